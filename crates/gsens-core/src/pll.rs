@@ -1,0 +1,414 @@
+//! Carrier-loop models: loop filter, NCO, the discrete loop as receivers run
+//! it, and its frequency response.
+//!
+//! # Signs and the operator L
+//!
+//! φ = θ_signal − θ_replica [rad]; the oscillator adds Δf [Hz] to the NCO's
+//! commanded frequency. For a loop filter
+//! F(s) = c0 + c1/s + c2/s² (rad/s of NCO command per rad of phase error) the
+//! continuous loop gives
+//!
+//! ```text
+//! L(s) = φ(s)/Δf(s) = −2π / (s + F(s)) = −2π·s² / (s³ + c0·s² + c1·s + c2)   [rad/Hz]
+//! ```
+//!
+//! which is conventions.md's 2nd-order form with c0 = 2ζωn, c1 = ωn², c2 = 0
+//! and Kaplan & Hegarty's 3rd-order form with c0 = b3·ωn, c1 = a3·ωn²,
+//! c2 = ωn³ (Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.3, Table 5.6).
+//!
+//! # The discrete loop (what receivers run)
+//!
+//! The loop is updated once per coherent integration of length T. Integration
+//! k covers [kT, (k+1)T]; during it the NCO runs at the constant commanded
+//! frequency f_k plus the oscillator bias Δf_k (its mean over the interval).
+//! With e_k the phase error at the start of the interval:
+//!
+//! ```text
+//! φ_k      = e_k − π·T·(f_k + Δf_k)          discriminator: mean phase error over the interval
+//! e_{k+1}  = e_k − 2π·T·(f_k + Δf_k)         NCO phase accumulates the frequency it ran at
+//! a2_k     = a2_{k−1} + c2·T·φ_k             integrators updated once per T (rectangular rule)
+//! a1_k     = a1_{k−1} + T·(c1·φ_k + a2_k)
+//! f_{k+1}  = (c0·φ_k + a1_k) / 2π            applied to the next integration (one update of latency)
+//! ```
+//!
+//! This is the structure of the digital loop filter of Kaplan & Hegarty
+//! (Fig. 5.17 and 5.18: accumulators clocked once per predetection integration,
+//! the NCO as a phase accumulator) with the filter output applied to the next
+//! integration, as it must be since the correlation of interval k ends at
+//! (k+1)T. In z, with G(z) = π·T·(z+1)/(z−1) and
+//! F_d(z) = c0 + c1·T/(1−z⁻¹) + c2·T²/(1−z⁻¹)²:
+//!
+//! ```text
+//! L_d(z) = −G(z) / (1 + G(z)·z⁻¹·F_d(z)/2π)
+//! ```
+//!
+//! which tends to L(s) as T → 0 (z = e^{sT}).
+
+use crate::math::{PI, TAU, abs, cos, sin, sqrt};
+use nalgebra::Complex;
+
+/// Loop-filter coefficients of F(s) = c0 + c1/s + c2/s² [rad/s per rad].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopFilterCoeffs {
+    /// Proportional gain c0 [1/s].
+    pub c0_per_s: f64,
+    /// First-integrator gain c1 [1/s²].
+    pub c1_per_s2: f64,
+    /// Second-integrator gain c2 [1/s³] (0 for a 2nd-order loop).
+    pub c2_per_s3: f64,
+}
+
+/// Kaplan & Hegarty's 3rd-order loop constant a3 (Table 5.6).
+pub const KAPLAN_A3: f64 = 1.1;
+/// Kaplan & Hegarty's 3rd-order loop constant b3 (Table 5.6).
+pub const KAPLAN_B3: f64 = 2.4;
+
+/// How a carrier loop is specified by a user.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LoopSpec {
+    /// 2nd-order loop from its one-sided noise bandwidth and damping.
+    SecondOrder {
+        /// Noise bandwidth Bn [Hz].
+        bn_hz: f64,
+        /// Damping ratio ζ.
+        zeta: f64,
+    },
+    /// 3rd-order loop F(s) = b3·ωn + a3·ωn²/s + ωn³/s² from its noise bandwidth.
+    ThirdOrder {
+        /// Noise bandwidth Bn [Hz].
+        bn_hz: f64,
+        /// a3 (Kaplan: 1.1).
+        a3: f64,
+        /// b3 (Kaplan: 2.4).
+        b3: f64,
+    },
+    /// A loop filter given directly by its coefficients.
+    Coefficients(LoopFilterCoeffs),
+}
+
+/// Errors in a loop specification.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LoopError {
+    /// Bn, ζ, a3, b3 or T not finite and positive.
+    NonPositiveParameter(&'static str),
+    /// The continuous loop is not stable (Routh–Hurwitz fails).
+    Unstable,
+    /// The discrete loop at this update interval is not stable.
+    UnstableAtInterval,
+}
+
+impl core::fmt::Display for LoopError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LoopError::NonPositiveParameter(p) => write!(f, "loop parameter {p} must be finite and positive"),
+            LoopError::Unstable => write!(f, "the loop filter gives an unstable loop"),
+            LoopError::UnstableAtInterval => {
+                write!(f, "the loop is unstable at this update interval (Bn·T too large)")
+            }
+        }
+    }
+}
+
+fn positive(x: f64, name: &'static str) -> Result<f64, LoopError> {
+    if x.is_finite() && x > 0.0 { Ok(x) } else { Err(LoopError::NonPositiveParameter(name)) }
+}
+
+/// 2nd-order loop: Bn = (ωn/2)·(ζ + 1/(4ζ)) (Kaplan & Hegarty Table 5.6) → ωn [rad/s].
+pub fn second_order_wn_from_bn(bn_hz: f64, zeta: f64) -> f64 {
+    2.0 * bn_hz / (zeta + 1.0 / (4.0 * zeta))
+}
+
+/// 2nd-order loop: ωn [rad/s] → Bn [Hz], Bn = (ωn/2)·(ζ + 1/(4ζ)).
+pub fn second_order_bn_from_wn(wn_rad_per_s: f64, zeta: f64) -> f64 {
+    0.5 * wn_rad_per_s * (zeta + 1.0 / (4.0 * zeta))
+}
+
+/// 3rd-order loop Bn/ωn for F(s) = b3·ωn + a3·ωn²/s + ωn³/s²:
+/// Bn/ωn = (a3·b3² + a3² − b3) / (4·(a3·b3 − 1)), the closed-form noise
+/// bandwidth of H(s) = (b3·s² + a3·s + 1)/(s³ + b3·s² + a3·s + 1)
+/// (0.7845 for Kaplan's a3 = 1.1, b3 = 2.4).
+pub fn third_order_bn_over_wn(a3: f64, b3: f64) -> f64 {
+    (a3 * b3 * b3 + a3 * a3 - b3) / (4.0 * (a3 * b3 - 1.0))
+}
+
+impl LoopSpec {
+    /// The paper's loop: 2nd order, Bn = 3 Hz, ζ = 1/√2.
+    pub const PAPER: LoopSpec = LoopSpec::SecondOrder { bn_hz: 3.0, zeta: core::f64::consts::FRAC_1_SQRT_2 };
+
+    /// Kaplan's 3rd-order loop with bandwidth `bn_hz`.
+    pub fn third_order_kaplan(bn_hz: f64) -> LoopSpec {
+        LoopSpec::ThirdOrder { bn_hz, a3: KAPLAN_A3, b3: KAPLAN_B3 }
+    }
+
+    /// Natural frequency ωn [rad/s] (None for raw coefficients of a 3rd-order
+    /// filter, where ωn = c2^(1/3)).
+    pub fn wn_rad_per_s(&self) -> Option<f64> {
+        match *self {
+            LoopSpec::SecondOrder { bn_hz, zeta } => Some(second_order_wn_from_bn(bn_hz, zeta)),
+            LoopSpec::ThirdOrder { bn_hz, a3, b3 } => Some(bn_hz / third_order_bn_over_wn(a3, b3)),
+            LoopSpec::Coefficients(c) => {
+                if c.c2_per_s3 > 0.0 {
+                    Some(libm::cbrt(c.c2_per_s3))
+                } else if c.c1_per_s2 > 0.0 {
+                    Some(sqrt(c.c1_per_s2))
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// Loop order (1, 2 or 3): the number of integrators in the loop.
+    pub fn order(&self) -> u8 {
+        let c = match self.coeffs() {
+            Ok(c) => c,
+            Err(_) => return 0,
+        };
+        if c.c2_per_s3 != 0.0 {
+            3
+        } else if c.c1_per_s2 != 0.0 {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// The loop-filter coefficients, checked for stability of the continuous
+    /// loop (Routh–Hurwitz on s³ + c0·s² + c1·s + c2: all positive, c0·c1 > c2).
+    pub fn coeffs(&self) -> Result<LoopFilterCoeffs, LoopError> {
+        let c = match *self {
+            LoopSpec::SecondOrder { bn_hz, zeta } => {
+                positive(bn_hz, "bn_hz")?;
+                positive(zeta, "zeta")?;
+                let wn = second_order_wn_from_bn(bn_hz, zeta);
+                LoopFilterCoeffs { c0_per_s: 2.0 * zeta * wn, c1_per_s2: wn * wn, c2_per_s3: 0.0 }
+            }
+            LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
+                positive(bn_hz, "bn_hz")?;
+                positive(a3, "a3")?;
+                positive(b3, "b3")?;
+                if a3 * b3 <= 1.0 {
+                    return Err(LoopError::Unstable);
+                }
+                let wn = bn_hz / third_order_bn_over_wn(a3, b3);
+                LoopFilterCoeffs { c0_per_s: b3 * wn, c1_per_s2: a3 * wn * wn, c2_per_s3: wn * wn * wn }
+            }
+            LoopSpec::Coefficients(c) => c,
+        };
+        let finite = c.c0_per_s.is_finite() && c.c1_per_s2.is_finite() && c.c2_per_s3.is_finite();
+        let hurwitz = c.c0_per_s > 0.0
+            && c.c1_per_s2 >= 0.0
+            && c.c2_per_s3 >= 0.0
+            && (c.c2_per_s3 == 0.0 || (c.c1_per_s2 > 0.0 && c.c0_per_s * c.c1_per_s2 > c.c2_per_s3));
+        if finite && hurwitz { Ok(c) } else { Err(LoopError::Unstable) }
+    }
+}
+
+impl LoopFilterCoeffs {
+    /// Continuous response L(j2πf) = −2π/(s + F(s)) at s = j2πf [rad/Hz].
+    pub fn response_continuous(&self, f_hz: f64) -> Complex<f64> {
+        let s = Complex::new(0.0, TAU * f_hz);
+        if f_hz == 0.0 {
+            // L(0) = 0 for any loop with an integrator; −2π/c0 for a 1st-order loop.
+            return if self.c1_per_s2 != 0.0 || self.c2_per_s3 != 0.0 {
+                Complex::new(0.0, 0.0)
+            } else {
+                Complex::new(-TAU / self.c0_per_s, 0.0)
+            };
+        }
+        let f = Complex::new(self.c0_per_s, 0.0)
+            + Complex::new(self.c1_per_s2, 0.0) / s
+            + Complex::new(self.c2_per_s3, 0.0) / (s * s);
+        Complex::new(-TAU, 0.0) / (s + f)
+    }
+
+    /// Closed-loop H(j2πf) = F/(s + F): the transfer from signal phase to
+    /// replica phase, whose noise bandwidth is Bn = ∫₀^∞ |H(j2πf)|² df.
+    pub fn closed_loop_continuous(&self, f_hz: f64) -> Complex<f64> {
+        let s = Complex::new(0.0, TAU * f_hz);
+        if f_hz == 0.0 {
+            return Complex::new(1.0, 0.0);
+        }
+        let f = Complex::new(self.c0_per_s, 0.0)
+            + Complex::new(self.c1_per_s2, 0.0) / s
+            + Complex::new(self.c2_per_s3, 0.0) / (s * s);
+        f / (s + f)
+    }
+
+    /// Discrete response L_d(e^{j2πfT}) from the sequence Δf_k to the sequence
+    /// φ_k of the loop of this module's docs, updated every `t_s` seconds.
+    pub fn response_discrete(&self, f_hz: f64, t_s: f64) -> Complex<f64> {
+        let w = TAU * f_hz * t_s;
+        let z = Complex::new(cos(w), sin(w));
+        let one = Complex::new(1.0, 0.0);
+        if f_hz == 0.0 || (z - one).norm_sqr() < 1e-300 {
+            return self.response_continuous(0.0);
+        }
+        let zi = one / z;
+        let g = Complex::new(PI * t_s, 0.0) * (z + one) / (z - one);
+        let acc = one / (one - zi);
+        let fd = Complex::new(self.c0_per_s, 0.0)
+            + Complex::new(self.c1_per_s2 * t_s, 0.0) * acc
+            + Complex::new(self.c2_per_s3 * t_s * t_s, 0.0) * acc * acc;
+        -g / (one + g * zi * fd / Complex::new(TAU, 0.0))
+    }
+
+    /// Whether the discrete loop at update interval `t_s` is stable: the
+    /// iteration of [`DiscretePll`] must decay. Checked by running its impulse
+    /// response (no allocation) until it has decayed or grown.
+    pub fn is_stable_at(&self, t_s: f64) -> bool {
+        let mut pll = DiscretePll::new(*self, t_s);
+        let mut peak = abs(pll.step(1.0));
+        // 20 time constants of the slowest pole at most (or 10⁶ steps).
+        let n = (20.0 / (self.c0_per_s.min(sqrt(self.c1_per_s2.max(1e-30))) * t_s)).clamp(100.0, 1e6) as usize;
+        let mut last = 0.0f64;
+        for i in 0..n {
+            let y = abs(pll.step(0.0));
+            if !y.is_finite() || y > 1e6 * peak.max(1e-300) {
+                return false;
+            }
+            peak = peak.max(y);
+            if i + 64 >= n {
+                last = last.max(y);
+            }
+        }
+        last < 1e-3 * peak
+    }
+}
+
+/// The loop filter as receivers clock it: integrators updated once per update
+/// interval T (see the module docs for the difference equations).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopFilter {
+    coeffs: LoopFilterCoeffs,
+    t_s: f64,
+    /// First integrator a1 [rad/s]: the steady-state NCO frequency (×2π).
+    acc1_rad_per_s: f64,
+    /// Second integrator a2 [rad/s²]: the steady-state frequency rate (×2π).
+    acc2_rad_per_s2: f64,
+}
+
+impl LoopFilter {
+    /// A filter with coefficients `coeffs` updated every `t_s` seconds, integrators at zero.
+    pub fn new(coeffs: LoopFilterCoeffs, t_s: f64) -> Self {
+        LoopFilter { coeffs, t_s, acc1_rad_per_s: 0.0, acc2_rad_per_s2: 0.0 }
+    }
+
+    /// Update interval T [s].
+    pub fn interval_s(&self) -> f64 {
+        self.t_s
+    }
+
+    /// The coefficients.
+    pub fn coeffs(&self) -> LoopFilterCoeffs {
+        self.coeffs
+    }
+
+    /// Preloads the integrators with a frequency [Hz] and frequency rate [Hz/s]
+    /// (from acquisition or aiding), as a receiver does when it starts tracking.
+    pub fn preload(&mut self, freq_hz: f64, freq_rate_hz_per_s: f64) {
+        self.acc1_rad_per_s = TAU * freq_hz;
+        self.acc2_rad_per_s2 = if self.coeffs.c2_per_s3 != 0.0 { TAU * freq_rate_hz_per_s } else { 0.0 };
+    }
+
+    /// One update with discriminator output `phase_err_rad`; returns the NCO
+    /// frequency command [Hz] for the next integration:
+    /// a2 += c2·T·φ; a1 += T·(c1·φ + a2); f = (c0·φ + a1)/2π.
+    #[inline]
+    pub fn update(&mut self, phase_err_rad: f64) -> f64 {
+        let c = &self.coeffs;
+        self.acc2_rad_per_s2 += c.c2_per_s3 * self.t_s * phase_err_rad;
+        self.acc1_rad_per_s += self.t_s * (c.c1_per_s2 * phase_err_rad + self.acc2_rad_per_s2);
+        (c.c0_per_s * phase_err_rad + self.acc1_rad_per_s) / TAU
+    }
+}
+
+/// Loop filter + NCO: the part of a carrier loop shared by the estimator's
+/// linear models and the simulator's correlator-level channels. The
+/// discriminator is the caller's (a linear one in [`DiscretePll`], atan/atan2
+/// on prompt I/Q in the simulator).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CarrierLoop {
+    filter: LoopFilter,
+    /// NCO commanded frequency for the current integration [Hz].
+    nco_freq_hz: f64,
+}
+
+impl CarrierLoop {
+    /// A loop at rest (commanded frequency 0).
+    pub fn new(coeffs: LoopFilterCoeffs, t_s: f64) -> Self {
+        CarrierLoop { filter: LoopFilter::new(coeffs, t_s), nco_freq_hz: 0.0 }
+    }
+
+    /// Starts tracking at `freq_hz` with rate `freq_rate_hz_per_s`.
+    pub fn preload(&mut self, freq_hz: f64, freq_rate_hz_per_s: f64) {
+        self.filter.preload(freq_hz, freq_rate_hz_per_s);
+        self.nco_freq_hz = freq_hz;
+    }
+
+    /// The NCO's commanded frequency during the current integration [Hz].
+    #[inline]
+    pub fn nco_freq_hz(&self) -> f64 {
+        self.nco_freq_hz
+    }
+
+    /// Update interval T [s].
+    #[inline]
+    pub fn interval_s(&self) -> f64 {
+        self.filter.interval_s()
+    }
+
+    /// Phase advance of the replica over one integration [rad] when the NCO
+    /// runs at its command plus the oscillator bias `bias_hz`: 2π·T·(f + Δf).
+    #[inline]
+    pub fn replica_advance_rad(&self, bias_hz: f64) -> f64 {
+        TAU * self.filter.interval_s() * (self.nco_freq_hz + bias_hz)
+    }
+
+    /// Closes the loop at the end of an integration: feeds the discriminator
+    /// output to the filter and commands the next integration's frequency.
+    #[inline]
+    pub fn close(&mut self, discriminator_rad: f64) {
+        self.nco_freq_hz = self.filter.update(discriminator_rad);
+    }
+}
+
+/// The linear discrete loop: one Δf sample in, one phase error out (the
+/// difference equations of the module docs). This is the operator L in
+/// discrete time, with an ideal (linear, mean-phase) discriminator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiscretePll {
+    carrier: CarrierLoop,
+    /// Phase error at the start of the current integration [rad].
+    err_start_rad: f64,
+}
+
+impl DiscretePll {
+    /// A loop at rest with filter `coeffs` updated every `t_s` seconds.
+    pub fn new(coeffs: LoopFilterCoeffs, t_s: f64) -> Self {
+        DiscretePll { carrier: CarrierLoop::new(coeffs, t_s), err_start_rad: 0.0 }
+    }
+
+    /// One integration with mean NCO frequency bias `delta_f_hz` over it;
+    /// returns the discriminator output φ_k [rad].
+    #[inline]
+    pub fn step(&mut self, delta_f_hz: f64) -> f64 {
+        let advance = self.carrier.replica_advance_rad(delta_f_hz);
+        let phase_err_rad = self.err_start_rad - 0.5 * advance;
+        self.err_start_rad -= advance;
+        self.carrier.close(phase_err_rad);
+        phase_err_rad
+    }
+
+    /// Back to rest.
+    pub fn reset(&mut self) {
+        *self = DiscretePll::new(self.carrier.filter.coeffs(), self.carrier.interval_s());
+    }
+}
+
+/// The frequency |L| peaks at for a 2nd-order loop: ω = ωn, value π/(ζ·ωn)
+/// [rad/Hz] (conventions.md). Returns (peak_hz, peak_rad_per_hz).
+pub fn second_order_peak(bn_hz: f64, zeta: f64) -> (f64, f64) {
+    let wn = second_order_wn_from_bn(bn_hz, zeta);
+    (wn / TAU, PI / (zeta * wn))
+}

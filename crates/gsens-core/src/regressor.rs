@@ -1,0 +1,129 @@
+//! The triad of software loop models fed by a_x, a_y, a_z: φ_a = L\[a\].
+//!
+//! The model loop runs at the receiver's loop update interval T_loop, which
+//! may be shorter than the log interval T_log = n·T_loop. Between two log
+//! epochs the specific force is interpolated linearly (the loop is far slower
+//! than the log rate, so the interpolation error is second order in the log
+//! interval). What a log row holds depends on the receiver:
+//!
+//! - [`LoggedPhase::Last`]: the discriminator output of the integration
+//!   centred on the row's time stamp (the last one before the row is written);
+//! - [`LoggedPhase::Mean`]: the mean of the n discriminator outputs since the
+//!   previous row, time-stamped like `Last` at the centre of the latest one.
+//!
+//! With n = 1 the two are the same.
+
+use crate::pll::{DiscretePll, LoopFilterCoeffs};
+
+/// What a tracking-log row reports when the loop runs faster than the log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoggedPhase {
+    /// The latest discriminator output.
+    Last,
+    /// The mean of the discriminator outputs since the previous row.
+    Mean,
+}
+
+/// Errors building a [`RegressorModel`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RegressorError {
+    /// The log interval is not an integer multiple of the loop interval.
+    NotAMultiple {
+        /// Log interval [s].
+        log_interval_s: f64,
+        /// Loop interval [s].
+        loop_interval_s: f64,
+    },
+    /// An interval is not finite and positive.
+    BadInterval,
+}
+
+impl core::fmt::Display for RegressorError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            RegressorError::NotAMultiple { log_interval_s, loop_interval_s } => write!(
+                f,
+                "the log interval {log_interval_s} s is not an integer multiple of the loop interval {loop_interval_s} s"
+            ),
+            RegressorError::BadInterval => write!(f, "loop and log intervals must be finite and positive"),
+        }
+    }
+}
+
+/// φ_a = L\[a\] epoch by epoch: three identical [`DiscretePll`]s, one per axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegressorModel {
+    triad: [DiscretePll; 3],
+    substeps: u32,
+    logged: LoggedPhase,
+    prev_accel_mps2: Option<[f64; 3]>,
+}
+
+impl RegressorModel {
+    /// A triad at rest for a loop with `coeffs` updated every
+    /// `loop_interval_s`, sampled every `log_interval_s` (an integer multiple
+    /// of it, within 1e-6 relative).
+    pub fn new(
+        coeffs: LoopFilterCoeffs,
+        loop_interval_s: f64,
+        log_interval_s: f64,
+        logged: LoggedPhase,
+    ) -> Result<Self, RegressorError> {
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        if !ok(loop_interval_s) || !ok(log_interval_s) {
+            return Err(RegressorError::BadInterval);
+        }
+        let ratio = log_interval_s / loop_interval_s;
+        let n = libm::round(ratio);
+        if n < 1.0 || libm::fabs(ratio - n) > 1e-6 * ratio {
+            return Err(RegressorError::NotAMultiple { log_interval_s, loop_interval_s });
+        }
+        let pll = DiscretePll::new(coeffs, loop_interval_s);
+        Ok(RegressorModel { triad: [pll; 3], substeps: n as u32, logged, prev_accel_mps2: None })
+    }
+
+    /// Loop updates per log epoch.
+    pub fn substeps(&self) -> u32 {
+        self.substeps
+    }
+
+    /// Advances the triad to the next log epoch, whose specific force is
+    /// `accel_mps2`, and returns φ_a there [rad per Hz/(m/s²)·(m/s²)], i.e. the
+    /// phase error each axis would cause with a unit sensitivity.
+    #[inline]
+    pub fn epoch(&mut self, accel_mps2: &[f64; 3]) -> [f64; 3] {
+        let prev = self.prev_accel_mps2.unwrap_or(*accel_mps2);
+        self.prev_accel_mps2 = Some(*accel_mps2);
+        let n = self.substeps;
+        if n == 1 {
+            return [
+                self.triad[0].step(accel_mps2[0]),
+                self.triad[1].step(accel_mps2[1]),
+                self.triad[2].step(accel_mps2[2]),
+            ];
+        }
+        let inv_n = 1.0 / n as f64;
+        let mut sum = [0.0; 3];
+        let mut last = [0.0; 3];
+        for j in 1..=n {
+            let w = j as f64 * inv_n;
+            for axis in 0..3 {
+                let a = prev[axis] + w * (accel_mps2[axis] - prev[axis]);
+                last[axis] = self.triad[axis].step(a);
+                sum[axis] += last[axis];
+            }
+        }
+        match self.logged {
+            LoggedPhase::Last => last,
+            LoggedPhase::Mean => [sum[0] * inv_n, sum[1] * inv_n, sum[2] * inv_n],
+        }
+    }
+
+    /// Back to rest.
+    pub fn reset(&mut self) {
+        for p in &mut self.triad {
+            p.reset();
+        }
+        self.prev_accel_mps2 = None;
+    }
+}

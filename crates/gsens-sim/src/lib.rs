@@ -1,0 +1,1 @@
+//! Simulator of a g-sensitivity calibration session.
