@@ -177,9 +177,10 @@ impl GammaEstimator for BatchLeastSquares {
 /// The paper's gradient observer with constant gain `k`, discretized at the
 /// log interval (see the module docs for the stable range of k).
 ///
-/// Its covariance is propagated alongside: with e the residual noise of
-/// variance σ² (estimated from the running residuals),
-/// C ← (I − kTφ_aφ_aᵀ)·C·(I − kTφ_aφ_aᵀ)ᵀ + (kT)²σ²·φ_aφ_aᵀ.
+/// Its covariance is propagated alongside: with white residual noise of
+/// variance σ², C ← (I − kTφ_aφ_aᵀ)·C·(I − kTφ_aφ_aᵀ)ᵀ + (kT)²σ²·φ_aφ_aᵀ.
+/// σ² factors out, so C is propagated for σ² = 1 and scaled on request by
+/// σ̂² = RSS(Γ̂)/(n − 3) (the running residuals would include the transient).
 /// This is the spread of Γ̂ caused by the noise; the transient from the
 /// initial guess is not in it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -187,8 +188,8 @@ pub struct GradientObserver {
     gain_k: f64,
     interval_s: f64,
     gamma: Vector3<f64>,
-    cov: Matrix3<f64>,
-    resid_sum_sq: f64,
+    /// Covariance propagated for unit residual variance (σ² factors out).
+    cov_unit: Matrix3<f64>,
     normal: NormalEquations,
 }
 
@@ -200,8 +201,7 @@ impl GradientObserver {
             gain_k,
             interval_s,
             gamma: Vector3::zeros(),
-            cov: Matrix3::zeros(),
-            resid_sum_sq: 0.0,
+            cov_unit: Matrix3::zeros(),
             normal: NormalEquations::default(),
         }
     }
@@ -221,21 +221,20 @@ impl GammaEstimator for GradientObserver {
         let e = phase_err_rad - v.dot(&self.gamma);
         let kt = self.gain_k * self.interval_s;
         self.gamma += v * (kt * e);
-        self.resid_sum_sq += e * e;
         self.normal.add(phase_err_rad, phi_a);
-        let s2 = self.resid_sum_sq / self.normal.n as f64;
         let vvt = v * v.transpose();
         let m = Matrix3::identity() - vvt * kt;
-        self.cov = m * self.cov * m.transpose() + vvt * (kt * kt * s2);
+        self.cov_unit = m * self.cov_unit * m.transpose() + vvt * (kt * kt);
     }
     fn estimate(&self) -> GammaEstimate {
-        let mut cov = self.cov;
         let (_, rank) = self.normal.pseudo_inverse(RANK_TOL);
+        let s2 = self.normal.rss(&self.gamma) / (self.normal.n as f64 - rank as f64).max(1.0);
+        let mut cov = self.cov_unit * s2;
         mark_unobservable(&mut cov, &self.normal.ata, rank);
         GammaEstimate {
             gamma_hz_per_mps2: [self.gamma[0], self.gamma[1], self.gamma[2]],
             covariance: to_array(&cov),
-            residual_variance_rad2: self.normal.rss(&self.gamma) / (self.normal.n.max(1) as f64),
+            residual_variance_rad2: s2,
             epochs: self.normal.n,
         }
     }

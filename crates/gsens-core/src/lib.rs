@@ -15,6 +15,7 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 
+pub mod calibrator;
 pub mod compensate;
 pub mod estimator;
 pub mod math;
@@ -23,6 +24,7 @@ pub mod pll;
 pub mod regressor;
 pub mod units;
 
+pub use calibrator::{Calibrator, average_phase_rad};
 pub use estimator::{BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, RecursiveLeastSquares};
 pub use pll::{CarrierLoop, DiscretePll, LoopFilter, LoopFilterCoeffs, LoopSpec};
 pub use regressor::{LoggedPhase, RegressorModel};

@@ -404,6 +404,14 @@ impl DiscretePll {
     pub fn reset(&mut self) {
         *self = DiscretePll::new(self.carrier.filter.coeffs(), self.carrier.interval_s());
     }
+
+    /// Puts the loop in the steady state of a constant bias `delta_f_hz`: zero
+    /// phase error, NCO command −Δf (a receiver that has been tracking for a
+    /// while has long absorbed gravity's constant part of aᵀΓ).
+    pub fn settle(&mut self, delta_f_hz: f64) {
+        self.reset();
+        self.carrier.preload(-delta_f_hz, 0.0);
+    }
 }
 
 /// The frequency |L| peaks at for a 2nd-order loop: ω = ωn, value π/(ζ·ωn)

@@ -92,7 +92,17 @@ impl RegressorModel {
     /// phase error each axis would cause with a unit sensitivity.
     #[inline]
     pub fn epoch(&mut self, accel_mps2: &[f64; 3]) -> [f64; 3] {
-        let prev = self.prev_accel_mps2.unwrap_or(*accel_mps2);
+        let prev = match self.prev_accel_mps2 {
+            Some(p) => p,
+            None => {
+                // The receiver was tracking before the log began: start each
+                // model loop in the steady state of the first sample.
+                for (pll, a) in self.triad.iter_mut().zip(accel_mps2) {
+                    pll.settle(*a);
+                }
+                *accel_mps2
+            }
+        };
         self.prev_accel_mps2 = Some(*accel_mps2);
         let n = self.substeps;
         if n == 1 {

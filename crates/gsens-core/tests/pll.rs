@@ -1,0 +1,145 @@
+//! Known answers for the loop models (conventions.md, "PLL parametrization").
+
+use gsens_core::pll::*;
+use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
+
+fn paper() -> LoopFilterCoeffs {
+    LoopSpec::PAPER.coeffs().unwrap()
+}
+
+/// ∫₀^fmax |H(j2πf)|² df by composite Simpson on a log-spaced + linear grid.
+fn noise_bandwidth_by_integration(c: &LoopFilterCoeffs) -> f64 {
+    // Substitute f = u/(1-u) to map [0, ∞) onto [0, 1): df = du/(1-u)².
+    let n = 200_000;
+    let h = 1.0 / n as f64;
+    let g = |u: f64| {
+        if u >= 1.0 {
+            return 0.0;
+        }
+        let f = u / (1.0 - u);
+        c.closed_loop_continuous(f).norm_sqr() / ((1.0 - u) * (1.0 - u))
+    };
+    let mut s = g(0.0) + g(1.0 - 1e-12);
+    for i in 1..n {
+        let w = if i % 2 == 1 { 4.0 } else { 2.0 };
+        s += w * g(i as f64 * h);
+    }
+    s * h / 3.0
+}
+
+#[test]
+fn paper_loop_natural_frequency_is_0_9_hz() {
+    let wn = second_order_wn_from_bn(3.0, FRAC_1_SQRT_2);
+    assert!((wn - 5.657).abs() < 1e-3, "{wn}");
+    assert!((wn / TAU - 0.900).abs() < 1e-3);
+    assert!((second_order_bn_from_wn(wn, FRAC_1_SQRT_2) - 3.0).abs() < 1e-12);
+}
+
+#[test]
+fn second_order_response_peaks_at_wn_with_pi_over_zeta_wn() {
+    let c = paper();
+    let wn = second_order_wn_from_bn(3.0, FRAC_1_SQRT_2);
+    // Golden-section search of the peak over 0.1 … 10 Hz (independent of the formula).
+    let (mut a, mut b) = (0.1f64, 10.0f64);
+    let r = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..200 {
+        let x1 = b - r * (b - a);
+        let x2 = a + r * (b - a);
+        if c.response_continuous(x1).norm() > c.response_continuous(x2).norm() {
+            b = x2;
+        } else {
+            a = x1;
+        }
+    }
+    let peak_hz = 0.5 * (a + b);
+    assert!((peak_hz - wn / TAU).abs() < 1e-6, "peak at {peak_hz} Hz");
+    let peak = c.response_continuous(peak_hz).norm();
+    assert!((peak - PI / (FRAC_1_SQRT_2 * wn)).abs() < 1e-9, "{peak}");
+    assert!((peak - 0.785).abs() < 1e-3);
+    let (f, v) = second_order_peak(3.0, FRAC_1_SQRT_2);
+    assert!((f - peak_hz).abs() < 1e-6 && (v - peak).abs() < 1e-9);
+    // A constant Δf leaves no steady-state phase error; the sign is negative at low f
+    // (a positive NCO bias makes the replica lead: φ = θ_s − θ_r < 0).
+    assert_eq!(c.response_continuous(0.0).norm(), 0.0);
+    let low = c.response_continuous(0.01);
+    assert!(low.im < 0.0 && low.norm() < 0.02);
+}
+
+#[test]
+fn noise_bandwidths_by_numerical_integration() {
+    // 2nd order: Bn = 3 Hz by construction; the integral must give it back.
+    let bn2 = noise_bandwidth_by_integration(&paper());
+    assert!((bn2 - 3.0).abs() < 1e-4, "2nd-order Bn = {bn2}");
+    // 3rd order, Kaplan a3 = 1.1, b3 = 2.4, built from ωn = 1 rad/s: Bn/ωn = 0.7845.
+    let c3 = LoopFilterCoeffs { c0_per_s: KAPLAN_B3, c1_per_s2: KAPLAN_A3, c2_per_s3: 1.0 };
+    let bn3 = noise_bandwidth_by_integration(&c3);
+    assert!((bn3 - 0.7845).abs() < 5e-4, "3rd-order Bn/ωn = {bn3}");
+    assert!((third_order_bn_over_wn(KAPLAN_A3, KAPLAN_B3) - bn3).abs() < 1e-4);
+}
+
+#[test]
+fn discrete_response_converges_to_continuous_as_t_shrinks() {
+    for c in [paper(), LoopSpec::third_order_kaplan(3.0).coeffs().unwrap()] {
+        let mut prev = f64::INFINITY;
+        for t_s in [0.02, 0.005, 0.001, 0.0002] {
+            let mut worst = 0.0f64;
+            for f_hz in [0.1, 0.3, 0.9, 2.0, 5.0] {
+                let d = c.response_discrete(f_hz, t_s);
+                let k = c.response_continuous(f_hz);
+                worst = worst.max((d - k).norm() / k.norm());
+            }
+            assert!(worst < prev * 0.6, "T = {t_s}: {worst} vs {prev}");
+            prev = worst;
+        }
+        // First order in T (the one-update latency is a delay of about T).
+        assert!(prev < 5e-3, "{prev}");
+    }
+}
+
+/// The z-domain formula must describe the time-domain loop exactly: drive the
+/// DiscretePll with a sinusoid and compare the steady-state phasor.
+#[test]
+fn discrete_response_matches_time_domain_loop() {
+    for (c, t_s) in [(paper(), 0.025), (paper(), 0.001), (LoopSpec::third_order_kaplan(5.0).coeffs().unwrap(), 0.02)] {
+        for f_hz in [0.3, 0.9, 3.0] {
+            let mut pll = DiscretePll::new(c, t_s);
+            let n_settle = (30.0 / t_s) as usize;
+            let n_cycles = 20.0;
+            let n = (n_cycles / (f_hz * t_s)).round() as usize;
+            let mut acc = nalgebra::Complex::new(0.0, 0.0);
+            for k in 0..n_settle + n {
+                let t = k as f64 * t_s;
+                let y = pll.step((TAU * f_hz * t).cos());
+                if k >= n_settle {
+                    acc += nalgebra::Complex::new(0.0, -TAU * f_hz * t).exp() * y;
+                }
+            }
+            let measured = acc * (2.0 / n as f64);
+            let model = c.response_discrete(f_hz, t_s);
+            assert!((measured - model).norm() < 2e-3 * model.norm(), "f={f_hz} T={t_s}: {measured} vs {model}");
+        }
+    }
+}
+
+#[test]
+fn stability_checks() {
+    assert!(paper().is_stable_at(0.001));
+    assert!(paper().is_stable_at(0.025));
+    // Bn·T far beyond any receiver's choice: unstable.
+    let wide = LoopSpec::SecondOrder { bn_hz: 60.0, zeta: FRAC_1_SQRT_2 }.coeffs().unwrap();
+    assert!(!wide.is_stable_at(0.02));
+    assert_eq!(
+        LoopSpec::SecondOrder { bn_hz: -1.0, zeta: 0.7 }.coeffs(),
+        Err(LoopError::NonPositiveParameter("bn_hz"))
+    );
+    assert_eq!(LoopSpec::ThirdOrder { bn_hz: 3.0, a3: 0.3, b3: 2.0 }.coeffs(), Err(LoopError::Unstable));
+}
+
+#[test]
+fn preloaded_loop_tracks_constant_frequency_with_zero_error() {
+    let mut l = CarrierLoop::new(paper(), 0.001);
+    l.preload(1234.5, 0.0);
+    assert_eq!(l.nco_freq_hz(), 1234.5);
+    l.close(0.0);
+    assert!((l.nco_freq_hz() - 1234.5).abs() < 1e-9);
+}
