@@ -64,6 +64,11 @@ impl<E: GammaEstimator> Calibrator<E> {
         self.estimator.estimate()
     }
 
+    /// Epochs ignored at the start.
+    pub fn skip_epochs(&self) -> u64 {
+        self.skip_epochs
+    }
+
     /// The estimator.
     pub fn estimator(&self) -> &E {
         &self.estimator

@@ -1,0 +1,322 @@
+//! # gsens-calib
+//!
+//! The calibration job: from a uniform epoch series of channel-averaged phase
+//! error φ [rad] and specific force a [m/s²] to Γ̂ with its uncertainty, the
+//! observability verdict per axis, and what compensation removes.
+//!
+//! It wires the pure core ([`gsens_core`]) together and adds what needs the
+//! whole series in memory: the residual series for an autocorrelation-robust
+//! covariance (the residuals of a carrier loop are coloured, see
+//! [`gsens_core::estimator::hac_covariance`]) and the RMS before and after
+//! compensation. No file I/O: the CLI reads logs with `gsens-io`.
+#![deny(missing_docs)]
+
+use gsens_core::estimator::{
+    BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance,
+};
+use gsens_core::observability::{ObservabilityCriteria, assess};
+use gsens_core::pll::{LoopError, LoopSpec};
+use gsens_core::regressor::{LoggedPhase, RegressorError, RegressorModel};
+use gsens_core::units::hz_per_mps2_to_ppb_per_g;
+use gsens_core::{Calibrator, GammaEstimator, compensate::compensated_phase_rad};
+use serde::Serialize;
+
+/// Which estimator produces Γ̂.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "name", rename_all = "lowercase")]
+pub enum Method {
+    /// The paper's gradient observer with constant gain k.
+    Gradient {
+        /// Gain k [1/s per unit φ_a²].
+        gain_k: f64,
+    },
+    /// Recursive least squares (Kalman-type gain) with forgetting factor λ.
+    Rls {
+        /// Forgetting factor λ (1 = none).
+        lambda: f64,
+    },
+    /// Batch least squares over the whole log.
+    Batch,
+}
+
+/// Everything that decides an estimate; reported with it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct EstimateSettings {
+    /// The receiver's carrier loop.
+    #[serde(serialize_with = "ser_loop")]
+    pub loop_spec: LoopSpec,
+    /// The receiver's loop update interval [s]; `None` = the log interval.
+    pub loop_interval_s: Option<f64>,
+    /// What a log row holds when the loop runs faster than the log.
+    #[serde(serialize_with = "ser_logged")]
+    pub logged_phase: LoggedPhase,
+    /// The estimator.
+    pub method: Method,
+    /// Epochs in the first `warmup_s` seconds only drive the loop models.
+    pub warmup_s: f64,
+    /// Longest lag of the autocorrelation-robust covariance [s].
+    pub hac_lag_s: f64,
+    /// Carrier frequency [Hz] for ppb/g.
+    pub carrier_hz: f64,
+    /// Observability thresholds.
+    #[serde(serialize_with = "ser_criteria")]
+    pub criteria: ObservabilityCriteria,
+}
+
+impl Default for EstimateSettings {
+    fn default() -> Self {
+        EstimateSettings {
+            loop_spec: LoopSpec::PAPER,
+            loop_interval_s: None,
+            logged_phase: LoggedPhase::Last,
+            method: Method::Batch,
+            warmup_s: 2.0,
+            hac_lag_s: 2.5,
+            carrier_hz: gsens_core::units::GPS_L1_HZ,
+            criteria: ObservabilityCriteria::default(),
+        }
+    }
+}
+
+fn ser_loop<S: serde::Serializer>(l: &LoopSpec, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut m = s.serialize_map(None)?;
+    match *l {
+        LoopSpec::SecondOrder { bn_hz, zeta } => {
+            m.serialize_entry("order", &2)?;
+            m.serialize_entry("bn_hz", &bn_hz)?;
+            m.serialize_entry("zeta", &zeta)?;
+        }
+        LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
+            m.serialize_entry("order", &3)?;
+            m.serialize_entry("bn_hz", &bn_hz)?;
+            m.serialize_entry("a3", &a3)?;
+            m.serialize_entry("b3", &b3)?;
+        }
+        LoopSpec::Coefficients(c) => {
+            m.serialize_entry("c0_per_s", &c.c0_per_s)?;
+            m.serialize_entry("c1_per_s2", &c.c1_per_s2)?;
+            m.serialize_entry("c2_per_s3", &c.c2_per_s3)?;
+        }
+    }
+    if let Some(wn) = l.wn_rad_per_s() {
+        m.serialize_entry("natural_frequency_hz", &(wn / core::f64::consts::TAU))?;
+    }
+    m.end()
+}
+
+fn ser_logged<S: serde::Serializer>(l: &LoggedPhase, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(match l {
+        LoggedPhase::Last => "last",
+        LoggedPhase::Mean => "mean",
+    })
+}
+
+fn ser_criteria<S: serde::Serializer>(c: &ObservabilityCriteria, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut m = s.serialize_map(Some(2))?;
+    m.serialize_entry("min_excitation_rms", &c.min_excitation_rms)?;
+    m.serialize_entry("max_sigma_hz_per_mps2", &c.max_sigma_hz_per_mps2)?;
+    m.end()
+}
+
+/// Why a calibration could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibError {
+    /// The loop specification is invalid.
+    #[error("invalid loop: {0}")]
+    Loop(LoopError),
+    /// Loop and log intervals do not fit together.
+    #[error("{0}")]
+    Intervals(RegressorError),
+    /// The discrete loop at this interval is unstable.
+    #[error("the loop (Bn, order) is unstable when updated every {0} s; is --loop-interval-s right?")]
+    UnstableAtInterval(f64),
+    /// Series of different lengths or too short.
+    #[error("{0}")]
+    Input(String),
+}
+
+/// A calibration result: the public JSON interface of `gsens estimate`
+/// (key names as in conventions.md).
+#[derive(Debug, Clone, Serialize)]
+pub struct Calibration {
+    /// Γ̂ [Hz/(m/s²)]; `null` for an unobservable axis.
+    pub gamma_hz_per_mps2: [Option<f64>; 3],
+    /// 1σ [Hz/(m/s²)] (autocorrelation-robust); `null` for an unobservable axis.
+    pub sigma_hz_per_mps2: [Option<f64>; 3],
+    /// Γ̂ [ppb/g] at the carrier.
+    pub gamma_ppb_per_g: [Option<f64>; 3],
+    /// 1σ [ppb/g].
+    pub sigma_ppb_per_g: [Option<f64>; 3],
+    /// Whether the data observe each axis.
+    pub observable: [bool; 3],
+    /// Unexplained excitation RMS per axis [rad per Hz/(m/s²)].
+    pub excitation_rms: [f64; 3],
+    /// Condition number of the information matrix (null when singular).
+    pub condition_number: Option<f64>,
+    /// The estimate of every axis even when unobservable (for experts).
+    pub gamma_raw_hz_per_mps2: [f64; 3],
+    /// 1σ assuming white residuals (for comparison with the robust one).
+    pub sigma_white_hz_per_mps2: [f64; 3],
+    /// IMU time stamp minus true time applied to the IMU [s].
+    pub imu_time_offset_s: f64,
+    /// Whether `imu_time_offset_s` was estimated (false: assumed by the user).
+    pub imu_time_offset_estimated: bool,
+    /// RMS of the averaged phase error over the used epochs [rad].
+    pub rms_before_rad: f64,
+    /// RMS of φ − φ_aᵀΓ̂ over the same epochs [rad].
+    pub rms_after_rad: f64,
+    /// RMS of the g-induced part φ_aᵀΓ̂ [rad].
+    pub rms_g_induced_rad: f64,
+    /// Residual standard deviation [rad].
+    pub residual_sigma_rad: f64,
+    /// Epochs used by the estimator.
+    pub epochs_used: u64,
+    /// Epochs in the series (including gaps and warm-up).
+    pub epochs_total: usize,
+    /// Log interval [s].
+    pub log_interval_s: f64,
+    /// Loop updates per log epoch in the model.
+    pub model_substeps: u32,
+    /// Every setting used.
+    pub settings: EstimateSettings,
+}
+
+/// The per-epoch series a calibration needs (owned by the caller).
+#[derive(Debug, Clone, Copy)]
+pub struct EpochSeries<'a> {
+    /// Uniform log interval [s].
+    pub log_interval_s: f64,
+    /// Averaged phase error per epoch [rad]; `None` where no channel was present.
+    pub phase_err_rad: &'a [Option<f64>],
+    /// Specific force per epoch [m/s²] (IMU interpolated onto the epochs).
+    pub accel_mps2: &'a [[f64; 3]],
+    /// IMU time offset that was applied when interpolating [s].
+    pub imu_time_offset_s: f64,
+}
+
+/// The regressor series φ_a for every epoch (the triad run over the whole series).
+pub fn regressors(series: &EpochSeries, settings: &EstimateSettings) -> Result<Vec<[f64; 3]>, CalibError> {
+    let mut model = build_model(series.log_interval_s, settings)?;
+    Ok(series.accel_mps2.iter().map(|a| model.epoch(a)).collect())
+}
+
+fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> Result<RegressorModel, CalibError> {
+    let coeffs = settings.loop_spec.coeffs().map_err(CalibError::Loop)?;
+    let loop_t = settings.loop_interval_s.unwrap_or(log_interval_s);
+    if !coeffs.is_stable_at(loop_t) {
+        return Err(CalibError::UnstableAtInterval(loop_t));
+    }
+    RegressorModel::new(coeffs, loop_t, log_interval_s, settings.logged_phase).map_err(CalibError::Intervals)
+}
+
+/// Runs the configured estimator over the series and assembles the result.
+pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
+    let n = series.accel_mps2.len();
+    if series.phase_err_rad.len() != n {
+        return Err(CalibError::Input("phase and specific-force series differ in length".into()));
+    }
+    let model = build_model(series.log_interval_s, settings)?;
+    let substeps = model.substeps();
+    let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
+    let (estimate, phi_a, batch) = match settings.method {
+        Method::Batch => run(Calibrator::new(model, BatchLeastSquares::new(), skip), series),
+        Method::Rls { lambda } => run(
+            Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip),
+            series,
+        ),
+        Method::Gradient { gain_k } => {
+            run(Calibrator::new(model, GradientObserver::new(gain_k, series.log_interval_s), skip), series)
+        }
+    };
+    if batch.normal_equations().n < 10 {
+        return Err(CalibError::Input(format!(
+            "only {} epochs with a phase measurement after the {} s warm-up; need at least 10",
+            batch.normal_equations().n,
+            settings.warmup_s
+        )));
+    }
+    let gamma = estimate.gamma_hz_per_mps2;
+
+    // Residuals over the used epochs, for the robust covariance and the RMS.
+    let used: Vec<usize> =
+        (skip as usize..n).filter(|&k| series.phase_err_rad[k].is_some_and(|p| p.is_finite())).collect();
+    let mut used_phi_a = Vec::with_capacity(used.len());
+    let mut resid = Vec::with_capacity(used.len());
+    let (mut ss_before, mut ss_after, mut ss_g) = (0.0, 0.0, 0.0);
+    for &k in &used {
+        let phi = series.phase_err_rad[k].unwrap_or(0.0);
+        let r = compensated_phase_rad(phi, &phi_a[k], &gamma);
+        ss_before += phi * phi;
+        ss_after += r * r;
+        ss_g += (phi - r) * (phi - r);
+        used_phi_a.push(phi_a[k]);
+        resid.push(r);
+    }
+    let m = used.len().max(1) as f64;
+    let max_lag = (settings.hac_lag_s / series.log_interval_s).round() as usize;
+    let hac = hac_covariance(&used_phi_a, &resid, max_lag);
+    // The robust/white variance ratio of the batch solution scales the chosen
+    // estimator's own covariance (the same residual colour affects them all).
+    let white_batch = batch.estimate();
+    let obs = assess(batch.normal_equations(), &estimate, &settings.criteria);
+    let mut sigma = [None; 3];
+    let mut sigma_white = [0.0; 3];
+    let mut gamma_out = [None; 3];
+    for i in 0..3 {
+        let own = estimate.covariance[i][i];
+        let ratio =
+            if white_batch.covariance[i][i] > 0.0 { (hac[i][i] / white_batch.covariance[i][i]).max(1.0) } else { 1.0 };
+        sigma_white[i] = own.max(0.0).sqrt();
+        if obs.observable[i] {
+            sigma[i] = Some((own * ratio).sqrt());
+            gamma_out[i] = Some(gamma[i]);
+        }
+    }
+    let ppb = |x: Option<f64>| x.map(|v| hz_per_mps2_to_ppb_per_g(v, settings.carrier_hz));
+    Ok(Calibration {
+        gamma_hz_per_mps2: gamma_out,
+        sigma_hz_per_mps2: sigma,
+        gamma_ppb_per_g: gamma_out.map(ppb),
+        sigma_ppb_per_g: sigma.map(ppb),
+        observable: obs.observable,
+        excitation_rms: obs.excitation_rms,
+        condition_number: obs.condition_number.is_finite().then_some(obs.condition_number),
+        gamma_raw_hz_per_mps2: gamma,
+        sigma_white_hz_per_mps2: sigma_white,
+        imu_time_offset_s: series.imu_time_offset_s,
+        imu_time_offset_estimated: false,
+        rms_before_rad: (ss_before / m).sqrt(),
+        rms_after_rad: (ss_after / m).sqrt(),
+        rms_g_induced_rad: (ss_g / m).sqrt(),
+        residual_sigma_rad: estimate.residual_variance_rad2.sqrt(),
+        epochs_used: batch.normal_equations().n,
+        epochs_total: n,
+        log_interval_s: series.log_interval_s,
+        model_substeps: substeps,
+        settings: *settings,
+    })
+}
+
+/// Runs an estimator and, alongside, a batch accumulator (for the
+/// observability verdict and the robust covariance) over the series.
+fn run<E: GammaEstimator>(
+    mut cal: Calibrator<E>,
+    series: &EpochSeries,
+) -> (GammaEstimate, Vec<[f64; 3]>, BatchLeastSquares) {
+    let mut batch = BatchLeastSquares::new();
+    let skip = cal.skip_epochs();
+    let mut phi_a = Vec::with_capacity(series.accel_mps2.len());
+    for (k, (a, p)) in series.accel_mps2.iter().zip(series.phase_err_rad).enumerate() {
+        let p = p.filter(|x| x.is_finite());
+        let v = cal.feed(a, p);
+        if let Some(phi) = p
+            && k as u64 >= skip
+        {
+            batch.update(phi, &v);
+        }
+        phi_a.push(v);
+    }
+    (cal.estimate(), phi_a, batch)
+}

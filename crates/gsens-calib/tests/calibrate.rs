@@ -1,0 +1,100 @@
+//! The calibration job on synthetic series: coloured noise, gaps, unobservable axes.
+
+use gsens_calib::{EpochSeries, EstimateSettings, Method, calibrate};
+use gsens_core::pll::{DiscretePll, LoopSpec};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use std::f64::consts::TAU;
+
+const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
+const T: f64 = 0.025;
+
+/// Paper-like session: x, then y, then z shaken for 20 s each, with rests;
+/// φ from the same discrete loop; AR(1) noise (ρ = 0.97, ~1 s correlation) on top.
+fn session(seed: u64, noise_rad: f64, shake_z: bool) -> (Vec<Option<f64>>, Vec<[f64; 3]>) {
+    let n = (80.0 / T) as usize;
+    let mut pll = DiscretePll::new(LoopSpec::PAPER.coeffs().unwrap(), T);
+    pll.settle(9.80665 * GAMMA[2]);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let rho: f64 = 0.97;
+    let mut ar = 0.0;
+    let mut phase = Vec::with_capacity(n);
+    let mut accel = Vec::with_capacity(n);
+    for k in 0..n {
+        let t = k as f64 * T;
+        let mut a = [0.0, 0.0, 9.80665];
+        let axis = ((t - 5.0) / 25.0).floor();
+        let within = (t - 5.0) - 25.0 * axis;
+        if (0.0..3.0).contains(&axis) && within < 20.0 && (axis < 2.0 || shake_z) {
+            a[axis as usize] += 3.0 * (TAU * 0.9 * within).sin() * (std::f64::consts::PI * within / 20.0).sin();
+        }
+        let df: f64 = (0..3).map(|i| a[i] * GAMMA[i]).sum();
+        let e: f64 = StandardNormal.sample(&mut rng);
+        ar = rho * ar + (1.0 - rho * rho).sqrt() * e;
+        let phi = pll.step(df) + noise_rad * ar;
+        // A gap every 10 s (no channel present).
+        phase.push(if k % 400 == 399 { None } else { Some(phi) });
+        accel.push(a);
+    }
+    (phase, accel)
+}
+
+#[test]
+fn robust_sigma_is_honest_under_coloured_noise_and_white_sigma_is_not() {
+    let mut z_robust = Vec::new();
+    let mut z_white = Vec::new();
+    for seed in 0..150 {
+        let (phase, accel) = session(seed, 0.02, true);
+        let series =
+            EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+        let c = calibrate(&series, &EstimateSettings::default()).unwrap();
+        for i in 0..3 {
+            let err = c.gamma_hz_per_mps2[i].unwrap() - GAMMA[i];
+            z_robust.push(err / c.sigma_hz_per_mps2[i].unwrap());
+            z_white.push(err / c.sigma_white_hz_per_mps2[i]);
+        }
+    }
+    let sd = |z: &[f64]| (z.iter().map(|x| x * x).sum::<f64>() / z.len() as f64).sqrt();
+    let (r, w) = (sd(&z_robust), sd(&z_white));
+    eprintln!("z spread: robust {r:.3}, white {w:.3}");
+    assert!((0.75..1.25).contains(&r), "robust z spread {r}");
+    assert!(w > 1.5, "white z spread {w}: the test noise is not coloured enough to matter");
+}
+
+#[test]
+fn every_method_recovers_gamma_and_compensation_removes_the_g_part() {
+    let (phase, accel) = session(1, 0.002, true);
+    let series = EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    for method in [Method::Batch, Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }] {
+        let settings = EstimateSettings { method, ..Default::default() };
+        let c = calibrate(&series, &settings).unwrap();
+        for i in 0..3 {
+            let g = c.gamma_hz_per_mps2[i].unwrap();
+            assert!((g - GAMMA[i]).abs() < 0.01 * GAMMA[i].abs(), "{method:?} axis {i}: {g}");
+        }
+        assert!(c.rms_after_rad < 0.3 * c.rms_before_rad, "{method:?}: {} → {}", c.rms_before_rad, c.rms_after_rad);
+        assert_eq!(c.observable, [true; 3]);
+    }
+}
+
+#[test]
+fn axis_never_shaken_is_reported_unobservable_not_as_a_number() {
+    let (phase, accel) = session(2, 0.005, false);
+    let series = EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    let c = calibrate(&series, &EstimateSettings::default()).unwrap();
+    assert_eq!(c.observable, [true, true, false]);
+    assert_eq!(c.gamma_hz_per_mps2[2], None);
+    assert_eq!(c.sigma_hz_per_mps2[2], None);
+    let json = format!("{:?}", c.gamma_ppb_per_g);
+    assert!(json.contains("None"));
+}
+
+#[test]
+fn wrong_loop_interval_is_an_error_not_garbage() {
+    let (phase, accel) = session(3, 0.005, true);
+    let series = EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    let settings = EstimateSettings { loop_interval_s: Some(0.007), ..Default::default() };
+    let e = calibrate(&series, &settings).unwrap_err().to_string();
+    assert!(e.contains("not an integer multiple"), "{e}");
+}
