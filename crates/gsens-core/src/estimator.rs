@@ -132,7 +132,8 @@ fn mark_unobservable(cov: &mut Matrix3<f64>, ata: &Matrix3<f64>, rank: usize) {
     let eig = SymmetricEigen::new(*ata);
     let max = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
     for i in 0..3 {
-        if !(eig.eigenvalues[i] > RANK_TOL * max) {
+        let excited = eig.eigenvalues[i] > RANK_TOL * max;
+        if !excited {
             let v = eig.eigenvectors.column(i);
             for axis in 0..3 {
                 if v[axis].abs() > 1e-6 {

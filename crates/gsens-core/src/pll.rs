@@ -45,7 +45,7 @@
 //! which tends to L(s) as T → 0 (z = e^{sT}).
 
 use crate::math::{PI, TAU, abs, cos, sin, sqrt};
-use nalgebra::Complex;
+pub use nalgebra::Complex;
 
 /// Loop-filter coefficients of F(s) = c0 + c1/s + c2/s² [rad/s per rad].
 #[derive(Debug, Clone, Copy, PartialEq)]

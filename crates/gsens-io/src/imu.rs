@@ -1,0 +1,230 @@
+//! Reader of `imu.csv`: one row per IMU sample, header `t_s,fx_mps2,fy_mps2,fz_mps2`.
+//!
+//! The columns may come in any order and extra columns are ignored, but the four
+//! must all be present. Time stamps must be strictly increasing; every value
+//! must be a finite number.
+
+use std::io::Read;
+use std::path::Path;
+
+use crate::error::FormatError;
+use crate::parse::{CsvSource, path_name};
+
+/// The columns of `imu.csv`, in the order the writer emits them.
+pub const IMU_COLUMNS: [&str; 4] = ["t_s", "fx_mps2", "fy_mps2", "fz_mps2"];
+
+/// An IMU log: specific force samples in the IMU body frame.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImuSeries {
+    /// Sample time stamps \[s\], strictly increasing (IMU clock: see `imu_time_offset_s`
+    /// in [`crate::session::prepare_session`]).
+    pub t_s: Vec<f64>,
+    /// Specific force `[fx, fy, fz]` [m/s²] at each time stamp, IMU body frame
+    /// (at rest, level, z up: ≈ `[0, 0, +9.81]`).
+    pub accel_mps2: Vec<[f64; 3]>,
+}
+
+impl ImuSeries {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// `true` when the series holds no sample.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    /// Checks the invariants the readers guarantee: equal lengths, at least one
+    /// sample, finite values, strictly increasing time stamps. `name` names the
+    /// series in the error.
+    pub fn validate(&self, name: &str) -> Result<(), FormatError> {
+        let fail = |reason: String| Err(FormatError::InvalidImuSeries { file: name.to_owned(), reason });
+        if self.t_s.len() != self.accel_mps2.len() {
+            return fail(format!("{} time stamps but {} acceleration samples", self.t_s.len(), self.accel_mps2.len()));
+        }
+        if self.t_s.is_empty() {
+            return fail("no samples".to_owned());
+        }
+        for (i, (t, a)) in self.t_s.iter().zip(&self.accel_mps2).enumerate() {
+            if !t.is_finite() || !a.iter().all(|x| x.is_finite()) {
+                return fail(format!("sample {i} is not finite (t = {t} s, a = {a:?} m/s²)"));
+            }
+            if i > 0 && *t <= self.t_s[i - 1] {
+                return fail(format!(
+                    "time stamps not strictly increasing at sample {i} ({} s then {t} s)",
+                    self.t_s[i - 1]
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Reads an `imu.csv` stream. `source_name` names the source in error messages
+/// (typically the file name).
+pub fn read_imu<R: Read>(input: R, source_name: &str) -> Result<ImuSeries, FormatError> {
+    let (mut src, cols) = CsvSource::open(input, source_name, &IMU_COLUMNS)?;
+    let (ct, cx, cy, cz) = (cols[0], cols[1], cols[2], cols[3]);
+    let mut out = ImuSeries::default();
+    let mut prev: Option<(f64, u64)> = None;
+    while src.next_record()? {
+        src.check_field_count()?;
+        let t = src.f64_at(ct)?;
+        let a = [src.f64_at(cx)?, src.f64_at(cy)?, src.f64_at(cz)?];
+        let line = src.line();
+        if let Some((prev_t, prev_line)) = prev {
+            if t < prev_t {
+                return Err(FormatError::TimeBackwards {
+                    file: src.file.clone(),
+                    line,
+                    column: src.column(ct),
+                    t_s: t,
+                    previous_t_s: prev_t,
+                    previous_line: prev_line,
+                });
+            }
+            if t == prev_t {
+                return Err(FormatError::RepeatedTime {
+                    file: src.file.clone(),
+                    line,
+                    column: src.column(ct),
+                    t_s: t,
+                    previous_line: prev_line,
+                });
+            }
+        }
+        prev = Some((t, line));
+        out.t_s.push(t);
+        out.accel_mps2.push(a);
+    }
+    if out.t_s.is_empty() {
+        return Err(FormatError::NoData { file: src.file });
+    }
+    Ok(out)
+}
+
+/// Opens and reads an `imu.csv` file; errors name the file by its path.
+pub fn read_imu_file(path: impl AsRef<Path>) -> Result<ImuSeries, FormatError> {
+    let path = path.as_ref();
+    let name = path_name(path);
+    let file = std::fs::File::open(path).map_err(|e| FormatError::io(&name, e))?;
+    read_imu(file, &name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> Result<ImuSeries, FormatError> {
+        read_imu(text.as_bytes(), "imu.csv")
+    }
+
+    fn err(text: &str) -> String {
+        let e = read(text).expect_err("expected an error");
+        let msg = e.to_string();
+        assert!(msg.starts_with("imu.csv"), "message does not name the source: {msg}");
+        msg
+    }
+
+    #[test]
+    fn reads_plain_file() {
+        let s = read("t_s,fx_mps2,fy_mps2,fz_mps2\n0,0.5,-1,9.81\n0.025,1e-3,2,3\n").unwrap();
+        assert_eq!(s.t_s, vec![0.0, 0.025]);
+        assert_eq!(s.accel_mps2, vec![[0.5, -1.0, 9.81], [1e-3, 2.0, 3.0]]);
+        s.validate("imu.csv").unwrap();
+    }
+
+    #[test]
+    fn columns_in_any_order_extra_ignored_crlf_bom_spaces() {
+        let s = read("\u{feff}fz_mps2, extra ,t_s,fy_mps2,fx_mps2\r\n3,x,1.5, 2 ,1\r\n\r\n6,y,2.5,5,4\r\n").unwrap();
+        assert_eq!(s.t_s, vec![1.5, 2.5]);
+        assert_eq!(s.accel_mps2, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    }
+
+    #[test]
+    fn missing_column() {
+        let m = err("t_s,fx_mps2,fz_mps2\n0,1,2\n");
+        assert!(m.contains("line 1") && m.contains("missing column `fy_mps2`"), "{m}");
+    }
+
+    #[test]
+    fn duplicate_column() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2,fx_mps2\n0,1,2,3,4\n");
+        assert!(m.contains("`fx_mps2` appears twice") && m.contains("columns 2 and 5"), "{m}");
+    }
+
+    #[test]
+    fn non_numeric_cell() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,2,3\n0.1,1,abc,3\n");
+        assert!(m.contains("line 3, column 3 (`fy_mps2`)") && m.contains("`abc` is not a number"), "{m}");
+    }
+
+    #[test]
+    fn empty_cell() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,,3\n");
+        assert!(m.contains("line 2, column 3 (`fy_mps2`)") && m.contains("empty cell"), "{m}");
+    }
+
+    #[test]
+    fn nan_and_inf() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,NaN,2,3\n");
+        assert!(m.contains("line 2, column 2 (`fx_mps2`)") && m.contains("`NaN` is not a finite number"), "{m}");
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,2,3\n1,1,2,-inf\n");
+        assert!(m.contains("line 3, column 4 (`fz_mps2`)") && m.contains("`-inf` is not a finite number"), "{m}");
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\ninfinity,1,2,3\n");
+        assert!(m.contains("line 2, column 1 (`t_s`)") && m.contains("not a finite number"), "{m}");
+    }
+
+    #[test]
+    fn time_backwards() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,2,3\n0.2,1,2,3\n0.1,1,2,3\n");
+        assert!(m.contains("line 4, column 1 (`t_s`)") && m.contains("goes backwards") && m.contains("line 3"), "{m}");
+    }
+
+    #[test]
+    fn repeated_time() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,2,3\n0.1,1,2,3\n0.1,1,2,3\n");
+        assert!(m.contains("line 4, column 1 (`t_s`)") && m.contains("repeated time stamp 0.1 s"), "{m}");
+        assert!(m.contains("already on line 3"), "{m}");
+    }
+
+    #[test]
+    fn empty_file() {
+        let m = err("");
+        assert!(m.contains("empty file"), "{m}");
+        let m = err("\n\n");
+        assert!(m.contains("empty file"), "{m}");
+    }
+
+    #[test]
+    fn header_only() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n");
+        assert!(m.contains("header only, no data rows"), "{m}");
+    }
+
+    #[test]
+    fn wrong_field_count() {
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,2,3\n0.1,1,2\n");
+        assert!(m.contains("line 3") && m.contains("expected 4 fields") && m.contains("found 3"), "{m}");
+        let m = err("t_s,fx_mps2,fy_mps2,fz_mps2\n0,1,2,3,4\n");
+        assert!(m.contains("line 2") && m.contains("found 5"), "{m}");
+    }
+
+    #[test]
+    fn missing_file() {
+        let e = read_imu_file("/nonexistent/dir/imu.csv").unwrap_err();
+        let m = e.to_string();
+        assert!(m.starts_with("/nonexistent/dir/imu.csv: cannot read"), "{m}");
+    }
+
+    #[test]
+    fn validate_in_memory_series() {
+        let bad = ImuSeries { t_s: vec![0.0, 0.0], accel_mps2: vec![[0.0; 3]; 2] };
+        let m = bad.validate("sim").unwrap_err().to_string();
+        assert!(m.starts_with("sim: invalid IMU series") && m.contains("not strictly increasing"), "{m}");
+        let bad = ImuSeries { t_s: vec![0.0], accel_mps2: vec![] };
+        assert!(bad.validate("sim").is_err());
+        assert!(ImuSeries::default().validate("sim").is_err());
+    }
+}

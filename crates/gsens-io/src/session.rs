@@ -1,0 +1,662 @@
+//! Assembly of what the estimator needs from a tracking log and an IMU log:
+//! the epoch grid, the channel selection, the per-epoch averaged phase error and
+//! the specific force interpolated onto the epochs.
+//!
+//! # Epoch grid
+//!
+//! The tracking time stamps define the epochs. The median spacing of the
+//! distinct time stamps gives the log interval, with which each spacing is
+//! rounded to a whole number of intervals: that numbers the epochs `k` (a
+//! spacing rounding to zero is an error). A least-squares line through the
+//! pairs (k, time stamp) then defines the uniform grid `t0 + k·T` (so that
+//! jitter in the time stamps or a log interval slightly off its nominal value
+//! does not accumulate over a long log); every time stamp must lie within 10%
+//! of `T` of its grid time, or it is an error naming the file, line and column.
+//! Grid points without any tracking row (gaps) are epochs too, with no phase,
+//! so that the estimator's loop models run through the gaps. The epoch time
+//! `t_s[k]` is the logged time stamp where the log has one (so an IMU logged at
+//! the same instants is used exactly), the grid time `t0 + k·T` in the gaps.
+//!
+//! # Selection
+//!
+//! Rows outside the usable span (see below), below the elevation mask (rows of
+//! unknown elevation pass) or below the C/N0 threshold are dropped; then the
+//! `max_channels` tracks (a track: one channel, one PRN) with the highest mean
+//! C/N0 over their remaining rows are used.
+//!
+//! # Averaging
+//!
+//! At each epoch, the phase errors of the selected tracks present at that epoch
+//! are averaged with weights renormalized over the present ones, so a missing
+//! channel does not scale the average. Because the average over a changing set
+//! of channels would still jump by the channels' constant offsets (a Costas
+//! discriminator bias, multipath, ...) whenever a channel comes or goes,
+//! [`SelectionConfig::remove_channel_offsets`] (on by default) first estimates
+//! a constant offset per track by least squares on the additive model
+//! `φ_i(k) = s(k) + c_i` (the common part `s` free at every epoch, the offsets
+//! summing to zero over the tracks that share epochs) and averages `φ_i − c_i`.
+//! When all selected tracks are present at every epoch, this changes nothing
+//! with equal weights.
+//!
+//! Weights: [`Weighting::Equal`], as in the paper, or [`Weighting::Cn0`], the
+//! inverse of the thermal phase variance of a Costas loop,
+//! `σ_φ² = Bn/(C/N0)·(1 + 1/(2·T·C/N0))`, neglecting the squaring loss (the
+//! second term, small above ~30 dB-Hz): `w ∝ C/N0 = 10^(cn0_dbhz/10)` (the ratio
+//! in Hz), evaluated with each row's own C/N0.
+//!
+//! # IMU
+//!
+//! The specific force is interpolated linearly onto the epochs. The IMU sample
+//! stamped `t_imu` was taken at true time `t_imu − imu_time_offset_s`, so the
+//! epoch at time `t` reads the IMU at stamp `t + imu_time_offset_s`; when that
+//! is one of the IMU's stamps the sample is used exactly. Epochs outside the
+//! IMU's span are dropped from the ends: the usable span is the overlap of the
+//! two logs.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::FormatError;
+use crate::imu::{ImuSeries, read_imu_file};
+use crate::parse::path_name;
+use crate::tracking::{TrackingLog, read_tracking_file};
+
+/// The most epochs (gaps included) a prepared session may hold.
+pub const MAX_EPOCHS: u64 = 1 << 25;
+
+/// Relative tolerance of a time stamp around the epoch grid (fraction of the log interval).
+pub const GRID_TOLERANCE: f64 = 0.1;
+
+/// How the phase errors of the selected channels are weighted in the per-epoch average.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Weighting {
+    /// Equal weights (the paper).
+    #[default]
+    Equal,
+    /// Weights ∝ C/N0 as a ratio, `10^(cn0_dbhz/10)`: the inverse of the thermal
+    /// phase variance `Bn/(C/N0)` (squaring loss neglected), per row.
+    Cn0,
+}
+
+/// Which channels enter the average, and how.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SelectionConfig {
+    /// Use at most this many tracks, those with the highest mean C/N0 (after
+    /// the masks); `None`: all that pass the masks. Default `Some(4)` (the paper).
+    pub max_channels: Option<usize>,
+    /// Drop the rows whose C/N0 is below this [dB-Hz]. Default `None`.
+    pub min_cn0_dbhz: Option<f64>,
+    /// Drop the rows whose elevation is below this \[deg\]; rows of unknown
+    /// elevation pass. Default `None`.
+    pub elevation_mask_deg: Option<f64>,
+    /// The weights of the per-epoch average. Default [`Weighting::Equal`].
+    pub weighting: Weighting,
+    /// Estimate and remove a constant phase offset per track before averaging,
+    /// so that channels coming and going do not step the average (see the
+    /// module documentation). Default `true`.
+    pub remove_channel_offsets: bool,
+}
+
+impl Default for SelectionConfig {
+    fn default() -> Self {
+        SelectionConfig {
+            max_channels: Some(4),
+            min_cn0_dbhz: None,
+            elevation_mask_deg: None,
+            weighting: Weighting::Equal,
+            remove_channel_offsets: true,
+        }
+    }
+}
+
+/// What became of one track (one channel, one PRN) of the tracking log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSummary {
+    /// Receiver channel number.
+    pub channel: u32,
+    /// Satellite PRN.
+    pub prn: u32,
+    /// Mean C/N0 [dB-Hz] over the rows counted in `epochs`; when none is, over
+    /// the rows in the usable span, or else over all the track's rows.
+    pub mean_cn0_dbhz: f64,
+    /// Number of rows in the usable span that pass the masks (the epochs the
+    /// track contributes to when used).
+    pub epochs: usize,
+    /// Whether the track enters the average.
+    pub used: bool,
+    /// `"used"`, or why the track is excluded.
+    pub reason: String,
+    /// The constant phase offset removed from the track \[rad\] (used tracks with
+    /// [`SelectionConfig::remove_channel_offsets`]), else `None`.
+    pub phase_offset_rad: Option<f64>,
+}
+
+/// The inputs of the estimator, on a uniform epoch grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreparedSession {
+    /// The log interval `T` \[s\]: the slope of the epoch grid (for a log without
+    /// jitter, the spacing of the tracking time stamps).
+    pub log_interval_s: f64,
+    /// Epoch times \[s\]: the logged time stamp, or the grid time `t0 + k·T` in
+    /// gaps. Consecutive epochs are one log interval apart (up to the time
+    /// stamps' jitter, at most 10% of the interval).
+    pub t_s: Vec<f64>,
+    /// Averaged phase error of the selected channels \[rad\]; `None` where no
+    /// selected channel is present.
+    pub phase_err_rad: Vec<Option<f64>>,
+    /// Specific force [m/s²] interpolated at each epoch, IMU body frame.
+    pub accel_mps2: Vec<[f64; 3]>,
+    /// Every track of the log, sorted by channel then PRN, with whether it is used.
+    pub channels: Vec<ChannelSummary>,
+    /// The selection settings used.
+    pub selection: SelectionConfig,
+    /// The IMU time offset used \[s\] (IMU time stamp minus true time).
+    pub imu_time_offset_s: f64,
+}
+
+impl PreparedSession {
+    /// Number of epochs.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// `true` when there is no epoch (never the case for a session from [`prepare_session`]).
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    /// Number of epochs that have a phase error.
+    pub fn epochs_with_phase(&self) -> usize {
+        self.phase_err_rad.iter().filter(|p| p.is_some()).count()
+    }
+}
+
+/// The uniform epoch grid of a tracking log.
+struct Grid {
+    t0_s: f64,
+    log_interval_s: f64,
+    /// Grid index of each distinct time stamp.
+    k_of_stamp: Vec<u64>,
+}
+
+impl Grid {
+    /// Epoch time of grid index `k`: the logged stamp if any, else `t0 + k·T`.
+    fn time(&self, stamps: &[f64], k: u64) -> f64 {
+        match self.k_of_stamp.binary_search(&k) {
+            Ok(i) => stamps[i],
+            Err(_) => self.t0_s + k as f64 * self.log_interval_s,
+        }
+    }
+
+    /// Grid indices of the rows of a track whose time stamps are all stamps of the log.
+    fn track_ks(&self, stamps: &[f64], t_s: &[f64]) -> Vec<u64> {
+        let mut p = 0usize;
+        t_s.iter()
+            .map(|&t| {
+                while stamps[p] < t {
+                    p += 1;
+                }
+                debug_assert_eq!(stamps[p], t);
+                self.k_of_stamp[p]
+            })
+            .collect()
+    }
+
+    /// The grid of a log. The median spacing assigns the grid indices (each
+    /// spacing rounded to a whole number of intervals, so a slightly wrong
+    /// median does not accumulate); a least-squares line through (index, time
+    /// stamp) then gives the grid `t0 + k·T`, around which every time stamp must
+    /// lie within [`GRID_TOLERANCE`]·T.
+    fn new(log: &TrackingLog) -> Result<Self, FormatError> {
+        let stamps = log.epoch_t_s();
+        let lines = log.epoch_line();
+        let file = log.source_name();
+        let n = stamps.len();
+        if n < 2 {
+            return Err(FormatError::TooFewEpochs { file: file.to_owned(), epochs: n });
+        }
+        let mut d: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
+        let m = d.len() / 2;
+        d.select_nth_unstable_by(m, f64::total_cmp);
+        let median_s = if d.len() % 2 == 1 {
+            d[m]
+        } else {
+            let lower = d[..m].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            0.5 * (lower + d[m])
+        };
+        drop(d);
+
+        let mut k_of_stamp = Vec::with_capacity(n);
+        k_of_stamp.push(0u64);
+        for i in 1..n {
+            let steps = ((stamps[i] - stamps[i - 1]) / median_s).round();
+            if steps < 1.0 {
+                return Err(FormatError::GridCollision {
+                    file: file.to_owned(),
+                    line: lines[i],
+                    column: log.t_column().clone(),
+                    t_s: stamps[i],
+                    previous_t_s: stamps[i - 1],
+                    previous_line: lines[i - 1],
+                    log_interval_s: median_s,
+                });
+            }
+            k_of_stamp.push(k_of_stamp[i - 1] + steps as u64);
+        }
+
+        // Least-squares line t = t0 + T·k (times relative to the first stamp).
+        let nf = n as f64;
+        let k_mean = k_of_stamp.iter().map(|&k| k as f64).sum::<f64>() / nf;
+        let y_mean = stamps.iter().map(|&t| t - stamps[0]).sum::<f64>() / nf;
+        let (mut sxx, mut sxy) = (0.0, 0.0);
+        for (&k, &t) in k_of_stamp.iter().zip(stamps) {
+            let dk = k as f64 - k_mean;
+            sxx += dk * dk;
+            sxy += dk * (t - stamps[0] - y_mean);
+        }
+        let log_interval_s = sxy / sxx;
+        let t0_s = stamps[0] + (y_mean - log_interval_s * k_mean);
+        let grid = Grid { t0_s, log_interval_s, k_of_stamp };
+        for (i, &t) in stamps.iter().enumerate() {
+            let grid_t_s = t0_s + grid.k_of_stamp[i] as f64 * log_interval_s;
+            let offset_s = t - grid_t_s;
+            if offset_s.abs() > GRID_TOLERANCE * log_interval_s {
+                return Err(FormatError::OffGrid {
+                    file: file.to_owned(),
+                    line: lines[i],
+                    column: log.t_column().clone(),
+                    t_s: t,
+                    offset_s,
+                    t0_s,
+                    log_interval_s,
+                    grid_t_s,
+                });
+            }
+        }
+        Ok(grid)
+    }
+}
+
+/// Per-track bookkeeping of the selection.
+struct TrackStats {
+    in_span: usize,
+    above_mask: usize,
+    passing: usize,
+    cn0_sum_passing: f64,
+    cn0_sum_span: f64,
+}
+
+/// Reads both files and prepares the session: [`read_tracking_file`],
+/// [`read_imu_file`], then [`prepare_session`].
+pub fn prepare_session_files(
+    tracking_path: impl AsRef<Path>,
+    imu_path: impl AsRef<Path>,
+    selection: &SelectionConfig,
+    imu_time_offset_s: f64,
+) -> Result<PreparedSession, FormatError> {
+    let tracking = read_tracking_file(tracking_path)?;
+    let imu = read_imu_file(imu_path.as_ref())?;
+    prepare_session(&tracking, &imu, &path_name(imu_path.as_ref()), selection, imu_time_offset_s)
+}
+
+/// Builds the estimator's inputs from a tracking log and an IMU series (see the
+/// module documentation for the epoch grid, the selection, the averaging and
+/// the interpolation).
+///
+/// `imu_name` names the IMU source in errors; `imu_time_offset_s` is the IMU
+/// time stamp minus true time \[s\] (0 when the clocks agree).
+///
+/// Errors: fewer than two tracking epochs, a time stamp off the grid, an
+/// invalid IMU series, invalid settings, logs that do not overlap in time, or no
+/// channel passing the selection (naming the criterion that excluded each one).
+pub fn prepare_session(
+    tracking: &TrackingLog,
+    imu: &ImuSeries,
+    imu_name: &str,
+    selection: &SelectionConfig,
+    imu_time_offset_s: f64,
+) -> Result<PreparedSession, FormatError> {
+    let file = tracking.source_name();
+    check_settings(file, selection, imu_time_offset_s)?;
+    imu.validate(imu_name)?;
+    let stamps = tracking.epoch_t_s();
+    let grid = Grid::new(tracking)?;
+    let k_last = *grid.k_of_stamp.last().expect("at least two stamps");
+
+    // Usable span: the grid epochs whose IMU read time lies in the IMU's span.
+    let imu_first = imu.t_s[0];
+    let imu_last = *imu.t_s.last().expect("validated non-empty");
+    let read_time = |k: u64| grid.time(stamps, k) + imu_time_offset_s;
+    let k_first = partition_point(0, k_last + 1, |k| read_time(k) < imu_first);
+    let k_end = partition_point(0, k_last + 1, |k| read_time(k) <= imu_last); // one past the last
+    if k_first >= k_end {
+        return Err(FormatError::NoOverlap {
+            imu_file: imu_name.to_owned(),
+            tracking_file: file.to_owned(),
+            imu_start_s: imu_first - imu_time_offset_s,
+            imu_end_s: imu_last - imu_time_offset_s,
+            imu_time_offset_s,
+            tracking_start_s: stamps[0],
+            tracking_end_s: *stamps.last().expect("non-empty"),
+        });
+    }
+    let n_epochs = k_end - k_first;
+    if n_epochs > MAX_EPOCHS {
+        return Err(FormatError::GridTooLarge {
+            file: file.to_owned(),
+            epochs: n_epochs,
+            log_interval_s: grid.log_interval_s,
+            limit: MAX_EPOCHS,
+        });
+    }
+    let n_epochs = n_epochs as usize;
+    let span = (grid.time(stamps, k_first), grid.time(stamps, k_end - 1));
+
+    // Row filter shared by the statistics and the averaging.
+    let in_span = |k: u64| k >= k_first && k < k_end;
+    let above_mask = |elev: f64| selection.elevation_mask_deg.is_none_or(|m| elev.is_nan() || elev >= m);
+    let above_cn0 = |cn0: f64| selection.min_cn0_dbhz.is_none_or(|m| cn0 >= m);
+
+    let tracks = tracking.tracks();
+    let track_ks: Vec<Vec<u64>> = tracks.iter().map(|tr| grid.track_ks(stamps, &tr.t_s)).collect();
+    let stats: Vec<TrackStats> = tracks
+        .iter()
+        .zip(&track_ks)
+        .map(|(tr, ks)| {
+            let mut s = TrackStats { in_span: 0, above_mask: 0, passing: 0, cn0_sum_passing: 0.0, cn0_sum_span: 0.0 };
+            for (j, &k) in ks.iter().enumerate() {
+                if !in_span(k) {
+                    continue;
+                }
+                let cn0 = tr.cn0_dbhz[j];
+                s.in_span += 1;
+                s.cn0_sum_span += cn0;
+                if !above_mask(tr.elev_deg[j]) {
+                    continue;
+                }
+                s.above_mask += 1;
+                if !above_cn0(cn0) {
+                    continue;
+                }
+                s.passing += 1;
+                s.cn0_sum_passing += cn0;
+            }
+            s
+        })
+        .collect();
+
+    // Rank the candidates by mean C/N0 (ties: channel, PRN).
+    let mean_cn0 = |i: usize| {
+        let s = &stats[i];
+        if s.passing > 0 {
+            s.cn0_sum_passing / s.passing as f64
+        } else if s.in_span > 0 {
+            s.cn0_sum_span / s.in_span as f64
+        } else {
+            tracks[i].mean_cn0_dbhz()
+        }
+    };
+    let mut ranked: Vec<usize> = (0..tracks.len()).filter(|&i| stats[i].passing > 0).collect();
+    ranked.sort_by(|&a, &b| {
+        mean_cn0(b)
+            .total_cmp(&mean_cn0(a))
+            .then(tracks[a].channel.cmp(&tracks[b].channel))
+            .then(tracks[a].prn.cmp(&tracks[b].prn))
+    });
+    let n_used = selection.max_channels.map_or(ranked.len(), |n| n.min(ranked.len()));
+    let mut reasons: Vec<String> = vec![String::new(); tracks.len()];
+    let mut used = vec![false; tracks.len()];
+    for (rank, &i) in ranked.iter().enumerate() {
+        if rank < n_used {
+            used[i] = true;
+            reasons[i] = "used".to_owned();
+        } else {
+            reasons[i] =
+                format!("not among the {} strongest (mean C/N0 {:.1} dB-Hz, rank {})", n_used, mean_cn0(i), rank + 1);
+        }
+    }
+    for (i, s) in stats.iter().enumerate() {
+        if s.in_span == 0 {
+            reasons[i] = format!("no rows in the usable span [{}, {}] s (overlap with the IMU)", span.0, span.1);
+        } else if s.above_mask == 0 {
+            reasons[i] = format!(
+                "all {} rows in the usable span below the elevation mask of {} deg",
+                s.in_span,
+                selection.elevation_mask_deg.unwrap_or(f64::NAN)
+            );
+        } else if s.passing == 0 {
+            reasons[i] = format!(
+                "all {} rows in the usable span (above the elevation mask) below the C/N0 threshold of {} dB-Hz",
+                s.above_mask,
+                selection.min_cn0_dbhz.unwrap_or(f64::NAN)
+            );
+        }
+    }
+    if n_used == 0 {
+        let mut order: Vec<usize> = (0..tracks.len()).collect();
+        order.sort_by_key(|&i| (tracks[i].channel, tracks[i].prn, i));
+        let detail: Vec<String> = order
+            .iter()
+            .map(|&i| format!("channel {} (PRN {}): {}", tracks[i].channel, tracks[i].prn, reasons[i]))
+            .collect();
+        return Err(FormatError::NoChannelSelected { file: file.to_owned(), reason: detail.join("; ") });
+    }
+
+    // Gather the used rows by epoch (compressed rows: track slot, weight, phase).
+    let selected: Vec<usize> = ranked[..n_used].to_vec();
+    let weight = |cn0_dbhz: f64| match selection.weighting {
+        Weighting::Equal => 1.0,
+        Weighting::Cn0 => 10f64.powf(cn0_dbhz / 10.0),
+    };
+    let mut start = vec![0usize; n_epochs + 1];
+    let for_each_used_row = |f: &mut dyn FnMut(usize, usize, usize)| {
+        for (slot, &i) in selected.iter().enumerate() {
+            let tr = &tracks[i];
+            for (j, &k) in track_ks[i].iter().enumerate() {
+                if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
+                    f(slot, j, (k - k_first) as usize);
+                }
+            }
+        }
+    };
+    for_each_used_row(&mut |_, _, e| start[e + 1] += 1);
+    for e in 0..n_epochs {
+        start[e + 1] += start[e];
+    }
+    let mut fill = start.clone();
+    let mut entries = vec![(0usize, 0f64, 0f64); start[n_epochs]];
+    for_each_used_row(&mut |slot, j, e| {
+        let tr = &tracks[selected[slot]];
+        entries[fill[e]] = (slot, weight(tr.cn0_dbhz[j]), tr.phase_err_rad[j]);
+        fill[e] += 1;
+    });
+    drop(fill);
+
+    let offsets_rad = if selection.remove_channel_offsets && selected.len() > 1 {
+        channel_offsets(selected.len(), &start, &entries)
+    } else {
+        vec![0.0; selected.len()]
+    };
+
+    // Average, interpolate.
+    let mut t_s = Vec::with_capacity(n_epochs);
+    let mut phase_err_rad = Vec::with_capacity(n_epochs);
+    let mut accel_mps2 = Vec::with_capacity(n_epochs);
+    let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first);
+    let mut cursor = 0usize;
+    for e in 0..n_epochs {
+        let k = k_first + e as u64;
+        let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
+            stamp_idx += 1;
+            stamps[stamp_idx - 1]
+        } else {
+            grid.t0_s + k as f64 * grid.log_interval_s
+        };
+        t_s.push(t);
+        let rows = &entries[start[e]..start[e + 1]];
+        phase_err_rad.push(if rows.is_empty() {
+            None
+        } else {
+            let (sw, swp) =
+                rows.iter().fold((0.0, 0.0), |(sw, swp), &(slot, w, p)| (sw + w, swp + w * (p - offsets_rad[slot])));
+            Some(swp / sw)
+        });
+        accel_mps2.push(interpolate(imu, t + imu_time_offset_s, &mut cursor));
+    }
+
+    let mut channels: Vec<ChannelSummary> = (0..tracks.len())
+        .map(|i| ChannelSummary {
+            channel: tracks[i].channel,
+            prn: tracks[i].prn,
+            mean_cn0_dbhz: mean_cn0(i),
+            epochs: stats[i].passing,
+            used: used[i],
+            reason: std::mem::take(&mut reasons[i]),
+            phase_offset_rad: selected
+                .iter()
+                .position(|&s| s == i)
+                .filter(|_| selection.remove_channel_offsets)
+                .map(|slot| offsets_rad[slot]),
+        })
+        .collect();
+    channels.sort_by_key(|c| (c.channel, c.prn));
+
+    Ok(PreparedSession {
+        log_interval_s: grid.log_interval_s,
+        t_s,
+        phase_err_rad,
+        accel_mps2,
+        channels,
+        selection: selection.clone(),
+        imu_time_offset_s,
+    })
+}
+
+fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f64) -> Result<(), FormatError> {
+    let fail = |reason: String| Err(FormatError::InvalidSelection { file: file.to_owned(), reason });
+    if selection.max_channels == Some(0) {
+        return fail("max_channels is 0".to_owned());
+    }
+    if let Some(v) = selection.min_cn0_dbhz.filter(|v| !v.is_finite()) {
+        return fail(format!("min_cn0_dbhz = {v} is not finite"));
+    }
+    if let Some(v) = selection.elevation_mask_deg.filter(|v| !v.is_finite()) {
+        return fail(format!("elevation_mask_deg = {v} is not finite"));
+    }
+    if !imu_time_offset_s.is_finite() {
+        return fail(format!("imu_time_offset_s = {imu_time_offset_s} is not finite"));
+    }
+    Ok(())
+}
+
+/// The first `k` in `[lo, hi)` where `pred` is false (`pred` monotone: true then false); `hi` if none.
+fn partition_point(mut lo: u64, mut hi: u64, pred: impl Fn(u64) -> bool) -> u64 {
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if pred(mid) { lo = mid + 1 } else { hi = mid }
+    }
+    lo
+}
+
+/// Linear interpolation of the IMU at stamp `tau` (within the IMU's span), moving
+/// `cursor` forward (calls must come with non-decreasing `tau`). A `tau` equal to
+/// a stamp returns that sample exactly.
+fn interpolate(imu: &ImuSeries, tau: f64, cursor: &mut usize) -> [f64; 3] {
+    let t = &imu.t_s;
+    let mut j = *cursor;
+    while j + 1 < t.len() && t[j + 1] <= tau {
+        j += 1;
+    }
+    *cursor = j;
+    if t[j] == tau || j + 1 == t.len() {
+        return imu.accel_mps2[j];
+    }
+    let f = (tau - t[j]) / (t[j + 1] - t[j]);
+    let (a, b) = (imu.accel_mps2[j], imu.accel_mps2[j + 1]);
+    [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f]
+}
+
+/// Least-squares constant offsets `c` of the additive model `φ_i(k) = s(k) + c_i`
+/// (weights `w_ik`), with `s` eliminated: `M c = b`,
+/// `M = Σ_k (diag(w_k) − w_k w_kᵀ / W_k)`, `b_i = Σ_k w_ik (φ_ik − φ̄_k)`, `φ̄_k` the
+/// weighted mean at epoch `k`. `M` is singular along the indicator vector of
+/// each group of tracks connected by shared epochs; the gauge `Σ c_i = 0` over
+/// each group is imposed by adding `λ·1_g 1_gᵀ` (b is orthogonal to these
+/// vectors, so the solution satisfies the gauge exactly).
+fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)]) -> Vec<f64> {
+    let mut m = vec![vec![0.0f64; n]; n];
+    let mut b = vec![0.0f64; n];
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for e in 0..start.len() - 1 {
+        let rows = &entries[start[e]..start[e + 1]];
+        if rows.is_empty() {
+            continue;
+        }
+        let (sw, swp) = rows.iter().fold((0.0, 0.0), |(sw, swp), &(_, w, p)| (sw + w, swp + w * p));
+        let mean = swp / sw;
+        for (r, &(i, wi, pi)) in rows.iter().enumerate() {
+            b[i] += wi * (pi - mean);
+            m[i][i] += wi - wi * wi / sw;
+            for &(j, wj, _) in &rows[r + 1..] {
+                let x = wi * wj / sw;
+                m[i][j] -= x;
+                m[j][i] -= x;
+            }
+            let (ri, r0) = (root(&mut parent, i), root(&mut parent, rows[0].0));
+            parent[ri] = r0;
+        }
+    }
+    let trace: f64 = (0..n).map(|i| m[i][i]).sum();
+    let lambda = if trace > 0.0 { trace / n as f64 } else { 1.0 };
+    let groups: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
+    for i in 0..n {
+        for j in 0..n {
+            if groups[i] == groups[j] {
+                m[i][j] += lambda;
+            }
+        }
+    }
+    solve(m, b)
+}
+
+/// Solves `a x = b` by Gaussian elimination with partial pivoting (`a` square,
+/// non-singular by construction).
+fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+    let n = b.len();
+    for col in 0..n {
+        let p = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs())).expect("non-empty");
+        a.swap(col, p);
+        b.swap(col, p);
+        let (upper, lower) = a.split_at_mut(col + 1);
+        let pivot_row = &upper[col];
+        let (b_upper, b_lower) = b.split_at_mut(col + 1);
+        for (row, br) in lower.iter_mut().zip(b_lower) {
+            let f = row[col] / pivot_row[col];
+            if f != 0.0 {
+                for (x, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                    *x -= f * p;
+                }
+                *br -= f * b_upper[col];
+            }
+        }
+    }
+    let mut x = vec![0.0; n];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|c| a[r][c] * x[c]).sum();
+        x[r] = (b[r] - s) / a[r][r];
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests;

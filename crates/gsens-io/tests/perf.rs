@@ -1,0 +1,96 @@
+//! Throughput of the readers on a 1-hour, 12-channel, 40 Hz log (1.7 M rows).
+//!
+//! Ignored by default (it allocates a few hundred MB); run it optimized:
+//! `cargo test -p gsens-io --release --test perf -- --ignored --nocapture`.
+
+use std::time::Instant;
+
+use gsens_io::{ImuSeries, SelectionConfig, TrackingRow, TrackingWriter, prepare_session, read_imu, read_tracking};
+
+const EPOCHS: usize = 3600 * 40;
+
+/// Writes the log; `round` maps each value to what the log holds (full precision,
+/// or a receiver's few decimals: `round(v, scale)`, scale = 10^decimals).
+fn tracking_text(round: impl Fn(f64, f64) -> f64) -> Vec<u8> {
+    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+    let mut rnd = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut w = TrackingWriter::new(Vec::with_capacity(200 << 20)).unwrap();
+    for k in 0..EPOCHS {
+        let t_s = 345_600.0 + k as f64 * 0.025;
+        for ch in 0..12u32 {
+            // Channel 11 drops out now and then.
+            if ch == 11 && (k / 1000) % 7 == 3 {
+                continue;
+            }
+            let row = TrackingRow {
+                t_s,
+                channel: ch,
+                prn: ch * 2 + 1,
+                cn0_dbhz: round(35.0 + ch as f64 + rnd(), 10.0),
+                elev_deg: if ch == 5 { None } else { Some(round(10.0 + 70.0 * rnd(), 10.0)) },
+                phase_err_rad: round(0.05 * (rnd() - 0.5), 1e6),
+            };
+            w.write_row(&row).unwrap();
+        }
+    }
+    w.finish().unwrap()
+}
+
+fn time_tracking(label: &str, text: &[u8]) -> gsens_io::TrackingLog {
+    let rows = text.iter().filter(|&&b| b == b'\n').count() - 1;
+    // Baseline: splitting the text into records with the csv crate, nothing parsed.
+    let t = Instant::now();
+    let mut rdr = csv::ReaderBuilder::new().flexible(true).from_reader(text);
+    let mut rec = csv::ByteRecord::new();
+    let mut n = 0usize;
+    while rdr.read_byte_record(&mut rec).unwrap() {
+        n += rec.len();
+    }
+    let split_s = t.elapsed().as_secs_f64();
+    assert_eq!(n, rows * 6);
+
+    let t = Instant::now();
+    let log = read_tracking(text, "tracking.csv").unwrap();
+    let read_s = t.elapsed().as_secs_f64();
+    assert_eq!(log.rows(), rows);
+    eprintln!(
+        "tracking ({label}): {rows} rows, {:.1} MB read in {read_s:.3} s ({:.0} MB/s; csv splitting alone {split_s:.3} s)",
+        text.len() as f64 / 1e6,
+        text.len() as f64 / 1e6 / read_s,
+    );
+    log
+}
+
+#[test]
+#[ignore = "timing test: run with --release -- --ignored"]
+fn one_hour_twelve_channels_40hz() {
+    let full = tracking_text(|v, _| v);
+    let log = time_tracking("full f64 precision", &full);
+    drop(full);
+    let short = tracking_text(|v, scale| (v * scale).round() / scale);
+    time_tracking("receiver-like decimals", &short);
+    drop(short);
+
+    let imu = ImuSeries {
+        t_s: (0..EPOCHS).map(|k| 345_600.0 + k as f64 * 0.025).collect(),
+        accel_mps2: (0..EPOCHS).map(|k| [(k as f64).sin(), (k as f64).cos(), 9.81 + 1e-3 * (k % 17) as f64]).collect(),
+    };
+    let mut imu_text = Vec::new();
+    gsens_io::write_imu_csv(&mut imu_text, &imu).unwrap();
+    let t = Instant::now();
+    let imu_back = read_imu(imu_text.as_slice(), "imu.csv").unwrap();
+    let imu_s = t.elapsed().as_secs_f64();
+    assert_eq!(imu_back, imu);
+
+    let t = Instant::now();
+    let cfg = SelectionConfig { max_channels: None, ..SelectionConfig::default() };
+    let s = prepare_session(&log, &imu_back, "imu.csv", &cfg, 0.0).unwrap();
+    let prep_s = t.elapsed().as_secs_f64();
+    assert_eq!(s.len(), EPOCHS);
+    eprintln!("imu: {} rows in {imu_s:.3} s; prepare_session (12 channels, offsets): {prep_s:.3} s", imu_back.len());
+}
