@@ -177,17 +177,36 @@ pub struct Calibration {
     pub epochs_total: usize,
     /// Log interval [s].
     pub log_interval_s: f64,
+    /// The estimate as it evolved (every `history_interval_s` after the warm-up).
+    #[serde(skip)]
+    pub history: Vec<HistoryPoint>,
     /// Loop updates per log epoch in the model.
     pub model_substeps: u32,
     /// Every setting used.
     pub settings: EstimateSettings,
 }
 
+/// The estimate at one epoch of the run (the paper's Fig. 4).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct HistoryPoint {
+    /// Epoch time [s].
+    pub t_s: f64,
+    /// Γ̂ so far [Hz/(m/s²)].
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// Its 1σ so far, assuming white residuals [Hz/(m/s²)] (+∞ while unexcited).
+    pub sigma_hz_per_mps2: [f64; 3],
+}
+
+/// Interval between two [`HistoryPoint`]s [s].
+pub const HISTORY_INTERVAL_S: f64 = 0.25;
+
 /// The per-epoch series a calibration needs (owned by the caller).
 #[derive(Debug, Clone, Copy)]
 pub struct EpochSeries<'a> {
     /// Uniform log interval [s].
     pub log_interval_s: f64,
+    /// Epoch times [s].
+    pub t_s: &'a [f64],
     /// Averaged phase error per epoch [rad]; `None` where no channel was present.
     pub phase_err_rad: &'a [Option<f64>],
     /// Specific force per epoch [m/s²] (IMU interpolated onto the epochs).
@@ -214,13 +233,13 @@ fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> Result<Regre
 /// Runs the configured estimator over the series and assembles the result.
 pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
     let n = series.accel_mps2.len();
-    if series.phase_err_rad.len() != n {
+    if series.phase_err_rad.len() != n || series.t_s.len() != n {
         return Err(CalibError::Input("phase and specific-force series differ in length".into()));
     }
     let model = build_model(series.log_interval_s, settings)?;
     let substeps = model.substeps();
     let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
-    let (estimate, phi_a, batch) = match settings.method {
+    let (estimate, phi_a, batch, history) = match settings.method {
         Method::Batch => run(Calibrator::new(model, BatchLeastSquares::new(), skip), series),
         Method::Rls { lambda } => run(
             Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip),
@@ -294,6 +313,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         epochs_used: batch.normal_equations().n,
         epochs_total: n,
         log_interval_s: series.log_interval_s,
+        history,
         model_substeps: substeps,
         settings: *settings,
     })
@@ -304,9 +324,11 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
 fn run<E: GammaEstimator>(
     mut cal: Calibrator<E>,
     series: &EpochSeries,
-) -> (GammaEstimate, Vec<[f64; 3]>, BatchLeastSquares) {
+) -> (GammaEstimate, Vec<[f64; 3]>, BatchLeastSquares, Vec<HistoryPoint>) {
     let mut batch = BatchLeastSquares::new();
     let skip = cal.skip_epochs();
+    let every = ((HISTORY_INTERVAL_S / series.log_interval_s).round() as usize).max(1);
+    let mut history = Vec::new();
     let mut phi_a = Vec::with_capacity(series.accel_mps2.len());
     for (k, (a, p)) in series.accel_mps2.iter().zip(series.phase_err_rad).enumerate() {
         let p = p.filter(|x| x.is_finite());
@@ -317,6 +339,14 @@ fn run<E: GammaEstimator>(
             batch.update(phi, &v);
         }
         phi_a.push(v);
+        if k as u64 >= skip && k % every == 0 && batch.normal_equations().n >= 3 {
+            let e = cal.estimate();
+            history.push(HistoryPoint {
+                t_s: series.t_s[k],
+                gamma_hz_per_mps2: e.gamma_hz_per_mps2,
+                sigma_hz_per_mps2: e.sigma_hz_per_mps2(),
+            });
+        }
     }
-    (cal.estimate(), phi_a, batch)
+    (cal.estimate(), phi_a, batch, history)
 }

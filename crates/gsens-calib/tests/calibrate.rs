@@ -10,6 +10,10 @@ use std::f64::consts::TAU;
 const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
 const T: f64 = 0.025;
 
+fn times(n: usize) -> Vec<f64> {
+    (0..n).map(|k| k as f64 * T).collect()
+}
+
 /// Paper-like session: x, then y, then z shaken for 20 s each, with rests;
 /// φ from the same discrete loop; AR(1) noise (ρ = 0.97, ~1 s correlation) on top.
 fn session(seed: u64, noise_rad: f64, shake_z: bool) -> (Vec<Option<f64>>, Vec<[f64; 3]>) {
@@ -46,8 +50,13 @@ fn robust_sigma_is_honest_under_coloured_noise_and_white_sigma_is_not() {
     let mut z_white = Vec::new();
     for seed in 0..150 {
         let (phase, accel) = session(seed, 0.02, true);
-        let series =
-            EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+        let series = EpochSeries {
+            log_interval_s: T,
+            t_s: &times(phase.len()),
+            phase_err_rad: &phase,
+            accel_mps2: &accel,
+            imu_time_offset_s: 0.0,
+        };
         let c = calibrate(&series, &EstimateSettings::default()).unwrap();
         for i in 0..3 {
             let err = c.gamma_hz_per_mps2[i].unwrap() - GAMMA[i];
@@ -65,7 +74,13 @@ fn robust_sigma_is_honest_under_coloured_noise_and_white_sigma_is_not() {
 #[test]
 fn every_method_recovers_gamma_and_compensation_removes_the_g_part() {
     let (phase, accel) = session(1, 0.002, true);
-    let series = EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    let series = EpochSeries {
+        log_interval_s: T,
+        t_s: &times(phase.len()),
+        phase_err_rad: &phase,
+        accel_mps2: &accel,
+        imu_time_offset_s: 0.0,
+    };
     for method in [Method::Batch, Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }] {
         let settings = EstimateSettings { method, ..Default::default() };
         let c = calibrate(&series, &settings).unwrap();
@@ -81,7 +96,13 @@ fn every_method_recovers_gamma_and_compensation_removes_the_g_part() {
 #[test]
 fn axis_never_shaken_is_reported_unobservable_not_as_a_number() {
     let (phase, accel) = session(2, 0.005, false);
-    let series = EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    let series = EpochSeries {
+        log_interval_s: T,
+        t_s: &times(phase.len()),
+        phase_err_rad: &phase,
+        accel_mps2: &accel,
+        imu_time_offset_s: 0.0,
+    };
     let c = calibrate(&series, &EstimateSettings::default()).unwrap();
     assert_eq!(c.observable, [true, true, false]);
     assert_eq!(c.gamma_hz_per_mps2[2], None);
@@ -93,7 +114,13 @@ fn axis_never_shaken_is_reported_unobservable_not_as_a_number() {
 #[test]
 fn wrong_loop_interval_is_an_error_not_garbage() {
     let (phase, accel) = session(3, 0.005, true);
-    let series = EpochSeries { log_interval_s: T, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    let series = EpochSeries {
+        log_interval_s: T,
+        t_s: &times(phase.len()),
+        phase_err_rad: &phase,
+        accel_mps2: &accel,
+        imu_time_offset_s: 0.0,
+    };
     let settings = EstimateSettings { loop_interval_s: Some(0.007), ..Default::default() };
     let e = calibrate(&series, &settings).unwrap_err().to_string();
     assert!(e.contains("not an integer multiple"), "{e}");
