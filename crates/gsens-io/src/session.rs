@@ -53,6 +53,7 @@
 //! IMU's span are dropped from the ends: the usable span is the overlap of the
 //! two logs.
 
+use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -587,8 +588,8 @@ fn interpolate(imu: &ImuSeries, tau: f64, cursor: &mut usize) -> [f64; 3] {
 /// each group is imposed by adding `λ·1_g 1_gᵀ` (b is orthogonal to these
 /// vectors, so the solution satisfies the gauge exactly).
 fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)]) -> Vec<f64> {
-    let mut m = vec![vec![0.0f64; n]; n];
-    let mut b = vec![0.0f64; n];
+    let mut m = DMatrix::<f64>::zeros(n, n);
+    let mut b = DVector::<f64>::zeros(n);
     let mut parent: Vec<usize> = (0..n).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
@@ -606,56 +607,31 @@ fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)]) -> 
         let mean = swp / sw;
         for (r, &(i, wi, pi)) in rows.iter().enumerate() {
             b[i] += wi * (pi - mean);
-            m[i][i] += wi - wi * wi / sw;
+            m[(i, i)] += wi - wi * wi / sw;
             for &(j, wj, _) in &rows[r + 1..] {
                 let x = wi * wj / sw;
-                m[i][j] -= x;
-                m[j][i] -= x;
+                m[(i, j)] -= x;
+                m[(j, i)] -= x;
             }
             let (ri, r0) = (root(&mut parent, i), root(&mut parent, rows[0].0));
             parent[ri] = r0;
         }
     }
-    let trace: f64 = (0..n).map(|i| m[i][i]).sum();
+    let trace: f64 = m.trace();
     let lambda = if trace > 0.0 { trace / n as f64 } else { 1.0 };
     let groups: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
     for i in 0..n {
         for j in 0..n {
             if groups[i] == groups[j] {
-                m[i][j] += lambda;
+                m[(i, j)] += lambda;
             }
         }
     }
-    solve(m, b)
-}
-
-/// Solves `a x = b` by Gaussian elimination with partial pivoting (`a` square,
-/// non-singular by construction).
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
-    let n = b.len();
-    for col in 0..n {
-        let p = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs())).expect("non-empty");
-        a.swap(col, p);
-        b.swap(col, p);
-        let (upper, lower) = a.split_at_mut(col + 1);
-        let pivot_row = &upper[col];
-        let (b_upper, b_lower) = b.split_at_mut(col + 1);
-        for (row, br) in lower.iter_mut().zip(b_lower) {
-            let f = row[col] / pivot_row[col];
-            if f != 0.0 {
-                for (x, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
-                    *x -= f * p;
-                }
-                *br -= f * b_upper[col];
-            }
-        }
+    // M + λ·(group indicators) is symmetric positive definite by construction.
+    match m.clone().cholesky() {
+        Some(ch) => ch.solve(&b).iter().copied().collect(),
+        None => m.lu().solve(&b).map(|x| x.iter().copied().collect()).unwrap_or_else(|| vec![0.0; n]),
     }
-    let mut x = vec![0.0; n];
-    for r in (0..n).rev() {
-        let s: f64 = (r + 1..n).map(|c| a[r][c] * x[c]).sum();
-        x[r] = (b[r] - s) / a[r][r];
-    }
-    x
 }
 
 #[cfg(test)]
