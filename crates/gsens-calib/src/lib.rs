@@ -11,6 +11,7 @@
 //! compensation. No file I/O: the CLI reads logs with `gsens-io`.
 #![deny(missing_docs)]
 
+use gsens_core::calibrator::FedEpoch;
 use gsens_core::estimator::{
     BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance,
 };
@@ -54,6 +55,9 @@ pub struct EstimateSettings {
     pub method: Method,
     /// Epochs in the first `warmup_s` seconds only drive the loop models.
     pub warmup_s: f64,
+    /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off); see
+    /// [`gsens_core::filter`].
+    pub highpass_hz: f64,
     /// Longest lag of the autocorrelation-robust covariance [s].
     pub hac_lag_s: f64,
     /// Carrier frequency [Hz] for ppb/g.
@@ -71,6 +75,7 @@ impl Default for EstimateSettings {
             logged_phase: LoggedPhase::Last,
             method: Method::Batch,
             warmup_s: 2.0,
+            highpass_hz: 0.05,
             hac_lag_s: 2.5,
             carrier_hz: gsens_core::units::GPS_L1_HZ,
             criteria: ObservabilityCriteria::default(),
@@ -239,14 +244,15 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     let model = build_model(series.log_interval_s, settings)?;
     let substeps = model.substeps();
     let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
-    let (estimate, phi_a, batch, history) = match settings.method {
-        Method::Batch => run(Calibrator::new(model, BatchLeastSquares::new(), skip), series),
+    let (hp, t) = (settings.highpass_hz, series.log_interval_s);
+    let (estimate, fed, batch, history) = match settings.method {
+        Method::Batch => run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), series),
         Method::Rls { lambda } => run(
-            Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip),
+            Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip, hp, t),
             series,
         ),
         Method::Gradient { gain_k } => {
-            run(Calibrator::new(model, GradientObserver::new(gain_k, series.log_interval_s), skip), series)
+            run(Calibrator::new(model, GradientObserver::new(gain_k, t), skip, hp, t), series)
         }
     };
     if batch.normal_equations().n < 10 {
@@ -258,19 +264,18 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     }
     let gamma = estimate.gamma_hz_per_mps2;
 
-    // Residuals over the used epochs, for the robust covariance and the RMS.
-    let used: Vec<usize> =
-        (skip as usize..n).filter(|&k| series.phase_err_rad[k].is_some_and(|p| p.is_finite())).collect();
+    // Residuals over the used epochs (high-passed), for the robust covariance and the RMS.
+    let used: Vec<&FedEpoch> = fed.iter().filter(|e| e.used).collect();
     let mut used_phi_a = Vec::with_capacity(used.len());
     let mut resid = Vec::with_capacity(used.len());
     let (mut ss_before, mut ss_after, mut ss_g) = (0.0, 0.0, 0.0);
-    for &k in &used {
-        let phi = series.phase_err_rad[k].unwrap_or(0.0);
-        let r = compensated_phase_rad(phi, &phi_a[k], &gamma);
+    for e in &used {
+        let phi = e.phase_err_rad.unwrap_or(0.0);
+        let r = compensated_phase_rad(phi, &e.phi_a, &gamma);
         ss_before += phi * phi;
         ss_after += r * r;
         ss_g += (phi - r) * (phi - r);
-        used_phi_a.push(phi_a[k]);
+        used_phi_a.push(e.phi_a);
         resid.push(r);
     }
     let m = used.len().max(1) as f64;
@@ -324,29 +329,25 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
 fn run<E: GammaEstimator>(
     mut cal: Calibrator<E>,
     series: &EpochSeries,
-) -> (GammaEstimate, Vec<[f64; 3]>, BatchLeastSquares, Vec<HistoryPoint>) {
+) -> (GammaEstimate, Vec<FedEpoch>, BatchLeastSquares, Vec<HistoryPoint>) {
     let mut batch = BatchLeastSquares::new();
-    let skip = cal.skip_epochs();
     let every = ((HISTORY_INTERVAL_S / series.log_interval_s).round() as usize).max(1);
     let mut history = Vec::new();
-    let mut phi_a = Vec::with_capacity(series.accel_mps2.len());
+    let mut fed = Vec::with_capacity(series.accel_mps2.len());
     for (k, (a, p)) in series.accel_mps2.iter().zip(series.phase_err_rad).enumerate() {
-        let p = p.filter(|x| x.is_finite());
-        let v = cal.feed(a, p);
-        if let Some(phi) = p
-            && k as u64 >= skip
-        {
-            batch.update(phi, &v);
+        let e = cal.feed(a, *p);
+        if e.used {
+            batch.update(e.phase_err_rad.unwrap_or(0.0), &e.phi_a);
         }
-        phi_a.push(v);
-        if k as u64 >= skip && k % every == 0 && batch.normal_equations().n >= 3 {
-            let e = cal.estimate();
+        fed.push(e);
+        if k % every == 0 && batch.normal_equations().n >= 3 {
+            let est = cal.estimate();
             history.push(HistoryPoint {
                 t_s: series.t_s[k],
-                gamma_hz_per_mps2: e.gamma_hz_per_mps2,
-                sigma_hz_per_mps2: e.sigma_hz_per_mps2(),
+                gamma_hz_per_mps2: est.gamma_hz_per_mps2,
+                sigma_hz_per_mps2: est.sigma_hz_per_mps2(),
             });
         }
     }
-    (cal.estimate(), phi_a, batch, history)
+    (cal.estimate(), fed, batch, history)
 }

@@ -11,7 +11,7 @@ use std::hint::black_box;
 fn bench_epoch<E: GammaEstimator>(c: &mut Criterion, name: &str, estimator: E, loop_interval_s: f64) {
     let coeffs = LoopSpec::PAPER.coeffs().unwrap();
     let model = RegressorModel::new(coeffs, loop_interval_s, 0.025, LoggedPhase::Last).unwrap();
-    let mut cal = Calibrator::new(model, estimator, 0);
+    let mut cal = Calibrator::new(model, estimator, 0, 0.05, 0.025);
     let weights = [1.0; 8];
     let mut k = 0u64;
     c.bench_function(name, |b| {

@@ -3,6 +3,8 @@
 //! allocation.
 
 use crate::estimator::{GammaEstimate, GammaEstimator};
+use crate::filter::HighPass;
+use crate::math::dot3;
 use crate::regressor::RegressorModel;
 
 /// Weighted mean of the channels present at an epoch: Σwᵢφᵢ/Σwᵢ over the
@@ -22,40 +24,106 @@ pub fn average_phase_rad(phase_err_rad: &[f64], weights: &[f64]) -> Option<f64> 
     if wsum > 0.0 { Some(sum / wsum) } else { None }
 }
 
-/// Regressor model + estimator, fed one log epoch at a time.
+/// What the calibrator made of one epoch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FedEpoch {
+    /// φ_a after the high-pass [rad per Hz/(m/s²)].
+    pub phi_a: [f64; 3],
+    /// φ after the high-pass [rad] (None when no channel was present).
+    pub phase_err_rad: Option<f64>,
+    /// Whether the estimator used the epoch (not in the warm-up, not settling after a gap).
+    pub used: bool,
+}
+
+/// Regressor model + identical high-pass + estimator, fed one log epoch at a time.
+///
+/// Through a gap (no phase measured) the φ filter is fed the last measured φ
+/// plus the change of the model's prediction φ_aᵀΓ̂ since then, and the epochs of the
+/// gap and the filter's settling after it (up to 3 time constants, at most 4×
+/// the gap) are left out of the estimate.
 #[derive(Debug, Clone)]
 pub struct Calibrator<E> {
     model: RegressorModel,
     estimator: E,
     skip_epochs: u64,
     epochs: u64,
+    hp_phase: HighPass,
+    hp_phi_a: [HighPass; 3],
+    /// Last measured φ and the raw φ_a at that epoch.
+    last_phase_rad: f64,
+    last_raw_phi_a: [f64; 3],
+    /// Γ̂ frozen at the start of the current gap.
+    gap_gamma: [f64; 3],
+    gap_epochs: u64,
+    settle_left: u64,
 }
 
 impl<E: GammaEstimator> Calibrator<E> {
-    /// Runs `estimator` on the regressors of `model`, ignoring the first
-    /// `skip_epochs` epochs while the model's start-up transient (its loops
-    /// start in the steady state of the first sample) dies out.
-    pub fn new(model: RegressorModel, estimator: E, skip_epochs: u64) -> Self {
-        Calibrator { model, estimator, skip_epochs, epochs: 0 }
+    /// Runs `estimator` on the regressors of `model`, both high-passed at
+    /// `highpass_hz` (0 = off) for epochs `log_interval_s` apart, ignoring the
+    /// first `skip_epochs` epochs while the model's start-up transient (its
+    /// loops start in the steady state of the first sample) dies out.
+    pub fn new(model: RegressorModel, estimator: E, skip_epochs: u64, highpass_hz: f64, log_interval_s: f64) -> Self {
+        let hp = HighPass::new(highpass_hz, log_interval_s);
+        Calibrator {
+            model,
+            estimator,
+            skip_epochs,
+            epochs: 0,
+            hp_phase: hp,
+            hp_phi_a: [hp; 3],
+            last_phase_rad: 0.0,
+            last_raw_phi_a: [0.0; 3],
+            gap_gamma: [0.0; 3],
+            gap_epochs: 0,
+            settle_left: 0,
+        }
     }
 
     /// One epoch: specific force `accel_mps2` and the averaged phase error
-    /// (None when no channel was present; the model still advances). Returns φ_a.
+    /// (None when no channel was present; the model still advances).
     #[inline]
-    pub fn feed(&mut self, accel_mps2: &[f64; 3], phase_err_rad: Option<f64>) -> [f64; 3] {
-        let phi_a = self.model.epoch(accel_mps2);
+    pub fn feed(&mut self, accel_mps2: &[f64; 3], phase_err_rad: Option<f64>) -> FedEpoch {
+        let raw = self.model.epoch(accel_mps2);
+        let phi_a = [self.hp_phi_a[0].step(raw[0]), self.hp_phi_a[1].step(raw[1]), self.hp_phi_a[2].step(raw[2])];
         self.epochs += 1;
-        if let Some(phi) = phase_err_rad
-            && self.epochs > self.skip_epochs
-        {
-            self.estimator.update(phi, &phi_a);
+        let (input, measured) = match phase_err_rad.filter(|p| p.is_finite()) {
+            Some(p) => {
+                self.last_phase_rad = p;
+                self.last_raw_phi_a = raw;
+                if self.gap_epochs > 0 {
+                    let tau = self.hp_phase.time_constant_samples();
+                    self.settle_left = ((3.0 * tau) as u64).min(4 * self.gap_epochs);
+                    self.gap_epochs = 0;
+                }
+                (p, true)
+            }
+            None => {
+                if self.gap_epochs == 0 {
+                    self.gap_gamma = self.estimator.gamma_hz_per_mps2();
+                }
+                self.gap_epochs += 1;
+                let d =
+                    [raw[0] - self.last_raw_phi_a[0], raw[1] - self.last_raw_phi_a[1], raw[2] - self.last_raw_phi_a[2]];
+                (self.last_phase_rad + dot3(&d, &self.gap_gamma), false)
+            }
+        };
+        let phi = self.hp_phase.step(input);
+        let mut used = false;
+        if measured {
+            if self.settle_left > 0 {
+                self.settle_left -= 1;
+            } else if self.epochs > self.skip_epochs {
+                self.estimator.update(phi, &phi_a);
+                used = true;
+            }
         }
-        phi_a
+        FedEpoch { phi_a, phase_err_rad: measured.then_some(phi), used }
     }
 
     /// One epoch from the raw channel phases (NaN = absent) and their weights.
     #[inline]
-    pub fn feed_channels(&mut self, accel_mps2: &[f64; 3], phase_err_rad: &[f64], weights: &[f64]) -> [f64; 3] {
+    pub fn feed_channels(&mut self, accel_mps2: &[f64; 3], phase_err_rad: &[f64], weights: &[f64]) -> FedEpoch {
         self.feed(accel_mps2, average_phase_rad(phase_err_rad, weights))
     }
 

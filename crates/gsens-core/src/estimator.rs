@@ -45,6 +45,10 @@ pub trait GammaEstimator {
     fn update(&mut self, phase_err_rad: f64, phi_a: &[f64; 3]);
     /// The current estimate.
     fn estimate(&self) -> GammaEstimate;
+    /// The current Γ̂ alone [Hz/(m/s²)] (cheaper where the estimator can).
+    fn gamma_hz_per_mps2(&self) -> [f64; 3] {
+        self.estimate().gamma_hz_per_mps2
+    }
 }
 
 /// Information accumulated from the regressors: AᵀA, Aᵀφ, φᵀφ and the count.
@@ -227,6 +231,9 @@ impl GammaEstimator for GradientObserver {
         let m = Matrix3::identity() - vvt * kt;
         self.cov_unit = m * self.cov_unit * m.transpose() + vvt * (kt * kt);
     }
+    fn gamma_hz_per_mps2(&self) -> [f64; 3] {
+        [self.gamma[0], self.gamma[1], self.gamma[2]]
+    }
     fn estimate(&self) -> GammaEstimate {
         let (_, rank) = self.normal.pseudo_inverse(RANK_TOL);
         let s2 = self.normal.rss(&self.gamma) / (self.normal.n as f64 - rank as f64).max(1.0);
@@ -289,6 +296,9 @@ impl GammaEstimator for RecursiveLeastSquares {
         self.rss = self.lambda * self.rss + e * e * self.lambda / denom;
         self.n_eff = self.lambda * self.n_eff + 1.0;
         self.normal.add(phase_err_rad, phi_a);
+    }
+    fn gamma_hz_per_mps2(&self) -> [f64; 3] {
+        [self.gamma[0], self.gamma[1], self.gamma[2]]
     }
     fn estimate(&self) -> GammaEstimate {
         let s2 = self.rss / (self.n_eff - 3.0).max(1.0);

@@ -18,6 +18,7 @@
 pub mod calibrator;
 pub mod compensate;
 pub mod estimator;
+pub mod filter;
 pub mod math;
 pub mod observability;
 pub mod pll;

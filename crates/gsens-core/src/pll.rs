@@ -109,6 +109,8 @@ impl core::fmt::Display for LoopError {
     }
 }
 
+impl core::error::Error for LoopError {}
+
 fn positive(x: f64, name: &'static str) -> Result<f64, LoopError> {
     if x.is_finite() && x > 0.0 { Ok(x) } else { Err(LoopError::NonPositiveParameter(name)) }
 }

@@ -50,6 +50,8 @@ impl core::fmt::Display for RegressorError {
     }
 }
 
+impl core::error::Error for RegressorError {}
+
 /// φ_a = L\[a\] epoch by epoch: three identical [`DiscretePll`]s, one per axis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegressorModel {

@@ -35,4 +35,4 @@ pub use session::{
     ChannelSummary, PreparedSession, SelectionConfig, Weighting, prepare_session, prepare_session_files,
 };
 pub use tracking::{ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
-pub use writers::{TrackingRow, TrackingWriter, write_imu_csv};
+pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv};

@@ -31,17 +31,46 @@ pub fn write_imu_csv<W: Write>(w: W, imu: &ImuSeries) -> io::Result<()> {
             format!("IMU series has {} time stamps but {} samples", imu.t_s.len(), imu.accel_mps2.len()),
         ));
     }
-    let mut out = BufWriter::new(w);
-    writeln!(out, "{}", IMU_COLUMNS.join(","))?;
-    for (i, (t, a)) in imu.t_s.iter().zip(&imu.accel_mps2).enumerate() {
-        let row = i as u64 + 1;
-        check("t_s", *t, row)?;
-        for (name, v) in ["fx_mps2", "fy_mps2", "fz_mps2"].iter().zip(a) {
+    let mut out = ImuWriter::new(w)?;
+    for (t, a) in imu.t_s.iter().zip(&imu.accel_mps2) {
+        out.write_sample(*t, a)?;
+    }
+    out.finish().map(|_| ())
+}
+
+/// A streaming writer of `imu.csv`, one sample at a time (header written by
+/// [`ImuWriter::new`]).
+#[derive(Debug)]
+pub struct ImuWriter<W: Write> {
+    out: BufWriter<W>,
+    rows: u64,
+}
+
+impl<W: Write> ImuWriter<W> {
+    /// Starts an `imu.csv` on `w` (buffered internally) by writing the header.
+    pub fn new(w: W) -> io::Result<Self> {
+        let mut out = BufWriter::new(w);
+        writeln!(out, "{}", IMU_COLUMNS.join(","))?;
+        Ok(ImuWriter { out, rows: 0 })
+    }
+
+    /// Writes one sample: time stamp [s] and specific force [m/s²].
+    /// Errors: I/O errors; `InvalidInput` for a non-finite value.
+    pub fn write_sample(&mut self, t_s: f64, accel_mps2: &[f64; 3]) -> io::Result<()> {
+        let row = self.rows + 1;
+        check("t_s", t_s, row)?;
+        for (name, v) in ["fx_mps2", "fy_mps2", "fz_mps2"].iter().zip(accel_mps2) {
             check(name, *v, row)?;
         }
-        writeln!(out, "{},{},{},{}", t, a[0], a[1], a[2])?;
+        writeln!(self.out, "{},{},{},{}", t_s, accel_mps2[0], accel_mps2[1], accel_mps2[2])?;
+        self.rows = row;
+        Ok(())
     }
-    out.flush()
+
+    /// Flushes the buffer and returns the underlying writer.
+    pub fn finish(self) -> io::Result<W> {
+        self.out.into_inner().map_err(|e| e.into_error())
+    }
 }
 
 /// One row of `tracking.csv`.

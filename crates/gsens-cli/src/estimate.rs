@@ -1,0 +1,223 @@
+//! `gsens estimate`: Γ̂ from receiver logs.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, ValueEnum};
+use gsens_calib::{Calibration, EpochSeries, EstimateSettings, Method, calibrate};
+use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
+use gsens_core::regressor::LoggedPhase;
+use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session_files};
+use std::path::PathBuf;
+
+/// Estimator choice on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum MethodArg {
+    /// The paper's gradient observer (constant gain).
+    Gradient,
+    /// Recursive least squares (Kalman-type gain).
+    Rls,
+    /// Batch least squares over the whole log.
+    Batch,
+}
+
+/// What a log row holds when the loop runs faster than the log.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum LoggedArg {
+    /// The latest discriminator output.
+    Last,
+    /// The mean of the discriminator outputs since the previous row.
+    Mean,
+}
+
+/// Channel weighting on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum WeightsArg {
+    /// Equal weights (the paper).
+    Equal,
+    /// Weights proportional to C/N0 (inverse thermal phase variance).
+    Cn0,
+}
+
+/// The receiver-loop and estimator options shared by `estimate` and `demo`.
+#[derive(Args, Debug, Clone)]
+pub struct LoopArgs {
+    /// Loop order of the receiver's carrier PLL.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub order: u8,
+    /// One-sided noise bandwidth Bn of the receiver's PLL [Hz].
+    #[arg(long, default_value_t = 3.0)]
+    pub bn_hz: f64,
+    /// Damping ratio ζ (2nd-order loop).
+    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2)]
+    pub zeta: f64,
+    /// a3 of the 3rd-order loop (Kaplan: 1.1).
+    #[arg(long, default_value_t = KAPLAN_A3)]
+    pub a3: f64,
+    /// b3 of the 3rd-order loop (Kaplan: 2.4).
+    #[arg(long, default_value_t = KAPLAN_B3)]
+    pub b3: f64,
+    /// The receiver's loop update interval [s] (default: the log interval).
+    #[arg(long)]
+    pub loop_interval_s: Option<f64>,
+    /// What a log row holds when the loop runs faster than the log.
+    #[arg(long, value_enum, default_value_t = LoggedArg::Last)]
+    pub logged_phase: LoggedArg,
+}
+
+impl LoopArgs {
+    pub fn loop_spec(&self) -> LoopSpec {
+        match self.order {
+            3 => LoopSpec::ThirdOrder { bn_hz: self.bn_hz, a3: self.a3, b3: self.b3 },
+            _ => LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta },
+        }
+    }
+}
+
+/// Estimator options shared by `estimate` and `demo`.
+#[derive(Args, Debug, Clone)]
+pub struct EstimatorArgs {
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = MethodArg::Batch)]
+    pub method: MethodArg,
+    /// Gain k of the gradient observer.
+    #[arg(long, default_value_t = 0.5)]
+    pub gain_k: f64,
+    /// Forgetting factor λ of the RLS estimator (1 = none).
+    #[arg(long, default_value_t = 1.0)]
+    pub lambda: f64,
+    /// Seconds at the start that only drive the loop models (their start-up transient).
+    #[arg(long, default_value_t = 2.0)]
+    pub warmup_s: f64,
+    /// Carrier frequency [Hz] for ppb/g (default GPS L1).
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ)]
+    pub carrier_hz: f64,
+}
+
+impl EstimatorArgs {
+    pub fn settings(&self, loop_args: &LoopArgs) -> Result<EstimateSettings> {
+        let method = match self.method {
+            MethodArg::Batch => Method::Batch,
+            MethodArg::Rls => {
+                if !(self.lambda > 0.0 && self.lambda <= 1.0) {
+                    bail!("--lambda must be in (0, 1], got {}", self.lambda);
+                }
+                Method::Rls { lambda: self.lambda }
+            }
+            MethodArg::Gradient => {
+                if !(self.gain_k > 0.0 && self.gain_k.is_finite()) {
+                    bail!("--gain-k must be positive, got {}", self.gain_k);
+                }
+                Method::Gradient { gain_k: self.gain_k }
+            }
+        };
+        if !(self.warmup_s >= 0.0 && self.warmup_s.is_finite()) {
+            bail!("--warmup-s must be ≥ 0, got {}", self.warmup_s);
+        }
+        if !(self.carrier_hz > 0.0 && self.carrier_hz.is_finite()) {
+            bail!("--carrier-hz must be positive, got {}", self.carrier_hz);
+        }
+        Ok(EstimateSettings {
+            loop_spec: loop_args.loop_spec(),
+            loop_interval_s: loop_args.loop_interval_s,
+            logged_phase: match loop_args.logged_phase {
+                LoggedArg::Last => LoggedPhase::Last,
+                LoggedArg::Mean => LoggedPhase::Mean,
+            },
+            method,
+            warmup_s: self.warmup_s,
+            carrier_hz: self.carrier_hz,
+            ..EstimateSettings::default()
+        })
+    }
+}
+
+/// Channel selection options.
+#[derive(Args, Debug, Clone)]
+pub struct SelectionArgs {
+    /// Average the N channels with the highest mean C/N0 (0 = all that pass the masks).
+    #[arg(long, default_value_t = 4)]
+    pub channels: usize,
+    /// Drop rows below this C/N0 [dB-Hz].
+    #[arg(long)]
+    pub min_cn0_dbhz: Option<f64>,
+    /// Drop rows below this elevation [deg] (rows without elevation pass).
+    #[arg(long)]
+    pub elevation_mask_deg: Option<f64>,
+    /// Weights of the per-epoch channel average.
+    #[arg(long, value_enum, default_value_t = WeightsArg::Equal)]
+    pub weights: WeightsArg,
+}
+
+impl SelectionArgs {
+    pub fn selection(&self) -> SelectionConfig {
+        SelectionConfig {
+            max_channels: (self.channels > 0).then_some(self.channels),
+            min_cn0_dbhz: self.min_cn0_dbhz,
+            elevation_mask_deg: self.elevation_mask_deg,
+            weighting: match self.weights {
+                WeightsArg::Equal => Weighting::Equal,
+                WeightsArg::Cn0 => Weighting::Cn0,
+            },
+            ..SelectionConfig::default()
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct EstimateArgs {
+    /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
+    #[arg(long)]
+    pub imu: PathBuf,
+    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad.
+    #[arg(long)]
+    pub tracking: PathBuf,
+    #[command(flatten)]
+    pub loop_args: LoopArgs,
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
+    #[command(flatten)]
+    pub selection: SelectionArgs,
+    /// IMU time stamp minus true time [s] applied to the IMU.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub imu_time_offset_s: f64,
+    /// Write the result as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Prepares the session from files and runs the calibration.
+pub fn estimate_files(
+    imu: &std::path::Path,
+    tracking: &std::path::Path,
+    selection: &SelectionConfig,
+    imu_time_offset_s: f64,
+    settings: &EstimateSettings,
+) -> Result<(PreparedSession, Calibration)> {
+    let session = prepare_session_files(tracking, imu, selection, imu_time_offset_s)?;
+    let series = EpochSeries {
+        log_interval_s: session.log_interval_s,
+        t_s: &session.t_s,
+        phase_err_rad: &session.phase_err_rad,
+        accel_mps2: &session.accel_mps2,
+        imu_time_offset_s: session.imu_time_offset_s,
+    };
+    let calibration = calibrate(&series, settings)?;
+    Ok((session, calibration))
+}
+
+pub fn run(args: &EstimateArgs) -> Result<()> {
+    let settings = args.estimator.settings(&args.loop_args)?;
+    let (session, calibration) =
+        estimate_files(&args.imu, &args.tracking, &args.selection.selection(), args.imu_time_offset_s, &settings)?;
+    print!("{}", crate::report::text(&session, &calibration, None));
+    if let Some(path) = &args.json {
+        crate::report::write_json(
+            path,
+            &session,
+            &calibration,
+            None,
+            &[("imu", &args.imu), ("tracking", &args.tracking)],
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}

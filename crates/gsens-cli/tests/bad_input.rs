@@ -1,0 +1,126 @@
+//! Every malformed input gets a clear message naming the file, line and
+//! column, and a non-zero exit status; never a panic.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const IMU_OK: &str = "t_s,fx_mps2,fy_mps2,fz_mps2\n0,0,0,9.8\n0.025,0.1,0,9.8\n0.05,0.2,0,9.8\n0.075,0.1,0,9.8\n";
+const TRK_OK: &str = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n\
+0,1,5,45,30,0.01\n0.025,1,5,45,30,0.02\n0.05,1,5,45,30,0.01\n0.075,1,5,45,30,0.0\n";
+
+struct Case {
+    dir: PathBuf,
+}
+
+impl Case {
+    fn new(name: &str, imu: &str, tracking: &str) -> Case {
+        let dir = std::env::temp_dir().join(format!("gsens-bad-input-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("imu.csv"), imu).unwrap();
+        std::fs::write(dir.join("tracking.csv"), tracking).unwrap();
+        Case { dir }
+    }
+    fn path(&self, f: &str) -> PathBuf {
+        self.dir.join(f)
+    }
+}
+
+impl Drop for Case {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn estimate(imu: &Path, tracking: &Path, extra: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .arg("estimate")
+        .arg("--imu")
+        .arg(imu)
+        .arg("--tracking")
+        .arg(tracking)
+        .args(extra)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+/// Runs `estimate` on the case and checks a non-zero exit and every fragment in stderr.
+fn expect_error(name: &str, imu: &str, tracking: &str, fragments: &[&str]) {
+    let case = Case::new(name, imu, tracking);
+    let (code, stderr) = estimate(&case.path("imu.csv"), &case.path("tracking.csv"), &[]);
+    assert_ne!(code, 0, "{name}: exit status 0");
+    assert_eq!(code, 2, "{name}: {stderr}");
+    for f in fragments {
+        assert!(stderr.contains(f), "{name}: `{f}` not in: {stderr}");
+    }
+}
+
+#[test]
+fn missing_column() {
+    expect_error(
+        "missing-col",
+        "t_s,fx_mps2,fz_mps2\n0,0,9.8\n",
+        TRK_OK,
+        &["imu.csv", "line 1", "missing column `fy_mps2`"],
+    );
+}
+
+#[test]
+fn non_numeric_cell() {
+    let trk = TRK_OK.replace("0.025,1,5,45,30,0.02", "0.025,1,5,45,30,abc");
+    expect_error("non-numeric", IMU_OK, &trk, &["tracking.csv", "line 3", "column 6 (`phase_err_rad`)", "`abc`"]);
+}
+
+#[test]
+fn nan_and_inf() {
+    let imu = IMU_OK.replace("0.05,0.2,0,9.8", "0.05,NaN,0,9.8");
+    expect_error("nan", &imu, TRK_OK, &["imu.csv", "line 4", "column 2 (`fx_mps2`)", "not a finite number"]);
+    let trk = TRK_OK.replace("0.05,1,5,45,30,0.01", "0.05,1,5,inf,30,0.01");
+    expect_error("inf", IMU_OK, &trk, &["tracking.csv", "line 4", "column 4 (`cn0_dbhz`)", "not a finite number"]);
+}
+
+#[test]
+fn time_going_backwards_or_repeated() {
+    let imu = IMU_OK.replace("0.05,0.2,0,9.8", "0.01,0.2,0,9.8");
+    expect_error("backwards", &imu, TRK_OK, &["imu.csv", "line 4", "column 1 (`t_s`)", "goes backwards"]);
+    let imu = IMU_OK.replace("0.05,0.2,0,9.8", "0.025,0.2,0,9.8");
+    expect_error("repeated", &imu, TRK_OK, &["imu.csv", "line 4", "repeated time stamp"]);
+    let trk = TRK_OK.replace("0.05,1,5,45,30,0.01", "0.025,1,5,45,30,0.01");
+    expect_error("repeated-channel", IMU_OK, &trk, &["tracking.csv", "line 4", "channel 1 appears twice"]);
+}
+
+#[test]
+fn empty_file_and_header_only() {
+    expect_error("empty", "", TRK_OK, &["imu.csv", "empty file"]);
+    expect_error(
+        "header-only",
+        IMU_OK,
+        "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n",
+        &["tracking.csv", "header only"],
+    );
+}
+
+#[test]
+fn streams_not_overlapping_in_time() {
+    let imu = "t_s,fx_mps2,fy_mps2,fz_mps2\n100,0,0,9.8\n100.025,0,0,9.8\n";
+    expect_error("no-overlap", imu, TRK_OK, &["imu.csv", "tracking.csv", "overlap"]);
+}
+
+#[test]
+fn no_channel_passing_the_selection() {
+    let case = Case::new("no-channel", IMU_OK, TRK_OK);
+    let (code, stderr) = estimate(&case.path("imu.csv"), &case.path("tracking.csv"), &["--min-cn0-dbhz", "50"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("no channel") || stderr.contains("No channel"), "{stderr}");
+    assert!(stderr.contains("C/N0"), "{stderr}");
+}
+
+#[test]
+fn missing_file() {
+    let case = Case::new("missing-file", IMU_OK, TRK_OK);
+    let (code, stderr) = estimate(&case.path("nope.csv"), &case.path("tracking.csv"), &[]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("nope.csv"), "{stderr}");
+}
