@@ -62,6 +62,11 @@ pub struct EstimateSettings {
     pub hac_lag_s: f64,
     /// Carrier frequency [Hz] for ppb/g.
     pub carrier_hz: f64,
+    /// 1σ of the IMU's scale-factor error per axis (fraction, e.g. 1e-3),
+    /// propagated into the uncertainty of Γ̂ (see [`imu_systematic_sigma`]).
+    pub imu_scale_sigma: f64,
+    /// 1σ of the IMU's axis misalignment [rad], propagated likewise.
+    pub imu_misalignment_sigma_rad: f64,
     /// Observability thresholds.
     #[serde(serialize_with = "ser_criteria")]
     pub criteria: ObservabilityCriteria,
@@ -78,6 +83,8 @@ impl Default for EstimateSettings {
             highpass_hz: 0.05,
             hac_lag_s: 2.5,
             carrier_hz: gsens_core::units::GPS_L1_HZ,
+            imu_scale_sigma: 0.0,
+            imu_misalignment_sigma_rad: 0.0,
             criteria: ObservabilityCriteria::default(),
         }
     }
@@ -148,8 +155,13 @@ pub enum CalibError {
 pub struct Calibration {
     /// Γ̂ [Hz/(m/s²)]; `null` for an unobservable axis.
     pub gamma_hz_per_mps2: [Option<f64>; 3],
-    /// 1σ [Hz/(m/s²)] (autocorrelation-robust); `null` for an unobservable axis.
+    /// Total 1σ [Hz/(m/s²)]: the statistical part (autocorrelation-robust) and
+    /// the IMU-calibration part combined; `null` for an unobservable axis.
     pub sigma_hz_per_mps2: [Option<f64>; 3],
+    /// Statistical 1σ alone [Hz/(m/s²)].
+    pub sigma_statistical_hz_per_mps2: [Option<f64>; 3],
+    /// 1σ from the assumed IMU scale-factor and misalignment errors [Hz/(m/s²)].
+    pub sigma_imu_hz_per_mps2: [Option<f64>; 3],
     /// Γ̂ [ppb/g] at the carrier.
     pub gamma_ppb_per_g: [Option<f64>; 3],
     /// 1σ [ppb/g].
@@ -220,6 +232,19 @@ pub struct EpochSeries<'a> {
     pub imu_time_offset_s: f64,
 }
 
+/// 1σ of Γ̂ per axis caused by IMU calibration errors [Hz/(m/s²)].
+///
+/// The IMU measures f_m = (I + E)·f with E = diag(s) + N (scale factors s,
+/// misalignment N, zero diagonal), so the estimate is in the IMU's frame:
+/// Δf = fᵀΓ = f_mᵀ(I + E)⁻ᵀΓ ⇒ Γ̂ ≈ Γ − EᵀΓ. With independent errors of 1σ
+/// `scale_sigma` and `misalignment_sigma_rad`:
+/// σ_i² = (σ_s·Γ_i)² + σ_m²·Σ_{j≠i} Γ_j².
+pub fn imu_systematic_sigma(gamma: &[f64; 3], scale_sigma: f64, misalignment_sigma_rad: f64) -> [f64; 3] {
+    let g2: [f64; 3] = gamma.map(|g| g * g);
+    let total: f64 = g2.iter().sum();
+    [0, 1, 2].map(|i| (scale_sigma * scale_sigma * g2[i] + misalignment_sigma_rad.powi(2) * (total - g2[i])).sqrt())
+}
+
 /// The regressor series φ_a for every epoch (the triad run over the whole series).
 pub fn regressors(series: &EpochSeries, settings: &EstimateSettings) -> Result<Vec<[f64; 3]>, CalibError> {
     let mut model = build_model(series.log_interval_s, settings)?;
@@ -286,6 +311,9 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     let white_batch = batch.estimate();
     let obs = assess(batch.normal_equations(), &estimate, &settings.criteria);
     let mut sigma = [None; 3];
+    let mut sigma_stat = [None; 3];
+    let mut sigma_imu = [None; 3];
+    let sys = imu_systematic_sigma(&gamma, settings.imu_scale_sigma, settings.imu_misalignment_sigma_rad);
     let mut sigma_white = [0.0; 3];
     let mut gamma_out = [None; 3];
     for i in 0..3 {
@@ -294,7 +322,10 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
             if white_batch.covariance[i][i] > 0.0 { (hac[i][i] / white_batch.covariance[i][i]).max(1.0) } else { 1.0 };
         sigma_white[i] = own.max(0.0).sqrt();
         if obs.observable[i] {
-            sigma[i] = Some((own * ratio).sqrt());
+            let stat = (own * ratio).sqrt();
+            sigma_stat[i] = Some(stat);
+            sigma_imu[i] = Some(sys[i]);
+            sigma[i] = Some(stat.hypot(sys[i]));
             gamma_out[i] = Some(gamma[i]);
         }
     }
@@ -302,6 +333,8 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     Ok(Calibration {
         gamma_hz_per_mps2: gamma_out,
         sigma_hz_per_mps2: sigma,
+        sigma_statistical_hz_per_mps2: sigma_stat,
+        sigma_imu_hz_per_mps2: sigma_imu,
         gamma_ppb_per_g: gamma_out.map(ppb),
         sigma_ppb_per_g: sigma.map(ppb),
         observable: obs.observable,

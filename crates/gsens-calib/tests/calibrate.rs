@@ -125,3 +125,32 @@ fn wrong_loop_interval_is_an_error_not_garbage() {
     let e = calibrate(&series, &settings).unwrap_err().to_string();
     assert!(e.contains("not an integer multiple"), "{e}");
 }
+
+#[test]
+fn imu_systematic_sigma_matches_monte_carlo_of_the_sensing_matrix() {
+    use gsens_calib::imu_systematic_sigma;
+    use rand_distr::Normal;
+    let (s_sigma, m_sigma) = (2e-3, 1.5e-3);
+    let predicted = imu_systematic_sigma(&GAMMA, s_sigma, m_sigma);
+    // Draw E = diag(s) + N, form Γ̂ = (I + E)⁻ᵀ·Γ exactly, compare the spread.
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+    let (ns, nm) = (Normal::new(0.0, s_sigma).unwrap(), Normal::new(0.0, m_sigma).unwrap());
+    let n = 20_000;
+    let mut ss = [0.0; 3];
+    for _ in 0..n {
+        let mut m = nalgebra::Matrix3::<f64>::identity();
+        for i in 0..3 {
+            for j in 0..3 {
+                m[(i, j)] += if i == j { ns.sample(&mut rng) } else { nm.sample(&mut rng) };
+            }
+        }
+        let g = m.transpose().try_inverse().unwrap() * nalgebra::Vector3::from(GAMMA);
+        for i in 0..3 {
+            ss[i] += (g[i] - GAMMA[i]).powi(2);
+        }
+    }
+    for i in 0..3 {
+        let sd = (ss[i] / n as f64).sqrt();
+        assert!((sd / predicted[i] - 1.0).abs() < 0.03, "axis {i}: {sd} vs {}", predicted[i]);
+    }
+}

@@ -56,6 +56,14 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     };
     let mut settings = args.estimator.settings(&loop_args)?;
     settings.carrier_hz = scenario.oscillator.carrier_hz;
+    // The IMU's datasheet accuracy enters the uncertainty, as a user would give it.
+    let imu = scenario.imu.config();
+    if settings.imu_scale_sigma == 0.0 {
+        settings.imu_scale_sigma = imu.scale_factor_sigma_ppm * 1e-6;
+    }
+    if settings.imu_misalignment_sigma_rad == 0.0 {
+        settings.imu_misalignment_sigma_rad = imu.misalignment_sigma_rad;
+    }
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
     let (session, calibration) =
         estimate_files(&imu, &tracking, &args.selection.selection(), truth.imu_time_offset_s, &settings)?;

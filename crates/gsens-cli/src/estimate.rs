@@ -90,6 +90,15 @@ pub struct EstimatorArgs {
     /// Carrier frequency [Hz] for ppb/g (default GPS L1).
     #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ)]
     pub carrier_hz: f64,
+    /// 1σ scale-factor error of the IMU [ppm] (from its datasheet), added to Γ̂'s uncertainty.
+    #[arg(long, default_value_t = 0.0)]
+    pub imu_scale_sigma_ppm: f64,
+    /// 1σ axis misalignment of the IMU [mrad], added to Γ̂'s uncertainty.
+    #[arg(long, default_value_t = 0.0)]
+    pub imu_misalignment_sigma_mrad: f64,
+    /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off).
+    #[arg(long, default_value_t = 0.05)]
+    pub highpass_hz: f64,
 }
 
 impl EstimatorArgs {
@@ -112,6 +121,15 @@ impl EstimatorArgs {
         if !(self.warmup_s >= 0.0 && self.warmup_s.is_finite()) {
             bail!("--warmup-s must be ≥ 0, got {}", self.warmup_s);
         }
+        for (name, v) in [
+            ("--imu-scale-sigma-ppm", self.imu_scale_sigma_ppm),
+            ("--imu-misalignment-sigma-mrad", self.imu_misalignment_sigma_mrad),
+            ("--highpass-hz", self.highpass_hz),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                bail!("{name} must be ≥ 0, got {v}");
+            }
+        }
         if !(self.carrier_hz > 0.0 && self.carrier_hz.is_finite()) {
             bail!("--carrier-hz must be positive, got {}", self.carrier_hz);
         }
@@ -125,6 +143,9 @@ impl EstimatorArgs {
             method,
             warmup_s: self.warmup_s,
             carrier_hz: self.carrier_hz,
+            imu_scale_sigma: self.imu_scale_sigma_ppm * 1e-6,
+            imu_misalignment_sigma_rad: self.imu_misalignment_sigma_mrad * 1e-3,
+            highpass_hz: self.highpass_hz,
             ..EstimateSettings::default()
         })
     }
