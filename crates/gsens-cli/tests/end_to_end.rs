@@ -1,0 +1,132 @@
+//! `gsens simulate` on the default scenario, then `gsens estimate` on its
+//! files, as a user would: the truth within the estimate's own 3σ and within
+//! 2 % of |Γ|; the same seed gives the same bytes.
+
+use std::path::Path;
+use std::process::Command;
+
+fn gsens(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
+    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn vec3(v: &serde_json::Value) -> [f64; 3] {
+    [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
+}
+
+#[test]
+fn simulate_then_estimate_recovers_the_truth() {
+    let dir = std::env::temp_dir().join(format!("gsens-e2e-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    gsens(&["simulate", "--out", d, "--seed", "7"]);
+    let out = dir.join("estimate.json");
+    // The receiver's settings as the simulator wrote them (truth.json) and the
+    // industrial IMU's datasheet accuracy (1000 ppm, 1 mrad).
+    let text = gsens(&[
+        "estimate",
+        "--imu",
+        &format!("{d}/imu.csv"),
+        "--tracking",
+        &format!("{d}/tracking.csv"),
+        "--loop-interval-s",
+        "0.001",
+        "--logged-phase",
+        "mean",
+        "--imu-scale-sigma-ppm",
+        "1000",
+        "--imu-misalignment-sigma-mrad",
+        "1",
+        "--json",
+        out.to_str().unwrap(),
+    ]);
+    assert!(text.contains("Γ̂ [Hz/(m/s²)]"), "{text}");
+    let est = json(&out);
+    let truth = json(&dir.join("truth.json"));
+    let g = vec3(&est["gamma_hz_per_mps2"]);
+    let s = vec3(&est["sigma_hz_per_mps2"]);
+    let t = vec3(&truth["gamma_hz_per_mps2"]);
+    assert_eq!(t, [0.09, 0.08, -0.08]);
+    assert_eq!(est["observable"], serde_json::json!([true, true, true]));
+    let norm = t.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let err = (0..3).map(|i| (g[i] - t[i]).powi(2)).sum::<f64>().sqrt();
+    assert!(err < 0.02 * norm, "|Γ̂ − Γ| = {err} ({:.2} %)", 100.0 * err / norm);
+    for i in 0..3 {
+        assert!((g[i] - t[i]).abs() < 3.0 * s[i], "axis {i}: {} ± {} vs {}", g[i], s[i], t[i]);
+    }
+    // Compensation brings the shaking phase error back to its rest level.
+    let before = est["rms_before_rad"].as_f64().unwrap();
+    let after = est["rms_after_rad"].as_f64().unwrap();
+    assert!(after < 0.3 * before, "{before} → {after}");
+    for key in ["gamma_ppb_per_g", "imu_time_offset_s", "settings"] {
+        assert!(!est[key].is_null(), "{key} missing");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn same_seed_same_bytes() {
+    let base = std::env::temp_dir().join(format!("gsens-seed-{}", std::process::id()));
+    let (a, b, c) = (base.join("a"), base.join("b"), base.join("c"));
+    gsens(&["simulate", "--out", a.to_str().unwrap(), "--seed", "3"]);
+    gsens(&["simulate", "--out", b.to_str().unwrap(), "--seed", "3"]);
+    gsens(&["simulate", "--out", c.to_str().unwrap(), "--seed", "4"]);
+    for f in ["imu.csv", "tracking.csv", "truth.json"] {
+        let (x, y) = (std::fs::read(a.join(f)).unwrap(), std::fs::read(b.join(f)).unwrap());
+        assert!(x == y, "{f} differs between two runs with the same seed");
+    }
+    assert!(std::fs::read(a.join("tracking.csv")).unwrap() != std::fs::read(c.join("tracking.csv")).unwrap());
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn demo_shows_estimate_next_to_truth() {
+    let dir = std::env::temp_dir().join(format!("gsens-demo-test-{}", std::process::id()));
+    let text = gsens(&["demo", "--out", dir.to_str().unwrap()]);
+    assert!(text.contains("truth"), "{text}");
+    assert!(text.contains("% of |Γ|"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn scenario_command_prints_a_parsable_default() {
+    let text = gsens(&["scenario"]);
+    assert!(text.contains("gamma_hz_per_mps2 = [0.09, 0.08, -0.08]"));
+    let dir = std::env::temp_dir().join(format!("gsens-scn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = -3.0")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(err.contains("bad.toml") && err.contains("bn_hz"), "{err}");
+    std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = 3.0\nbandwidth = 2")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(err.contains("bandwidth"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn response_reports_the_paper_loop_peak() {
+    let dir = std::env::temp_dir().join(format!("gsens-resp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("r.json");
+    gsens(&["response", "--json", out.to_str().unwrap()]);
+    let r = json(&out);
+    // conventions.md: peak at ωn/2π = 0.900 Hz with π/(ζωn) = 0.785 rad/Hz.
+    assert!((r["peak_hz"].as_f64().unwrap() - 0.9003).abs() < 1e-3);
+    assert!((r["peak_rad_per_hz"].as_f64().unwrap() - 0.7854).abs() < 1e-3);
+    let _ = std::fs::remove_dir_all(&dir);
+}
