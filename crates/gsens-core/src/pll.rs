@@ -44,7 +44,10 @@
 //!
 //! which tends to L(s) as T → 0 (z = e^{sT}).
 
-use crate::math::{PI, TAU, abs, cos, sin, sqrt};
+use crate::math::{PI, TAU, cos, sin, sqrt};
+
+/// 1/2π: the loop's critical path multiplies rather than divides.
+const FRAC_1_TAU: f64 = 1.0 / TAU;
 pub use nalgebra::Complex;
 
 /// Loop-filter coefficients of F(s) = c0 + c1/s + c2/s² [rad/s per rad].
@@ -255,26 +258,53 @@ impl LoopFilterCoeffs {
         -g / (one + g * zi * fd / Complex::new(TAU, 0.0))
     }
 
-    /// Whether the discrete loop at update interval `t_s` is stable: the
-    /// iteration of [`DiscretePll`] must decay. Checked by running its impulse
-    /// response (no allocation) until it has decayed or grown.
+    /// Whether the discrete loop at update interval `t_s` is stable: every
+    /// root of the characteristic polynomial of [`DiscretePll`] (the
+    /// denominator of L_d(z), multiplied out),
+    ///
+    /// ```text
+    /// P(z) = (2/T)·z·(z−1)³ + (z+1)·[c0·(z−1)² + c1·T·z·(z−1) + c2·T²·z²],
+    /// ```
+    ///
+    /// lies strictly inside the unit circle (eigenvalues of its companion
+    /// matrix). Without the second integrator (c2 = 0) both terms share a
+    /// factor (z − 1) that cancels in L_d, and without the first (c1 = c2 = 0)
+    /// another: they are divided out first.
     pub fn is_stable_at(&self, t_s: f64) -> bool {
-        let mut pll = DiscretePll::new(*self, t_s);
-        let mut peak = abs(pll.step(1.0));
-        // 20 time constants of the slowest pole at most (or 10⁶ steps).
-        let n = (20.0 / (self.c0_per_s.min(sqrt(self.c1_per_s2.max(1e-30))) * t_s)).clamp(100.0, 1e6) as usize;
-        let mut last = 0.0f64;
-        for i in 0..n {
-            let y = abs(pll.step(0.0));
-            if !y.is_finite() || y > 1e6 * peak.max(1e-300) {
-                return false;
-            }
-            peak = peak.max(y);
-            if i + 64 >= n {
-                last = last.max(y);
-            }
+        if !(t_s.is_finite() && t_s > 0.0) {
+            return false;
         }
-        last < 1e-3 * peak
+        let (c0, c1, c2) = (self.c0_per_s, self.c1_per_s2, self.c2_per_s3);
+        let k = 2.0 / t_s;
+        let inside = |z: &Complex<f64>| z.norm_sqr() < 1.0 - 1e-12;
+        if c2 != 0.0 {
+            let a = c0 + c1 * t_s + c2 * t_s * t_s;
+            let b = -2.0 * c0 - c1 * t_s;
+            // k·z(z−1)³ + (z+1)(a z² + b z + c0), divided by k.
+            let p = [(-3.0 * k + a) / k, (3.0 * k + a + b) / k, (-k + b + c0) / k, c0 / k];
+            let m = nalgebra::Matrix4::new(
+                -p[0], -p[1], -p[2], -p[3], //
+                1.0, 0.0, 0.0, 0.0, //
+                0.0, 1.0, 0.0, 0.0, //
+                0.0, 0.0, 1.0, 0.0,
+            );
+            m.complex_eigenvalues().iter().all(inside)
+        } else if c1 != 0.0 {
+            // k·z(z−1)² + (z+1)((c0 + c1·T) z − c0), divided by k.
+            let a = c0 + c1 * t_s;
+            let p = [(-2.0 * k + a) / k, (k + a - c0) / k, -c0 / k];
+            let m = nalgebra::Matrix3::new(
+                -p[0], -p[1], -p[2], //
+                1.0, 0.0, 0.0, //
+                0.0, 1.0, 0.0,
+            );
+            m.complex_eigenvalues().iter().all(inside)
+        } else {
+            // k·z(z−1) + c0·(z+1), divided by k.
+            let p = [(-k + c0) / k, c0 / k];
+            let m = nalgebra::Matrix2::new(-p[0], -p[1], 1.0, 0.0);
+            m.complex_eigenvalues().iter().all(inside)
+        }
     }
 }
 
@@ -321,7 +351,7 @@ impl LoopFilter {
         let c = &self.coeffs;
         self.acc2_rad_per_s2 += c.c2_per_s3 * self.t_s * phase_err_rad;
         self.acc1_rad_per_s += self.t_s * (c.c1_per_s2 * phase_err_rad + self.acc2_rad_per_s2);
-        (c.c0_per_s * phase_err_rad + self.acc1_rad_per_s) / TAU
+        (c.c0_per_s * phase_err_rad + self.acc1_rad_per_s) * FRAC_1_TAU
     }
 }
 

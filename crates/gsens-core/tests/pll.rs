@@ -128,6 +128,39 @@ fn stability_checks() {
     // Bn·T far beyond any receiver's choice: unstable.
     let wide = LoopSpec::SecondOrder { bn_hz: 60.0, zeta: FRAC_1_SQRT_2 }.coeffs().unwrap();
     assert!(!wide.is_stable_at(0.02));
+    // Slow 3rd-order loops at fast updates are stable (their slow poles sit near z = 1).
+    assert!(LoopSpec::third_order_kaplan(1.0).coeffs().unwrap().is_stable_at(0.001));
+    assert!(LoopSpec::third_order_kaplan(0.2).coeffs().unwrap().is_stable_at(0.001));
+    // The root test agrees with the time-domain loop: find the Bn·T where the
+    // impulse response starts to grow and check the verdict flips there too.
+    for spec in [LoopSpec::PAPER, LoopSpec::third_order_kaplan(3.0)] {
+        let t_s = 0.02;
+        let verdict = |bn: f64| {
+            let c = match spec {
+                LoopSpec::SecondOrder { zeta, .. } => LoopSpec::SecondOrder { bn_hz: bn, zeta },
+                LoopSpec::ThirdOrder { a3, b3, .. } => LoopSpec::ThirdOrder { bn_hz: bn, a3, b3 },
+                other => other,
+            }
+            .coeffs()
+            .unwrap();
+            let mut pll = DiscretePll::new(c, t_s);
+            pll.step(1.0);
+            let mut late = 0.0f64;
+            let mut finite = true;
+            for k in 0..20_000 {
+                let y = pll.step(0.0).abs();
+                finite &= y.is_finite();
+                if k >= 19_000 {
+                    late = late.max(y);
+                }
+            }
+            (c.is_stable_at(t_s), finite && late < 1e-6)
+        };
+        for bn in [5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 40.0] {
+            let (roots, time_domain) = verdict(bn);
+            assert_eq!(roots, time_domain, "Bn = {bn} Hz at T = {t_s} s");
+        }
+    }
     assert_eq!(
         LoopSpec::SecondOrder { bn_hz: -1.0, zeta: 0.7 }.coeffs(),
         Err(LoopError::NonPositiveParameter("bn_hz"))
