@@ -1,1 +1,25 @@
-//! Simulator of a g-sensitivity calibration session.
+//! # gsens-sim
+//!
+//! A closed-loop simulator of a g-sensitivity calibration session (the
+//! experiment of the seed paper): a crystal oscillator whose frequency depends
+//! on the specific force it feels drives the carrier-tracking channels of a
+//! GNSS receiver with a fixed antenna, while the board with the oscillator and
+//! an IMU is shaken by hand. It produces what the receiver would log — IMU
+//! specific force and per-channel PLL phase errors — and the truth (Γ and
+//! everything needed to reproduce the run).
+//!
+//! - [`scenario`]: the TOML scenario (with an embedded, commented default
+//!   reproducing the paper's experiment) and its validation;
+//! - [`channel`]: one tracking channel at the correlator level, using the
+//!   core's loop filter and NCO ([`gsens_core::pll::CarrierLoop`]);
+//! - [`session`]: the whole session, streamed through a [`session::SessionSink`].
+#![deny(missing_docs)]
+
+pub mod channel;
+pub mod imu;
+pub mod motion;
+pub mod oscillator;
+pub mod rng;
+pub mod satellites;
+pub mod scenario;
+pub mod session;

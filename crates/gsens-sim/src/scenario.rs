@@ -1,0 +1,641 @@
+//! The scenario of a simulated calibration session: a TOML file.
+//!
+//! Every section and key is optional; what is missing takes the default, and
+//! the defaults reproduce the paper's experiment (conventions.md): an OCXO with
+//! Γ = \[+0.09, +0.08, −0.08\] Hz/(m/s²) at GPS L1, a 2nd-order PLL with
+//! Bn = 3 Hz and ζ = 1/√2 updated every 1 ms, logs at 40 Hz, a fixed antenna in
+//! Moscow with the satellites of the built-in almanac in view, the board
+//! shaken by hand along x, then y, then z with a 1.1 s period and rests
+//! between axes. [`Scenario::default_toml`] is that default as a commented
+//! TOML file (what `gsens scenario` prints).
+//!
+//! Unknown keys are errors (`deny_unknown_fields` everywhere; toml's message
+//! names the key and its line), and so are out-of-range values
+//! ([`Scenario::validate`]: the message names the key path, e.g.
+//! `loop.bn_hz must be > 0 (got -1)`).
+
+use core::f64::consts::FRAC_1_SQRT_2;
+
+use gsens_core::pll::{LoopFilterCoeffs, LoopSpec};
+use gsens_core::regressor::LoggedPhase;
+use gsens_core::units::GPS_L1_HZ;
+use serde::{Deserialize, Serialize};
+
+use crate::channel::{DATA_BIT_S, Discriminator};
+use crate::imu::{ImuConfig, ImuPreset};
+use crate::motion::MotionConfig;
+use crate::oscillator::OscillatorConfig;
+use crate::satellites::{Cn0Model, Geodetic, gps_seconds_from_utc};
+
+/// The embedded default scenario, with comments (see [`Scenario::default_toml`]).
+const DEFAULT_TOML: &str = include_str!("default_scenario.toml");
+
+/// Errors reading or checking a scenario.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ScenarioError {
+    /// The TOML does not parse or has an unknown key / a value of the wrong
+    /// type (toml's message, which names the key and the line).
+    #[error("invalid scenario: {0}")]
+    Parse(String),
+    /// A value out of range; the message names the key path.
+    #[error("invalid scenario: {0}")]
+    Invalid(String),
+}
+
+/// A complete scenario (see the module docs and `default_scenario.toml`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// `[session]`: start time and duration.
+    #[serde(default)]
+    pub session: SessionSection,
+    /// `[antenna]`: the fixed antenna's WGS-84 position.
+    #[serde(default = "default_antenna")]
+    pub antenna: Geodetic,
+    /// `[oscillator]`: noise, g-sensitivity, carrier.
+    #[serde(default)]
+    pub oscillator: OscillatorSection,
+    /// `[loop]`: the receiver's carrier loops.
+    #[serde(default, rename = "loop")]
+    pub tracking_loop: LoopSection,
+    /// `[log]`: what the receiver logs and how often.
+    #[serde(default)]
+    pub log: LogSection,
+    /// `[imu]`: the accelerometer triad.
+    #[serde(default)]
+    pub imu: ImuSection,
+    /// `[motion]`: the hand motion, `[[motion.segments]]`.
+    #[serde(default)]
+    pub motion: MotionConfig,
+    /// `[satellites]`: mask, channels, C/N0 model.
+    #[serde(default)]
+    pub satellites: SatellitesSection,
+}
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Scenario {
+            session: SessionSection::default(),
+            antenna: default_antenna(),
+            oscillator: OscillatorSection::default(),
+            tracking_loop: LoopSection::default(),
+            log: LogSection::default(),
+            imu: ImuSection::default(),
+            motion: MotionConfig::paper_default(),
+            satellites: SatellitesSection::default(),
+        }
+    }
+}
+
+/// The default antenna: Moscow (55.75° N, 37.60° E, 200 m), where the seed
+/// paper's authors work.
+pub fn default_antenna() -> Geodetic {
+    Geodetic::new(55.75, 37.60, 200.0)
+}
+
+/// `[session]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SessionSection {
+    /// Start of the session, UTC, `YYYY-MM-DDTHH:MM:SS[.sss]Z` (GPS − UTC is
+    /// taken as 18 s). Default 2024-02-08T12:00:00Z, within a day of the
+    /// built-in almanac's epoch.
+    pub start_utc: String,
+    /// Duration \[s\]; absent: the motion's total duration.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duration_s: Option<f64>,
+}
+
+impl Default for SessionSection {
+    fn default() -> Self {
+        SessionSection { start_utc: "2024-02-08T12:00:00Z".into(), duration_s: None }
+    }
+}
+
+/// Oscillator noise presets; see [`OscillatorConfig`]'s constructors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OscillatorKind {
+    /// [`OscillatorConfig::ocxo`] (the paper's oscillator class).
+    Ocxo,
+    /// [`OscillatorConfig::tcxo`].
+    Tcxo,
+    /// [`OscillatorConfig::tcxo_low_quality`].
+    TcxoLowQuality,
+    /// [`OscillatorConfig::ideal`]: no noise at all (only aᵀΓ).
+    Ideal,
+}
+
+/// `[oscillator]`: a noise preset, optional overrides of its parameters, the
+/// g-sensitivity and the carrier.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OscillatorSection {
+    /// Noise preset (`"ocxo"`, `"tcxo"`, `"tcxo_low_quality"`, `"ideal"`).
+    pub preset: OscillatorKind,
+    /// Override of h₀ \[s\] (white FM).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub h0: Option<f64>,
+    /// Override of h₋₁ \[-\] (flicker FM).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub h_neg1: Option<f64>,
+    /// Override of h₋₂ \[Hz\] (random-walk FM).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub h_neg2: Option<f64>,
+    /// Override of h₂ \[s³\] (white PM).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub h2: Option<f64>,
+    /// Override of the constant fractional frequency offset \[-\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_frac: Option<f64>,
+    /// Override of the linear drift \[1/s\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_frac_per_s: Option<f64>,
+    /// Override of the temperature-cycle amplitude \[-\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub temp_cycle_amplitude_frac: Option<f64>,
+    /// Override of the temperature-cycle period \[s\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub temp_cycle_period_s: Option<f64>,
+    /// Override of the temperature-cycle phase \[rad\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub temp_cycle_phase_rad: Option<f64>,
+    /// Override of the flicker synthesis low cutoff \[Hz\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flicker_low_cutoff_hz: Option<f64>,
+    /// The g-sensitivity Γ \[Hz/(m/s²)\] at the carrier (conventions.md):
+    /// Δf = aᵀΓ is added to every NCO. Default: the paper's calibrated OCXO.
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// Tracked carrier frequency \[Hz\] (default GPS L1, 1 575.42 MHz).
+    pub carrier_hz: f64,
+}
+
+impl Default for OscillatorSection {
+    fn default() -> Self {
+        OscillatorSection {
+            preset: OscillatorKind::Ocxo,
+            h0: None,
+            h_neg1: None,
+            h_neg2: None,
+            h2: None,
+            offset_frac: None,
+            drift_frac_per_s: None,
+            temp_cycle_amplitude_frac: None,
+            temp_cycle_period_s: None,
+            temp_cycle_phase_rad: None,
+            flicker_low_cutoff_hz: None,
+            gamma_hz_per_mps2: [0.09, 0.08, -0.08],
+            carrier_hz: GPS_L1_HZ,
+        }
+    }
+}
+
+impl OscillatorSection {
+    /// The noise model: the preset with the overrides applied.
+    pub fn config(&self) -> OscillatorConfig {
+        let mut c = match self.preset {
+            OscillatorKind::Ocxo => OscillatorConfig::ocxo(),
+            OscillatorKind::Tcxo => OscillatorConfig::tcxo(),
+            OscillatorKind::TcxoLowQuality => OscillatorConfig::tcxo_low_quality(),
+            OscillatorKind::Ideal => OscillatorConfig::ideal(),
+        };
+        let set = |dst: &mut f64, v: Option<f64>| {
+            if let Some(v) = v {
+                *dst = v;
+            }
+        };
+        set(&mut c.h0, self.h0);
+        set(&mut c.h_neg1, self.h_neg1);
+        set(&mut c.h_neg2, self.h_neg2);
+        set(&mut c.h2, self.h2);
+        set(&mut c.offset_frac, self.offset_frac);
+        set(&mut c.drift_frac_per_s, self.drift_frac_per_s);
+        set(&mut c.temp_cycle_amplitude_frac, self.temp_cycle_amplitude_frac);
+        set(&mut c.temp_cycle_period_s, self.temp_cycle_period_s);
+        set(&mut c.temp_cycle_phase_rad, self.temp_cycle_phase_rad);
+        set(&mut c.flicker_low_cutoff_hz, self.flicker_low_cutoff_hz);
+        c
+    }
+}
+
+/// `[loop]`: the carrier loops (all channels alike).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LoopSection {
+    /// Loop order, 2 or 3.
+    pub order: u8,
+    /// One-sided noise bandwidth Bn \[Hz\].
+    pub bn_hz: f64,
+    /// Damping ratio ζ (order 2).
+    pub zeta: f64,
+    /// a3 of F(s) = b3·ωn + a3·ωn²/s + ωn³/s² (order 3; Kaplan: 1.1).
+    pub a3: f64,
+    /// b3 (order 3; Kaplan: 2.4).
+    pub b3: f64,
+    /// Loop update interval = coherent integration time T \[s\]; 20 ms (a data
+    /// bit) must be a whole number of them: 1, 2, 4, 5, 10, 20 ms, …
+    pub interval_s: f64,
+    /// `"costas"` (atan(Q/I), data channel) or `"pilot"` (atan2(Q, I)).
+    pub discriminator: Discriminator,
+    /// Aid the NCO with the satellite Doppler predicted from the orbit model
+    /// (the antenna is fixed and known), so the loop only tracks the
+    /// oscillator; otherwise the loop also tracks the Doppler and its rate.
+    pub doppler_aiding: bool,
+    /// σ of the frequency error \[Hz\] the loop starts with (what acquisition /
+    /// FLL pull-in hands over); the initial phase error is uniform in (−π, π].
+    pub initial_freq_err_hz: f64,
+    /// Lock indicator threshold on the filtered cos 2φ estimate, in (0, 1).
+    pub lock_threshold: f64,
+    /// Lock indicator low-pass time constant \[s\].
+    pub lock_tau_s: f64,
+}
+
+impl Default for LoopSection {
+    fn default() -> Self {
+        LoopSection {
+            order: 2,
+            bn_hz: 3.0,
+            zeta: FRAC_1_SQRT_2,
+            a3: gsens_core::pll::KAPLAN_A3,
+            b3: gsens_core::pll::KAPLAN_B3,
+            interval_s: 0.001,
+            discriminator: Discriminator::Costas,
+            doppler_aiding: false,
+            initial_freq_err_hz: 0.2,
+            lock_threshold: 0.5,
+            lock_tau_s: 0.2,
+        }
+    }
+}
+
+impl LoopSection {
+    /// The loop specification for the core.
+    pub fn spec(&self) -> LoopSpec {
+        if self.order == 3 {
+            LoopSpec::ThirdOrder { bn_hz: self.bn_hz, a3: self.a3, b3: self.b3 }
+        } else {
+            LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta }
+        }
+    }
+
+    /// The loop-filter coefficients (after validation they exist).
+    pub fn coeffs(&self) -> Result<LoopFilterCoeffs, ScenarioError> {
+        self.spec().coeffs().map_err(|e| ScenarioError::Invalid(format!("loop: {e}")))
+    }
+}
+
+/// What a tracking-log row's phase is, when the loop runs faster than the log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LoggedPhaseMode {
+    /// The latest discriminator output ([`LoggedPhase::Last`]).
+    Last,
+    /// The mean of the discriminator outputs since the previous row ([`LoggedPhase::Mean`]).
+    Mean,
+}
+
+impl From<LoggedPhaseMode> for LoggedPhase {
+    fn from(m: LoggedPhaseMode) -> Self {
+        match m {
+            LoggedPhaseMode::Last => LoggedPhase::Last,
+            LoggedPhaseMode::Mean => LoggedPhase::Mean,
+        }
+    }
+}
+
+/// Which C/N0 the tracking log reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Cn0Logged {
+    /// The receiver's estimate (moments method over 1 s of 20 ms sums).
+    Estimated,
+    /// The simulator's true value.
+    True,
+}
+
+/// `[log]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LogSection {
+    /// Tracking log interval \[s\], a whole number of loop intervals (0.025 = 40 Hz).
+    pub interval_s: f64,
+    /// `"last"` or `"mean"` discriminator output (see `gsens_core::regressor`);
+    /// rows are time-stamped at the centre of the latest integration.
+    pub phase: LoggedPhaseMode,
+    /// `"estimated"` or `"true"` C/N0 in the rows.
+    pub cn0: Cn0Logged,
+    /// Leave out rows of channels whose lock indicator reads unlocked (as
+    /// receivers do); the rows always carry the lock state for callers.
+    pub drop_unlocked: bool,
+}
+
+impl Default for LogSection {
+    fn default() -> Self {
+        LogSection { interval_s: 0.025, phase: LoggedPhaseMode::Mean, cn0: Cn0Logged::Estimated, drop_unlocked: true }
+    }
+}
+
+/// `[imu]`: a preset and optional overrides of its parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImuSection {
+    /// Preset (`"ideal"`, `"consumer_mems"`, `"industrial"`, `"tactical"`);
+    /// default `"industrial"`, the class of a survey GNSS/IMU receiver such as
+    /// the paper's Topcon AGI-4.
+    pub preset: ImuPreset,
+    /// Output rate \[Hz\] (default 40 Hz, the paper's log rate).
+    pub rate_hz: f64,
+    /// IMU time stamp minus true time \[s\].
+    pub time_offset_s: f64,
+    /// Override of the velocity random walk \[(m/s²)/√Hz\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vrw_mps2_per_rthz: Option<f64>,
+    /// Override of the bias σ \[m/s²\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bias_sigma_mps2: Option<f64>,
+    /// Override of the scale-factor σ \[ppm\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale_factor_sigma_ppm: Option<f64>,
+    /// Override of the misalignment σ \[rad\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub misalignment_sigma_rad: Option<f64>,
+    /// Override of the quantization step \[m/s²\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quantization_mps2: Option<f64>,
+}
+
+impl Default for ImuSection {
+    fn default() -> Self {
+        ImuSection {
+            preset: ImuPreset::Industrial,
+            rate_hz: 40.0,
+            time_offset_s: 0.0,
+            vrw_mps2_per_rthz: None,
+            bias_sigma_mps2: None,
+            scale_factor_sigma_ppm: None,
+            misalignment_sigma_rad: None,
+            quantization_mps2: None,
+        }
+    }
+}
+
+impl ImuSection {
+    /// The IMU configuration: the preset with rate, offset and overrides applied.
+    pub fn config(&self) -> ImuConfig {
+        let mut c = self.preset.config();
+        c.rate_hz = self.rate_hz;
+        c.time_offset_s = self.time_offset_s;
+        let set = |dst: &mut f64, v: Option<f64>| {
+            if let Some(v) = v {
+                *dst = v;
+            }
+        };
+        set(&mut c.vrw_mps2_per_rthz, self.vrw_mps2_per_rthz);
+        set(&mut c.bias_sigma_mps2, self.bias_sigma_mps2);
+        set(&mut c.scale_factor_sigma_ppm, self.scale_factor_sigma_ppm);
+        set(&mut c.misalignment_sigma_rad, self.misalignment_sigma_rad);
+        set(&mut c.quantization_mps2, self.quantization_mps2);
+        c
+    }
+}
+
+/// `[satellites]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SatellitesSection {
+    /// Elevation mask \[deg\]: channels start when a satellite rises above it
+    /// and stop when it sets below it.
+    pub elevation_mask_deg: f64,
+    /// Number of tracking channels; the highest satellites get them first.
+    pub max_channels: u32,
+    /// `[satellites.cn0]`: C/N0 versus elevation.
+    pub cn0: Cn0Model,
+}
+
+impl Default for SatellitesSection {
+    fn default() -> Self {
+        SatellitesSection { elevation_mask_deg: 10.0, max_channels: 12, cn0: Cn0Model::default() }
+    }
+}
+
+/// Parses `YYYY-MM-DDTHH:MM:SS[.fff][Z]` (UTC) into GPS seconds.
+pub fn parse_utc_to_gps_s(s: &str) -> Result<f64, String> {
+    let bad = || format!("session.start_utc must look like 2024-02-08T12:00:00Z (got {s:?})");
+    let t = s.trim().trim_end_matches('Z');
+    let (date, time) = t.split_once(['T', ' ']).ok_or_else(bad)?;
+    let d: Vec<&str> = date.split('-').collect();
+    let h: Vec<&str> = time.split(':').collect();
+    if d.len() != 3 || h.len() != 3 {
+        return Err(bad());
+    }
+    let year: i32 = d[0].parse().map_err(|_| bad())?;
+    let month: u32 = d[1].parse().map_err(|_| bad())?;
+    let day: u32 = d[2].parse().map_err(|_| bad())?;
+    let hour: u32 = h[0].parse().map_err(|_| bad())?;
+    let minute: u32 = h[1].parse().map_err(|_| bad())?;
+    let second: f64 = h[2].parse().map_err(|_| bad())?;
+    let ok = (1980..=2200).contains(&year)
+        && (1..=12).contains(&month)
+        && (1..=31).contains(&day)
+        && hour < 24
+        && minute < 60
+        && (0.0..61.0).contains(&second);
+    if !ok {
+        return Err(bad());
+    }
+    Ok(gps_seconds_from_utc(year, month, day, hour, minute, second))
+}
+
+fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), ScenarioError> {
+    if ok { Ok(()) } else { Err(ScenarioError::Invalid(msg())) }
+}
+
+impl Scenario {
+    /// The embedded default scenario as commented TOML (parses to
+    /// [`Scenario::default`]).
+    pub fn default_toml() -> &'static str {
+        DEFAULT_TOML
+    }
+
+    /// Parses and validates a scenario.
+    pub fn from_toml_str(s: &str) -> Result<Scenario, ScenarioError> {
+        let sc: Scenario = toml::from_str(s).map_err(|e| ScenarioError::Parse(e.to_string().trim_end().to_string()))?;
+        sc.validate()?;
+        Ok(sc)
+    }
+
+    /// The scenario as TOML (without comments).
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(self).unwrap_or_default()
+    }
+
+    /// GPS seconds at t = 0.
+    pub fn start_gps_s(&self) -> Result<f64, ScenarioError> {
+        parse_utc_to_gps_s(&self.session.start_utc).map_err(ScenarioError::Invalid)
+    }
+
+    /// The session's duration \[s\]: `session.duration_s` or the motion's.
+    pub fn duration_s(&self) -> f64 {
+        self.session.duration_s.unwrap_or_else(|| self.motion.duration_s())
+    }
+
+    /// Loop updates per log row, round(log.interval_s / loop.interval_s).
+    pub fn integrations_per_row(&self) -> u32 {
+        (self.log.interval_s / self.tracking_loop.interval_s).round().max(1.0) as u32
+    }
+
+    /// Checks every value; the error names the key path.
+    pub fn validate(&self) -> Result<(), ScenarioError> {
+        let inv = ScenarioError::Invalid;
+        // [session]
+        self.start_gps_s()?;
+        if let Some(d) = self.session.duration_s {
+            check(d.is_finite() && d > 0.0 && d <= 1e6, || {
+                format!("session.duration_s must be in (0, 1e6] s (got {d})")
+            })?;
+        }
+        check(self.duration_s() > 0.0, || "the session is empty: give motion.segments or session.duration_s".into())?;
+        // [antenna]
+        self.antenna.validate().map_err(|e| inv(format!("antenna.{e}")))?;
+        // [oscillator]
+        let o = &self.oscillator;
+        self.oscillator.config().validate().map_err(inv)?;
+        for (i, g) in o.gamma_hz_per_mps2.iter().enumerate() {
+            check(g.is_finite() && g.abs() <= 100.0, || {
+                format!("oscillator.gamma_hz_per_mps2[{i}] must be finite and within ±100 Hz/(m/s²) (got {g})")
+            })?;
+        }
+        check(o.carrier_hz.is_finite() && (1e8..=1e11).contains(&o.carrier_hz), || {
+            format!("oscillator.carrier_hz must be within [1e8, 1e11] Hz (got {})", o.carrier_hz)
+        })?;
+        // [loop]
+        let l = &self.tracking_loop;
+        check(l.order == 2 || l.order == 3, || format!("loop.order must be 2 or 3 (got {})", l.order))?;
+        check(l.bn_hz.is_finite() && l.bn_hz > 0.0, || format!("loop.bn_hz must be > 0 (got {})", l.bn_hz))?;
+        if l.order == 2 {
+            check(l.zeta.is_finite() && l.zeta > 0.0, || format!("loop.zeta must be > 0 (got {})", l.zeta))?;
+        } else {
+            check(l.a3.is_finite() && l.a3 > 0.0, || format!("loop.a3 must be > 0 (got {})", l.a3))?;
+            check(l.b3.is_finite() && l.b3 > 0.0, || format!("loop.b3 must be > 0 (got {})", l.b3))?;
+            check(l.a3 * l.b3 > 1.0, || {
+                format!("loop.a3 * loop.b3 must be > 1 for a stable loop (got {})", l.a3 * l.b3)
+            })?;
+        }
+        let t = l.interval_s;
+        check(t.is_finite() && t > 0.0 && t <= DATA_BIT_S + 1e-12, || {
+            format!("loop.interval_s must be in (0, 0.02] s (got {t})")
+        })?;
+        let per_bit = DATA_BIT_S / t;
+        check((per_bit - per_bit.round()).abs() < 1e-6 * per_bit, || {
+            format!("loop.interval_s must divide the 20 ms data bit (1, 2, 4, 5, 10 or 20 ms, …) (got {t})")
+        })?;
+        let coeffs = l.coeffs()?;
+        // coeffs() checked the continuous loop (Routh–Hurwitz); the discrete
+        // loop at this interval is checked by its poles.
+        check(coeffs.is_stable_at(t), || {
+            format!("loop.bn_hz = {} is too wide for loop.interval_s = {t}: the discrete loop is unstable", l.bn_hz)
+        })?;
+        check(l.initial_freq_err_hz.is_finite() && l.initial_freq_err_hz >= 0.0, || {
+            format!("loop.initial_freq_err_hz must be >= 0 (got {})", l.initial_freq_err_hz)
+        })?;
+        check(l.lock_threshold > 0.0 && l.lock_threshold < 1.0, || {
+            format!("loop.lock_threshold must be in (0, 1) (got {})", l.lock_threshold)
+        })?;
+        check(l.lock_tau_s.is_finite() && l.lock_tau_s > 0.0, || {
+            format!("loop.lock_tau_s must be > 0 (got {})", l.lock_tau_s)
+        })?;
+        // [log]
+        let li = self.log.interval_s;
+        check(li.is_finite() && li > 0.0 && li <= 10.0, || format!("log.interval_s must be in (0, 10] s (got {li})"))?;
+        let r = li / t;
+        check(r.round() >= 1.0 && (r - r.round()).abs() < 1e-6 * r, || {
+            format!("log.interval_s must be a whole multiple of loop.interval_s = {t} (got {li})")
+        })?;
+        // [imu]
+        self.imu.config().validate().map_err(inv)?;
+        // [motion]
+        self.motion.validate().map_err(inv)?;
+        // [satellites]
+        let s = &self.satellites;
+        check(s.elevation_mask_deg.is_finite() && (-5.0..=80.0).contains(&s.elevation_mask_deg), || {
+            format!("satellites.elevation_mask_deg must be within [-5, 80] (got {})", s.elevation_mask_deg)
+        })?;
+        check((1..=64).contains(&s.max_channels), || {
+            format!("satellites.max_channels must be within [1, 64] (got {})", s.max_channels)
+        })?;
+        s.cn0.validate().map_err(|e| inv(format!("satellites.{e}")))?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_default_parses_and_equals_the_programmatic_default() {
+        let parsed = Scenario::from_toml_str(Scenario::default_toml()).unwrap();
+        assert_eq!(parsed, Scenario::default());
+        // And the serialized form round-trips.
+        let again = Scenario::from_toml_str(&Scenario::default().to_toml_string()).unwrap();
+        assert_eq!(again, Scenario::default());
+    }
+
+    #[test]
+    fn empty_file_is_the_default() {
+        assert_eq!(Scenario::from_toml_str("").unwrap(), Scenario::default());
+    }
+
+    #[test]
+    fn unknown_keys_are_errors_naming_the_key() {
+        for (toml, key) in [
+            ("[loop]\nbn_hz = 3.0\nbandwidth = 2\n", "bandwidth"),
+            ("foo = 1\n", "foo"),
+            ("[oscillator]\ngama = [0.0, 0.0, 0.0]\n", "gama"),
+            ("[satellites.cn0]\nzenith = 40\n", "zenith"),
+            ("[[motion.segments]]\nkind = \"rest\"\nduration_s = 1\nperiod_s = 2\n", "period_s"),
+            (
+                "[[motion.segments]]\nkind = \"shake\"\naxis = \"x\"\nduration_s = 1\nperiod_s = 1\namplitude_mps2 = 1\namp = 2\n",
+                "amp",
+            ),
+        ] {
+            let e = Scenario::from_toml_str(toml).unwrap_err().to_string();
+            assert!(e.contains(key), "{toml:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn out_of_range_values_name_the_key() {
+        for (toml, key) in [
+            ("[loop]\nbn_hz = -1.0\n", "loop.bn_hz"),
+            ("[loop]\norder = 4\n", "loop.order"),
+            ("[loop]\ninterval_s = 0.003\n", "loop.interval_s"),
+            ("[loop]\nbn_hz = 600.0\n", "loop.bn_hz"),
+            ("[log]\ninterval_s = 0.0255\n", "log.interval_s"),
+            ("[antenna]\nlat_deg = 95.0\nlon_deg = 0.0\n", "antenna.lat_deg"),
+            ("[oscillator]\nh0 = -1.0\n", "oscillator.h0"),
+            ("[oscillator]\ncarrier_hz = 5.0\n", "oscillator.carrier_hz"),
+            ("[imu]\nrate_hz = 0.0\n", "imu.rate_hz"),
+            ("[satellites]\nmax_channels = 0\n", "satellites.max_channels"),
+            ("[satellites.cn0]\nzenith_cn0_dbhz = 99.0\n", "satellites.cn0.zenith_cn0_dbhz"),
+            ("[session]\nstart_utc = \"yesterday\"\n", "session.start_utc"),
+            (
+                "[[motion.segments]]\nkind = \"shake\"\naxis = \"x\"\nduration_s = 1\nperiod_s = 1\namplitude_mps2 = -1\n",
+                "motion.segments[0].amplitude_mps2",
+            ),
+        ] {
+            let e = Scenario::from_toml_str(toml).unwrap_err().to_string();
+            assert!(e.contains(key), "{toml:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn utc_parsing() {
+        let a = parse_utc_to_gps_s("2024-02-08T12:00:00Z").unwrap();
+        let b = parse_utc_to_gps_s("2024-02-08T12:00:01.5").unwrap();
+        assert!((b - a - 1.5).abs() < 1e-9);
+        // GPS week 2300 starts 2024-02-04 00:00:00 GPS = 2024-02-03T23:59:42 UTC.
+        let w = parse_utc_to_gps_s("2024-02-03T23:59:42Z").unwrap();
+        assert!((w - 2300.0 * 604_800.0).abs() < 1e-6);
+    }
+}

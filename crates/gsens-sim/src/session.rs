@@ -1,0 +1,571 @@
+//! A whole simulated calibration session: oscillator, hand motion, IMU,
+//! satellites, one tracking channel per satellite, and the logs.
+//!
+//! # Timeline
+//!
+//! Receiver time t \[s\] starts at 0 (GPS time `start_utc` + t). The loops run
+//! at the update interval T: integration k covers \[kT − T/2, kT + T/2\], so its
+//! centre is t_k = kT. Every step k, once for all channels:
+//!
+//! - the oscillator gives ȳ_k, its fractional frequency averaged over the
+//!   step ([`Oscillator::next_y`]);
+//! - the true specific force a(t_k) in the body frame comes from the motion
+//!   ([`specific_force_body`]), evaluated exactly on a 5 ms grid and
+//!   interpolated linearly in between (error < 1e-4 relative for a 1 s shake);
+//! - Δf_k = f_carrier·ȳ_k + a(t_k)ᵀΓ \[Hz\], added to every NCO's command
+//!   (conventions.md).
+//!
+//! Then each channel integrates against its satellite's carrier, whose Doppler
+//! (and rate) come from the orbit model at 1 s intervals and are interpolated
+//! linearly in between ([`Channel::step`]).
+//!
+//! # Logs
+//!
+//! - IMU: sample i is stamped i/rate and taken at the true time
+//!   i/rate − `imu.time_offset_s` (the IMU's errors from [`ImuErrors`]),
+//!   for every stamp in \[0, duration\].
+//! - Tracking: a row per channel every n = `log.interval_s`/T integrations, after
+//!   integration k = m·n (m ≥ 1), time-stamped t_k = kT, the centre of the
+//!   latest integration; with `log.phase = "mean"` the phase is the mean of
+//!   the n discriminator outputs since the previous row. This is exactly the
+//!   convention of `gsens_core::regressor::LoggedPhase`. With the default
+//!   40 Hz logs and IMU the two streams share their time stamps.
+//!
+//! # Satellites and channels
+//!
+//! Every second the satellites above the elevation mask are listed; a
+//! satellite that has set stops its channel, and risen satellites take free
+//! channels, highest first (at most `satellites.max_channels`). A starting
+//! channel is preloaded with the true carrier frequency offset seen through the
+//! oscillator (Doppler − Δf) plus a random error of σ = `loop.initial_freq_err_hz`,
+//! a uniform phase and a uniform data-bit phase: lock, losses of lock and
+//! cycle slips then come from the loop's dynamics alone.
+//!
+//! # Reproducibility
+//!
+//! All randomness comes from streams derived from the one seed
+//! ([`crate::rng::substream`]): oscillator, motion jitter, IMU errors, IMU
+//! noise, C/N0 offsets, and one stream per channel start (identified by PRN
+//! and start time), so the same scenario and seed give the same bytes.
+
+use core::f64::consts::PI;
+
+use gsens_core::pll::LoopFilterCoeffs;
+use gsens_core::units::hz_per_mps2_to_ppb_per_g;
+use rand::RngExt;
+use serde::Serialize;
+
+use crate::channel::{Channel, ChannelConfig, ChannelStart, ChannelStats};
+use crate::imu::{ImuErrors, specific_force_body};
+use crate::motion::Motion;
+use crate::oscillator::Oscillator;
+use crate::rng::{Xoshiro256PlusPlus, normal, substream};
+use crate::satellites::{Cn0Offsets, Constellation, LineOfSight};
+use crate::scenario::{Cn0Logged, LoggedPhaseMode, Scenario, ScenarioError};
+
+/// Stream ids of [`crate::rng::substream`] for the session's components.
+mod stream {
+    pub const OSCILLATOR: u64 = 1;
+    pub const MOTION: u64 = 2;
+    pub const IMU_ERRORS: u64 = 3;
+    pub const IMU_NOISE: u64 = 4;
+    pub const CN0_OFFSETS: u64 = 5;
+    /// Channel streams: CHANNEL | prn << 32 | start second.
+    pub const CHANNEL: u64 = 0xC4A7 << 48;
+}
+
+/// Interval of the satellite geometry updates \[s\].
+const GEOMETRY_STEP_S: f64 = 1.0;
+/// Grid of the exact specific-force evaluations \[s\] (interpolated in between).
+const FORCE_GRID_S: f64 = 0.005;
+
+/// One tracking-log row (a channel at a log epoch).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TrackingRow {
+    /// Time stamp \[s\]: the centre of the latest integration.
+    pub t_s: f64,
+    /// Receiver channel number (0-based; reused after a satellite sets).
+    pub channel: u32,
+    /// Satellite PRN.
+    pub prn: u32,
+    /// C/N0 \[dB-Hz\]: the receiver's estimate or the true value, per `log.cn0`.
+    pub cn0_dbhz: f64,
+    /// Elevation \[deg\].
+    pub elev_deg: f64,
+    /// The logged phase error \[rad\]: the last discriminator output or the mean
+    /// since the previous row, per `log.phase` (what a receiver can log).
+    pub phase_err_rad: f64,
+    /// The lock indicator's state.
+    pub locked: bool,
+    /// Truth: the same statistic (last or mean) of the true phase error at the
+    /// integration centres, unwrapped (it includes the multiples of π or 2π the
+    /// loop has slipped by, and the initial ambiguity) \[rad\].
+    pub true_phase_err_rad: f64,
+    /// Truth: the channel's true C/N0 \[dB-Hz\].
+    pub true_cn0_dbhz: f64,
+}
+
+/// Error of a sink (e.g. an I/O error of the CLI's file writers).
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Where a session's logs go, as they are produced (so that long sessions
+/// need not be held in memory).
+pub trait SessionSink {
+    /// One IMU sample: time stamp \[s\] and measured specific force, body axes \[m/s²\].
+    fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), SinkError>;
+    /// One tracking row.
+    fn tracking(&mut self, row: &TrackingRow) -> Result<(), SinkError>;
+}
+
+/// A sink that keeps everything in memory.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MemorySink {
+    /// IMU samples (time stamp \[s\], specific force \[m/s²\]).
+    pub imu: Vec<(f64, [f64; 3])>,
+    /// Tracking rows.
+    pub tracking: Vec<TrackingRow>,
+}
+
+impl SessionSink for MemorySink {
+    fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), SinkError> {
+        self.imu.push((t_s, f_mps2));
+        Ok(())
+    }
+    fn tracking(&mut self, row: &TrackingRow) -> Result<(), SinkError> {
+        self.tracking.push(*row);
+        Ok(())
+    }
+}
+
+/// A sink that drops everything (for benchmarks and statistics-only runs).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NullSink;
+
+impl SessionSink for NullSink {
+    fn imu(&mut self, _t_s: f64, _f_mps2: [f64; 3]) -> Result<(), SinkError> {
+        Ok(())
+    }
+    fn tracking(&mut self, _row: &TrackingRow) -> Result<(), SinkError> {
+        Ok(())
+    }
+}
+
+/// Errors of a simulation.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The scenario is invalid.
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// A model refused its configuration.
+    #[error("{0}")]
+    Model(String),
+    /// The sink failed.
+    #[error("writing the logs: {0}")]
+    Sink(SinkError),
+}
+
+/// The loop filter as used, for the truth file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LoopCoeffsTruth {
+    /// c0 \[1/s\].
+    pub c0_per_s: f64,
+    /// c1 \[1/s²\].
+    pub c1_per_s2: f64,
+    /// c2 \[1/s³\].
+    pub c2_per_s3: f64,
+}
+
+impl From<LoopFilterCoeffs> for LoopCoeffsTruth {
+    fn from(c: LoopFilterCoeffs) -> Self {
+        LoopCoeffsTruth { c0_per_s: c.c0_per_s, c1_per_s2: c.c1_per_s2, c2_per_s3: c.c2_per_s3 }
+    }
+}
+
+/// What happened on one channel (one satellite pass within the session).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSummary {
+    /// Channel number.
+    pub channel: u32,
+    /// PRN.
+    pub prn: u32,
+    /// Start of tracking \[s\].
+    pub start_s: f64,
+    /// End of tracking \[s\] (the satellite set, or the session ended).
+    pub stop_s: f64,
+    /// Elevation at the start \[deg\].
+    pub start_elev_deg: f64,
+    /// The satellite's C/N0 offset from the elevation model \[dB\].
+    pub cn0_offset_db: f64,
+    /// True C/N0 at the start \[dB-Hz\].
+    pub start_cn0_dbhz: f64,
+    /// Counters: integrations, integrations locked, cycle slips, losses of lock.
+    pub stats: ChannelStats,
+}
+
+/// The truth of a run: Γ and everything needed to reproduce it
+/// (`truth.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Truth {
+    /// Γ \[Hz/(m/s²)\] at the carrier, body axes.
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// Γ in ppb/g: Γ·g₀/f_carrier·1e9.
+    pub gamma_ppb_per_g: [f64; 3],
+    /// Γ as seen through the IMU's readings, M⁻ᵀΓ \[Hz/(m/s²)\]: the IMU reads
+    /// m = M·f + b (M = I + scale factors + misalignment), so
+    /// Δf = Γᵀf = (M⁻ᵀΓ)ᵀ(m − b) and the constant b is rejected by the loops.
+    /// This is what an estimator fed with the IMU log converges to.
+    pub gamma_imu_axes_hz_per_mps2: [f64; 3],
+    /// Tracked carrier \[Hz\].
+    pub carrier_hz: f64,
+    /// The seed.
+    pub seed: u64,
+    /// The simulator and its version, e.g. `gsens-sim 0.1.0`.
+    pub generator: String,
+    /// GPS seconds at t = 0.
+    pub start_gps_s: f64,
+    /// Duration \[s\].
+    pub duration_s: f64,
+    /// Loop update interval T \[s\].
+    pub loop_interval_s: f64,
+    /// Tracking log interval \[s\].
+    pub log_interval_s: f64,
+    /// What `phase_err_rad` is: `last` or `mean`.
+    pub logged_phase: LoggedPhaseMode,
+    /// The rows' time-stamp convention.
+    pub row_time_stamp: String,
+    /// The loop filter used by every channel.
+    pub loop_coeffs: LoopCoeffsTruth,
+    /// IMU time stamp minus true time \[s\].
+    pub imu_time_offset_s: f64,
+    /// The IMU's realized errors (bias, scale factor, misalignment, noise).
+    pub imu_errors: ImuErrors,
+    /// Per channel (satellite pass): PRN, times, slips, losses of lock.
+    pub channels: Vec<ChannelSummary>,
+    /// The scenario as run.
+    pub scenario: Scenario,
+}
+
+/// One active channel and its satellite's interpolated geometry.
+struct Track {
+    ch: Channel,
+    prn: u32,
+    channel: u32,
+    start_s: f64,
+    start_elev_deg: f64,
+    start_cn0_dbhz: f64,
+    cn0_offset_db: f64,
+    /// Carrier Doppler at the start of the current geometry second \[Hz\] and its slope \[Hz/s\].
+    doppler0_hz: f64,
+    doppler_slope_hz_per_s: f64,
+    /// Elevation at the start of the current geometry second \[deg\] and its slope \[deg/s\].
+    elev0_deg: f64,
+    elev_slope_deg_per_s: f64,
+    /// Start of the current geometry second \[s\].
+    seg_t0_s: f64,
+    /// Geometry at the end of the current second.
+    next: LineOfSight,
+}
+
+impl Track {
+    fn summary(&self, stop_s: f64) -> ChannelSummary {
+        ChannelSummary {
+            channel: self.channel,
+            prn: self.prn,
+            start_s: self.start_s,
+            stop_s,
+            start_elev_deg: self.start_elev_deg,
+            cn0_offset_db: self.cn0_offset_db,
+            start_cn0_dbhz: self.start_cn0_dbhz,
+            stats: self.ch.stats(),
+        }
+    }
+}
+
+/// Simulates the session of `scenario` with `seed`, streaming the logs into
+/// `sink` and reporting the fraction done (0…1) to `progress` about once per
+/// simulated second. Returns the truth.
+pub fn simulate<S: SessionSink + ?Sized>(
+    scenario: &Scenario,
+    seed: u64,
+    sink: &mut S,
+    mut progress: impl FnMut(f64),
+) -> Result<Truth, SimError> {
+    scenario.validate()?;
+    let sc = scenario;
+    let t_s = sc.tracking_loop.interval_s;
+    let coeffs = sc.tracking_loop.coeffs()?;
+    let duration_s = sc.duration_s();
+    let start_gps_s = sc.start_gps_s()?;
+    let carrier_hz = sc.oscillator.carrier_hz;
+    let gamma = sc.oscillator.gamma_hz_per_mps2;
+    let aiding = sc.tracking_loop.doppler_aiding;
+    // 20 ms is a whole number of loop intervals, so 1/T is an integer and
+    // t = k/(1/T) is the correctly rounded time stamp.
+    let updates_per_s = (1.0 / t_s).round();
+    let n_steps = (duration_s * updates_per_s + 1e-6).floor() as u64;
+    let per_row = u64::from(sc.integrations_per_row());
+    let geo_steps = (GEOMETRY_STEP_S / t_s).round() as u64;
+    let force_m = ((FORCE_GRID_S / t_s).round() as u64).max(1);
+    let force_h_s = force_m as f64 * t_s;
+
+    let mut osc = Oscillator::try_new(&sc.oscillator.config(), t_s, substream(seed, stream::OSCILLATOR))
+        .map_err(SimError::Model)?;
+    let motion = Motion::try_new(&sc.motion, &mut substream(seed, stream::MOTION)).map_err(SimError::Model)?;
+    let imu_cfg = sc.imu.config();
+    let imu = ImuErrors::draw(&imu_cfg, &mut substream(seed, stream::IMU_ERRORS));
+    let mut imu_rng = substream(seed, stream::IMU_NOISE);
+    let cn0 = sc.satellites.cn0.draw_offsets(&mut substream(seed, stream::CN0_OFFSETS));
+    let constellation = Constellation::builtin();
+    let antenna = sc.antenna;
+    let mask_deg = sc.satellites.elevation_mask_deg;
+    let max_channels = sc.satellites.max_channels;
+
+    let mut ch_cfg = ChannelConfig::new(coeffs, t_s, sc.tracking_loop.discriminator);
+    ch_cfg.lock_threshold = sc.tracking_loop.lock_threshold;
+    ch_cfg.lock_tau_s = sc.tracking_loop.lock_tau_s;
+
+    let force_at = |t: f64| specific_force_body(&motion.state(t));
+    let mut force_j = 0u64;
+    let mut force_a = force_at(0.0);
+    let mut force_b = force_at(force_h_s);
+
+    let mut tracks: Vec<Track> = Vec::with_capacity(max_channels as usize);
+    let mut done: Vec<ChannelSummary> = Vec::new();
+    let mut next_imu = 0u64;
+    let sink_err = SimError::Sink;
+
+    for k in 0..=n_steps {
+        let t = k as f64 / updates_per_s;
+
+        // Shared per-step inputs: oscillator and specific force → Δf.
+        let y = osc.next_y();
+        let j = k / force_m;
+        if j != force_j {
+            if j == force_j + 1 {
+                force_a = force_b;
+            } else {
+                force_a = force_at(j as f64 * force_h_s);
+            }
+            force_b = force_at((j + 1) as f64 * force_h_s);
+            force_j = j;
+        }
+        let w = (k - j * force_m) as f64 / force_m as f64;
+        let a = [
+            force_a[0] + w * (force_b[0] - force_a[0]),
+            force_a[1] + w * (force_b[1] - force_a[1]),
+            force_a[2] + w * (force_b[2] - force_a[2]),
+        ];
+        let delta_f_hz = carrier_hz * y + a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2];
+
+        // Satellite geometry, risings and settings, once per second.
+        if k % geo_steps == 0 {
+            let t_gps = start_gps_s + t;
+            let t_next_gps = t_gps + GEOMETRY_STEP_S;
+            let mut i = 0;
+            while i < tracks.len() {
+                let tr = &mut tracks[i];
+                let now = tr.next;
+                if now.elevation_deg < mask_deg {
+                    done.push(tr.summary(t));
+                    tracks.swap_remove(i);
+                    continue;
+                }
+                let next = constellation.line_of_sight(tr.prn, &antenna, t_next_gps).expect("tracked PRN exists");
+                set_segment(tr, &now, &next, t, carrier_hz);
+                tr.ch.set_cn0_dbhz(cn0.cn0_dbhz(tr.prn, now.elevation_deg));
+                i += 1;
+            }
+            if tracks.len() < max_channels as usize {
+                for los in constellation.visible_lines_of_sight(&antenna, t_gps, mask_deg) {
+                    if tracks.len() >= max_channels as usize {
+                        break;
+                    }
+                    if tracks.iter().any(|tr| tr.prn == los.prn) {
+                        continue;
+                    }
+                    let channel = (0..).find(|c| !tracks.iter().any(|tr| tr.channel == *c)).unwrap_or(0);
+                    let next = constellation.line_of_sight(los.prn, &antenna, t_next_gps).expect("visible PRN exists");
+                    let rng = substream(seed, stream::CHANNEL | u64::from(los.prn) << 32 | (t as u64 & 0xFFFF_FFFF));
+                    tracks.push(start_track(&ch_cfg, &los, &next, t, channel, delta_f_hz, aiding, sc, &cn0, rng));
+                }
+                tracks.sort_by_key(|tr| tr.channel);
+            }
+            progress((t / duration_s).min(1.0));
+        }
+
+        // One integration per channel.
+        for tr in tracks.iter_mut() {
+            let f_sig = tr.doppler0_hz + tr.doppler_slope_hz_per_s * (t - tr.seg_t0_s);
+            let bias = if aiding { delta_f_hz + f_sig } else { delta_f_hz };
+            tr.ch.step(f_sig, bias);
+        }
+
+        // IMU samples whose stamp has been reached.
+        loop {
+            let stamp = imu.stamp_s(next_imu);
+            if stamp > t || stamp > duration_s + 1e-9 {
+                break;
+            }
+            let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
+            let m = imu.measure(f_true, &mut imu_rng);
+            sink.imu(stamp, m).map_err(sink_err)?;
+            next_imu += 1;
+        }
+
+        // Tracking rows.
+        if k > 0 && k % per_row == 0 {
+            for tr in tracks.iter_mut() {
+                let snap = tr.ch.take_log();
+                if sc.log.drop_unlocked && !snap.locked {
+                    continue;
+                }
+                let (phase, truth) = match sc.log.phase {
+                    LoggedPhaseMode::Last => (snap.last_rad, snap.true_last_rad),
+                    LoggedPhaseMode::Mean => (snap.mean_rad, snap.true_mean_rad),
+                };
+                let row = TrackingRow {
+                    t_s: t,
+                    channel: tr.channel,
+                    prn: tr.prn,
+                    cn0_dbhz: match sc.log.cn0 {
+                        Cn0Logged::Estimated => snap.cn0_est_dbhz,
+                        Cn0Logged::True => tr.ch.cn0_true_dbhz(),
+                    },
+                    elev_deg: tr.elev0_deg + tr.elev_slope_deg_per_s * (t - tr.seg_t0_s),
+                    phase_err_rad: phase,
+                    locked: snap.locked,
+                    true_phase_err_rad: truth,
+                    true_cn0_dbhz: tr.ch.cn0_true_dbhz(),
+                };
+                sink.tracking(&row).map_err(sink_err)?;
+            }
+        }
+    }
+    // Any IMU stamp after the last integration but within the duration.
+    loop {
+        let stamp = imu.stamp_s(next_imu);
+        if stamp > duration_s + 1e-9 {
+            break;
+        }
+        let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
+        let m = imu.measure(f_true, &mut imu_rng);
+        sink.imu(stamp, m).map_err(sink_err)?;
+        next_imu += 1;
+    }
+    progress(1.0);
+
+    let end_s = n_steps as f64 / updates_per_s;
+    done.extend(tracks.iter().map(|tr| tr.summary(end_s)));
+    done.sort_by(|a, b| a.start_s.total_cmp(&b.start_s).then(a.channel.cmp(&b.channel)));
+    Ok(Truth {
+        gamma_hz_per_mps2: gamma,
+        gamma_ppb_per_g: gamma.map(|g| hz_per_mps2_to_ppb_per_g(g, carrier_hz)),
+        gamma_imu_axes_hz_per_mps2: inverse_transpose_times(&imu.sensing_matrix(), &gamma),
+        carrier_hz,
+        seed,
+        generator: format!("{} {}", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
+        start_gps_s,
+        duration_s,
+        loop_interval_s: t_s,
+        log_interval_s: per_row as f64 * t_s,
+        logged_phase: sc.log.phase,
+        row_time_stamp: "centre of the latest integration (t = k*T, integration k covering [kT - T/2, kT + T/2])"
+            .into(),
+        loop_coeffs: coeffs.into(),
+        imu_time_offset_s: imu.time_offset_s,
+        imu_errors: imu,
+        channels: done,
+        scenario: sc.clone(),
+    })
+}
+
+/// M⁻ᵀ·v for a 3×3 matrix M (adjugate / determinant).
+fn inverse_transpose_times(m: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
+    // Cofactor matrix C: M⁻¹ = Cᵀ/det, so M⁻ᵀ = C/det.
+    let c = |i: usize, j: usize| {
+        let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);
+        let (c0, c1) = ((j + 1) % 3, (j + 2) % 3);
+        m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]
+    };
+    let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
+    [0, 1, 2].map(|i| (c(i, 0) * v[0] + c(i, 1) * v[1] + c(i, 2) * v[2]) / det)
+}
+
+/// Sets a track's linear geometry for the second starting at `t` from the
+/// lines of sight at its two ends.
+fn set_segment(tr: &mut Track, now: &LineOfSight, next: &LineOfSight, t: f64, carrier_hz: f64) {
+    let d0 = now.doppler_at_hz(carrier_hz);
+    let d1 = next.doppler_at_hz(carrier_hz);
+    tr.doppler0_hz = d0;
+    tr.doppler_slope_hz_per_s = (d1 - d0) / GEOMETRY_STEP_S;
+    tr.elev0_deg = now.elevation_deg;
+    tr.elev_slope_deg_per_s = (next.elevation_deg - now.elevation_deg) / GEOMETRY_STEP_S;
+    tr.seg_t0_s = t;
+    tr.next = *next;
+}
+
+#[allow(clippy::too_many_arguments)]
+fn start_track(
+    cfg: &ChannelConfig,
+    now: &LineOfSight,
+    next: &LineOfSight,
+    t: f64,
+    channel: u32,
+    delta_f_hz: f64,
+    aiding: bool,
+    sc: &Scenario,
+    cn0: &Cn0Offsets,
+    mut rng: Xoshiro256PlusPlus,
+) -> Track {
+    let carrier_hz = sc.oscillator.carrier_hz;
+    let doppler_hz = now.doppler_at_hz(carrier_hz);
+    let rate_hz_per_s = (next.doppler_at_hz(carrier_hz) - doppler_hz) / GEOMETRY_STEP_S;
+    let freq_err_hz = normal(&mut rng, sc.tracking_loop.initial_freq_err_hz);
+    // Acquisition hands over the apparent carrier frequency: the Doppler seen
+    // through the oscillator's offset (the NCO runs at command + Δf).
+    let (preload_hz, preload_rate) =
+        if aiding { (-delta_f_hz + freq_err_hz, 0.0) } else { (doppler_hz - delta_f_hz + freq_err_hz, rate_hz_per_s) };
+    let u: f64 = rng.random();
+    let initial_phase_err_rad = PI * (2.0 * u - 1.0);
+    let bit_offset = rng.random_range(0..cfg.integrations_per_bit());
+    let cn0_dbhz = cn0.cn0_dbhz(now.prn, now.elevation_deg);
+    let start = ChannelStart {
+        cn0_dbhz,
+        preload_freq_hz: preload_hz,
+        preload_rate_hz_per_s: preload_rate,
+        initial_phase_err_rad,
+        bit_offset,
+    };
+    let mut tr = Track {
+        ch: Channel::new(cfg, &start, rng),
+        prn: now.prn,
+        channel,
+        start_s: t,
+        start_elev_deg: now.elevation_deg,
+        start_cn0_dbhz: cn0_dbhz,
+        cn0_offset_db: cn0.offset_db(now.prn),
+        doppler0_hz: 0.0,
+        doppler_slope_hz_per_s: 0.0,
+        elev0_deg: 0.0,
+        elev_slope_deg_per_s: 0.0,
+        seg_t0_s: t,
+        next: *next,
+    };
+    set_segment(&mut tr, now, next, t, carrier_hz);
+    tr
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn inverse_transpose() {
+        let m = [[1.01, 0.002, -0.003], [0.001, 0.99, 0.004], [-0.002, 0.003, 1.005]];
+        let g = [0.09, 0.08, -0.08];
+        let x = super::inverse_transpose_times(&m, &g);
+        // Mᵀx = g.
+        for j in 0..3 {
+            let mtx: f64 = (0..3).map(|i| m[i][j] * x[i]).sum();
+            assert!((mtx - g[j]).abs() < 1e-15, "{j}");
+        }
+    }
+}
