@@ -12,6 +12,9 @@
 #![deny(missing_docs)]
 
 use gsens_core::calibrator::FedEpoch;
+pub mod gls;
+pub mod search;
+
 use gsens_core::estimator::{
     BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance,
 };
@@ -38,6 +41,9 @@ pub enum Method {
     },
     /// Batch least squares over the whole log.
     Batch,
+    /// Generalized least squares: the batch fit prewhitened by an AR model of
+    /// its residuals (see [`gls`]); efficient under coloured noise.
+    Gls,
 }
 
 /// Everything that decides an estimate; reported with it.
@@ -176,10 +182,21 @@ pub struct Calibration {
     pub gamma_raw_hz_per_mps2: [f64; 3],
     /// 1σ assuming white residuals (for comparison with the robust one).
     pub sigma_white_hz_per_mps2: [f64; 3],
+    /// Cramér–Rao bound on each component [Hz/(m/s²)]: √(J⁻¹)_ii, J the Fisher
+    /// information of the data under the noise spectrum fitted to the residuals
+    /// (an AR model, see [`gls`]). The same for every method; `null` for an
+    /// unobservable axis.
+    pub crlb_hz_per_mps2: [Option<f64>; 3],
+    /// Order of the AR model of the residual noise behind `crlb_hz_per_mps2`.
+    pub noise_ar_order: usize,
     /// IMU time stamp minus true time applied to the IMU [s].
     pub imu_time_offset_s: f64,
     /// Whether `imu_time_offset_s` was estimated (false: assumed by the user).
     pub imu_time_offset_estimated: bool,
+    /// 1σ of the estimated time offset [s] (when estimated).
+    pub imu_time_offset_sigma_s: Option<f64>,
+    /// The loop identification, when asked for.
+    pub loop_identification: Option<search::LoopIdentification>,
     /// RMS of the averaged phase error over the used epochs [rad].
     pub rms_before_rad: f64,
     /// RMS of φ − φ_aᵀΓ̂ over the same epochs [rad].
@@ -251,7 +268,7 @@ pub fn regressors(series: &EpochSeries, settings: &EstimateSettings) -> Result<V
     Ok(series.accel_mps2.iter().map(|a| model.epoch(a)).collect())
 }
 
-fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> Result<RegressorModel, CalibError> {
+pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> Result<RegressorModel, CalibError> {
     let coeffs = settings.loop_spec.coeffs().map_err(CalibError::Loop)?;
     let loop_t = settings.loop_interval_s.unwrap_or(log_interval_s);
     if !coeffs.is_stable_at(loop_t) {
@@ -271,7 +288,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
     let (hp, t) = (settings.highpass_hz, series.log_interval_s);
     let (estimate, fed, batch, history) = match settings.method {
-        Method::Batch => run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), series),
+        Method::Batch | Method::Gls => run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), series),
         Method::Rls { lambda } => run(
             Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip, hp, t),
             series,
@@ -287,6 +304,12 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
             settings.warmup_s
         )));
     }
+    // The noise model, the Cramér–Rao bound and the GLS estimate (all methods get the bound).
+    let noise_fit = gls_pass(&fed, settings, series.log_interval_s);
+    let estimate = match (&settings.method, &noise_fit) {
+        (Method::Gls, Some(g)) => g.estimate,
+        _ => estimate,
+    };
     let gamma = estimate.gamma_hz_per_mps2;
 
     // Residuals over the used epochs (high-passed), for the robust covariance and the RMS.
@@ -318,8 +341,12 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     let mut gamma_out = [None; 3];
     for i in 0..3 {
         let own = estimate.covariance[i][i];
-        let ratio =
-            if white_batch.covariance[i][i] > 0.0 { (hac[i][i] / white_batch.covariance[i][i]).max(1.0) } else { 1.0 };
+        let ratio = match (&settings.method, &noise_fit) {
+            // GLS: what colour its AR model missed, from its own prewhitened residuals.
+            (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance[i][i] / own).max(1.0),
+            _ if white_batch.covariance[i][i] > 0.0 => (hac[i][i] / white_batch.covariance[i][i]).max(1.0),
+            _ => 1.0,
+        };
         sigma_white[i] = own.max(0.0).sqrt();
         if obs.observable[i] {
             let stat = (own * ratio).sqrt();
@@ -342,8 +369,15 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         condition_number: obs.condition_number.is_finite().then_some(obs.condition_number),
         gamma_raw_hz_per_mps2: gamma,
         sigma_white_hz_per_mps2: sigma_white,
+        crlb_hz_per_mps2: [0, 1, 2].map(|i| {
+            let c = noise_fit.as_ref().map(|g| g.crlb_hz_per_mps2()[i]);
+            c.filter(|c| c.is_finite() && obs.observable[i])
+        }),
+        noise_ar_order: noise_fit.as_ref().map_or(0, |g| g.noise.order()),
         imu_time_offset_s: series.imu_time_offset_s,
         imu_time_offset_estimated: false,
+        imu_time_offset_sigma_s: None,
+        loop_identification: None,
         rms_before_rad: (ss_before / m).sqrt(),
         rms_after_rad: (ss_after / m).sqrt(),
         rms_g_induced_rad: (ss_g / m).sqrt(),
@@ -355,6 +389,18 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         model_substeps: substeps,
         settings: *settings,
     })
+}
+
+/// GLS over the used epochs of a pass (their contiguous runs are the segments).
+fn gls_pass(fed: &[FedEpoch], settings: &EstimateSettings, log_interval_s: f64) -> Option<gls::GlsFit> {
+    let phase: Vec<f64> = fed.iter().map(|e| e.phase_err_rad.unwrap_or(0.0)).collect();
+    let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
+    let segments = gls::segments_of(fed.iter().map(|e| e.used));
+    let gls_settings = gls::GlsSettings {
+        hac_max_lag: (settings.hac_lag_s / log_interval_s).round() as usize,
+        ..gls::GlsSettings::default()
+    };
+    gls::gls(&phase, &phi_a, &segments, &gls_settings)
 }
 
 /// Runs an estimator and, alongside, a batch accumulator (for the

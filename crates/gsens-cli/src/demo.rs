@@ -2,7 +2,7 @@
 //! write the logs, estimate Γ from the files as a user would, and show the
 //! estimate next to the truth.
 
-use crate::estimate::{EstimatorArgs, LoggedArg, LoopArgs, SelectionArgs, estimate_files};
+use crate::estimate::{EstimatorArgs, LoggedArg, LoopArgs, SelectionArgs, SystematicArgs, estimate_files};
 use crate::simulate::{load_scenario, simulate_to_dir};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -24,6 +24,8 @@ pub struct DemoArgs {
     pub estimator: EstimatorArgs,
     #[command(flatten)]
     pub selection: SelectionArgs,
+    #[command(flatten)]
+    pub systematic: SystematicArgs,
     /// Write the estimate as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -66,7 +68,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
     let (session, calibration) =
-        estimate_files(&imu, &tracking, &args.selection.selection(), truth.imu_time_offset_s, &settings)?;
+        estimate_files(&imu, &tracking, &args.selection.selection(), &args.systematic, &settings)?;
     println!(
         "estimating from {} and {} (the command line: gsens estimate --imu {} --tracking {} --order {} --bn-hz {} --loop-interval-s {} --logged-phase {})\n",
         imu.display(),

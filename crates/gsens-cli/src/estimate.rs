@@ -2,11 +2,13 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
+use gsens_calib::search::{estimate_time_offset, identify_loop};
 use gsens_calib::{Calibration, EpochSeries, EstimateSettings, Method, calibrate};
 use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
 use gsens_core::regressor::LoggedPhase;
-use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session_files};
-use std::path::PathBuf;
+use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session};
+use gsens_io::{read_imu_file, read_tracking_file};
+use std::path::{Path, PathBuf};
 
 /// Estimator choice on the command line.
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
@@ -183,6 +185,45 @@ impl SelectionArgs {
     }
 }
 
+/// How the IMU/tracking time offset is handled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeOffset {
+    /// Estimated jointly with Γ.
+    Auto,
+    /// Assumed to be zero.
+    None,
+    /// Assumed to be this many seconds (IMU time stamp minus true time).
+    Seconds(f64),
+}
+
+fn parse_time_offset(s: &str) -> Result<TimeOffset, String> {
+    match s {
+        "auto" => Ok(TimeOffset::Auto),
+        "none" => Ok(TimeOffset::None),
+        _ => match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(TimeOffset::Seconds(v)),
+            _ => Err(format!("expected auto, none or a number of seconds, got `{s}`")),
+        },
+    }
+}
+
+/// Systematic errors estimated jointly with Γ.
+#[derive(Args, Debug, Clone)]
+pub struct SystematicArgs {
+    /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
+    #[arg(long, default_value = "auto", value_parser = parse_time_offset, allow_hyphen_values = true)]
+    pub time_offset: TimeOffset,
+    /// Search range ± of `--time-offset auto` [s].
+    #[arg(long, default_value_t = 0.25)]
+    pub time_offset_max_s: f64,
+    /// Identify the loop's natural frequency jointly with Γ and use it when the data reject the assumed loop.
+    #[arg(long)]
+    pub identify_loop: bool,
+    /// With --identify-loop: identify the damping ζ too (weakly determined by near-sinusoidal shaking).
+    #[arg(long)]
+    pub identify_damping: bool,
+}
+
 #[derive(Args, Debug)]
 pub struct EstimateArgs {
     /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
@@ -197,38 +238,91 @@ pub struct EstimateArgs {
     pub estimator: EstimatorArgs,
     #[command(flatten)]
     pub selection: SelectionArgs,
-    /// IMU time stamp minus true time [s] applied to the IMU.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub imu_time_offset_s: f64,
+    #[command(flatten)]
+    pub systematic: SystematicArgs,
     /// Write the result as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
 
-/// Prepares the session from files and runs the calibration.
+/// The estimator's view of a prepared session.
+fn series_of(s: &PreparedSession) -> EpochSeries<'_> {
+    EpochSeries {
+        log_interval_s: s.log_interval_s,
+        t_s: &s.t_s,
+        phase_err_rad: &s.phase_err_rad,
+        accel_mps2: &s.accel_mps2,
+        imu_time_offset_s: s.imu_time_offset_s,
+    }
+}
+
+/// Reads the logs, prepares the session, estimates the time offset and the
+/// loop when asked, and runs the calibration.
 pub fn estimate_files(
-    imu: &std::path::Path,
-    tracking: &std::path::Path,
+    imu: &Path,
+    tracking: &Path,
     selection: &SelectionConfig,
-    imu_time_offset_s: f64,
+    systematic: &SystematicArgs,
     settings: &EstimateSettings,
 ) -> Result<(PreparedSession, Calibration)> {
-    let session = prepare_session_files(tracking, imu, selection, imu_time_offset_s)?;
-    let series = EpochSeries {
-        log_interval_s: session.log_interval_s,
-        t_s: &session.t_s,
-        phase_err_rad: &session.phase_err_rad,
-        accel_mps2: &session.accel_mps2,
-        imu_time_offset_s: session.imu_time_offset_s,
+    let tracking_log = read_tracking_file(tracking)?;
+    let imu_series = read_imu_file(imu)?;
+    let imu_name = imu.display().to_string();
+    let prepare = |offset_s: f64| prepare_session(&tracking_log, &imu_series, &imu_name, selection, offset_s);
+    let assumed = match systematic.time_offset {
+        TimeOffset::Seconds(v) => v,
+        TimeOffset::Auto | TimeOffset::None => 0.0,
     };
-    let calibration = calibrate(&series, settings)?;
+    let mut session = prepare(assumed)?;
+    let auto = systematic.time_offset == TimeOffset::Auto;
+    if auto {
+        anyhow::ensure!(
+            systematic.time_offset_max_s > 0.0 && systematic.time_offset_max_s.is_finite(),
+            "--time-offset-max-s must be positive"
+        );
+    }
+    let mut settings = *settings;
+    let mut identification = None;
+    if systematic.identify_loop {
+        // A loop error mimics a time offset: with `auto` both are searched together.
+        let id = identify_loop(
+            &series_of(&session),
+            &settings,
+            systematic.identify_damping,
+            auto.then_some(systematic.time_offset_max_s),
+        )
+        .context("identifying the loop")?;
+        if id.assumed_loop_rejected {
+            settings.loop_spec = id.spec(&settings.loop_spec);
+        }
+        identification = Some(id);
+    }
+    let mut offset_sigma = None;
+    if auto {
+        let found = estimate_time_offset(&series_of(&session), &settings, systematic.time_offset_max_s)
+            .context("estimating the IMU time offset (give --time-offset SECONDS or none to skip)")?;
+        if (found.imu_time_offset_s - assumed).abs() >= systematic.time_offset_max_s * 0.999 {
+            anyhow::bail!(
+                "the IMU time offset search ended at its limit ({:+.3} s): the offset may be larger than \
+                 --time-offset-max-s {} s; widen the search or give --time-offset SECONDS",
+                found.imu_time_offset_s,
+                systematic.time_offset_max_s
+            );
+        }
+        session = prepare(found.imu_time_offset_s)?;
+        offset_sigma = Some(found.sigma_s);
+    }
+    let mut calibration = calibrate(&series_of(&session), &settings)?;
+    calibration.imu_time_offset_estimated = offset_sigma.is_some();
+    calibration.imu_time_offset_sigma_s = offset_sigma;
+    calibration.loop_identification = identification;
     Ok((session, calibration))
 }
 
 pub fn run(args: &EstimateArgs) -> Result<()> {
     let settings = args.estimator.settings(&args.loop_args)?;
     let (session, calibration) =
-        estimate_files(&args.imu, &args.tracking, &args.selection.selection(), args.imu_time_offset_s, &settings)?;
+        estimate_files(&args.imu, &args.tracking, &args.selection.selection(), &args.systematic, &settings)?;
     print!("{}", crate::report::text(&session, &calibration, None));
     if let Some(path) = &args.json {
         crate::report::write_json(

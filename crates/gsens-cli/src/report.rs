@@ -61,6 +61,43 @@ pub fn text(session: &PreparedSession, c: &Calibration, truth: Option<[f64; 3]>)
         );
     }
     let _ = writeln!(s_, "method: {:?}", c.settings.method);
+    match c.imu_time_offset_sigma_s {
+        Some(sd) => {
+            let _ = writeln!(
+                s_,
+                "IMU time offset (IMU stamp − true time): {:+.4} s ± {:.4} s, estimated jointly with Γ and applied",
+                c.imu_time_offset_s, sd
+            );
+        }
+        None => {
+            let _ = writeln!(s_, "IMU time offset: {:+.4} s, assumed", c.imu_time_offset_s);
+        }
+    }
+    if let Some(id) = &c.loop_identification {
+        let _ = writeln!(
+            s_,
+            "loop identification: ωn/2π = {:.4} ± {:.4} Hz{} (assumed {:.4} Hz{}), likelihood ratio {:.1}: {}",
+            id.natural_frequency_hz,
+            id.sigma_natural_frequency_hz,
+            id.zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+            id.assumed_natural_frequency_hz,
+            id.assumed_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+            id.likelihood_ratio,
+            if id.assumed_loop_rejected {
+                "the data reject the assumed loop; the identified one is used"
+            } else {
+                "the data agree with the assumed loop; it is kept"
+            }
+        );
+        let s = id.gamma_sensitivity_per_percent_wn;
+        let _ = writeln!(
+            s_,
+            "  sensitivity of Γ̂ to the loop: {:+.2} %, {:+.2} %, {:+.2} % (x, y, z) per +1 % of ωn",
+            100.0 * s[0],
+            100.0 * s[1],
+            100.0 * s[2]
+        );
+    }
     let head = if truth.is_some() { "      truth       error" } else { "" };
     let _ = writeln!(s_, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
     let fn_hz = c.settings.loop_spec.wn_rad_per_s().map(|w| w / std::f64::consts::TAU).unwrap_or(0.9);

@@ -1,0 +1,159 @@
+//! Time offset and loop identification on synthetic sessions with known truth.
+
+use gsens_calib::search::{estimate_time_offset, identify_loop};
+use gsens_calib::{EpochSeries, EstimateSettings, calibrate};
+use gsens_core::pll::{DiscretePll, LoopSpec};
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
+
+const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
+const T: f64 = 0.025;
+
+/// Paper-like motion: x, y, z shaken 20 s each at ~0.9 Hz with rests.
+fn accel(t: f64) -> [f64; 3] {
+    accel_swept(t, 0.0)
+}
+
+/// The same with the shaking rate swept by ±`sweep` (relative) within each
+/// axis: f(t) = 0.9·(1 + sweep·(2u − 1)), u the fraction of the segment.
+fn accel_swept(t: f64, sweep: f64) -> [f64; 3] {
+    let mut a = [0.0, 0.0, 9.80665];
+    let axis = ((t - 5.0) / 25.0).floor();
+    let within = (t - 5.0) - 25.0 * axis;
+    if (0.0..3.0).contains(&axis) && within < 20.0 {
+        // Phase of a linear chirp from 0.9(1 − sweep) to 0.9(1 + sweep) Hz over 20 s.
+        let f0 = 0.9 * (1.0 - sweep);
+        let k = 0.9 * 2.0 * sweep / 20.0;
+        let phase = TAU * (f0 * within + 0.5 * k * within * within);
+        a[axis as usize] += 3.0 * phase.sin() * (PI * within / 20.0).sin();
+    }
+    a
+}
+
+/// φ from the true loop `truth` at the true times; the IMU series as logged
+/// with a time offset (sample stamped t taken at t − offset).
+fn session(
+    truth: LoopSpec,
+    imu_offset_s: f64,
+    noise_rad: f64,
+    seed: u64,
+) -> (Vec<f64>, Vec<Option<f64>>, Vec<[f64; 3]>) {
+    session_swept(truth, imu_offset_s, noise_rad, seed, 0.0)
+}
+
+fn session_swept(
+    truth: LoopSpec,
+    imu_offset_s: f64,
+    noise_rad: f64,
+    seed: u64,
+    sweep: f64,
+) -> (Vec<f64>, Vec<Option<f64>>, Vec<[f64; 3]>) {
+    let accel = |t: f64| accel_swept(t, sweep);
+    let n = (80.0 / T) as usize;
+    let mut pll = DiscretePll::new(truth.coeffs().unwrap(), T);
+    pll.settle(9.80665 * GAMMA[2]);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let noise = Normal::new(0.0, noise_rad).unwrap();
+    let mut t_s = Vec::new();
+    let mut phase = Vec::new();
+    let mut imu = Vec::new();
+    for k in 0..n {
+        let t = k as f64 * T;
+        let a = accel(t);
+        let phi = pll.step((0..3).map(|i| a[i] * GAMMA[i]).sum()) + noise.sample(&mut rng);
+        t_s.push(t);
+        phase.push(Some(phi));
+        imu.push(accel(t - imu_offset_s));
+    }
+    (t_s, phase, imu)
+}
+
+#[test]
+fn a_30_ms_imu_offset_is_found_within_2_ms_and_its_bias_removed() {
+    let (t_s, phase, imu) = session(LoopSpec::PAPER, 0.030, 0.01, 1);
+    let series =
+        EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
+    let settings = EstimateSettings::default();
+    let biased = calibrate(&series, &settings).unwrap();
+    let off = estimate_time_offset(&series, &settings, 0.2).unwrap();
+    assert!((off.imu_time_offset_s - 0.030).abs() < 0.002, "{off:?}");
+    assert!(off.sigma_s < 0.002, "{off:?}");
+    // Re-sample the IMU at the found offset (true time t ↔ IMU stamp t + offset).
+    let fixed_imu: Vec<[f64; 3]> = t_s.iter().map(|&t| accel(t + off.imu_time_offset_s - 0.030)).collect();
+    let series2 = EpochSeries { accel_mps2: &fixed_imu, imu_time_offset_s: off.imu_time_offset_s, ..series };
+    let fixed = calibrate(&series2, &settings).unwrap();
+    let rel = |c: &gsens_calib::Calibration| {
+        (0..3).map(|i| (c.gamma_hz_per_mps2[i].unwrap() - GAMMA[i]).powi(2)).sum::<f64>().sqrt() / 0.142
+    };
+    // cos(2π·0.9·0.03) ≈ 0.984 plus a quadrature part: ~2 % before, ≪ 1 % after.
+    let (t2, p2, i2) = session(LoopSpec::PAPER, 0.0, 0.01, 1);
+    let clean = calibrate(
+        &EpochSeries { log_interval_s: T, t_s: &t2, phase_err_rad: &p2, accel_mps2: &i2, imu_time_offset_s: 0.0 },
+        &settings,
+    )
+    .unwrap();
+    eprintln!(
+        "rel err: offset ignored {:.4}, estimated {:.4}, no offset {:.4}",
+        rel(&biased),
+        rel(&fixed),
+        rel(&clean)
+    );
+    assert!(rel(&biased) > 0.01, "{}", rel(&biased));
+    assert!((rel(&fixed) - rel(&clean)).abs() < 0.002, "{} vs {}", rel(&fixed), rel(&clean));
+}
+
+#[test]
+fn no_offset_is_found_where_there_is_none() {
+    let (t_s, phase, imu) = session(LoopSpec::PAPER, 0.0, 0.01, 2);
+    let series =
+        EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
+    let off = estimate_time_offset(&series, &EstimateSettings::default(), 0.2).unwrap();
+    assert!(off.imu_time_offset_s.abs() < 0.001, "{off:?}");
+}
+
+#[test]
+fn a_loop_assumed_10_percent_off_is_detected_and_corrected() {
+    let truth = LoopSpec::PAPER;
+    let (t_s, phase, imu) = session(truth, 0.0, 0.01, 3);
+    let series =
+        EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
+    for bn in [3.3, 2.7] {
+        let assumed = EstimateSettings {
+            loop_spec: LoopSpec::SecondOrder { bn_hz: bn, zeta: FRAC_1_SQRT_2 },
+            ..Default::default()
+        };
+        let wrong = calibrate(&series, &assumed).unwrap();
+        let id = identify_loop(&series, &assumed, false, None).unwrap();
+        assert!(id.assumed_loop_rejected, "Bn {bn}: {id:?}");
+        assert!((id.natural_frequency_hz - 0.9003).abs() < 0.01, "Bn {bn}: {id:?}");
+        let fixed =
+            calibrate(&series, &EstimateSettings { loop_spec: id.spec(&assumed.loop_spec), ..assumed }).unwrap();
+        let err = |c: &gsens_calib::Calibration| {
+            (0..3).map(|i| (c.gamma_hz_per_mps2[i].unwrap() / GAMMA[i] - 1.0).abs()).fold(0.0, f64::max)
+        };
+        assert!(err(&wrong) > 0.05, "Bn {bn}: the wrong loop should bias Γ̂ by several %: {}", err(&wrong));
+        assert!(err(&fixed) < 0.01, "Bn {bn}: {} after identification", err(&fixed));
+    }
+    // The right loop is not rejected.
+    let id = identify_loop(&series, &EstimateSettings::default(), false, None).unwrap();
+    assert!(!id.assumed_loop_rejected, "{id:?}");
+}
+
+#[test]
+fn loop_and_time_offset_identified_together() {
+    // 30 ms IMU offset and a loop assumed 10 % too wide: a phase error of the
+    // loop mimics a time offset at one shaking frequency, so the two are
+    // profiled jointly, and the shaking rate must vary (here swept ±40 %).
+    let (t_s, phase, imu) = session_swept(LoopSpec::PAPER, 0.030, 0.01, 4, 0.4);
+    let series =
+        EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
+    let assumed =
+        EstimateSettings { loop_spec: LoopSpec::SecondOrder { bn_hz: 3.3, zeta: FRAC_1_SQRT_2 }, ..Default::default() };
+    let id = identify_loop(&series, &assumed, false, Some(0.2)).unwrap();
+    eprintln!("{id:?}");
+    assert!(id.assumed_loop_rejected, "{id:?}");
+    assert!((id.natural_frequency_hz - 0.9003).abs() < 0.01, "{id:?}");
+    assert!((id.imu_time_offset_s.unwrap() - 0.030).abs() < 0.002, "{id:?}");
+}
