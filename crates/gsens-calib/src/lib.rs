@@ -14,6 +14,7 @@
 use gsens_core::calibrator::FedEpoch;
 pub mod gls;
 pub mod search;
+pub mod verdict;
 
 use gsens_core::estimator::{
     BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance,
@@ -197,6 +198,12 @@ pub struct Calibration {
     pub imu_time_offset_sigma_s: Option<f64>,
     /// The loop identification, when asked for.
     pub loop_identification: Option<search::LoopIdentification>,
+    /// The verdict per axis (shaking frequency, sensitivity reached, advice).
+    pub axes: [verdict::AxisVerdict; 3],
+    /// Largest predicted g-induced phase error |φ_aᵀΓ̂| over the log [rad].
+    pub predicted_peak_phase_err_rad: f64,
+    /// The discriminator's linear range assumed for the check [rad] (π/4).
+    pub discriminator_linear_range_rad: f64,
     /// RMS of the averaged phase error over the used epochs [rad].
     pub rms_before_rad: f64,
     /// RMS of φ − φ_aᵀΓ̂ over the same epochs [rad].
@@ -357,6 +364,17 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         }
     }
     let ppb = |x: Option<f64>| x.map(|v| hz_per_mps2_to_ppb_per_g(v, settings.carrier_hz));
+    let coeffs = settings.loop_spec.coeffs().map_err(CalibError::Loop)?;
+    let loop_t = settings.loop_interval_s.unwrap_or(series.log_interval_s);
+    let axes = verdict::axis_verdicts(
+        series.accel_mps2,
+        series.log_interval_s,
+        &coeffs,
+        loop_t,
+        obs.observable,
+        obs.excitation_rms,
+    );
+    let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
     Ok(Calibration {
         gamma_hz_per_mps2: gamma_out,
         sigma_hz_per_mps2: sigma,
@@ -378,6 +396,9 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         imu_time_offset_estimated: false,
         imu_time_offset_sigma_s: None,
         loop_identification: None,
+        axes,
+        predicted_peak_phase_err_rad: peak_phase,
+        discriminator_linear_range_rad: verdict::DISCRIMINATOR_LINEAR_RANGE_RAD,
         rms_before_rad: (ss_before / m).sqrt(),
         rms_after_rad: (ss_after / m).sqrt(),
         rms_g_induced_rad: (ss_g / m).sqrt(),

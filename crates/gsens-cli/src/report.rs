@@ -130,6 +130,24 @@ pub fn text(session: &PreparedSession, c: &Calibration, truth: Option<[f64; 3]>)
         let err: f64 = (0..3).filter_map(|i| c.gamma_hz_per_mps2[i].map(|g| (g - t[i]).powi(2))).sum::<f64>().sqrt();
         let _ = writeln!(s_, "  |Γ̂ − Γ| = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|", 100.0 * err / norm);
     }
+    let _ = writeln!(s_, "\nshaking:");
+    for v in &c.axes {
+        let _ = writeln!(s_, "  {}", v.text);
+    }
+    let peak = c.predicted_peak_phase_err_rad;
+    let lin = c.discriminator_linear_range_rad;
+    if peak > lin {
+        let _ = writeln!(
+            s_,
+            "  warning: the predicted g-induced phase error reaches {peak:.2} rad, beyond the discriminator's linear \
+             range ({lin:.2} rad): shake more gently or the loss of discriminator gain biases Γ̂ low"
+        );
+    } else {
+        let _ = writeln!(
+            s_,
+            "  predicted g-induced phase error peaks at {peak:.3} rad, inside the discriminator's linear range ({lin:.2} rad)"
+        );
+    }
     let _ = writeln!(
         s_,
         "\nphase error RMS: {:.4} rad before compensation, {:.4} rad after (g-induced part {:.4} rad)",

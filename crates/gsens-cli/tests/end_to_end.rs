@@ -130,3 +130,32 @@ fn response_reports_the_paper_loop_peak() {
     assert!((r["peak_rad_per_hz"].as_f64().unwrap() - 0.7854).abs() < 1e-3);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn session_shaken_only_along_x_and_y_reports_z_unobservable() {
+    let dir = std::env::temp_dir().join(format!("gsens-xy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = gsens(&["scenario"]);
+    // The z segment shaken with 1 mm/s²: nothing the loop can see.
+    let (head, tail) = text.split_once("axis = \"z\"").unwrap();
+    let scenario = format!("{head}axis = \"z\"{}", tail.replacen("amplitude_mps2 = 3.0", "amplitude_mps2 = 0.001", 1));
+    let path = dir.join("xy.toml");
+    std::fs::write(&path, scenario).unwrap();
+    let out = dir.join("e.json");
+    let text = gsens(&[
+        "demo",
+        "--scenario",
+        path.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+        out.to_str().unwrap(),
+    ]);
+    assert!(text.contains("z: too little excitation"), "{text}");
+    assert!(text.contains("unobservable"), "{text}");
+    let est = json(&out);
+    assert_eq!(est["observable"], serde_json::json!([true, true, false]));
+    assert!(est["gamma_hz_per_mps2"][2].is_null());
+    assert!(est["sigma_hz_per_mps2"][2].is_null());
+    let _ = std::fs::remove_dir_all(&dir);
+}
