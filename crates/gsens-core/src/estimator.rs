@@ -148,6 +148,19 @@ fn mark_unobservable(cov: &mut Matrix3<f64>, ata: &Matrix3<f64>, rank: usize) {
     }
 }
 
+/// The estimate of a recursive estimator: its own Γ̂ and covariance, with the
+/// axes the accumulated information cannot see marked unobservable.
+fn recursive_estimate(gamma: &Vector3<f64>, mut cov: Matrix3<f64>, s2: f64, normal: &NormalEquations) -> GammaEstimate {
+    let (_, rank) = normal.pseudo_inverse(RANK_TOL);
+    mark_unobservable(&mut cov, &normal.ata, rank);
+    GammaEstimate {
+        gamma_hz_per_mps2: [gamma[0], gamma[1], gamma[2]],
+        covariance: to_array(&cov),
+        residual_variance_rad2: s2,
+        epochs: normal.n,
+    }
+}
+
 fn to_array(m: &Matrix3<f64>) -> [[f64; 3]; 3] {
     [[m[(0, 0)], m[(0, 1)], m[(0, 2)]], [m[(1, 0)], m[(1, 1)], m[(1, 2)]], [m[(2, 0)], m[(2, 1)], m[(2, 2)]]]
 }
@@ -237,14 +250,7 @@ impl GammaEstimator for GradientObserver {
     fn estimate(&self) -> GammaEstimate {
         let (_, rank) = self.normal.pseudo_inverse(RANK_TOL);
         let s2 = self.normal.rss(&self.gamma) / (self.normal.n as f64 - rank as f64).max(1.0);
-        let mut cov = self.cov_unit * s2;
-        mark_unobservable(&mut cov, &self.normal.ata, rank);
-        GammaEstimate {
-            gamma_hz_per_mps2: [self.gamma[0], self.gamma[1], self.gamma[2]],
-            covariance: to_array(&cov),
-            residual_variance_rad2: s2,
-            epochs: self.normal.n,
-        }
+        recursive_estimate(&self.gamma, self.cov_unit * s2, s2, &self.normal)
     }
 }
 
@@ -302,15 +308,7 @@ impl GammaEstimator for RecursiveLeastSquares {
     }
     fn estimate(&self) -> GammaEstimate {
         let s2 = self.rss / (self.n_eff - 3.0).max(1.0);
-        let mut cov = self.p * s2;
-        let (_, rank) = self.normal.pseudo_inverse(RANK_TOL);
-        mark_unobservable(&mut cov, &self.normal.ata, rank);
-        GammaEstimate {
-            gamma_hz_per_mps2: [self.gamma[0], self.gamma[1], self.gamma[2]],
-            covariance: to_array(&cov),
-            residual_variance_rad2: s2,
-            epochs: self.normal.n,
-        }
+        recursive_estimate(&self.gamma, self.p * s2, s2, &self.normal)
     }
 }
 
