@@ -6,7 +6,8 @@ use crate::estimate::{EstimatorArgs, LoggedArg, LoopArgs, SelectionArgs, Systema
 use crate::simulate::{load_scenario, simulate_to_dir};
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_sim::scenario::LoggedPhaseMode;
+use gsens_calib::EstimateSettings;
+use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -29,20 +30,16 @@ pub struct DemoArgs {
     /// Write the estimate as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Also draw the figures here as PNG and SVG: the paper's Figs. 3–5, C/N0, the
+    /// residual spectrum and the Allan deviation of the simulated oscillator.
+    #[arg(long)]
+    pub figures: Option<PathBuf>,
 }
 
-pub fn run(args: &DemoArgs) -> Result<()> {
-    let scenario = load_scenario(args.scenario.as_deref())?;
-    let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
-    println!(
-        "simulating {:.0} s of the {} (seed {}) into {} …",
-        scenario.duration_s(),
-        if args.scenario.is_some() { "given scenario" } else { "paper's experiment" },
-        args.seed,
-        dir.display()
-    );
-    let truth = simulate_to_dir(&scenario, args.seed, &dir)?;
-    // The estimator models the receiver loop the scenario ran.
+/// The estimator settings for a simulated scenario: the receiver loop the
+/// scenario ran, its carrier, and its IMU's datasheet accuracy (where the
+/// options leave them at 0), as a user would give them.
+pub fn scenario_settings(scenario: &Scenario, estimator: &EstimatorArgs) -> Result<EstimateSettings> {
     let l = &scenario.tracking_loop;
     let loop_args = LoopArgs {
         order: l.order,
@@ -56,9 +53,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             LoggedPhaseMode::Mean => LoggedArg::Mean,
         },
     };
-    let mut settings = args.estimator.settings(&loop_args)?;
+    let mut settings = estimator.settings(&loop_args)?;
     settings.carrier_hz = scenario.oscillator.carrier_hz;
-    // The IMU's datasheet accuracy enters the uncertainty, as a user would give it.
     let imu = scenario.imu.config();
     if settings.imu_scale_sigma == 0.0 {
         settings.imu_scale_sigma = imu.scale_factor_sigma_ppm * 1e-6;
@@ -66,6 +62,22 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     if settings.imu_misalignment_sigma_rad == 0.0 {
         settings.imu_misalignment_sigma_rad = imu.misalignment_sigma_rad;
     }
+    Ok(settings)
+}
+
+pub fn run(args: &DemoArgs) -> Result<()> {
+    let scenario = load_scenario(args.scenario.as_deref())?;
+    let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
+    println!(
+        "simulating {:.0} s of the {} (seed {}) into {} …",
+        scenario.duration_s(),
+        if args.scenario.is_some() { "given scenario" } else { "paper's experiment" },
+        args.seed,
+        dir.display()
+    );
+    let truth = simulate_to_dir(&scenario, args.seed, &dir)?;
+    let settings = scenario_settings(&scenario, &args.estimator)?;
+    let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
     let (session, calibration) =
         estimate_files(&imu, &tracking, &args.selection.selection(), &args.systematic, &settings)?;
@@ -93,6 +105,17 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             &[("imu", &imu), ("tracking", &tracking)],
         )
         .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(fig_dir) = &args.figures {
+        crate::cmd_report::write_demo_figures(
+            fig_dir,
+            &session,
+            &calibration,
+            &tracking,
+            truth.gamma_hz_per_mps2,
+            &scenario,
+            args.seed,
+        )?;
     }
     Ok(())
 }

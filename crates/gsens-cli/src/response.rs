@@ -24,6 +24,9 @@ pub struct ResponseArgs {
     /// Write the response as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Draw the response (the paper's Fig. 3) here: FILE.png or FILE.svg.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Serialize)]
@@ -137,6 +140,17 @@ pub fn run(args: &ResponseArgs) -> Result<()> {
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&out)? + "\n")
             .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(path) = &args.plot {
+        crate::cmd_report::write_response_plot(
+            path,
+            &spec,
+            t,
+            [args.f_min_hz, args.f_max_hz],
+            (peak_hz, peak_val),
+            band,
+        )?;
+        println!("figure: {}", path.display());
     }
     Ok(())
 }

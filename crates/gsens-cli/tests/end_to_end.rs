@@ -127,7 +127,9 @@ fn response_reports_the_paper_loop_peak() {
     let r = json(&out);
     // conventions.md: peak at ωn/2π = 0.900 Hz with π/(ζωn) = 0.785 rad/Hz.
     assert!((r["peak_hz"].as_f64().unwrap() - 0.9003).abs() < 1e-3);
-    assert!((r["peak_rad_per_hz"].as_f64().unwrap() - 0.7854).abs() < 1e-3);
+    let wn = 2.0 * 3.0 / (std::f64::consts::FRAC_1_SQRT_2 + 1.0 / (4.0 * std::f64::consts::FRAC_1_SQRT_2));
+    let expected = std::f64::consts::PI / (std::f64::consts::FRAC_1_SQRT_2 * wn);
+    assert!((r["peak_rad_per_hz"].as_f64().unwrap() - expected).abs() < 1e-3);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1,0 +1,102 @@
+//! `gsens report` on a simulated session, `gsens response --plot` and
+//! `gsens demo --figures`: the files they promise, well formed.
+
+use std::path::Path;
+use std::process::Command;
+
+fn gsens(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
+    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn assert_png(path: &Path) {
+    let b = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(b.starts_with(b"\x89PNG\r\n\x1a\n"), "{} is not a PNG", path.display());
+    // IHDR: width and height, big-endian, at bytes 16..24.
+    let w = u32::from_be_bytes(b[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(b[20..24].try_into().unwrap());
+    assert!(w >= 800 && h >= 400 && b.len() > 10_000, "{}: {w}×{h}, {} bytes", path.display(), b.len());
+}
+
+fn assert_svg(path: &Path) {
+    let s = std::fs::read_to_string(path).unwrap();
+    assert!(s.trim_start().starts_with("<svg") && s.trim_end().ends_with("</svg>"), "{}", path.display());
+    assert!(s.matches("<text").count() > 10, "{}: too few labels", path.display());
+}
+
+#[test]
+fn report_writes_html_json_header_and_figures() {
+    let dir = std::env::temp_dir().join(format!("gsens-report-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    gsens(&["simulate", "--out", &format!("{d}/sim"), "--seed", "3"]);
+    let out = format!("{d}/report");
+    let text = gsens(&[
+        "report",
+        "--imu",
+        &format!("{d}/sim/imu.csv"),
+        "--tracking",
+        &format!("{d}/sim/tracking.csv"),
+        "--truth",
+        &format!("{d}/sim/truth.json"),
+        "--loop-interval-s",
+        "0.001",
+        "--logged-phase",
+        "mean",
+        "--out",
+        &out,
+    ]);
+    assert!(text.contains("report.html"), "{text}");
+    let out = Path::new(&out);
+
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_eq!(html.matches("<svg ").count(), 5, "Figs. 3–5, C/N0, residual spectrum");
+    for needle in
+        ["id=\"verdict\"", "id=\"estimate-table\"", "id=\"rms-before\"", "<code>settings.loop_spec.bn_hz</code>"]
+    {
+        assert!(html.contains(needle), "report.html lacks {needle}");
+    }
+    assert!(!html.contains("<script") && !html.contains("<img"), "the report must be self-contained");
+
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(v["gamma_hz_per_mps2"].as_array().unwrap().len(), 3);
+    assert_eq!(v["observable"], serde_json::json!([true, true, true]));
+    assert_eq!(v["report"]["figures"].as_array().unwrap().len(), 5);
+    assert!(v["truth_gamma_hz_per_mps2"].is_array());
+    let g0 = v["gamma_hz_per_mps2"][0].as_f64().unwrap();
+
+    let h = std::fs::read_to_string(out.join("gsens_gamma.h")).unwrap();
+    assert!(h.contains("#ifndef GSENS_GAMMA_H") && h.contains("GSENS_GAMMA_OBSERVABLE_MASK 7u"));
+    let line = h.lines().find(|l| l.starts_with("#define GSENS_GAMMA_X_HZ_PER_MPS2 ")).unwrap();
+    let lit = line.rsplit(' ').next().unwrap().trim_matches(|c| c == '(' || c == ')');
+    assert_eq!(lit.parse::<f64>().unwrap(), g0, "the header carries the JSON's estimate exactly");
+
+    for f in ["fig3_response", "fig4_estimation", "fig5_compensation", "cn0", "residual_spectrum"] {
+        assert_png(&out.join("figures").join(format!("{f}.png")));
+        assert_svg(&out.join("figures").join(format!("{f}.svg")));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn response_plot_and_demo_figures() {
+    let dir = std::env::temp_dir().join(format!("gsens-figs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("fig3.png");
+    let svg = dir.join("fig3.svg");
+    gsens(&["response", "--plot", png.to_str().unwrap()]);
+    gsens(&["response", "--plot", svg.to_str().unwrap(), "--order", "3", "--loop-interval-s", "0.005"]);
+    assert_png(&png);
+    assert_svg(&svg);
+    let bad = Command::new(env!("CARGO_BIN_EXE_gsens")).args(["response", "--plot", "x.jpg"]).output().unwrap();
+    assert!(!bad.status.success());
+
+    let figs = dir.join("demo");
+    gsens(&["demo", "--out", dir.join("logs").to_str().unwrap(), "--figures", figs.to_str().unwrap()]);
+    for f in ["fig3_response", "fig4_estimation", "fig5_compensation", "cn0", "residual_spectrum", "allan"] {
+        assert_png(&figs.join(format!("{f}.png")));
+        assert_svg(&figs.join(format!("{f}.svg")));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
