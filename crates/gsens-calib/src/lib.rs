@@ -13,6 +13,7 @@
 
 use gsens_core::calibrator::FedEpoch;
 pub mod gls;
+pub mod robust;
 pub mod search;
 pub mod verdict;
 
@@ -20,6 +21,7 @@ use gsens_core::estimator::{
     BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance,
 };
 use gsens_core::observability::{ObservabilityCriteria, assess};
+use gsens_core::pll::gnss_sdr::{GnssSdrPll, GnssSdrStage};
 use gsens_core::pll::{LoopError, LoopSpec};
 use gsens_core::regressor::{LoggedPhase, RegressorError, RegressorModel};
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
@@ -45,6 +47,18 @@ pub enum Method {
     /// Generalized least squares: the batch fit prewhitened by an AR model of
     /// its residuals (see [`gls`]); efficient under coloured noise.
     Gls,
+}
+
+/// Robust estimation against outlying epochs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Robust {
+    /// Plain least squares.
+    #[default]
+    None,
+    /// Huber's M-estimate by iteratively reweighted least squares (batch method
+    /// only; see [`robust`]).
+    Huber,
 }
 
 /// Everything that decides an estimate; reported with it.
@@ -77,6 +91,30 @@ pub struct EstimateSettings {
     /// Observability thresholds.
     #[serde(serialize_with = "ser_criteria")]
     pub criteria: ObservabilityCriteria,
+    /// Robust estimation against outlying epochs (default none).
+    pub robust: Robust,
+    /// The receiver runs GNSS-SDR's carrier loop, this stage of it (after bit
+    /// synchronization): the loop models are then
+    /// [`gsens_core::pll::gnss_sdr::GnssSdrPll`]s updated every
+    /// `symbols` ms, and `loop_spec` only describes the loop nominally.
+    /// `None` (default): the loop of `loop_spec` ([`gsens_core::pll`]'s docs).
+    #[serde(serialize_with = "ser_gnss_sdr")]
+    pub gnss_sdr_loop: Option<GnssSdrStage>,
+}
+
+fn ser_gnss_sdr<S: serde::Serializer>(g: &Option<GnssSdrStage>, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    match g {
+        None => s.serialize_none(),
+        Some(g) => {
+            let mut m = s.serialize_map(Some(4))?;
+            m.serialize_entry("implementation", "GNSS-SDR GPS_L1_CA_DLL_PLL_Tracking (dll_pll_veml)")?;
+            m.serialize_entry("pll_filter_order", &g.order)?;
+            m.serialize_entry("pll_bw_hz", &g.bw_hz)?;
+            m.serialize_entry("integration_ms", &g.symbols)?;
+            m.end()
+        }
+    }
 }
 
 impl Default for EstimateSettings {
@@ -93,6 +131,8 @@ impl Default for EstimateSettings {
             imu_scale_sigma: 0.0,
             imu_misalignment_sigma_rad: 0.0,
             criteria: ObservabilityCriteria::default(),
+            robust: Robust::None,
+            gnss_sdr_loop: None,
         }
     }
 }
@@ -198,6 +238,8 @@ pub struct Calibration {
     pub imu_time_offset_sigma_s: Option<f64>,
     /// The loop identification, when asked for.
     pub loop_identification: Option<search::LoopIdentification>,
+    /// The Huber fit (with `robust = huber`): scale, threshold, epochs down-weighted.
+    pub huber: Option<robust::HuberFit>,
     /// The verdict per axis (shaking frequency, sensitivity reached, advice).
     pub axes: [verdict::AxisVerdict; 3],
     /// Largest predicted g-induced phase error |φ_aᵀΓ̂| over the log [rad].
@@ -272,10 +314,34 @@ pub fn imu_systematic_sigma(gamma: &[f64; 3], scale_sigma: f64, misalignment_sig
 /// The regressor series φ_a for every epoch (the triad run over the whole series).
 pub fn regressors(series: &EpochSeries, settings: &EstimateSettings) -> Result<Vec<[f64; 3]>, CalibError> {
     let mut model = build_model(series.log_interval_s, settings)?;
-    Ok(series.accel_mps2.iter().map(|a| model.epoch(a)).collect())
+    let accel = model_input(series.accel_mps2, &model);
+    Ok(accel.iter().map(|a| model.epoch(a)).collect())
+}
+
+/// What the loop models are fed: the specific force compensated for the
+/// model's linear interpolation between epochs
+/// ([`gsens_core::regressor::compensate_interpolation`]; without it Γ̂ is too
+/// large by (ωh)²/12, 0.17 % at 0.9 Hz and 40 Hz), or the series as it is when
+/// the loop runs at the log rate.
+pub(crate) fn model_input<'a>(accel: &'a [[f64; 3]], model: &RegressorModel) -> std::borrow::Cow<'a, [[f64; 3]]> {
+    let c = model.interpolation_compensation();
+    if c == 0.0 {
+        return std::borrow::Cow::Borrowed(accel);
+    }
+    let mut a = accel.to_vec();
+    gsens_core::regressor::compensate_interpolation(&mut a, c);
+    std::borrow::Cow::Owned(a)
 }
 
 pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> Result<RegressorModel, CalibError> {
+    if let Some(stage) = settings.gnss_sdr_loop {
+        let pll = GnssSdrPll::new(stage).map_err(CalibError::Loop)?;
+        if !pll.is_stable() {
+            return Err(CalibError::UnstableAtInterval(stage.interval_s()));
+        }
+        return RegressorModel::with_loop(pll.into(), stage.interval_s(), log_interval_s, settings.logged_phase)
+            .map_err(CalibError::Intervals);
+    }
     let coeffs = settings.loop_spec.coeffs().map_err(CalibError::Loop)?;
     let loop_t = settings.loop_interval_s.unwrap_or(log_interval_s);
     if !coeffs.is_stable_at(loop_t) {
@@ -292,16 +358,21 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     }
     let model = build_model(series.log_interval_s, settings)?;
     let substeps = model.substeps();
+    // The model is fed the specific force compensated for its interpolation between epochs.
+    let accel = model_input(series.accel_mps2, &model);
+    let model_series = EpochSeries { accel_mps2: &accel, ..*series };
     let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
     let (hp, t) = (settings.highpass_hz, series.log_interval_s);
     let (estimate, fed, batch, history) = match settings.method {
-        Method::Batch | Method::Gls => run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), series),
+        Method::Batch | Method::Gls => {
+            run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), &model_series)
+        }
         Method::Rls { lambda } => run(
             Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip, hp, t),
-            series,
+            &model_series,
         ),
         Method::Gradient { gain_k } => {
-            run(Calibrator::new(model, GradientObserver::new(gain_k, t), skip, hp, t), series)
+            run(Calibrator::new(model, GradientObserver::new(gain_k, t), skip, hp, t), &model_series)
         }
     };
     if batch.normal_equations().n < 10 {
@@ -316,6 +387,16 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     let estimate = match (&settings.method, &noise_fit) {
         (Method::Gls, Some(g)) => g.estimate,
         _ => estimate,
+    };
+    let huber = huber_pass(&fed, &estimate, settings, series.log_interval_s)?;
+    let estimate = match &huber {
+        Some(h) => GammaEstimate {
+            gamma_hz_per_mps2: h.gamma_hz_per_mps2,
+            covariance: h.covariance_white,
+            residual_variance_rad2: h.scale_rad * h.scale_rad,
+            epochs: h.epochs as u64,
+        },
+        None => estimate,
     };
     let gamma = estimate.gamma_hz_per_mps2;
 
@@ -349,8 +430,12 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     for i in 0..3 {
         let own = estimate.covariance[i][i];
         let ratio = match (&settings.method, &noise_fit) {
+            // Huber: its own sandwich, with the autocorrelation terms.
+            _ if huber.is_some() => huber.as_ref().map_or(1.0, |h| {
+                if own > 0.0 { (h.covariance[i][i] / own).max(1.0) } else { 1.0 }
+            }),
             // GLS: what colour its AR model missed, from its own prewhitened residuals.
-            (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance[i][i] / own).max(1.0),
+            (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance.map_or(own, |c| c[i][i]) / own).max(1.0),
             _ if white_batch.covariance[i][i] > 0.0 => (hac[i][i] / white_batch.covariance[i][i]).max(1.0),
             _ => 1.0,
         };
@@ -396,6 +481,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         imu_time_offset_estimated: false,
         imu_time_offset_sigma_s: None,
         loop_identification: None,
+        huber,
         axes,
         predicted_peak_phase_err_rad: peak_phase,
         discriminator_linear_range_rad: verdict::DISCRIMINATOR_LINEAR_RANGE_RAD,
@@ -412,13 +498,40 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     })
 }
 
+/// Huber IRLS over the used epochs, from the batch estimate (with `robust = huber`).
+fn huber_pass(
+    fed: &[FedEpoch],
+    estimate: &GammaEstimate,
+    settings: &EstimateSettings,
+    log_interval_s: f64,
+) -> Result<Option<robust::HuberFit>, CalibError> {
+    if settings.robust == Robust::None {
+        return Ok(None);
+    }
+    if settings.method != Method::Batch {
+        // The recursive estimators have no second pass; GLS would need a robust
+        // AR fit and IRLS on the prewhitened series (an outlier spreads over the
+        // AR filter's length there).
+        return Err(CalibError::Input(format!(
+            "robust (Huber) estimation works with the batch method, not {:?}",
+            settings.method
+        )));
+    }
+    let (phase, phi_a): (Vec<f64>, Vec<[f64; 3]>) =
+        fed.iter().filter(|e| e.used).map(|e| (e.phase_err_rad.unwrap_or(0.0), e.phi_a)).unzip();
+    let max_lag = (settings.hac_lag_s / log_interval_s).round() as usize;
+    Ok(robust::huber_irls(&phase, &phi_a, estimate.gamma_hz_per_mps2, gsens_core::robust::HuberWeights::K_95, max_lag))
+}
+
 /// GLS over the used epochs of a pass (their contiguous runs are the segments).
 fn gls_pass(fed: &[FedEpoch], settings: &EstimateSettings, log_interval_s: f64) -> Option<gls::GlsFit> {
     let phase: Vec<f64> = fed.iter().map(|e| e.phase_err_rad.unwrap_or(0.0)).collect();
     let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
     let segments = gls::segments_of(fed.iter().map(|e| e.used));
     let gls_settings = gls::GlsSettings {
-        hac_max_lag: (settings.hac_lag_s / log_interval_s).round() as usize,
+        // The robust covariance only where it is used: the GLS method's σ.
+        hac_max_lag: (settings.method == Method::Gls).then(|| (settings.hac_lag_s / log_interval_s).round() as usize),
+        max_ar_order: (gls::MAX_AR_SPAN_S / log_interval_s).ceil() as usize,
         ..gls::GlsSettings::default()
     };
     gls::gls(&phase, &phi_a, &segments, &gls_settings)

@@ -30,9 +30,10 @@ pub(crate) fn batch_pass(
     settings: &EstimateSettings,
 ) -> Result<(Vec<FedEpoch>, NormalEquations), CalibError> {
     let model = build_model(series.log_interval_s, settings)?;
+    let accel = crate::model_input(series.accel_mps2, &model);
     let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
     let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, series.log_interval_s);
-    let fed: Vec<FedEpoch> = series.accel_mps2.iter().zip(series.phase_err_rad).map(|(a, p)| cal.feed(a, *p)).collect();
+    let fed: Vec<FedEpoch> = accel.iter().zip(series.phase_err_rad).map(|(a, p)| cal.feed(a, *p)).collect();
     Ok((fed, *cal.estimator().normal_equations()))
 }
 

@@ -3,11 +3,12 @@
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use gsens_calib::search::{estimate_time_offset, identify_loop};
-use gsens_calib::{Calibration, EpochSeries, EstimateSettings, Method, calibrate};
+use gsens_calib::{Calibration, EpochSeries, EstimateSettings, Method, Robust, calibrate};
 use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
 use gsens_core::regressor::LoggedPhase;
+use gsens_io::screening::ScreeningConfig;
 use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session};
-use gsens_io::{read_imu_file, read_tracking_file};
+use gsens_io::{ImuSeries, TrackingLog, read_imu_file, read_tracking_file};
 use std::path::{Path, PathBuf};
 
 /// Estimator choice on the command line.
@@ -19,6 +20,35 @@ pub enum MethodArg {
     Rls,
     /// Batch least squares over the whole log.
     Batch,
+    /// Generalized least squares: batch prewhitened by an AR model of the residual noise (efficient under coloured noise).
+    Gls,
+}
+
+/// Robust estimation on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum RobustArg {
+    /// Plain least squares.
+    None,
+    /// Huber's M-estimate (iteratively reweighted least squares).
+    Huber,
+}
+
+/// Robust estimation options.
+#[derive(Args, Debug, Clone)]
+pub struct RobustArgs {
+    /// Robust estimation against outlying epochs: `huber` (IRLS; batch method only) or `none`.
+    #[arg(long, value_enum, default_value_t = RobustArg::None)]
+    pub robust: RobustArg,
+}
+
+impl RobustArgs {
+    /// The setting.
+    pub fn robust(&self) -> Robust {
+        match self.robust {
+            RobustArg::None => Robust::None,
+            RobustArg::Huber => Robust::Huber,
+        }
+    }
 }
 
 /// What a log row holds when the loop runs faster than the log.
@@ -107,6 +137,7 @@ impl EstimatorArgs {
     pub fn settings(&self, loop_args: &LoopArgs) -> Result<EstimateSettings> {
         let method = match self.method {
             MethodArg::Batch => Method::Batch,
+            MethodArg::Gls => Method::Gls,
             MethodArg::Rls => {
                 if !(self.lambda > 0.0 && self.lambda <= 1.0) {
                     bail!("--lambda must be in (0, 1], got {}", self.lambda);
@@ -168,6 +199,24 @@ pub struct SelectionArgs {
     /// Weights of the per-epoch channel average.
     #[arg(long, value_enum, default_value_t = WeightsArg::Equal)]
     pub weights: WeightsArg,
+    /// Per-channel screening before averaging: cycle slips, losses of lock, C/N0 drops, |φ| beyond the linear range.
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    pub screening: OnOff,
+    /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
+    #[arg(long, default_value_t = 6.0)]
+    pub cn0_drop_db: f64,
+    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default π/4).
+    #[arg(long, default_value_t = std::f64::consts::FRAC_PI_4)]
+    pub max_abs_phase_rad: f64,
+}
+
+/// A switch on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum OnOff {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
 }
 
 impl SelectionArgs {
@@ -179,6 +228,12 @@ impl SelectionArgs {
             weighting: match self.weights {
                 WeightsArg::Equal => Weighting::Equal,
                 WeightsArg::Cn0 => Weighting::Cn0,
+            },
+            screening: ScreeningConfig {
+                enabled: self.screening == OnOff::On,
+                cn0_drop_db: (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db),
+                max_abs_phase_rad: (self.max_abs_phase_rad > 0.0).then_some(self.max_abs_phase_rad),
+                ..ScreeningConfig::default()
             },
             ..SelectionConfig::default()
         }
@@ -229,9 +284,11 @@ pub struct EstimateArgs {
     /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
     #[arg(long)]
     pub imu: PathBuf,
-    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad.
-    #[arg(long)]
-    pub tracking: PathBuf,
+    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr).
+    #[arg(long, required_unless_present = "gnss_sdr", conflicts_with = "gnss_sdr")]
+    pub tracking: Option<PathBuf>,
+    #[command(flatten)]
+    pub gnss_sdr: crate::gnss_sdr_cmd::GnssSdrArgs,
     #[command(flatten)]
     pub loop_args: LoopArgs,
     #[command(flatten)]
@@ -240,6 +297,8 @@ pub struct EstimateArgs {
     pub selection: SelectionArgs,
     #[command(flatten)]
     pub systematic: SystematicArgs,
+    #[command(flatten)]
+    pub robust: RobustArgs,
     /// Write the result as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -267,8 +326,19 @@ pub fn estimate_files(
 ) -> Result<(PreparedSession, Calibration)> {
     let tracking_log = read_tracking_file(tracking)?;
     let imu_series = read_imu_file(imu)?;
-    let imu_name = imu.display().to_string();
-    let prepare = |offset_s: f64| prepare_session(&tracking_log, &imu_series, &imu_name, selection, offset_s);
+    estimate_logs(&tracking_log, &imu_series, &imu.display().to_string(), selection, systematic, settings)
+}
+
+/// [`estimate_files`] on logs already in memory (`imu_name` names the IMU source in errors).
+pub fn estimate_logs(
+    tracking_log: &TrackingLog,
+    imu_series: &ImuSeries,
+    imu_name: &str,
+    selection: &SelectionConfig,
+    systematic: &SystematicArgs,
+    settings: &EstimateSettings,
+) -> Result<(PreparedSession, Calibration)> {
+    let prepare = |offset_s: f64| prepare_session(tracking_log, imu_series, imu_name, selection, offset_s);
     let assumed = match systematic.time_offset {
         TimeOffset::Seconds(v) => v,
         TimeOffset::Auto | TimeOffset::None => 0.0,
@@ -320,19 +390,17 @@ pub fn estimate_files(
 }
 
 pub fn run(args: &EstimateArgs) -> Result<()> {
-    let settings = args.estimator.settings(&args.loop_args)?;
+    if let Some(dir) = &args.gnss_sdr.gnss_sdr {
+        return crate::gnss_sdr_cmd::estimate(args, dir);
+    }
+    let tracking = args.tracking.as_ref().context("--tracking is required (or --gnss-sdr)")?;
+    let settings = EstimateSettings { robust: args.robust.robust(), ..args.estimator.settings(&args.loop_args)? };
     let (session, calibration) =
-        estimate_files(&args.imu, &args.tracking, &args.selection.selection(), &args.systematic, &settings)?;
+        estimate_files(&args.imu, tracking, &args.selection.selection(), &args.systematic, &settings)?;
     print!("{}", crate::report::text(&session, &calibration, None));
     if let Some(path) = &args.json {
-        crate::report::write_json(
-            path,
-            &session,
-            &calibration,
-            None,
-            &[("imu", &args.imu), ("tracking", &args.tracking)],
-        )
-        .with_context(|| format!("writing {}", path.display()))?;
+        crate::report::write_json(path, &session, &calibration, None, &[("imu", &args.imu), ("tracking", tracking)])
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

@@ -56,11 +56,27 @@ pub fn text(session: &PreparedSession, c: &Calibration, truth: Option<[f64; 3]>)
     for ch in &session.channels {
         let _ = writeln!(
             s_,
-            "  ch {:>3}  PRN {:>3}  C/N0 {:>5.1} dB-Hz  {:>7} epochs  {}",
-            ch.channel, ch.prn, ch.mean_cn0_dbhz, ch.epochs, ch.reason
+            "  ch {:>3}  PRN {:>3}  C/N0 {:>5.1} dB-Hz  {:>7} epochs  {}{}",
+            ch.channel,
+            ch.prn,
+            ch.mean_cn0_dbhz,
+            ch.epochs,
+            ch.reason,
+            ch.screening.brief().map(|b| format!("; {b}")).unwrap_or_default()
         );
     }
     let _ = writeln!(s_, "method: {:?}", c.settings.method);
+    if let Some(h) = &c.huber {
+        let _ = writeln!(
+            s_,
+            "robust: Huber, c = 1.345·σ̂ = {:.4} rad, {} of {} epochs down-weighted, {} iterations{}",
+            h.threshold_rad,
+            h.epochs_downweighted,
+            h.epochs,
+            h.iterations,
+            if h.converged { "" } else { " (not converged)" }
+        );
+    }
     match c.imu_time_offset_sigma_s {
         Some(sd) => {
             let _ = writeln!(
@@ -158,6 +174,14 @@ pub fn text(session: &PreparedSession, c: &Calibration, truth: Option<[f64; 3]>)
         "information matrix condition number: {}",
         c.condition_number.map(|x| format!("{x:.1}")).unwrap_or_else(|| "∞ (singular)".into())
     );
+    if c.crlb_hz_per_mps2.iter().any(Option::is_some) {
+        let b = c.crlb_hz_per_mps2.map(|v| v.map_or("—".to_owned(), |v| format!("{v:.5}")));
+        let _ = writeln!(
+            s_,
+            "Cramér–Rao bound [Hz/(m/s²)]: x {}, y {}, z {} (residual noise: AR({}) model)",
+            b[0], b[1], b[2], c.noise_ar_order
+        );
+    }
     s
 }
 

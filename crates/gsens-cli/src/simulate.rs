@@ -20,6 +20,33 @@ pub struct SimulateArgs {
     /// Seed of every random draw (same seed, same bytes).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Write complex baseband GPS L1 C/A IF samples of the scenario's satellites to
+    /// this file instead of tracking logs (with imu.csv, truth.json, delta_f.csv
+    /// and gnss-sdr.conf in --out; the scenario's [loop] order and bn_hz become
+    /// GNSS-SDR's narrow loop).
+    #[arg(long)]
+    pub iq: Option<PathBuf>,
+    /// Sample format of --iq (GNSS-SDR's item_type).
+    #[arg(long, value_enum, default_value_t = IqFormatArg::Ibyte, requires = "iq")]
+    pub iq_format: IqFormatArg,
+    /// Sampling rate of --iq [Hz].
+    #[arg(long, default_value_t = 4.0e6, requires = "iq")]
+    pub fs_hz: f64,
+    /// Also write carrier.csv: each satellite's baseband carrier frequency per 1 ms
+    /// block (the truth a receiver's loop tracks; large).
+    #[arg(long, requires = "iq")]
+    pub iq_carrier_truth: bool,
+}
+
+/// IF sample formats on the command line.
+#[derive(Clone, Copy, Debug, clap::ValueEnum, PartialEq)]
+pub enum IqFormatArg {
+    /// Interleaved signed 8-bit I/Q.
+    Ibyte,
+    /// Interleaved signed 16-bit I/Q.
+    Ishort,
+    /// Interleaved 32-bit float I/Q.
+    GrComplex,
 }
 
 /// Streams the simulator's output into the two CSV files.
@@ -83,6 +110,9 @@ pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Tru
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let scenario = load_scenario(args.scenario.as_deref())?;
+    if let Some(iq) = &args.iq {
+        return crate::simulate_iq::run(&scenario, args, iq);
+    }
     let truth = simulate_to_dir(&scenario, args.seed, &args.out)?;
     let slips: u64 = truth.channels.iter().map(|c| c.stats.cycle_slips).sum();
     println!(

@@ -5,6 +5,7 @@
 use crate::estimator::{GammaEstimate, GammaEstimator};
 use crate::filter::HighPass;
 use crate::math::dot3;
+use crate::pll::{LinearLoop, ModelLoop};
 use crate::regressor::RegressorModel;
 
 /// Weighted mean of the channels present at an epoch: Σwᵢφᵢ/Σwᵢ over the
@@ -42,8 +43,8 @@ pub struct FedEpoch {
 /// gap and the filter's settling after it (up to 3 time constants, at most 4×
 /// the gap) are left out of the estimate.
 #[derive(Debug, Clone)]
-pub struct Calibrator<E> {
-    model: RegressorModel,
+pub struct Calibrator<E, L = ModelLoop> {
+    model: RegressorModel<L>,
     estimator: E,
     skip_epochs: u64,
     epochs: u64,
@@ -58,12 +59,18 @@ pub struct Calibrator<E> {
     settle_left: u64,
 }
 
-impl<E: GammaEstimator> Calibrator<E> {
+impl<E: GammaEstimator, L: LinearLoop + Clone> Calibrator<E, L> {
     /// Runs `estimator` on the regressors of `model`, both high-passed at
     /// `highpass_hz` (0 = off) for epochs `log_interval_s` apart, ignoring the
     /// first `skip_epochs` epochs while the model's start-up transient (its
     /// loops start in the steady state of the first sample) dies out.
-    pub fn new(model: RegressorModel, estimator: E, skip_epochs: u64, highpass_hz: f64, log_interval_s: f64) -> Self {
+    pub fn new(
+        model: RegressorModel<L>,
+        estimator: E,
+        skip_epochs: u64,
+        highpass_hz: f64,
+        log_interval_s: f64,
+    ) -> Self {
         let hp = HighPass::new(highpass_hz, log_interval_s);
         Calibrator {
             model,

@@ -129,7 +129,7 @@ pub(crate) fn pseudo_inverse_sym(m: &Matrix3<f64>, rel_tol: f64) -> (Matrix3<f64
 
 /// Sets +∞ variance on every axis that has a component along a dropped
 /// (unexcited) direction of `ata`.
-fn mark_unobservable(cov: &mut Matrix3<f64>, ata: &Matrix3<f64>, rank: usize) {
+pub(crate) fn mark_unobservable(cov: &mut Matrix3<f64>, ata: &Matrix3<f64>, rank: usize) {
     if rank == 3 {
         return;
     }

@@ -23,6 +23,7 @@ pub mod math;
 pub mod observability;
 pub mod pll;
 pub mod regressor;
+pub mod robust;
 pub mod units;
 
 pub use calibrator::{Calibrator, average_phase_rad};

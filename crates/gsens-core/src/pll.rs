@@ -46,6 +46,8 @@
 
 use crate::math::{PI, TAU, cos, sin, sqrt};
 
+pub mod gnss_sdr;
+
 /// 1/2π: the loop's critical path multiplies rather than divides.
 const FRAC_1_TAU: f64 = 1.0 / TAU;
 pub use nalgebra::Complex;
@@ -443,6 +445,79 @@ impl DiscretePll {
     pub fn settle(&mut self, delta_f_hz: f64) {
         self.reset();
         self.carrier.preload(-delta_f_hz, 0.0);
+    }
+}
+
+/// A linear model of a receiver's carrier loop, from the NCO frequency bias
+/// Δf to the discriminator output φ, one loop update at a time: what the
+/// estimator's regressor ([`crate::regressor::RegressorModel`]) runs three of.
+/// Implemented by [`DiscretePll`] (the loop of this module's docs),
+/// [`gnss_sdr::GnssSdrPll`] (GNSS-SDR's loop, exactly) and [`ModelLoop`]
+/// (either, chosen at run time).
+pub trait LinearLoop {
+    /// One loop update with mean NCO frequency bias `delta_f_hz` \[Hz\] over
+    /// it; returns the discriminator output φ \[rad\].
+    fn step(&mut self, delta_f_hz: f64) -> f64;
+    /// Puts the loop in the steady state of a constant bias `delta_f_hz`.
+    fn settle(&mut self, delta_f_hz: f64);
+    /// Back to rest.
+    fn reset(&mut self);
+}
+
+impl LinearLoop for DiscretePll {
+    #[inline]
+    fn step(&mut self, delta_f_hz: f64) -> f64 {
+        DiscretePll::step(self, delta_f_hz)
+    }
+    fn settle(&mut self, delta_f_hz: f64) {
+        DiscretePll::settle(self, delta_f_hz)
+    }
+    fn reset(&mut self) {
+        DiscretePll::reset(self)
+    }
+}
+
+/// A loop model chosen at run time: the regressor's default loop type, so
+/// that callers pick the receiver's loop implementation without generics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ModelLoop {
+    /// The loop of this module's docs (Kaplan & Hegarty's filter, rectangular integrators).
+    Kaplan(DiscretePll),
+    /// GNSS-SDR's DLL/PLL carrier loop ([`gnss_sdr`]).
+    GnssSdr(gnss_sdr::GnssSdrPll),
+}
+
+impl From<DiscretePll> for ModelLoop {
+    fn from(p: DiscretePll) -> Self {
+        ModelLoop::Kaplan(p)
+    }
+}
+
+impl From<gnss_sdr::GnssSdrPll> for ModelLoop {
+    fn from(p: gnss_sdr::GnssSdrPll) -> Self {
+        ModelLoop::GnssSdr(p)
+    }
+}
+
+impl LinearLoop for ModelLoop {
+    #[inline]
+    fn step(&mut self, delta_f_hz: f64) -> f64 {
+        match self {
+            ModelLoop::Kaplan(p) => p.step(delta_f_hz),
+            ModelLoop::GnssSdr(p) => p.step(delta_f_hz),
+        }
+    }
+    fn settle(&mut self, delta_f_hz: f64) {
+        match self {
+            ModelLoop::Kaplan(p) => p.settle(delta_f_hz),
+            ModelLoop::GnssSdr(p) => p.settle(delta_f_hz),
+        }
+    }
+    fn reset(&mut self) {
+        match self {
+            ModelLoop::Kaplan(p) => p.reset(),
+            ModelLoop::GnssSdr(p) => p.reset(),
+        }
     }
 }
 

@@ -25,12 +25,14 @@
 pub mod error;
 pub mod imu;
 mod parse;
+pub mod screening;
 pub mod session;
 pub mod tracking;
 pub mod writers;
 
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
+pub use screening::{ExcludedSpan, ScreeningConfig, TrackScreening};
 pub use session::{
     ChannelSummary, PreparedSession, SelectionConfig, Weighting, prepare_session, prepare_session_files,
 };

@@ -24,6 +24,12 @@
 //! `max_channels` tracks (a track: one channel, one PRN) with the highest mean
 //! C/N0 over their remaining rows are used.
 //!
+//! Before the ranking, the rows that pass the masks are screened track by track
+//! ([`SelectionConfig::screening`], on by default; see [`crate::screening`]):
+//! cycle slips, losses of lock, C/N0 drops and rows beyond the discriminator's
+//! linear range are excluded, a track split where it settled on a new level
+//! after a slip, and the ranking uses the mean C/N0 over the rows kept.
+//!
 //! # Averaging
 //!
 //! At each epoch, the phase errors of the selected tracks present at that epoch
@@ -61,6 +67,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::FormatError;
 use crate::imu::{ImuSeries, read_imu_file};
 use crate::parse::path_name;
+use crate::screening::{self, ExcludedSpan, Rows, ScreeningConfig, Screened, TrackScreening};
 use crate::tracking::{TrackingLog, read_tracking_file};
 
 /// The most epochs (gaps included) a prepared session may hold.
@@ -99,6 +106,10 @@ pub struct SelectionConfig {
     /// so that channels coming and going do not step the average (see the
     /// module documentation). Default `true`.
     pub remove_channel_offsets: bool,
+    /// Per-track screening for cycle slips, losses of lock, C/N0 drops and
+    /// rows beyond the discriminator's linear range, before the ranking and
+    /// the averaging (see [`crate::screening`]). Default on.
+    pub screening: ScreeningConfig,
 }
 
 impl Default for SelectionConfig {
@@ -109,6 +120,7 @@ impl Default for SelectionConfig {
             elevation_mask_deg: None,
             weighting: Weighting::Equal,
             remove_channel_offsets: true,
+            screening: ScreeningConfig::default(),
         }
     }
 }
@@ -123,16 +135,20 @@ pub struct ChannelSummary {
     /// Mean C/N0 [dB-Hz] over the rows counted in `epochs`; when none is, over
     /// the rows in the usable span, or else over all the track's rows.
     pub mean_cn0_dbhz: f64,
-    /// Number of rows in the usable span that pass the masks (the epochs the
-    /// track contributes to when used).
+    /// Number of rows in the usable span that pass the masks and the
+    /// screening (the epochs the track contributes to when used).
     pub epochs: usize,
     /// Whether the track enters the average.
     pub used: bool,
     /// `"used"`, or why the track is excluded.
     pub reason: String,
     /// The constant phase offset removed from the track \[rad\] (used tracks with
-    /// [`SelectionConfig::remove_channel_offsets`]), else `None`.
+    /// [`SelectionConfig::remove_channel_offsets`]), else `None`. For a track
+    /// split at a step by the screening: the offset of its first segment (all
+    /// of them in `screening.segment_offsets_rad`).
     pub phase_offset_rad: Option<f64>,
+    /// What the screening excluded from the track's rows that pass the masks, and why.
+    pub screening: TrackScreening,
 }
 
 /// The inputs of the estimator, on a uniform epoch grid.
@@ -389,10 +405,45 @@ pub fn prepare_session(
         })
         .collect();
 
-    // Rank the candidates by mean C/N0 (ties: channel, PRN).
+    // The rows passing the masks of every track that has some (the candidates), screened.
+    let mut candidate_of: Vec<Option<usize>> = vec![None; tracks.len()];
+    let mut rows = Rows { track_start: vec![0], ..Rows::default() };
+    for (i, tr) in tracks.iter().enumerate() {
+        if stats[i].passing == 0 {
+            continue;
+        }
+        candidate_of[i] = Some(rows.tracks());
+        for (j, &k) in track_ks[i].iter().enumerate() {
+            if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
+                rows.epoch.push((k - k_first) as u32);
+                rows.phase.push(tr.phase_err_rad[j]);
+                rows.cn0.push(tr.cn0_dbhz[j]);
+            }
+        }
+        rows.track_start.push(rows.epoch.len());
+    }
+    let screened = if selection.screening.enabled {
+        screening::screen(&rows, n_epochs, grid.log_interval_s, &selection.screening)
+    } else {
+        Screened::none(&rows)
+    };
+    // Per candidate: rows kept by the screening and their C/N0 sum.
+    let kept: Vec<(usize, f64)> = (0..rows.tracks())
+        .map(|c| {
+            (rows.track_start[c]..rows.track_start[c + 1])
+                .filter(|&r| screened.flags[r] == 0)
+                .fold((0, 0.0), |(n, sum), r| (n + 1, sum + rows.cn0[r]))
+        })
+        .collect();
+    let kept_of = |i: usize| candidate_of[i].map_or((0, 0.0), |c| kept[c]);
+
+    // Rank the candidates by mean C/N0 over the rows they keep (ties: channel, PRN).
     let mean_cn0 = |i: usize| {
         let s = &stats[i];
-        if s.passing > 0 {
+        let (n_kept, cn0_kept) = kept_of(i);
+        if n_kept > 0 {
+            cn0_kept / n_kept as f64
+        } else if s.passing > 0 {
             s.cn0_sum_passing / s.passing as f64
         } else if s.in_span > 0 {
             s.cn0_sum_span / s.in_span as f64
@@ -400,7 +451,7 @@ pub fn prepare_session(
             tracks[i].mean_cn0_dbhz()
         }
     };
-    let mut ranked: Vec<usize> = (0..tracks.len()).filter(|&i| stats[i].passing > 0).collect();
+    let mut ranked: Vec<usize> = (0..tracks.len()).filter(|&i| kept_of(i).0 > 0).collect();
     ranked.sort_by(|&a, &b| {
         mean_cn0(b)
             .total_cmp(&mean_cn0(a))
@@ -434,6 +485,8 @@ pub fn prepare_session(
                 s.above_mask,
                 selection.min_cn0_dbhz.unwrap_or(f64::NAN)
             );
+        } else if kept_of(i).0 == 0 {
+            reasons[i] = format!("all {} rows passing the masks excluded by the screening", s.passing);
         }
     }
     if n_used == 0 {
@@ -446,40 +499,50 @@ pub fn prepare_session(
         return Err(FormatError::NoChannelSelected { file: file.to_owned(), reason: detail.join("; ") });
     }
 
-    // Gather the used rows by epoch (compressed rows: track slot, weight, phase).
+    // Gather the kept rows of the used tracks by epoch (compressed rows: slot,
+    // weight, phase). A slot is one segment of a track (the screening splits
+    // tracks at steps), each with its own offset.
     let selected: Vec<usize> = ranked[..n_used].to_vec();
     let weight = |cn0_dbhz: f64| match selection.weighting {
         Weighting::Equal => 1.0,
         Weighting::Cn0 => 10f64.powf(cn0_dbhz / 10.0),
     };
-    let mut start = vec![0usize; n_epochs + 1];
-    let for_each_used_row = |f: &mut dyn FnMut(usize, usize, usize)| {
-        for (slot, &i) in selected.iter().enumerate() {
-            let tr = &tracks[i];
-            for (j, &k) in track_ks[i].iter().enumerate() {
-                if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
-                    f(slot, j, (k - k_first) as usize);
+    let selected_candidates: Vec<usize> =
+        selected.iter().map(|&i| candidate_of[i].expect("a ranked track is a candidate")).collect();
+    let mut slot_base = Vec::with_capacity(selected.len() + 1);
+    slot_base.push(0usize);
+    for &c in &selected_candidates {
+        slot_base.push(slot_base.last().copied().unwrap_or(0) + screened.segments[c]);
+    }
+    let n_slots = *slot_base.last().expect("non-empty");
+    let for_each_used_row = |f: &mut dyn FnMut(usize, usize)| {
+        for (sel, &c) in selected_candidates.iter().enumerate() {
+            for r in rows.track_start[c]..rows.track_start[c + 1] {
+                if screened.flags[r] == 0 {
+                    f(slot_base[sel] + screened.segment[r] as usize, r);
                 }
             }
         }
     };
-    for_each_used_row(&mut |_, _, e| start[e + 1] += 1);
+    let mut start = vec![0usize; n_epochs + 1];
+    for_each_used_row(&mut |_, r| start[rows.epoch[r] as usize + 1] += 1);
     for e in 0..n_epochs {
         start[e + 1] += start[e];
     }
     let mut fill = start.clone();
     let mut entries = vec![(0usize, 0f64, 0f64); start[n_epochs]];
-    for_each_used_row(&mut |slot, j, e| {
-        let tr = &tracks[selected[slot]];
-        entries[fill[e]] = (slot, weight(tr.cn0_dbhz[j]), tr.phase_err_rad[j]);
+    for_each_used_row(&mut |slot, r| {
+        let e = rows.epoch[r] as usize;
+        entries[fill[e]] = (slot, weight(rows.cn0[r]), rows.phase[r]);
         fill[e] += 1;
     });
     drop(fill);
 
-    let offsets_rad = if selection.remove_channel_offsets && selected.len() > 1 {
-        channel_offsets(selected.len(), &start, &entries)
+    let offsets_rad = if selection.remove_channel_offsets && n_slots > 1 {
+        let first_segment: Vec<bool> = (0..n_slots).map(|slot| slot_base.contains(&slot)).collect();
+        channel_offsets(n_slots, &start, &entries, &first_segment)
     } else {
-        vec![0.0; selected.len()]
+        vec![0.0; n_slots]
     };
 
     // Average, interpolate.
@@ -508,19 +571,41 @@ pub fn prepare_session(
         accel_mps2.push(interpolate(imu, t + imu_time_offset_s, &mut cursor));
     }
 
+    let mut summaries = screened.summaries;
     let mut channels: Vec<ChannelSummary> = (0..tracks.len())
-        .map(|i| ChannelSummary {
-            channel: tracks[i].channel,
-            prn: tracks[i].prn,
-            mean_cn0_dbhz: mean_cn0(i),
-            epochs: stats[i].passing,
-            used: used[i],
-            reason: std::mem::take(&mut reasons[i]),
-            phase_offset_rad: selected
-                .iter()
-                .position(|&s| s == i)
-                .filter(|_| selection.remove_channel_offsets)
-                .map(|slot| offsets_rad[slot]),
+        .map(|i| {
+            let sel = selected.iter().position(|&s| s == i).filter(|_| selection.remove_channel_offsets);
+            let mut screening = candidate_of[i].map(|c| std::mem::take(&mut summaries[c])).unwrap_or_default();
+            if let Some(c) = candidate_of[i] {
+                screening.spans = screened.spans[c]
+                    .iter()
+                    .map(|sp| ExcludedSpan {
+                        start_s: t_s[sp.first_epoch as usize],
+                        end_s: t_s[sp.last_epoch as usize],
+                        rows: sp.rows,
+                        reasons: screening::flag::NAMES
+                            .iter()
+                            .filter(|(bit, _)| sp.flags & bit != 0)
+                            .map(|(_, name)| (*name).to_owned())
+                            .collect(),
+                    })
+                    .collect();
+            }
+            if let Some(s) = sel
+                && slot_base[s + 1] - slot_base[s] > 1
+            {
+                screening.segment_offsets_rad = offsets_rad[slot_base[s]..slot_base[s + 1]].to_vec();
+            }
+            ChannelSummary {
+                channel: tracks[i].channel,
+                prn: tracks[i].prn,
+                mean_cn0_dbhz: mean_cn0(i),
+                epochs: kept_of(i).0,
+                used: used[i],
+                reason: std::mem::take(&mut reasons[i]),
+                phase_offset_rad: sel.map(|s| offsets_rad[slot_base[s]]),
+                screening,
+            }
         })
         .collect();
     channels.sort_by_key(|c| (c.channel, c.prn));
@@ -549,6 +634,9 @@ fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f6
     }
     if !imu_time_offset_s.is_finite() {
         return fail(format!("imu_time_offset_s = {imu_time_offset_s} is not finite"));
+    }
+    if let Err(reason) = selection.screening.validate() {
+        return fail(reason);
     }
     Ok(())
 }
@@ -587,7 +675,13 @@ fn interpolate(imu: &ImuSeries, tau: f64, cursor: &mut usize) -> [f64; 3] {
 /// each group of tracks connected by shared epochs; the gauge `Σ c_i = 0` over
 /// each group is imposed by adding `λ·1_g 1_gᵀ` (b is orthogonal to these
 /// vectors, so the solution satisfies the gauge exactly).
-fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)]) -> Vec<f64> {
+///
+/// Only the slots with `gauge[i]` enter the gauge of their group (all of the
+/// group's when none of them does): a track split at a step by the screening
+/// keeps its later segments out of it, so the step does not shift the level
+/// of the average (`1_g·u ≠ 0` for the indicator `u` of the gauge slots keeps
+/// `M + λ·u uᵀ` regular, and `1_gᵀb = 0` again gives `uᵀc = 0` exactly).
+pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)], gauge: &[bool]) -> Vec<f64> {
     let mut m = DMatrix::<f64>::zeros(n, n);
     let mut b = DVector::<f64>::zeros(n);
     let mut parent: Vec<usize> = (0..n).collect();
@@ -620,9 +714,10 @@ fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)]) -> 
     let trace: f64 = m.trace();
     let lambda = if trace > 0.0 { trace / n as f64 } else { 1.0 };
     let groups: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
+    let in_gauge: Vec<bool> = (0..n).map(|i| gauge[i] || !(0..n).any(|j| groups[j] == groups[i] && gauge[j])).collect();
     for i in 0..n {
         for j in 0..n {
-            if groups[i] == groups[j] {
+            if groups[i] == groups[j] && in_gauge[i] && in_gauge[j] {
                 m[(i, j)] += lambda;
             }
         }

@@ -20,6 +20,7 @@ use std::path::Path;
 
 use crate::error::{Column, FormatError};
 use crate::parse::{CsvSource, path_name};
+use crate::writers::TrackingRow;
 
 /// The columns of `tracking.csv`, in the order the writer emits them.
 pub const TRACKING_COLUMNS: [&str; 6] = ["t_s", "channel", "prn", "cn0_dbhz", "elev_deg", "phase_err_rad"];
@@ -123,52 +124,67 @@ struct ChannelState {
     track: usize,
 }
 
-/// Reads a `tracking.csv` stream. `source_name` names the source in error
-/// messages (typically the file name).
-pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog, FormatError> {
-    let (mut src, cols) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
-    let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
-    let mut tracks: Vec<ChannelTrack> = Vec::new();
-    let mut track_of: HashMap<(u32, u32), usize> = HashMap::new();
-    let mut channels: HashMap<u32, ChannelState> = HashMap::new();
-    let mut epoch_t_s: Vec<f64> = Vec::new();
-    let mut epoch_line: Vec<u64> = Vec::new();
-    let mut rows = 0usize;
-    let mut prev: Option<(f64, u64)> = None;
-    // The rows of one epoch share the text of their time stamp: parse it once.
-    let mut prev_t_text: Vec<u8> = Vec::new();
+/// One row's values, as parsed.
+struct RowValues {
+    t_s: f64,
+    channel: u32,
+    prn: u32,
+    cn0_dbhz: f64,
+    elev_deg: f64,
+    phase_err_rad: f64,
+}
 
-    let mut track_for = |channel: u32, prn: u32, tracks: &mut Vec<ChannelTrack>| -> usize {
-        *track_of.entry((channel, prn)).or_insert_with(|| {
+/// Assembles a [`TrackingLog`] row by row with the format's checks (time
+/// stamps non-decreasing, one row per channel per epoch), shared by the CSV
+/// reader and [`TrackingLog::from_rows`].
+struct Builder {
+    file: String,
+    /// The `t_s` and `channel` columns, for errors.
+    t_column: Column,
+    channel_column: Column,
+    tracks: Vec<ChannelTrack>,
+    track_of: HashMap<(u32, u32), usize>,
+    channels: HashMap<u32, ChannelState>,
+    epoch_t_s: Vec<f64>,
+    epoch_line: Vec<u64>,
+    rows: usize,
+    prev: Option<(f64, u64)>,
+}
+
+impl Builder {
+    fn new(file: String, t_column: Column, channel_column: Column) -> Self {
+        Builder {
+            file,
+            t_column,
+            channel_column,
+            tracks: Vec::new(),
+            track_of: HashMap::new(),
+            channels: HashMap::new(),
+            epoch_t_s: Vec::new(),
+            epoch_line: Vec::new(),
+            rows: 0,
+            prev: None,
+        }
+    }
+
+    fn track_for(&mut self, channel: u32, prn: u32) -> usize {
+        let tracks = &mut self.tracks;
+        *self.track_of.entry((channel, prn)).or_insert_with(|| {
             tracks.push(ChannelTrack::new(channel, prn));
             tracks.len() - 1
         })
-    };
+    }
 
-    while src.next_record()? {
-        src.check_field_count()?;
-        let t = match prev {
-            Some((prev_t, _)) if src.cell(ct) == prev_t_text.as_slice() => prev_t,
-            _ => {
-                let t = src.f64_at(ct)?;
-                prev_t_text.clear();
-                prev_t_text.extend_from_slice(src.cell(ct));
-                t
-            }
-        };
-        let channel = src.u32_at(cch)?;
-        let prn = src.u32_at(cprn)?;
-        let cn0 = src.f64_at(ccn0)?;
-        let elev = src.opt_f64_at(celev)?.unwrap_or(f64::NAN);
-        let phase = src.f64_at(cphase)?;
-        let line = src.line();
-
-        match prev {
+    /// Adds the row on 1-based `line`.
+    #[inline]
+    fn push(&mut self, r: &RowValues, line: u64) -> Result<(), FormatError> {
+        let t = r.t_s;
+        match self.prev {
             Some((prev_t, prev_line)) if t < prev_t => {
                 return Err(FormatError::TimeBackwards {
-                    file: src.file.clone(),
+                    file: self.file.clone(),
                     line,
-                    column: src.column(ct),
+                    column: self.t_column.clone(),
                     t_s: t,
                     previous_t_s: prev_t,
                     previous_line: prev_line,
@@ -176,51 +192,137 @@ pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog
             }
             Some((prev_t, _)) if t == prev_t => {}
             _ => {
-                epoch_t_s.push(t);
-                epoch_line.push(line);
+                self.epoch_t_s.push(t);
+                self.epoch_line.push(line);
             }
         }
-        prev = Some((t, line));
+        self.prev = Some((t, line));
 
-        let track = match channels.get_mut(&channel) {
+        let (channel, prn) = (r.channel, r.prn);
+        let track = match self.channels.get(&channel) {
             Some(state) => {
                 // Time stamps are non-decreasing overall, so equality is the only
                 // way this channel can fail to be strictly increasing.
                 if state.last_t_s == t {
                     return Err(FormatError::RepeatedChannel {
-                        file: src.file.clone(),
+                        file: self.file.clone(),
                         line,
-                        column: src.column(cch),
+                        column: self.channel_column.clone(),
                         channel,
                         t_s: t,
                         previous_line: state.last_line,
                     });
                 }
-                if tracks[state.track].prn != prn {
-                    state.track = track_for(channel, prn, &mut tracks);
+                let mut track = state.track;
+                if self.tracks[track].prn != prn {
+                    track = self.track_for(channel, prn);
                 }
-                state.last_t_s = t;
-                state.last_line = line;
-                state.track
-            }
-            None => {
-                let track = track_for(channel, prn, &mut tracks);
-                channels.insert(channel, ChannelState { last_t_s: t, last_line: line, track });
                 track
             }
+            None => self.track_for(channel, prn),
         };
-        let tr = &mut tracks[track];
+        self.channels.insert(channel, ChannelState { last_t_s: t, last_line: line, track });
+        let tr = &mut self.tracks[track];
         tr.t_s.push(t);
-        tr.phase_err_rad.push(phase);
-        tr.cn0_dbhz.push(cn0);
-        tr.elev_deg.push(elev);
-        rows += 1;
+        tr.phase_err_rad.push(r.phase_err_rad);
+        tr.cn0_dbhz.push(r.cn0_dbhz);
+        tr.elev_deg.push(r.elev_deg);
+        self.rows += 1;
+        Ok(())
     }
-    if rows == 0 {
-        return Err(FormatError::NoData { file: src.file });
+
+    fn finish(self) -> Result<TrackingLog, FormatError> {
+        if self.rows == 0 {
+            return Err(FormatError::NoData { file: self.file });
+        }
+        Ok(TrackingLog {
+            source_name: self.file,
+            tracks: self.tracks,
+            epoch_t_s: self.epoch_t_s,
+            epoch_line: self.epoch_line,
+            t_column: self.t_column,
+            rows: self.rows,
+        })
     }
-    let t_column = src.column(ct);
-    Ok(TrackingLog { source_name: src.file, tracks, epoch_t_s, epoch_line, t_column, rows })
+}
+
+impl TrackingLog {
+    /// A tracking log from rows in memory (e.g. a simulator's output), checked
+    /// exactly as [`read_tracking`] checks a file: finite values (an elevation
+    /// of `None` is unknown), non-decreasing time stamps, one row per channel
+    /// per epoch. Errors name `source_name` and the line each row would have in
+    /// `tracking.csv` as [`crate::TrackingWriter`] writes it (row i on line
+    /// i + 2, columns in [`TRACKING_COLUMNS`] order).
+    pub fn from_rows<'a>(
+        source_name: &str,
+        rows: impl IntoIterator<Item = &'a TrackingRow>,
+    ) -> Result<TrackingLog, FormatError> {
+        let column = |i: usize| Column { index: i + 1, name: TRACKING_COLUMNS[i].to_owned() };
+        let mut b = Builder::new(source_name.to_owned(), column(0), column(1));
+        for (i, row) in rows.into_iter().enumerate() {
+            let line = i as u64 + 2;
+            let finite = |v: f64, col: usize| {
+                if v.is_finite() {
+                    Ok(v)
+                } else {
+                    Err(FormatError::NonFinite {
+                        file: source_name.to_owned(),
+                        line,
+                        column: column(col),
+                        value: v.to_string(),
+                    })
+                }
+            };
+            let values = RowValues {
+                t_s: finite(row.t_s, 0)?,
+                channel: row.channel,
+                prn: row.prn,
+                cn0_dbhz: finite(row.cn0_dbhz, 3)?,
+                elev_deg: match row.elev_deg {
+                    Some(e) => finite(e, 4)?,
+                    None => f64::NAN,
+                },
+                phase_err_rad: finite(row.phase_err_rad, 5)?,
+            };
+            b.push(&values, line)?;
+        }
+        b.finish()
+    }
+}
+
+/// Reads a `tracking.csv` stream. `source_name` names the source in error
+/// messages (typically the file name).
+pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog, FormatError> {
+    let (mut src, cols) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
+    let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
+    let mut b = Builder::new(src.file.clone(), src.column(ct), src.column(cch));
+    // The rows of one epoch share the text of their time stamp: parse it once.
+    let mut prev_t_text: Vec<u8> = Vec::new();
+    let mut prev_t: Option<f64> = None;
+
+    while src.next_record()? {
+        src.check_field_count()?;
+        let t_s = match prev_t {
+            Some(t) if src.cell(ct) == prev_t_text.as_slice() => t,
+            _ => {
+                let t = src.f64_at(ct)?;
+                prev_t_text.clear();
+                prev_t_text.extend_from_slice(src.cell(ct));
+                t
+            }
+        };
+        prev_t = Some(t_s);
+        let values = RowValues {
+            t_s,
+            channel: src.u32_at(cch)?,
+            prn: src.u32_at(cprn)?,
+            cn0_dbhz: src.f64_at(ccn0)?,
+            elev_deg: src.opt_f64_at(celev)?.unwrap_or(f64::NAN),
+            phase_err_rad: src.f64_at(cphase)?,
+        };
+        b.push(&values, src.line())?;
+    }
+    b.finish()
 }
 
 /// Opens and reads a `tracking.csv` file; errors name the file by its path.
@@ -344,6 +446,51 @@ mod tests {
         assert!(m.contains("empty file") && m.contains("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad"), "{m}");
         let m = err("");
         assert!(m.contains("header only, no data rows"), "{m}");
+    }
+
+    fn row(t_s: f64, channel: u32, prn: u32, elev_deg: Option<f64>, phase_err_rad: f64) -> TrackingRow {
+        TrackingRow { t_s, channel, prn, cn0_dbhz: 44.5, elev_deg, phase_err_rad }
+    }
+
+    #[test]
+    fn rows_in_memory_give_the_log_their_csv_gives() {
+        let rows = [
+            row(0.0, 1, 5, Some(30.0), 0.01),
+            row(0.0, 2, 7, None, 0.02),
+            row(0.025, 2, 7, Some(12.5), -0.03),
+            row(0.05, 1, 5, Some(31.0), 0.04),
+            row(0.075, 2, 9, Some(20.0), 0.06),
+        ];
+        let mut w = crate::TrackingWriter::new(Vec::new()).unwrap();
+        for r in &rows {
+            w.write_row(r).unwrap();
+        }
+        let csv = w.finish().unwrap();
+        let from_file = read_tracking(csv.as_slice(), "sim").unwrap();
+        let from_rows = TrackingLog::from_rows("sim", &rows).unwrap();
+        assert_eq!(from_rows.tracks().len(), 3);
+        assert_eq!(from_rows.tracks()[1].elev_deg[0].to_bits(), from_file.tracks()[1].elev_deg[0].to_bits());
+        // NaN ≠ NaN: compare with the unknown elevation blanked out.
+        let blank = |mut l: TrackingLog| {
+            l.tracks[1].elev_deg[0] = -1.0;
+            l
+        };
+        assert_eq!(blank(from_rows), blank(from_file));
+    }
+
+    #[test]
+    fn rows_in_memory_are_checked_like_a_file() {
+        let e = TrackingLog::from_rows("sim", &[row(0.0, 1, 5, None, 0.1), row(0.0, 1, 6, None, 0.1)]);
+        let m = e.unwrap_err().to_string();
+        assert!(m.starts_with("sim: line 3, column 2 (`channel`)") && m.contains("channel 1 appears twice"), "{m}");
+        let e = TrackingLog::from_rows("sim", &[row(0.05, 1, 5, None, 0.1), row(0.025, 2, 6, None, 0.1)]);
+        let m = e.unwrap_err().to_string();
+        assert!(m.contains("line 3, column 1 (`t_s`)") && m.contains("goes backwards"), "{m}");
+        let e = TrackingLog::from_rows("sim", &[row(0.0, 1, 5, Some(f64::NAN), 0.1)]);
+        let m = e.unwrap_err().to_string();
+        assert!(m.contains("line 2, column 5 (`elev_deg`)") && m.contains("not a finite number"), "{m}");
+        let m = TrackingLog::from_rows("sim", &[]).unwrap_err().to_string();
+        assert!(m.contains("no data rows"), "{m}");
     }
 
     #[test]

@@ -93,4 +93,15 @@ fn one_hour_twelve_channels_40hz() {
     let prep_s = t.elapsed().as_secs_f64();
     assert_eq!(s.len(), EPOCHS);
     eprintln!("imu: {} rows in {imu_s:.3} s; prepare_session (12 channels, offsets): {prep_s:.3} s", imu_back.len());
+    for (label, screening) in [("screening off", gsens_io::ScreeningConfig::off()), ("screening on", Default::default())]
+    {
+        for max_channels in [Some(4), None] {
+            let cfg = SelectionConfig { max_channels, screening: screening.clone(), ..SelectionConfig::default() };
+            let t = Instant::now();
+            let s = prepare_session(&log, &imu_back, "imu.csv", &cfg, 0.0).unwrap();
+            let prep_s = t.elapsed().as_secs_f64();
+            assert_eq!(s.len(), EPOCHS);
+            eprintln!("prepare_session, {label}, max_channels {max_channels:?}: {prep_s:.3} s");
+        }
+    }
 }

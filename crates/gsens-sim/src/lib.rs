@@ -12,11 +12,14 @@
 //!   reproducing the paper's experiment) and its validation;
 //! - [`channel`]: one tracking channel at the correlator level, using the
 //!   core's loop filter and NCO ([`gsens_core::pll::CarrierLoop`]);
-//! - [`session`]: the whole session, streamed through a [`session::SessionSink`].
+//! - [`session`]: the whole session, streamed through a [`session::SessionSink`];
+//! - [`iq`]: complex baseband GPS L1 C/A samples of the same scenario, for
+//!   software receivers (GNSS-SDR).
 #![deny(missing_docs)]
 
 pub mod channel;
 pub mod imu;
+pub mod iq;
 pub mod motion;
 pub mod oscillator;
 pub mod rng;

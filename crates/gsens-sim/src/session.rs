@@ -63,8 +63,9 @@ use crate::rng::{Xoshiro256PlusPlus, normal, substream};
 use crate::satellites::{Cn0Offsets, Constellation, LineOfSight};
 use crate::scenario::{Cn0Logged, LoggedPhaseMode, Scenario, ScenarioError};
 
-/// Stream ids of [`crate::rng::substream`] for the session's components.
-mod stream {
+/// Stream ids of [`crate::rng::substream`] for the session's components
+/// (shared with [`crate::iq`], so both draw the same oscillator, motion and IMU).
+pub(crate) mod stream {
     pub const OSCILLATOR: u64 = 1;
     pub const MOTION: u64 = 2;
     pub const IMU_ERRORS: u64 = 3;
@@ -480,7 +481,7 @@ pub fn simulate<S: SessionSink + ?Sized>(
 }
 
 /// M⁻ᵀ·v for a 3×3 matrix M (adjugate / determinant).
-fn inverse_transpose_times(m: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
+pub(crate) fn inverse_transpose_times(m: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
     // Cofactor matrix C: M⁻¹ = Cᵀ/det, so M⁻ᵀ = C/det.
     let c = |i: usize, j: usize| {
         let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);

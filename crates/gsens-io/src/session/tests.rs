@@ -51,6 +51,12 @@ fn prep(log: &TrackingLog, imu: &ImuSeries, cfg: &SelectionConfig) -> Result<Pre
     prepare_session(log, imu, "imu.csv", cfg, 0.0)
 }
 
+/// The selection without screening: most tests here use unphysical phases
+/// (phase = epoch number, or channel number, far beyond a discriminator's range).
+fn base() -> SelectionConfig {
+    SelectionConfig { screening: crate::screening::ScreeningConfig::off(), ..SelectionConfig::default() }
+}
+
 fn msg(e: FormatError) -> String {
     e.to_string()
 }
@@ -68,7 +74,7 @@ fn imu_at_the_same_instants_is_used_bit_exactly() {
     let t_s: Vec<f64> = std::iter::once(tk(0) - T).chain((0..n).map(tk)).chain(std::iter::once(tk(n) + 1e-3)).collect();
     let accel_mps2: Vec<[f64; 3]> = t_s.iter().map(|_| [rnd(), rnd(), rnd()]).collect();
     let imu = ImuSeries { t_s, accel_mps2 };
-    let s = prep(&log, &imu, &SelectionConfig::default()).unwrap();
+    let s = prep(&log, &imu, &base()).unwrap();
     assert_eq!(s.len(), n);
     for k in 0..n {
         assert_eq!(s.t_s[k].to_bits(), tk(k).to_bits());
@@ -87,7 +93,7 @@ fn interpolation_matches_a_linear_function_with_and_without_time_offset() {
     for offset_s in [0.0, 0.0137, -0.4] {
         // 100 Hz jittered IMU covering the whole tracking span.
         let imu = imu_lin(tk(0) - 0.1, tk(n) + 0.1, 0.01, offset_s);
-        let s = prepare_session(&log, &imu, "imu.csv", &SelectionConfig::default(), offset_s).unwrap();
+        let s = prepare_session(&log, &imu, "imu.csv", &base(), offset_s).unwrap();
         assert_eq!(s.len(), n);
         assert_eq!(s.imu_time_offset_s, offset_s);
         for k in 0..n {
@@ -108,7 +114,7 @@ fn epochs_outside_the_imu_span_are_dropped_from_the_ends() {
         // True span [102, 103] s.
         let imu = imu_lin(102.0, 103.0, 0.01, offset_s);
         let (first, last) = (imu.t_s[0] - offset_s, imu.t_s[imu.len() - 1] - offset_s);
-        let s = prepare_session(&log, &imu, "imu.csv", &SelectionConfig::default(), offset_s).unwrap();
+        let s = prepare_session(&log, &imu, "imu.csv", &base(), offset_s).unwrap();
         assert!(s.t_s[0] >= first && s.t_s[0] - T < first, "{} vs {first}", s.t_s[0]);
         let t_end = *s.t_s.last().unwrap();
         assert!(t_end <= last && t_end + T > last, "{t_end} vs {last}");
@@ -121,13 +127,13 @@ fn epochs_outside_the_imu_span_are_dropped_from_the_ends() {
 fn logs_not_overlapping_in_time() {
     let log = one_channel(400); // 100 .. 109.975 s
     let imu = ImuSeries { t_s: (0..=20).map(|j| 200.0 + 0.5 * j as f64).collect(), accel_mps2: vec![[0.0; 3]; 21] };
-    let m = msg(prep(&log, &imu, &SelectionConfig::default()).unwrap_err());
+    let m = msg(prep(&log, &imu, &base()).unwrap_err());
     assert!(m.contains("imu.csv and tracking.csv do not overlap in time"), "{m}");
     assert!(m.contains("the IMU covers [200, 210] s"), "{m}");
     assert!(m.contains("tracking epochs cover [100, 109.975] s"), "{m}");
     // The offset moves the IMU span: stamps 200..210 are true time 100..110 with offset 100.
-    prepare_session(&log, &imu, "imu.csv", &SelectionConfig::default(), 100.0).unwrap();
-    let m = msg(prepare_session(&log, &imu, "imu.csv", &SelectionConfig::default(), -5.0).unwrap_err());
+    prepare_session(&log, &imu, "imu.csv", &base(), 100.0).unwrap();
+    let m = msg(prepare_session(&log, &imu, "imu.csv", &base(), -5.0).unwrap_err());
     assert!(m.contains("[205, 215] s") && m.contains("imu_time_offset_s = -5 s"), "{m}");
 }
 
@@ -135,7 +141,7 @@ fn logs_not_overlapping_in_time() {
 fn gaps_become_epochs_without_phase() {
     let rows: Vec<TrackingRow> =
         (0..40).filter(|k| !(11..15).contains(k)).map(|k| row(tk(k), 1, 45.0, None, k as f64)).collect();
-    let s = prep(&log_from(&rows), &wide_imu(), &SelectionConfig::default()).unwrap();
+    let s = prep(&log_from(&rows), &wide_imu(), &base()).unwrap();
     assert_eq!(s.len(), 40);
     assert_eq!(s.epochs_with_phase(), 36);
     for k in 0..40 {
@@ -153,7 +159,7 @@ fn gaps_become_epochs_without_phase() {
 fn jittered_time_stamps_snap_to_the_grid() {
     let rows: Vec<TrackingRow> =
         (0..100).map(|k| row(tk(k) + 0.002 * (k as f64 * 1.7).sin(), 1, 45.0, None, k as f64)).collect();
-    let s = prep(&log_from(&rows), &wide_imu(), &SelectionConfig::default()).unwrap();
+    let s = prep(&log_from(&rows), &wide_imu(), &base()).unwrap();
     assert_eq!(s.len(), 100);
     assert!((s.log_interval_s - T).abs() < 0.002);
     for (k, r) in rows.iter().enumerate() {
@@ -175,7 +181,7 @@ fn long_log_with_jitter_and_an_off_nominal_interval_does_not_drift_off_the_grid(
         .map(|k| row(10.0 + k as f64 * true_t + 0.05 * true_t * (k as f64 * 0.77).sin(), 1, 45.0, None, k as f64))
         .collect();
     let imu = imu_lin(0.0, 3000.0, 0.5, 0.0);
-    let s = prep(&log_from(&rows), &imu, &SelectionConfig::default()).unwrap();
+    let s = prep(&log_from(&rows), &imu, &base()).unwrap();
     assert_eq!(s.len(), n);
     assert!((s.log_interval_s / true_t - 1.0).abs() < 1e-7, "{}", s.log_interval_s);
     for k in 0..n {
@@ -188,7 +194,7 @@ fn long_log_with_jitter_and_an_off_nominal_interval_does_not_drift_off_the_grid(
 fn time_stamp_off_the_grid() {
     let mut rows: Vec<TrackingRow> = (0..20).map(|k| row(tk(k), 1, 45.0, None, 0.0)).collect();
     rows[7].t_s += 0.3 * T; // line 9 (header + 7 rows before it)
-    let m = msg(prep(&log_from(&rows), &wide_imu(), &SelectionConfig::default()).unwrap_err());
+    let m = msg(prep(&log_from(&rows), &wide_imu(), &base()).unwrap_err());
     assert!(m.starts_with("tracking.csv: line 9, column 1 (`t_s`)"), "{m}");
     assert!(m.contains("off the epoch grid") && m.contains("tolerance 10% of T"), "{m}");
 }
@@ -198,7 +204,7 @@ fn two_time_stamps_on_one_grid_epoch() {
     let mut rows: Vec<TrackingRow> = (0..20).map(|k| row(tk(k), 1, 45.0, None, 0.0)).collect();
     rows[10].t_s = tk(10) - 0.09 * T;
     rows[11].t_s = tk(10) + 0.09 * T;
-    let m = msg(prep(&log_from(&rows), &wide_imu(), &SelectionConfig::default()).unwrap_err());
+    let m = msg(prep(&log_from(&rows), &wide_imu(), &base()).unwrap_err());
     assert!(m.starts_with("tracking.csv: line 13, column 1 (`t_s`)"), "{m}");
     assert!(m.contains("same epoch of the grid") && m.contains("on line 12"), "{m}");
 }
@@ -206,7 +212,7 @@ fn two_time_stamps_on_one_grid_epoch() {
 #[test]
 fn a_single_epoch_is_not_enough() {
     let log = log_from(&[row(1.0, 1, 45.0, None, 0.0), row(1.0, 2, 45.0, None, 0.0)]);
-    let m = msg(prep(&log, &wide_imu(), &SelectionConfig::default()).unwrap_err());
+    let m = msg(prep(&log, &wide_imu(), &base()).unwrap_err());
     assert!(m.starts_with("tracking.csv: only 1 distinct time stamp"), "{m}");
 }
 
@@ -269,7 +275,7 @@ fn plain_average_renormalizes_weights_over_present_channels() {
         (log_from(&rows), ())
     };
     for weighting in [Weighting::Equal, Weighting::Cn0] {
-        let cfg = SelectionConfig { weighting, remove_channel_offsets: false, ..SelectionConfig::default() };
+        let cfg = SelectionConfig { weighting, remove_channel_offsets: false, ..base() };
         let s = prep(&log, &wide_imu(), &cfg).unwrap();
         for k in 0..60 {
             let p = s.phase_err_rad[k].unwrap();
@@ -280,7 +286,7 @@ fn plain_average_renormalizes_weights_over_present_channels() {
     // With offsets and no offset removal, a missing channel shifts the mean by
     // −c_j/(N−1): the reason offset removal is the default.
     let (log, offsets) = offsets_log(|_, _| 45.0);
-    let cfg = SelectionConfig { remove_channel_offsets: false, ..SelectionConfig::default() };
+    let cfg = SelectionConfig { remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert!((s.phase_err_rad[0].unwrap() - common(0)).abs() < 1e-15);
     assert!((s.phase_err_rad[15].unwrap() - (common(15) - offsets[2] / 3.0)).abs() < 1e-12);
@@ -295,7 +301,7 @@ fn channels_without_common_epochs_get_offsets_per_group() {
         let ch = if k < 20 { 1 } else { 2 };
         rows.push(row(tk(k), ch, 45.0, None, common(k) + 0.1 * ch as f64));
     }
-    let s = prep(&log_from(&rows), &wide_imu(), &SelectionConfig::default()).unwrap();
+    let s = prep(&log_from(&rows), &wide_imu(), &base()).unwrap();
     for k in 0..40 {
         let want = common(k) + if k < 20 { 0.1 } else { 0.2 };
         assert!((s.phase_err_rad[k].unwrap() - want).abs() < 1e-12);
@@ -312,7 +318,7 @@ fn cn0_weights_are_the_cn0_ratio() {
     }
     let log = log_from(&rows);
     let cfg =
-        SelectionConfig { weighting: Weighting::Cn0, remove_channel_offsets: false, ..SelectionConfig::default() };
+        SelectionConfig { weighting: Weighting::Cn0, remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     let (w1, w2) = (10f64.powf(4.0), 10f64.powf(4.3));
     let want = w1 / (w1 + w2);
@@ -320,7 +326,7 @@ fn cn0_weights_are_the_cn0_ratio() {
     for p in &s.phase_err_rad {
         assert!((p.unwrap() - want).abs() < 1e-15);
     }
-    let cfg = SelectionConfig { remove_channel_offsets: false, ..SelectionConfig::default() };
+    let cfg = SelectionConfig { remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert!(s.phase_err_rad.iter().all(|p| *p == Some(0.5)));
 }
@@ -343,7 +349,7 @@ fn used(s: &PreparedSession) -> Vec<u32> {
 #[test]
 fn selection_keeps_the_n_strongest_channels() {
     let log = six_channels(|_, _| Some(40.0), |ch, _| 30.0 + 2.0 * ch as f64);
-    let cfg = SelectionConfig { remove_channel_offsets: false, ..SelectionConfig::default() };
+    let cfg = SelectionConfig { remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert_eq!(used(&s), vec![2, 3, 4, 5]);
     assert_eq!(s.phase_err_rad[0], Some(3.5));
@@ -353,9 +359,9 @@ fn selection_keeps_the_n_strongest_channels() {
     assert_eq!(s.channels[5].reason, "used");
     assert_eq!(s.selection, cfg);
 
-    let cfg = SelectionConfig { max_channels: Some(2), remove_channel_offsets: false, ..SelectionConfig::default() };
+    let cfg = SelectionConfig { max_channels: Some(2), remove_channel_offsets: false, ..base() };
     assert_eq!(used(&prep(&log, &wide_imu(), &cfg).unwrap()), vec![4, 5]);
-    let cfg = SelectionConfig { max_channels: None, remove_channel_offsets: false, ..SelectionConfig::default() };
+    let cfg = SelectionConfig { max_channels: None, remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert_eq!(used(&s), vec![0, 1, 2, 3, 4, 5]);
     assert_eq!(s.phase_err_rad[0], Some(2.5));
@@ -370,7 +376,7 @@ fn selection_by_cn0_threshold_drops_rows() {
         max_channels: None,
         min_cn0_dbhz: Some(35.0),
         remove_channel_offsets: false,
-        ..SelectionConfig::default()
+        ..base()
     };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert_eq!(used(&s), vec![1, 3, 4, 5]);
@@ -396,7 +402,7 @@ fn selection_by_elevation_mask() {
         max_channels: None,
         elevation_mask_deg: Some(10.0),
         remove_channel_offsets: false,
-        ..SelectionConfig::default()
+        ..base()
     };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert_eq!(used(&s), vec![1, 2, 3, 4, 5]);
@@ -410,7 +416,7 @@ fn selection_by_elevation_mask() {
 #[test]
 fn no_channel_passing_the_selection() {
     let log = six_channels(|_, _| Some(30.0), |ch, _| 30.0 + 2.0 * ch as f64);
-    let cfg = SelectionConfig { elevation_mask_deg: Some(50.0), ..SelectionConfig::default() };
+    let cfg = SelectionConfig { elevation_mask_deg: Some(50.0), ..base() };
     let m = msg(prep(&log, &wide_imu(), &cfg).unwrap_err());
     assert!(m.starts_with("tracking.csv: no channel passes the selection"), "{m}");
     assert!(
@@ -418,7 +424,7 @@ fn no_channel_passing_the_selection() {
         "{m}"
     );
 
-    let cfg = SelectionConfig { min_cn0_dbhz: Some(60.0), ..SelectionConfig::default() };
+    let cfg = SelectionConfig { min_cn0_dbhz: Some(60.0), ..base() };
     let m = msg(prep(&log, &wide_imu(), &cfg).unwrap_err());
     assert!(m.contains("no channel passes the selection") && m.contains("below the C/N0 threshold of 60 dB-Hz"), "{m}");
 
@@ -426,7 +432,7 @@ fn no_channel_passing_the_selection() {
     let mut rows: Vec<TrackingRow> = (0..10).map(|k| row(tk(k), 1, 45.0, None, 0.0)).collect();
     rows.extend((30..40).map(|k| row(tk(k), 2, 45.0, None, 0.0)));
     let imu = imu_lin(tk(15), tk(25), 0.01, 0.0);
-    let m = msg(prep(&log_from(&rows), &imu, &SelectionConfig::default()).unwrap_err());
+    let m = msg(prep(&log_from(&rows), &imu, &base()).unwrap_err());
     assert!(m.contains("channel 1 (PRN 101): no rows in the usable span"), "{m}");
     assert!(m.contains("channel 2 (PRN 102): no rows in the usable span"), "{m}");
 }
@@ -434,15 +440,15 @@ fn no_channel_passing_the_selection() {
 #[test]
 fn invalid_settings() {
     let log = one_channel(10);
-    let cfg = SelectionConfig { max_channels: Some(0), ..SelectionConfig::default() };
+    let cfg = SelectionConfig { max_channels: Some(0), ..base() };
     let m = msg(prep(&log, &wide_imu(), &cfg).unwrap_err());
     assert!(m.starts_with("tracking.csv: invalid selection settings: max_channels is 0"), "{m}");
-    let cfg = SelectionConfig { min_cn0_dbhz: Some(f64::NAN), ..SelectionConfig::default() };
+    let cfg = SelectionConfig { min_cn0_dbhz: Some(f64::NAN), ..base() };
     assert!(msg(prep(&log, &wide_imu(), &cfg).unwrap_err()).contains("min_cn0_dbhz = NaN"));
-    let m = msg(prepare_session(&log, &wide_imu(), "imu.csv", &SelectionConfig::default(), f64::NAN).unwrap_err());
+    let m = msg(prepare_session(&log, &wide_imu(), "imu.csv", &base(), f64::NAN).unwrap_err());
     assert!(m.contains("imu_time_offset_s"), "{m}");
     let bad = ImuSeries { t_s: vec![1.0, 0.0], accel_mps2: vec![[0.0; 3]; 2] };
-    let m = msg(prep(&log, &bad, &SelectionConfig::default()).unwrap_err());
+    let m = msg(prep(&log, &bad, &base()).unwrap_err());
     assert!(m.starts_with("imu.csv: invalid IMU series"), "{m}");
 }
 
@@ -453,7 +459,7 @@ fn reassigned_channel_is_two_tracks() {
         r.prn = 7;
         r.cn0_dbhz = 40.0;
     }
-    let cfg = SelectionConfig { remove_channel_offsets: false, ..SelectionConfig::default() };
+    let cfg = SelectionConfig { remove_channel_offsets: false, ..base() };
     let s = prep(&log_from(&rows), &wide_imu(), &cfg).unwrap();
     let ids: Vec<(u32, u32, usize, bool)> = s.channels.iter().map(|c| (c.channel, c.prn, c.epochs, c.used)).collect();
     assert_eq!(ids, vec![(1, 7, 10, true), (1, 101, 10, true)]);

@@ -1,0 +1,189 @@
+//! The GNSS-SDR commands on real GNSS-SDR 0.0.17 dumps (the fixtures of
+//! `gsens-gnss-sdr`): `gsens import gnss-sdr`, `gsens estimate --gnss-sdr`,
+//! errors on bad dumps, and `gsens simulate --iq`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap()
+}
+
+fn gsens(args: &[&str]) -> String {
+    let out = run(args);
+    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../gsens-gnss-sdr/tests/fixtures")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gsens-gnss-sdr-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+#[test]
+fn import_writes_tracking_csv() {
+    let f = fixtures();
+    let d = tmp("import");
+    let raw = d.join("raw.csv");
+    let out = gsens(&[
+        "import",
+        "gnss-sdr",
+        &s(&f.join("order2")),
+        "--conf",
+        &s(&f.join("order2/gnss-sdr.conf")),
+        "--out",
+        &s(&raw),
+        "--tracks-json",
+        &s(&d.join("tracks.json")),
+    ]);
+    assert!(out.contains("2 tracks, 2 used"), "{out}");
+    let text = std::fs::read_to_string(&raw).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,carrier_lock_test"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(rows.len() > 2500, "{}", rows.len());
+    assert!(rows.iter().all(|r| r[4].is_empty() && r[5].parse::<f64>().unwrap().abs() < 0.8));
+    assert!(rows.iter().all(|r| r[6].parse::<f64>().unwrap() >= 0.85));
+    // Times at the middle of each 20 ms integration: not on a common grid.
+    let t: Vec<f64> = rows.iter().map(|r| r[0].parse().unwrap()).collect();
+    assert!(t.iter().any(|v| ((v / 0.02).round() * 0.02 - v).abs() > 1e-4));
+    let grid = d.join("grid.csv");
+    gsens(&[
+        "import",
+        "gnss-sdr",
+        &s(&f.join("order2")),
+        "--conf",
+        &s(&f.join("order2/gnss-sdr.conf")),
+        "--out",
+        &s(&grid),
+        "--common-grid",
+    ]);
+    let g = std::fs::read_to_string(&grid).unwrap();
+    for line in g.lines().skip(1) {
+        let v: f64 = line.split(',').next().unwrap().parse().unwrap();
+        assert!(((v / 0.02).round() * 0.02 - v).abs() < 1e-9, "{v}");
+    }
+    let tracks: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("tracks.json")).unwrap()).unwrap();
+    assert_eq!(tracks["tracks"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn estimate_from_gnss_sdr_dumps_within_2_percent() {
+    let f = fixtures();
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(f.join("truth.json")).unwrap()).unwrap();
+    let d = tmp("estimate");
+    for order in ["order2", "order3"] {
+        let json = d.join(format!("{order}.json"));
+        let text = gsens(&[
+            "estimate",
+            "--imu",
+            &s(&f.join("imu.csv")),
+            "--gnss-sdr",
+            &s(&f.join(order)),
+            "--gnss-sdr-conf",
+            &s(&f.join(order).join("gnss-sdr.conf")),
+            "--json",
+            &s(&json),
+        ]);
+        assert!(text.contains("modelled exactly"), "{text}");
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        for i in 0..3 {
+            let g = v["gamma_hz_per_mps2"][i].as_f64().unwrap();
+            let t = truth["gamma_hz_per_mps2"][i].as_f64().unwrap();
+            assert!(((g - t) / t).abs() < 0.02, "{order} axis {i}: {g} vs {t}");
+        }
+        assert_eq!(v["settings"]["gnss_sdr_loop"]["pll_filter_order"], if order == "order2" { 2 } else { 3 });
+        assert_eq!(v["settings"]["gnss_sdr_loop"]["integration_ms"], 20);
+        assert!(v["gnss_sdr"]["tracks"].as_array().unwrap().iter().all(|t| t["used"] == true));
+    }
+}
+
+#[test]
+fn bad_dumps_are_refused_naming_the_file() {
+    let f = fixtures();
+    let d = tmp("bad");
+    let bytes = std::fs::read(f.join("order2/trk_ch_0.dat")).unwrap();
+    std::fs::write(d.join("trk_ch_0.dat"), &bytes[..bytes.len() - 10]).unwrap();
+    let out = run(&[
+        "import",
+        "gnss-sdr",
+        &s(&d),
+        "--conf",
+        &s(&f.join("order2/gnss-sdr.conf")),
+        "--out",
+        &s(&d.join("x.csv")),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains("trk_ch_0.dat") && e.contains("not a whole number of records"), "{e}");
+    std::fs::write(d.join("trk_ch_0.dat"), b"").unwrap();
+    let out = run(&[
+        "import",
+        "gnss-sdr",
+        &s(&d),
+        "--conf",
+        &s(&f.join("order2/gnss-sdr.conf")),
+        "--out",
+        &s(&d.join("x.csv")),
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("empty tracking dump"));
+    let empty = tmp("empty");
+    let out = run(&[
+        "import",
+        "gnss-sdr",
+        &s(&empty),
+        "--conf",
+        &s(&f.join("order2/gnss-sdr.conf")),
+        "--out",
+        &s(&d.join("x.csv")),
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no tracking dump"));
+    // --gnss-sdr needs its configuration.
+    let out = run(&["estimate", "--imu", &s(&f.join("imu.csv")), "--gnss-sdr", &s(&f.join("order2"))]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--gnss-sdr-conf"));
+}
+
+#[test]
+fn simulate_iq_writes_samples_conf_and_truth() {
+    let d = tmp("iq");
+    let sc = d.join("sc.toml");
+    std::fs::write(&sc, "[session]\nduration_s = 0.5\n[satellites]\nmax_channels = 3\n").unwrap();
+    let iq = d.join("x.bin");
+    let out = gsens(&[
+        "simulate",
+        "--scenario",
+        &s(&sc),
+        "--out",
+        &s(&d),
+        "--iq",
+        &s(&iq),
+        "--iq-format",
+        "ishort",
+        "--fs-hz",
+        "2048000",
+        "--iq-carrier-truth",
+    ]);
+    assert!(out.contains("real time"), "{out}");
+    assert_eq!(std::fs::metadata(&iq).unwrap().len(), 1_024_000 * 4);
+    let conf = std::fs::read_to_string(d.join("gnss-sdr.conf")).unwrap();
+    assert!(conf.contains("SignalSource.item_type=ishort") && conf.contains("Channels_1C.count=3"), "{conf}");
+    assert!(conf.contains("Tracking_1C.pll_bw_narrow_hz=3") && conf.contains("extend_correlation_symbols=20"));
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("truth.json")).unwrap()).unwrap();
+    assert_eq!(truth["satellites"].as_array().unwrap().len(), 3);
+    assert_eq!(truth["samples"], 1_024_000);
+    let carrier = std::fs::read_to_string(d.join("carrier.csv")).unwrap();
+    assert!(carrier.starts_with("t_s,prn") && carrier.lines().count() == 501);
+    assert_eq!(std::fs::read_to_string(d.join("delta_f.csv")).unwrap().lines().count(), 501);
+}

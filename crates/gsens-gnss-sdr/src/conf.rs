@@ -1,0 +1,512 @@
+//! GNSS-SDR configuration files (`.conf`): the reader of what decides the
+//! carrier loop of each tracking record, and the writer of a configuration
+//! that tracks a file of `gsens simulate --iq`.
+//!
+//! # Format
+//!
+//! GNSS-SDR reads an INI file: `[section]` lines, `key=value` lines with keys
+//! such as `Tracking_1C.pll_bw_hz`, comments from `;` or `#` at the start of a
+//! line, and a `;` anywhere in a value starts a comment too (the shipped
+//! examples write `Tracking_1C.pll_bw_hz=40.0;`). Keys are case-sensitive and
+//! the last occurrence of a key wins. Numbers are read like a C++ stream reads
+//! them: the longest numeric prefix of the value.
+//!
+//! # Tracking settings and their defaults
+//!
+//! [`TrackingConf`] collects the `Tracking_1C.*` keys that shape the carrier
+//! loop of GNSS-SDR 0.0.17's `GPS_L1_CA_DLL_PLL_Tracking` (the
+//! `dll_pll_veml_tracking` block). Where the file leaves a key out, the
+//! defaults are GNSS-SDR 0.0.17's: `pll_filter_order` 3, `pll_bw_hz` 35 and
+//! `pll_bw_narrow_hz` 5 (measured: the loop-filter coefficients fitted on the
+//! dumps of a run without these keys are those of a 3rd-order 35 Hz loop at
+//! 1 ms and a 5 Hz one at 20 ms, residual 1e-4 Hz), `extend_correlation_symbols`
+//! 1 (GNSS-SDR's documentation; not measured), `pull_in_time_s` taken as 10 s
+//! when absent (not measured; only used to skip an FLL pull-in when the
+//! integration is not extended).
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::error::GnssSdrError;
+
+/// One `key=value` entry of a configuration file.
+#[derive(Debug, Clone, PartialEq)]
+struct Entry {
+    key: String,
+    value: String,
+    line: usize,
+}
+
+/// A parsed GNSS-SDR configuration file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GnssSdrConf {
+    source_name: String,
+    entries: Vec<Entry>,
+}
+
+/// GNSS-SDR 0.0.17's default `pll_filter_order` of the GPS L1 C/A DLL/PLL tracking.
+pub const DEFAULT_PLL_FILTER_ORDER: u8 = 3;
+/// GNSS-SDR 0.0.17's default `pll_bw_hz` \[Hz\] (measured).
+pub const DEFAULT_PLL_BW_HZ: f64 = 35.0;
+/// GNSS-SDR 0.0.17's default `pll_bw_narrow_hz` \[Hz\] (measured).
+pub const DEFAULT_PLL_BW_NARROW_HZ: f64 = 5.0;
+/// `pull_in_time_s` assumed when absent \[s\] (conservative; not measured).
+pub const ASSUMED_PULL_IN_TIME_S: f64 = 10.0;
+/// The tracking implementation whose loop [`gsens_core::pll::gnss_sdr`] models.
+pub const SUPPORTED_TRACKING: &str = "GPS_L1_CA_DLL_PLL_Tracking";
+
+/// The carrier-loop settings of GNSS-SDR's GPS L1 C/A tracking (`Tracking_1C.*`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackingConf {
+    /// `Tracking_1C.implementation`.
+    pub implementation: String,
+    /// `pll_filter_order`: 2 or 3.
+    pub pll_filter_order: u8,
+    /// `pll_bw_hz`: the PLL noise bandwidth before bit synchronization \[Hz\].
+    pub pll_bw_hz: f64,
+    /// `pll_bw_narrow_hz`: the PLL bandwidth once the integration is extended \[Hz\].
+    pub pll_bw_narrow_hz: f64,
+    /// `extend_correlation_symbols`: 1 ms symbols per coherent integration
+    /// after bit synchronization (1…20).
+    pub extend_correlation_symbols: u32,
+    /// `enable_fll_pull_in`: an FLL during the pull-in (before the modelled records).
+    pub enable_fll_pull_in: bool,
+    /// `enable_fll_steady_state`: an FLL-assisted PLL throughout (not modelled).
+    pub enable_fll_steady_state: bool,
+    /// `pull_in_time_s`: how long the FLL pull-in lasts \[s\] ([`ASSUMED_PULL_IN_TIME_S`] when absent).
+    pub pull_in_time_s: f64,
+    /// The sampling rate the tracking runs at \[Hz\]: `GNSS-SDR.internal_fs_sps`,
+    /// else `SignalSource.sampling_frequency`; `None` when neither is given.
+    pub fs_hz: Option<f64>,
+    /// `Tracking_1C.dump_filename` (the dumps are `<dump_filename><channel>.dat`).
+    pub dump_filename: Option<String>,
+}
+
+impl TrackingConf {
+    /// The settings of a configuration that has none of the keys: GNSS-SDR 0.0.17's defaults.
+    pub fn defaults() -> Self {
+        TrackingConf {
+            implementation: SUPPORTED_TRACKING.into(),
+            pll_filter_order: DEFAULT_PLL_FILTER_ORDER,
+            pll_bw_hz: DEFAULT_PLL_BW_HZ,
+            pll_bw_narrow_hz: DEFAULT_PLL_BW_NARROW_HZ,
+            extend_correlation_symbols: 1,
+            enable_fll_pull_in: false,
+            enable_fll_steady_state: false,
+            pull_in_time_s: ASSUMED_PULL_IN_TIME_S,
+            fs_hz: None,
+            dump_filename: None,
+        }
+    }
+
+    /// The coherent integration after bit synchronization \[s\]:
+    /// `extend_correlation_symbols` × 1 ms.
+    pub fn narrow_interval_s(&self) -> f64 {
+        f64::from(self.extend_correlation_symbols) * 1e-3
+    }
+
+    /// The PLL bandwidth after bit synchronization \[Hz\]: `pll_bw_narrow_hz`
+    /// when the integration is extended, else `pll_bw_hz` (GNSS-SDR switches
+    /// bandwidth only together with the integration time).
+    pub fn narrow_bw_hz(&self) -> f64 {
+        if self.extend_correlation_symbols > 1 { self.pll_bw_narrow_hz } else { self.pll_bw_hz }
+    }
+}
+
+/// The longest prefix of `s` that a C++ stream would read as a number.
+fn numeric_prefix(s: &str) -> &str {
+    let b = s.as_bytes();
+    let mut i = 0;
+    if i < b.len() && (b[i] == b'+' || b[i] == b'-') {
+        i += 1;
+    }
+    let digits = |i: &mut usize| {
+        let start = *i;
+        while *i < b.len() && b[*i].is_ascii_digit() {
+            *i += 1;
+        }
+        *i > start
+    };
+    let mut any = digits(&mut i);
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        any |= digits(&mut i);
+    }
+    if !any {
+        return "";
+    }
+    if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
+        let mut j = i + 1;
+        if j < b.len() && (b[j] == b'+' || b[j] == b'-') {
+            j += 1;
+        }
+        if digits(&mut j) {
+            i = j;
+        }
+    }
+    &s[..i]
+}
+
+impl GnssSdrConf {
+    /// Parses the text of a configuration file; `source_name` names it in errors.
+    pub fn parse(text: &str, source_name: &str) -> Result<Self, GnssSdrError> {
+        let mut entries = Vec::new();
+        for (i, raw) in text.lines().enumerate() {
+            let line = i + 1;
+            let t = raw.trim();
+            if t.is_empty() || t.starts_with(';') || t.starts_with('#') || (t.starts_with('[') && t.ends_with(']')) {
+                continue;
+            }
+            let t = t.split(';').next().unwrap_or("").trim();
+            let Some((k, v)) = t.split_once('=') else {
+                return Err(GnssSdrError::Conf {
+                    file: source_name.into(),
+                    line,
+                    reason: format!("expected `key=value`, found `{}`", raw.trim()),
+                });
+            };
+            entries.push(Entry { key: k.trim().into(), value: v.trim().into(), line });
+        }
+        Ok(GnssSdrConf { source_name: source_name.into(), entries })
+    }
+
+    /// Reads and parses a configuration file.
+    pub fn read(path: impl AsRef<Path>) -> Result<Self, GnssSdrError> {
+        let path = path.as_ref();
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| GnssSdrError::Io { file: name.clone(), error: e })?;
+        Self::parse(&text, &name)
+    }
+
+    /// The file's name as given to the reader.
+    pub fn source_name(&self) -> &str {
+        &self.source_name
+    }
+
+    /// The value of `key` (its last occurrence), comments stripped.
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.entries.iter().rev().find(|e| e.key == key).map(|e| e.value.as_str())
+    }
+
+    fn entry(&self, key: &str) -> Option<&Entry> {
+        self.entries.iter().rev().find(|e| e.key == key)
+    }
+
+    /// `key` as a number (its numeric prefix), `None` when absent.
+    pub fn get_f64(&self, key: &str) -> Result<Option<f64>, GnssSdrError> {
+        let Some(e) = self.entry(key) else { return Ok(None) };
+        numeric_prefix(&e.value).parse::<f64>().map(Some).map_err(|_| GnssSdrError::Conf {
+            file: self.source_name.clone(),
+            line: e.line,
+            reason: format!("`{key}` = `{}` is not a number", e.value),
+        })
+    }
+
+    /// `key` as a boolean (`true`/`false`/`1`/`0`), `None` when absent.
+    pub fn get_bool(&self, key: &str) -> Result<Option<bool>, GnssSdrError> {
+        let Some(e) = self.entry(key) else { return Ok(None) };
+        match e.value.as_str() {
+            "true" | "1" => Ok(Some(true)),
+            "false" | "0" => Ok(Some(false)),
+            v => Err(GnssSdrError::Conf {
+                file: self.source_name.clone(),
+                line: e.line,
+                reason: format!("`{key}` = `{v}` is not a boolean (true/false)"),
+            }),
+        }
+    }
+
+    /// The GPS L1 C/A carrier-loop settings (module docs), checked: a
+    /// supported tracking implementation, order 2 or 3, positive bandwidths,
+    /// 1…20 symbols, no steady-state FLL.
+    pub fn tracking(&self) -> Result<TrackingConf, GnssSdrError> {
+        let d = TrackingConf::defaults();
+        let fail = |key: &str, reason: String| {
+            let line = self.entry(key).map_or(0, |e| e.line);
+            Err(GnssSdrError::Conf { file: self.source_name.clone(), line, reason })
+        };
+        let implementation = self.get("Tracking_1C.implementation").unwrap_or(SUPPORTED_TRACKING).to_owned();
+        if implementation != SUPPORTED_TRACKING {
+            return fail(
+                "Tracking_1C.implementation",
+                format!(
+                    "Tracking_1C.implementation = {implementation}: only {SUPPORTED_TRACKING} (GNSS-SDR's DLL/PLL) is modelled"
+                ),
+            );
+        }
+        let order = self.get_f64("Tracking_1C.pll_filter_order")?.unwrap_or(f64::from(d.pll_filter_order));
+        if order != 2.0 && order != 3.0 {
+            return fail("Tracking_1C.pll_filter_order", format!("pll_filter_order = {order}: must be 2 or 3"));
+        }
+        let pll_bw_hz = self.get_f64("Tracking_1C.pll_bw_hz")?.unwrap_or(d.pll_bw_hz);
+        let pll_bw_narrow_hz = self.get_f64("Tracking_1C.pll_bw_narrow_hz")?.unwrap_or(d.pll_bw_narrow_hz);
+        for (key, v) in [("Tracking_1C.pll_bw_hz", pll_bw_hz), ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz)] {
+            if !(v.is_finite() && v > 0.0) {
+                return fail(key, format!("{key} = {v}: must be > 0"));
+            }
+        }
+        let symbols = self.get_f64("Tracking_1C.extend_correlation_symbols")?.unwrap_or(1.0);
+        // GNSS-SDR clamps to [1, 20] with a warning; so do we.
+        let extend_correlation_symbols = if symbols.is_finite() { symbols.round().clamp(1.0, 20.0) as u32 } else { 1 };
+        let enable_fll_pull_in = self.get_bool("Tracking_1C.enable_fll_pull_in")?.unwrap_or(false);
+        let enable_fll_steady_state = self.get_bool("Tracking_1C.enable_fll_steady_state")?.unwrap_or(false);
+        if enable_fll_steady_state {
+            return fail(
+                "Tracking_1C.enable_fll_steady_state",
+                "enable_fll_steady_state = true: an FLL-assisted PLL is not modelled".into(),
+            );
+        }
+        let pull_in_time_s = self.get_f64("Tracking_1C.pull_in_time_s")?.unwrap_or(ASSUMED_PULL_IN_TIME_S);
+        let fs_hz = match self.get_f64("GNSS-SDR.internal_fs_sps")? {
+            Some(v) => Some(v),
+            None => self.get_f64("SignalSource.sampling_frequency")?,
+        };
+        if let Some(fs) = fs_hz.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            return fail("GNSS-SDR.internal_fs_sps", format!("sampling rate {fs}: must be > 0"));
+        }
+        Ok(TrackingConf {
+            implementation,
+            pll_filter_order: order as u8,
+            pll_bw_hz,
+            pll_bw_narrow_hz,
+            extend_correlation_symbols,
+            enable_fll_pull_in,
+            enable_fll_steady_state,
+            pull_in_time_s,
+            fs_hz,
+            dump_filename: self.get("Tracking_1C.dump_filename").map(str::to_owned),
+        })
+    }
+}
+
+/// What [`iq_file_conf`] needs to know.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IqConfOptions {
+    /// Path of the sample file, as GNSS-SDR will open it.
+    pub filename: String,
+    /// GNSS-SDR's `item_type`: `ibyte`, `ishort` or `gr_complex`.
+    pub item_type: String,
+    /// Sampling rate \[Hz\].
+    pub fs_hz: f64,
+    /// Tracking channels.
+    pub channels: u32,
+    /// Carrier-loop order, 2 or 3.
+    pub pll_filter_order: u8,
+    /// Pull-in PLL bandwidth at 1 ms \[Hz\].
+    pub pll_bw_hz: f64,
+    /// PLL bandwidth after bit synchronization \[Hz\].
+    pub pll_bw_narrow_hz: f64,
+    /// Symbols (ms) per coherent integration after bit synchronization.
+    pub extend_correlation_symbols: u32,
+    /// Prefix of the tracking dumps (`<prefix><channel>.dat`).
+    pub dump_filename: String,
+    /// Largest Doppler searched by acquisition \[Hz\].
+    pub doppler_max_hz: f64,
+}
+
+impl IqConfOptions {
+    /// The settings `gsens simulate --iq` writes: a pull-in from acquisition's
+    /// 250 Hz grid by a 10 Hz FLL for 2 s, then a 35 Hz PLL of `order` at
+    /// 1 ms, then, after bit synchronization, 20 ms integrations with the
+    /// narrow loop of `narrow_bw_hz` (a 3 Hz loop cannot pull in from the
+    /// acquisition grid by itself).
+    pub fn for_iq_file(
+        filename: &str,
+        item_type: &str,
+        fs_hz: f64,
+        channels: u32,
+        order: u8,
+        narrow_bw_hz: f64,
+    ) -> Self {
+        IqConfOptions {
+            filename: filename.into(),
+            item_type: item_type.into(),
+            fs_hz,
+            channels,
+            pll_filter_order: order,
+            pll_bw_hz: 35.0,
+            pll_bw_narrow_hz: narrow_bw_hz,
+            extend_correlation_symbols: 20,
+            dump_filename: "./trk_ch_".into(),
+            doppler_max_hz: 6000.0,
+        }
+    }
+}
+
+/// A GNSS-SDR 0.0.17 configuration that tracks a complex baseband GPS L1 C/A
+/// sample file (such as `gsens simulate --iq` writes) and dumps its tracking:
+/// file source without throttling, GPS L1 C/A PCPS acquisition
+/// (non-blocking: blocking acquisition in file mode corrupts the pull-in of
+/// narrow loops), DLL/PLL tracking with an FLL pull-in, a wide PLL and a
+/// narrow PLL after bit synchronization, dumps on (`dump_mat=false`: the raw `.dat` only),
+/// telemetry decoding, observables and a PVT that writes no files.
+pub fn iq_file_conf(o: &IqConfOptions) -> String {
+    let adapter = match o.item_type.as_str() {
+        "ibyte" => "Ibyte_To_Complex",
+        "ishort" => "Ishort_To_Complex",
+        _ => "Pass_Through",
+    };
+    let fs = o.fs_hz;
+    format!(
+        "; GNSS-SDR 0.0.17 configuration written by gsens: tracks {file}
+; Run: gnss-sdr --config_file=<this file>   (the tracking dumps go to {dump}<channel>.dat)
+[GNSS-SDR]
+GNSS-SDR.internal_fs_sps={fs}
+
+SignalSource.implementation=File_Signal_Source
+SignalSource.filename={file}
+SignalSource.item_type={item}
+SignalSource.sampling_frequency={fs}
+SignalSource.freq=1575420000
+SignalSource.samples=0
+SignalSource.repeat=false
+SignalSource.enable_throttle_control=false
+
+SignalConditioner.implementation=Signal_Conditioner
+DataTypeAdapter.implementation={adapter}
+DataTypeAdapter.item_type={item}
+InputFilter.implementation=Pass_Through
+InputFilter.input_item_type=gr_complex
+InputFilter.output_item_type=gr_complex
+InputFilter.item_type=gr_complex
+Resampler.implementation=Pass_Through
+Resampler.item_type=gr_complex
+
+Channels_1C.count={channels}
+Channels.in_acquisition=1
+Channel.signal=1C
+
+Acquisition_1C.implementation=GPS_L1_CA_PCPS_Acquisition
+Acquisition_1C.item_type=gr_complex
+Acquisition_1C.coherent_integration_time_ms=1
+Acquisition_1C.pfa=0.01
+Acquisition_1C.doppler_max={dmax}
+Acquisition_1C.doppler_step=250
+Acquisition_1C.blocking=false
+Acquisition_1C.dump=false
+
+Tracking_1C.implementation=GPS_L1_CA_DLL_PLL_Tracking
+Tracking_1C.item_type=gr_complex
+Tracking_1C.pll_filter_order={order}
+Tracking_1C.pll_bw_hz={bw}
+Tracking_1C.pll_bw_narrow_hz={bwn}
+Tracking_1C.extend_correlation_symbols={ext}
+Tracking_1C.dll_filter_order=2
+Tracking_1C.dll_bw_hz=2.0
+Tracking_1C.dll_bw_narrow_hz=0.5
+Tracking_1C.early_late_space_chips=0.5
+Tracking_1C.early_late_space_narrow_chips=0.5
+Tracking_1C.enable_fll_pull_in=true
+Tracking_1C.fll_bw_hz=10.0
+Tracking_1C.pull_in_time_s=2
+Tracking_1C.enable_fll_steady_state=false
+Tracking_1C.dump=true
+Tracking_1C.dump_filename={dump}
+Tracking_1C.dump_mat=false
+
+TelemetryDecoder_1C.implementation=GPS_L1_CA_Telemetry_Decoder
+TelemetryDecoder_1C.dump=false
+
+Observables.implementation=Hybrid_Observables
+Observables.dump=false
+
+PVT.implementation=RTKLIB_PVT
+PVT.positioning_mode=Single
+PVT.output_rate_ms=1000
+PVT.display_rate_ms=1000
+PVT.output_enabled=false
+PVT.rinex_output_enabled=false
+PVT.gpx_output_enabled=false
+PVT.geojson_output_enabled=false
+PVT.kml_output_enabled=false
+PVT.xml_output_enabled=false
+PVT.nmea_output_file_enabled=false
+PVT.rtcm_output_file_enabled=false
+PVT.an_output_enabled=false
+PVT.flag_rtcm_server=false
+PVT.flag_rtcm_tty_port=false
+PVT.flag_nmea_tty_port=false
+PVT.dump=false
+",
+        file = o.filename,
+        item = o.item_type,
+        channels = o.channels,
+        dmax = o.doppler_max_hz,
+        order = o.pll_filter_order,
+        bw = o.pll_bw_hz,
+        bwn = o.pll_bw_narrow_hz,
+        ext = o.extend_correlation_symbols,
+        dump = o.dump_filename,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_values_with_trailing_semicolons_and_comments() {
+        let text = "; comment\n[GNSS-SDR]\nGNSS-SDR.internal_fs_sps=4000000\n# other\n\
+                    Tracking_1C.pll_bw_hz=40.0;\nTracking_1C.pll_filter_order = 2 ; inline\n\
+                    Tracking_1C.extend_correlation_symbols=20\nTracking_1C.pll_bw_narrow_hz=3\n\
+                    Tracking_1C.pll_bw_hz=35\nTracking_1C.dump_filename=./trk_ch_\n";
+        let c = GnssSdrConf::parse(text, "x.conf").unwrap();
+        let t = c.tracking().unwrap();
+        assert_eq!(t.pll_filter_order, 2);
+        assert_eq!(t.pll_bw_hz, 35.0, "last occurrence wins");
+        assert_eq!(t.pll_bw_narrow_hz, 3.0);
+        assert_eq!(t.extend_correlation_symbols, 20);
+        assert_eq!(t.fs_hz, Some(4e6));
+        assert_eq!(t.dump_filename.as_deref(), Some("./trk_ch_"));
+        assert_eq!(t.narrow_interval_s(), 0.02);
+        assert_eq!(t.narrow_bw_hz(), 3.0);
+    }
+
+    #[test]
+    fn defaults_and_errors() {
+        let t = GnssSdrConf::parse("", "empty.conf").unwrap().tracking().unwrap();
+        assert_eq!(t, TrackingConf::defaults());
+        assert_eq!(t.narrow_bw_hz(), DEFAULT_PLL_BW_HZ, "no extension, no narrow bandwidth");
+        let e = GnssSdrConf::parse("a\nb=1\n", "bad.conf").unwrap_err().to_string();
+        assert!(e.contains("bad.conf") && e.contains("line 1"), "{e}");
+        let e = GnssSdrConf::parse("x=1\nTracking_1C.pll_filter_order=4\n", "o.conf").unwrap().tracking().unwrap_err();
+        assert!(e.to_string().contains("line 2") && e.to_string().contains("2 or 3"), "{e}");
+        let e = GnssSdrConf::parse("Tracking_1C.pll_bw_hz=abc\n", "n.conf").unwrap().tracking().unwrap_err();
+        assert!(e.to_string().contains("not a number"), "{e}");
+        let e = GnssSdrConf::parse("Tracking_1C.implementation=GPS_L1_CA_KF_VTL_Tracking\n", "k.conf")
+            .unwrap()
+            .tracking()
+            .unwrap_err();
+        assert!(e.to_string().contains("only GPS_L1_CA_DLL_PLL_Tracking"), "{e}");
+        let e =
+            GnssSdrConf::parse("Tracking_1C.enable_fll_steady_state=true\n", "f.conf").unwrap().tracking().unwrap_err();
+        assert!(e.to_string().contains("FLL"), "{e}");
+    }
+
+    #[test]
+    fn numeric_prefixes_like_a_stream() {
+        assert_eq!(numeric_prefix("40.0;"), "40.0");
+        assert_eq!(numeric_prefix("-1.5e3x"), "-1.5e3");
+        assert_eq!(numeric_prefix("2e"), "2");
+        assert_eq!(numeric_prefix(".5"), ".5");
+        assert_eq!(numeric_prefix("abc"), "");
+    }
+
+    #[test]
+    fn written_conf_parses_back() {
+        let o = IqConfOptions::for_iq_file("/tmp/x.bin", "ibyte", 4e6, 8, 2, 3.0);
+        let c = GnssSdrConf::parse(&iq_file_conf(&o), "w.conf").unwrap();
+        let t = c.tracking().unwrap();
+        assert_eq!(
+            (t.pll_filter_order, t.pll_bw_hz, t.pll_bw_narrow_hz, t.extend_correlation_symbols),
+            (2, 35.0, 3.0, 20)
+        );
+        assert_eq!(t.fs_hz, Some(4e6));
+        assert_eq!(c.get("SignalSource.filename"), Some("/tmp/x.bin"));
+        assert_eq!(c.get("DataTypeAdapter.implementation"), Some("Ibyte_To_Complex"));
+        assert_eq!(c.get("Acquisition_1C.blocking"), Some("false"));
+        assert_eq!(c.get("Tracking_1C.enable_fll_pull_in"), Some("true"));
+        assert!(!t.enable_fll_steady_state);
+    }
+}

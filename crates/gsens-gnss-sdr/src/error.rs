@@ -1,0 +1,85 @@
+//! The error type of the crate: every message names the file, and for a
+//! record of a dump its index and byte offset.
+
+/// What can go wrong reading GNSS-SDR's files or converting them.
+#[derive(Debug, thiserror::Error)]
+pub enum GnssSdrError {
+    /// A file or directory could not be read.
+    #[error("{file}: cannot read: {error}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The underlying error.
+        #[source]
+        error: std::io::Error,
+    },
+    /// A configuration file is malformed or asks for something not modelled.
+    #[error("{file}: line {line}: {reason}")]
+    Conf {
+        /// The configuration file.
+        file: String,
+        /// 1-based line (0 when the key is absent).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A tracking dump is empty.
+    #[error("{file}: empty tracking dump (0 bytes): no record; expected {expected}")]
+    EmptyDump {
+        /// The dump.
+        file: String,
+        /// The layouts the reader knows, with their record sizes.
+        expected: String,
+    },
+    /// The dump's length fits no known layout (or the one asked for).
+    #[error(
+        "{file}: {len} bytes is not a whole number of records of any known tracking-dump layout \
+         ({expected}); a truncated record, or a dump of another GNSS-SDR version or block"
+    )]
+    UnknownLayout {
+        /// The dump.
+        file: String,
+        /// File length \[bytes\].
+        len: u64,
+        /// The layouts tried, with their record sizes.
+        expected: String,
+    },
+    /// The dump's length fits several layouts and the records do not decide.
+    #[error("{file}: {len} bytes fits several tracking-dump layouts ({candidates}); give the layout explicitly")]
+    AmbiguousLayout {
+        /// The dump.
+        file: String,
+        /// File length \[bytes\].
+        len: u64,
+        /// The layouts that fit.
+        candidates: String,
+    },
+    /// A record holds an implausible value for its layout.
+    #[error("{file}: record {index} (byte offset {offset}): {reason} (layout {layout})")]
+    BadRecord {
+        /// The dump.
+        file: String,
+        /// 0-based record index.
+        index: u64,
+        /// Byte offset of the record's start.
+        offset: u64,
+        /// The layout used.
+        layout: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A dump directory holds no `*.dat` dump.
+    #[error("{dir}: no tracking dump (files named <prefix><channel>.dat, e.g. trk_ch_0.dat) found")]
+    NoDumps {
+        /// The directory.
+        dir: String,
+    },
+    /// No record survives the conversion.
+    #[error("{dir}: no usable tracking record: {reason}")]
+    NothingUsable {
+        /// The dump directory.
+        dir: String,
+        /// Why each dump was dropped.
+        reason: String,
+    },
+}

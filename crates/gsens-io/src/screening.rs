@@ -1,0 +1,1137 @@
+//! Per-track screening of the tracking rows before averaging: cycle slips,
+//! losses of lock, C/N0 drops and rows outside the discriminator's linear range
+//! are detected track by track and the affected stretches left out of the
+//! average ([`ScreeningConfig`], on by default; the result per track in
+//! [`TrackScreening`]).
+//!
+//! # The deviation from the other channels
+//!
+//! The oscillator's part of the phase error (and so the g-induced part) is
+//! common to all channels; what a slip, a loss of lock or a fade does to one
+//! channel is not. At each epoch, every track's phase is compared with the
+//! median of the other tracks present (all the tracks that pass the masks, not
+//! only those averaged, each less its constant offset; rows in a C/N0 drop do
+//! not enter the median):
+//!
+//! `d_i(k) = (φ_i(k) − c_i) − median_{j≠i}(φ_j(k) − c_j)`,
+//!
+//! where the common signal cancels. The offsets `c_i` are the median of each
+//! track's departure from the mean of the tracks present (exact, up to a
+//! common constant, while the set of tracks does not change), refined by the
+//! median of its `d_i` (which a slip or a step does not move). An epoch with fewer than two other tracks
+//! gives no deviation, and the cross-channel tests (1–3 below) skip it. Each
+//! track's scale is the robust σ of its deviation, `σ_i = 1.4826·MAD(d_i)`
+//! (at least [`ScreeningConfig::min_sigma_rad`]).
+//!
+//! # The tests
+//!
+//! 1. **Slips and excursions.** A track's deviation is followed around a slowly
+//!    adapting level ℓ (exponential mean of the in-bound rows, time constant
+//!    [`ScreeningConfig::level_tau_s`], so slow per-channel trends such as the
+//!    Doppler-rate steady-state error do not trigger). A row with
+//!    `|d − ℓ| > k·σ_i` ([`ScreeningConfig::deviation_k`]) starts an event, which
+//!    lasts until the deviation has stayed within bounds for
+//!    [`ScreeningConfig::settle_s`]. A Costas loop slipping by π, or a pilot
+//!    loop by 2π, logs such a fast excursion: its discriminator wraps, the loop
+//!    pulls in to the next stable point, and its filter state needs a loop time
+//!    constant to recover. The event and [`ScreeningConfig::guard_s`] on each
+//!    side are excluded. An event that settles, after at least
+//!    [`ScreeningConfig::step_min_s`], on a new quiet level (a persistent step,
+//!    as a log of unwrapped phase shows after a slip) is a *step*: the track is
+//!    split there into two segments, each with its own constant offset in the
+//!    averaging, and only the transition (plus the guard) is excluded.
+//! 2. **Noisy stretches (loss of lock).** In windows of
+//!    [`ScreeningConfig::noisy_window_s`], the RMS of `d − ℓ` over the rows not
+//!    already excluded; a window above [`ScreeningConfig::noisy_rms_k`]·σ_i is
+//!    excluded (with the guard).
+//! 3. **Low gain (loss of lock at low C/N0).** A channel that has lost lock, or
+//!    whose discriminator has lost gain at a low signal-to-noise ratio, logs a
+//!    phase that follows the common signal only partly or not at all; its
+//!    deviation can look like plain noise, yet averaging it scales the common
+//!    signal down and biases Γ̂ towards zero. In windows of
+//!    [`ScreeningConfig::gain_window_s`] each track's phase is regressed on the
+//!    median of the others (slope and standard error, inflated for the
+//!    residuals' lag-one correlation). The reference's own noise attenuates
+//!    every track's slope alike, so the slopes are compared with their median
+//!    over the tracks (at least three), and only in windows where that median
+//!    is at least 0.8 (the common signal, shaking or oscillator noise,
+//!    dominates the reference's noise). A window whose relative gain is below
+//!    [`ScreeningConfig::min_gain`] by more than two standard errors is
+//!    excluded; a track whose gain pooled over all its tested windows is below
+//!    [`ScreeningConfig::min_track_gain`] by more than two standard errors is
+//!    excluded entirely. Too large a gain is not tested.
+//! 4. **Linear range.** Rows with `|φ|` above
+//!    [`ScreeningConfig::max_abs_phase_rad`] (default π/4, the rule of thumb's
+//!    3σ < 45° for keeping a Costas loop locked) while the common level at that
+//!    epoch (`φ − d`, the others' median plus the track's offset) is within
+//!    half of it are excluded with the guard: the channel is on an excursion
+//!    of its own (slipping, losing lock), beyond the range where the
+//!    discriminator is linear and φ = L\[Δf\]. An excursion of the common
+//!    level is the oscillator's own phase error: it is kept (excluding every
+//!    channel at once, or each one as its noise crosses the limit, would
+//!    fragment the log wherever a noisy oscillator wanders near the limit),
+//!    and reported by the calibration's peak-phase check instead. A log of a
+//!    single track has no common level: its rows beyond the limit are excluded.
+//! 5. **C/N0 drops.** Rows whose C/N0 is more than
+//!    [`ScreeningConfig::cn0_drop_db`] below the track's median are excluded
+//!    with the guard.
+//!
+//! A track of which the cross-channel tests (1–3) flag more than
+//! [`ScreeningConfig::max_excluded_fraction`] of the rows is excluded
+//! entirely: what is left of it is not to be trusted. (Rows beyond the linear
+//! range or in C/N0 drops do not count there: a noisy oscillator takes every
+//! channel out of the range at once.) The tracks are ranked for the selection
+//! by their mean C/N0 over the rows they keep, so an excluded track makes room
+//! for the next one.
+//!
+//! The cost is linear in the number of rows (a sort of the few tracks present
+//! at each epoch, three times).
+
+use serde::{Deserialize, Serialize};
+
+/// The settings of the per-track screening (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ScreeningConfig {
+    /// Screen the tracks at all. Default `true`.
+    pub enabled: bool,
+    /// A row whose deviation from the other channels is more than this many σ
+    /// from the track's level starts a slip / excursion event. Default 6 (a
+    /// Gaussian deviation exceeds it once in 5·10⁸ rows).
+    pub deviation_k: f64,
+    /// Excluded on each side of every detected stretch \[s\]. Default 0.5 s.
+    pub guard_s: f64,
+    /// An event ends once the deviation has been back within bounds this long \[s\]. Default 0.25 s.
+    pub settle_s: f64,
+    /// An event lasting at least this long that settles on a new quiet level is
+    /// a step: the track is split there \[s\]. Default 1 s.
+    pub step_min_s: f64,
+    /// Time constant of the track's adapting deviation level \[s\]. Default 10 s.
+    pub level_tau_s: f64,
+    /// Window of the noisy-stretch test \[s\]. Default 1 s.
+    pub noisy_window_s: f64,
+    /// A window whose deviation RMS exceeds this many σ is excluded. Default 3.
+    pub noisy_rms_k: f64,
+    /// Window of the gain test \[s\]. Default 10 s.
+    pub gain_window_s: f64,
+    /// A window whose gain on the common signal (relative to the typical
+    /// track's) is significantly below this is excluded. Default 0.8.
+    pub min_gain: f64,
+    /// A track whose gain pooled over all its tested windows is significantly
+    /// below this is excluded entirely. Default 0.9.
+    pub min_track_gain: f64,
+    /// Rows with |φ| above this are excluded \[rad\]; `None`: no limit. Default π/4.
+    pub max_abs_phase_rad: Option<f64>,
+    /// Rows whose C/N0 is more than this below the track's median are excluded
+    /// \[dB\]; `None`: no test. Default 6 dB.
+    pub cn0_drop_db: Option<f64>,
+    /// A track of which the cross-channel tests (slips, noisy stretches, low
+    /// gain) flag more than this fraction of the rows is excluded entirely. Default 0.5.
+    pub max_excluded_fraction: f64,
+    /// Floor of a track's deviation σ \[rad\] (noise-free logs). Default 0.005 rad.
+    pub min_sigma_rad: f64,
+}
+
+impl Default for ScreeningConfig {
+    fn default() -> Self {
+        ScreeningConfig {
+            enabled: true,
+            deviation_k: 6.0,
+            guard_s: 0.5,
+            settle_s: 0.25,
+            step_min_s: 1.0,
+            level_tau_s: 10.0,
+            noisy_window_s: 1.0,
+            noisy_rms_k: 3.0,
+            gain_window_s: 10.0,
+            min_gain: 0.8,
+            min_track_gain: 0.9,
+            max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_4),
+            cn0_drop_db: Some(6.0),
+            max_excluded_fraction: 0.5,
+            min_sigma_rad: 0.005,
+        }
+    }
+}
+
+impl ScreeningConfig {
+    /// No screening at all.
+    pub fn off() -> Self {
+        ScreeningConfig { enabled: false, ..ScreeningConfig::default() }
+    }
+
+    /// Checks the values; the error names the offending key.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = [
+            ("deviation_k", self.deviation_k),
+            ("settle_s", self.settle_s),
+            ("step_min_s", self.step_min_s),
+            ("level_tau_s", self.level_tau_s),
+            ("noisy_window_s", self.noisy_window_s),
+            ("noisy_rms_k", self.noisy_rms_k),
+            ("gain_window_s", self.gain_window_s),
+        ];
+        for (key, v) in positive {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!("screening.{key} = {v} must be positive"));
+            }
+        }
+        let non_negative = [("guard_s", self.guard_s), ("min_gain", self.min_gain), ("min_sigma_rad", self.min_sigma_rad)];
+        let non_negative = [non_negative[0], non_negative[1], non_negative[2], ("min_track_gain", self.min_track_gain)];
+        for (key, v) in non_negative {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!("screening.{key} = {v} must be ≥ 0"));
+            }
+        }
+        if let Some(v) = self.max_abs_phase_rad.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(format!("screening.max_abs_phase_rad = {v} must be positive"));
+        }
+        if let Some(v) = self.cn0_drop_db.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(format!("screening.cn0_drop_db = {v} must be positive"));
+        }
+        if !(self.max_excluded_fraction >= 0.0 && self.max_excluded_fraction <= 1.0) {
+            return Err(format!("screening.max_excluded_fraction = {} must be in [0, 1]", self.max_excluded_fraction));
+        }
+        Ok(())
+    }
+}
+
+/// A stretch of a track excluded by the screening.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ExcludedSpan {
+    /// Time of the first excluded row \[s\].
+    pub start_s: f64,
+    /// Time of the last excluded row \[s\].
+    pub end_s: f64,
+    /// Excluded rows in the stretch.
+    pub rows: usize,
+    /// Why: any of `slip`, `noisy`, `low_gain`, `phase_range`, `cn0_drop`, `track`.
+    pub reasons: Vec<String>,
+}
+
+/// The most [`ExcludedSpan`]s listed per track (the counts are always complete).
+pub const MAX_SPANS: usize = 100;
+
+/// What the screening did to one track.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct TrackScreening {
+    /// Rows (passing the masks) excluded.
+    pub rows_excluded: usize,
+    /// Slip / excursion events detected.
+    pub slips: usize,
+    /// Of the events, those that settled on a new level (the track is split into `steps + 1` segments).
+    pub steps: usize,
+    /// Rows flagged by the slip / excursion test (a row may be flagged by several tests).
+    pub rows_slip: usize,
+    /// Rows flagged by the noisy-stretch test.
+    pub rows_noisy: usize,
+    /// Rows flagged by the gain test.
+    pub rows_low_gain: usize,
+    /// Rows flagged for |φ| beyond the linear range.
+    pub rows_phase_range: usize,
+    /// Rows flagged for a C/N0 drop.
+    pub rows_cn0_drop: usize,
+    /// Whether the whole track is excluded (too large a fraction flagged).
+    pub track_excluded: bool,
+    /// Robust σ of the track's deviation from the other channels \[rad\];
+    /// `None` where it never had two others to compare with.
+    pub deviation_sigma_rad: Option<f64>,
+    /// Median C/N0 of the track's rows \[dB-Hz\] (the reference of the C/N0-drop test).
+    pub median_cn0_dbhz: Option<f64>,
+    /// The excluded stretches, in time order (at most [`MAX_SPANS`]).
+    pub spans: Vec<ExcludedSpan>,
+    /// The constant offset of each segment \[rad\], when the track was split
+    /// (steps > 0) and is averaged with offsets removed; else empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub segment_offsets_rad: Vec<f64>,
+}
+
+impl TrackScreening {
+    /// A one-line summary, e.g. `screened out 312 rows: 2 slips (1 step), 40 noisy`;
+    /// `None` when nothing was excluded.
+    pub fn brief(&self) -> Option<String> {
+        if self.rows_excluded == 0 && self.steps == 0 {
+            return None;
+        }
+        let mut parts = Vec::new();
+        if self.slips > 0 {
+            let steps = if self.steps > 0 { format!(" ({} step{})", self.steps, plural(self.steps)) } else { "".into() };
+            parts.push(format!("{} slip{}{steps}", self.slips, plural(self.slips)));
+        }
+        for (n, what) in [
+            (self.rows_noisy, "noisy"),
+            (self.rows_low_gain, "low gain"),
+            (self.rows_phase_range, "|φ| range"),
+            (self.rows_cn0_drop, "C/N0 drop"),
+        ] {
+            if n > 0 {
+                parts.push(format!("{n} {what}"));
+            }
+        }
+        let whole = if self.track_excluded { ", whole track excluded" } else { "" };
+        Some(format!("screened out {} rows: {}{whole}", self.rows_excluded, parts.join(", ")))
+    }
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// Bit flags of why a row is excluded.
+pub(crate) mod flag {
+    pub const SLIP: u8 = 1;
+    pub const NOISY: u8 = 2;
+    pub const LOW_GAIN: u8 = 4;
+    pub const PHASE_RANGE: u8 = 8;
+    pub const CN0_DROP: u8 = 16;
+    pub const TRACK: u8 = 32;
+    pub const NAMES: [(u8, &str); 6] = [
+        (SLIP, "slip"),
+        (NOISY, "noisy"),
+        (LOW_GAIN, "low_gain"),
+        (PHASE_RANGE, "phase_range"),
+        (CN0_DROP, "cn0_drop"),
+        (TRACK, "track"),
+    ];
+}
+
+/// The rows of the candidate tracks, flat, track after track, each in time order.
+#[derive(Debug, Default)]
+pub(crate) struct Rows {
+    /// The rows of track `i` are `track_start[i]..track_start[i + 1]`.
+    pub track_start: Vec<usize>,
+    /// Epoch index of each row (strictly increasing within a track).
+    pub epoch: Vec<u32>,
+    /// Phase error \[rad\].
+    pub phase: Vec<f64>,
+    /// C/N0 \[dB-Hz\].
+    pub cn0: Vec<f64>,
+}
+
+impl Rows {
+    pub fn tracks(&self) -> usize {
+        self.track_start.len().saturating_sub(1)
+    }
+
+    fn range(&self, i: usize) -> core::ops::Range<usize> {
+        self.track_start[i]..self.track_start[i + 1]
+    }
+}
+
+/// A stretch of excluded rows of one track, in epochs (inclusive).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct EpochSpan {
+    pub first_epoch: u32,
+    pub last_epoch: u32,
+    pub rows: usize,
+    pub flags: u8,
+}
+
+/// The outcome of [`screen`].
+#[derive(Debug, Default)]
+pub(crate) struct Screened {
+    /// Per row: why it is excluded (0: kept).
+    pub flags: Vec<u8>,
+    /// Per row: its segment within its track (0, 1, … split at steps).
+    pub segment: Vec<u16>,
+    /// Per track: the number of segments.
+    pub segments: Vec<usize>,
+    /// Per track: the summary (spans without times; see `spans`).
+    pub summaries: Vec<TrackScreening>,
+    /// Per track: the excluded stretches in epochs (at most [`MAX_SPANS`]).
+    pub spans: Vec<Vec<EpochSpan>>,
+}
+
+impl Screened {
+    /// Nothing excluded, one segment per track.
+    pub fn none(rows: &Rows) -> Self {
+        let n = rows.epoch.len();
+        Screened {
+            flags: vec![0; n],
+            segment: vec![0; n],
+            segments: vec![1; rows.tracks()],
+            summaries: vec![TrackScreening::default(); rows.tracks()],
+            spans: vec![Vec::new(); rows.tracks()],
+        }
+    }
+}
+
+/// Median of a slice (reordered); NaN when empty.
+fn median_of(v: &mut [f64]) -> f64 {
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let m = n / 2;
+    let (lower, mid, _) = v.select_nth_unstable_by(m, f64::total_cmp);
+    let mid = *mid;
+    if n % 2 == 1 { mid } else { 0.5 * (mid + lower.iter().copied().fold(f64::NEG_INFINITY, f64::max)) }
+}
+
+/// Median of the values of the sorted `s` without its element `skip` (if any).
+#[inline]
+#[allow(dead_code)]
+fn median_excluding(s: &[(f64, u32)], skip: Option<usize>) -> f64 {
+    let n = s.len() - usize::from(skip.is_some());
+    let get = |i: usize| match skip {
+        Some(x) if i >= x => s[i + 1].0,
+        _ => s[i].0,
+    };
+    if n % 2 == 1 { get(n / 2) } else { 0.5 * (get(n / 2 - 1) + get(n / 2)) }
+}
+
+/// An integer key with the order of the (finite) float, at single precision:
+/// the sign-magnitude bits of `v as f32` turned into two's complement.
+#[inline]
+fn order_key(v: f64) -> i32 {
+    let b = (v as f32).to_bits() as i32;
+    b ^ (((b >> 31) as u32) >> 1) as i32
+}
+
+/// The most tracks at one epoch the median computation handles on the stack.
+const MAX_AT_EPOCH: usize = 64;
+
+/// The deviations of every row from the median of the other tracks at its
+/// epoch (NaN where fewer than two others), with the tracks' offsets `c`
+/// removed, and that median; rows with `flags & mask != 0` do not enter the
+/// medians, and the values entering them are less `shift` (the tracks' levels,
+/// steps included), if given.
+fn deviations(
+    rows: &Rows,
+    n_epochs: usize,
+    flags: &[u8],
+    mask: u8,
+    c: &[f64],
+    shift: Option<&[f64]>,
+    d: &mut [f64],
+    reference: &mut [f64],
+) {
+    // Blocks of epochs copied into dense [epoch][track] buffers (each track's
+    // rows of a block are contiguous), so that the per-epoch work reads and
+    // writes sequentially.
+    const BLOCK: usize = 256;
+    let n_tracks = rows.tracks();
+    let mut cursor: Vec<usize> = rows.track_start[..n_tracks].to_vec();
+    let mut block_start = vec![0usize; n_tracks];
+    let cells = BLOCK * n_tracks;
+    let (mut present, mut value) = (vec![f64::NAN; cells], vec![f64::NAN; cells]);
+    let (mut dev, mut med) = (vec![f64::NAN; cells], vec![0.0; cells]);
+    let mut vals = [0.0f64; MAX_AT_EPOCH];
+    let mut sorted = [0.0f64; MAX_AT_EPOCH];
+    let mut rank_of = [0usize; MAX_AT_EPOCH];
+    let mut keys = [0i32; MAX_AT_EPOCH];
+    let mut slot = vec![usize::MAX; n_tracks];
+    for e0 in (0..n_epochs).step_by(BLOCK) {
+        let e1 = (e0 + BLOCK).min(n_epochs);
+        present.fill(f64::NAN);
+        value.fill(f64::NAN);
+        for i in 0..n_tracks {
+            block_start[i] = cursor[i];
+            let end = rows.track_start[i + 1];
+            while cursor[i] < end && (rows.epoch[cursor[i]] as usize) < e1 {
+                let r = cursor[i];
+                let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
+                let p = rows.phase[r] - c[i];
+                present[k] = p;
+                if flags[r] & mask == 0 {
+                    value[k] = p - shift.map_or(0.0, |s| s[r]);
+                }
+                cursor[i] += 1;
+            }
+        }
+        for e in 0..e1 - e0 {
+            let (p_row, v_row) = (&present[e * n_tracks..][..n_tracks], &value[e * n_tracks..][..n_tracks]);
+            let (d_row, m_row) = (&mut dev[e * n_tracks..][..n_tracks], &mut med[e * n_tracks..][..n_tracks]);
+            // The values entering the median (at most MAX_AT_EPOCH of them).
+            let mut m = 0;
+            for (i, &v) in v_row.iter().enumerate() {
+                slot[i] = usize::MAX;
+                if v.is_finite() && m < MAX_AT_EPOCH {
+                    vals[m] = v;
+                    slot[i] = m;
+                    m += 1;
+                }
+            }
+            // Rank sort of a dozen values: branch-free integer comparisons of
+            // order-preserving single-precision keys, their 6 low bits replaced
+            // by the index (distinct keys; values within ~1e-5 of each other may
+            // come out of order, which moves a median by as little).
+            for a in 0..m {
+                keys[a] = (order_key(vals[a]) & !63) | a as i32;
+            }
+            for a in 0..m {
+                let ka = keys[a];
+                let n_below = keys[..m].iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
+                rank_of[a] = n_below;
+                sorted[n_below] = vals[a];
+            }
+            for i in 0..n_tracks {
+                if !p_row[i].is_finite() {
+                    continue;
+                }
+                // The median of the others: of `sorted` without the track's own
+                // value (rank `own`, or past the end when not among them).
+                let inside = slot[i] != usize::MAX;
+                let own = if inside { rank_of[slot[i]] } else { usize::MAX };
+                let others = m - usize::from(inside);
+                if others < 2 {
+                    d_row[i] = f64::NAN;
+                    continue;
+                }
+                let get = |j: usize| sorted[j + usize::from(j >= own)];
+                let (lo, hi) = (get((others - 1) / 2), get(others / 2));
+                let md = 0.5 * (lo + hi);
+                d_row[i] = p_row[i] - md;
+                m_row[i] = md;
+            }
+        }
+        for i in 0..n_tracks {
+            for r in block_start[i]..cursor[i] {
+                let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
+                d[r] = dev[k];
+                reference[r] = med[k];
+            }
+        }
+    }
+}
+
+/// The robust scale of a track's deviation about its local level: 1.4826 ×
+/// the median of |d − the median of its window| over windows of `window`
+/// epochs (a regular subsample of at most 512 windows). A step or an
+/// excursion moves few windows' medians, unlike the track's global median.
+fn local_sigma(epoch: &[u32], d: &[f64], window: u32, scratch: &mut Vec<f64>) -> f64 {
+    let n = epoch.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let windows = (epoch[n - 1] / window - epoch[0] / window) as usize + 1;
+    let stride = windows.div_ceil(512).max(1) as u32;
+    let mut block: Vec<f64> = Vec::new();
+    scratch.clear();
+    let mut j = 0;
+    while j < n {
+        let w = epoch[j] / window;
+        let first = j;
+        while j < n && epoch[j] / window == w {
+            j += 1;
+        }
+        if (w - epoch[0] / window) % stride != 0 {
+            continue;
+        }
+        block.clear();
+        block.extend(d[first..j].iter().copied().filter(|v| v.is_finite()));
+        if block.len() < 3 {
+            continue;
+        }
+        let m = median_of(&mut block);
+        scratch.extend(d[first..j].iter().filter(|v| v.is_finite()).map(|v| (v - m).abs()));
+    }
+    1.4826 * median_of(scratch)
+}
+
+/// The median over a regular subsample of the epochs (at most
+/// [`MEDIAN_SAMPLE`]) of each track's departure from the mean of the tracks
+/// present (at least two; rows in C/N0 drops left out of the mean).
+fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
+    let n_tracks = rows.tracks();
+    let stride = n_epochs.div_ceil(MEDIAN_SAMPLE).max(1);
+    let mut cursor: Vec<usize> = rows.track_start[..n_tracks].to_vec();
+    let mut dep: Vec<Vec<f64>> = vec![Vec::new(); n_tracks];
+    let mut at: Vec<(usize, usize)> = Vec::with_capacity(n_tracks);
+    for e in (0..n_epochs).step_by(stride) {
+        at.clear();
+        let (mut sum, mut n) = (0.0, 0usize);
+        for i in 0..n_tracks {
+            let end = rows.track_start[i + 1];
+            // The track's row at epoch e, if any (its rows are in epoch order).
+            let c = &mut cursor[i];
+            while *c < end && (rows.epoch[*c] as usize) < e {
+                *c += 1;
+            }
+            if *c < end && rows.epoch[*c] as usize == e {
+                at.push((i, *c));
+                if flags[*c] & flag::CN0_DROP == 0 {
+                    sum += rows.phase[*c];
+                    n += 1;
+                }
+            }
+        }
+        if n >= 2 {
+            for &(i, r) in &at {
+                dep[i].push(rows.phase[r] - sum / n as f64);
+            }
+        }
+    }
+    dep.iter_mut().map(|v| if v.is_empty() { 0.0 } else { median_of(v) }).collect()
+}
+
+/// The most values a median of a track's rows is taken over (a regular
+/// subsample beyond: the medians set offsets and scales, not row decisions).
+const MEDIAN_SAMPLE: usize = 16_384;
+
+/// Median of the finite values among `values` (a regular subsample of at most
+/// [`MEDIAN_SAMPLE`]), each mapped by `f`; NaN when there is none.
+fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64) -> f64 {
+    let stride = values.len().div_ceil(MEDIAN_SAMPLE).max(1);
+    scratch.clear();
+    scratch.extend(values.iter().step_by(stride).copied().filter(|v| v.is_finite()).map(f));
+    median_of(scratch)
+}
+
+/// Screens the rows (see the module documentation). `n_epochs`: the epoch
+/// indices are below it; `log_interval_s`: the epoch spacing.
+pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &ScreeningConfig) -> Screened {
+    let n_tracks = rows.tracks();
+    let n_rows = rows.epoch.len();
+    let mut out = Screened::none(rows);
+    if !cfg.enabled || n_rows == 0 {
+        return out;
+    }
+    let epochs_of = |s: f64| (s / log_interval_s).round().max(0.0) as u32;
+    let guard = epochs_of(cfg.guard_s);
+    let flags = &mut out.flags;
+
+    // Test 5: C/N0 drops.
+    let mut scratch: Vec<f64> = Vec::new();
+    for i in 0..n_tracks {
+        let range = rows.range(i);
+        let median_cn0 = sampled_median(&rows.cn0[range.clone()], &mut scratch, |v| v);
+        out.summaries[i].median_cn0_dbhz = Some(median_cn0).filter(|v| v.is_finite());
+        if let Some(x) = cfg.cn0_drop_db {
+            for r in range.clone() {
+                if rows.cn0[r] < median_cn0 - x {
+                    flags[r] |= flag::CN0_DROP;
+                }
+            }
+            spread_with_guard(&rows.epoch[range.clone()], &mut flags[range], flag::CN0_DROP, guard);
+        }
+    }
+
+    // Offsets, σ and the deviations (tests 1–4 use them).
+    // Initial offsets: the median of each track's departure from the mean of
+    // the tracks present (exact up to a common constant while the set of
+    // tracks does not change), over a regular subsample of the epochs.
+    let c = initial_offsets(rows, n_epochs, flags);
+    let mut c = c;
+    let mut d = vec![f64::NAN; n_rows];
+    let mut reference = vec![0.0; n_rows];
+    // Two rounds: the first finds each track's levels (steps) and slips
+    // against the others as they are; the second (when the first found any)
+    // compares every track with the others less their levels and without
+    // their slips, and is the one kept.
+    let mut level = vec![0.0; n_rows];
+    let mut sigma = vec![f64::NAN; n_tracks];
+    let mut buf = Vec::new();
+    let noisy_window = epochs_of(cfg.noisy_window_s).max(1);
+    for round in 0..2 {
+        // The rows kept out of the medians: C/N0 drops, and the first round's slips.
+        let (mask, shift) =
+            if round == 0 { (flag::CN0_DROP, None) } else { (flag::CN0_DROP | flag::SLIP, Some(level.as_slice())) };
+        deviations(rows, n_epochs, flags, mask, &c, shift, &mut d, &mut reference);
+        // Each track's own offset refined by the median of its deviations (the
+        // others' medians are robust to their small errors); σ from the local MAD.
+        for i in 0..n_tracks {
+            let range = rows.range(i);
+            let m = sampled_median(&d[range.clone()], &mut scratch, |v| v);
+            if m.is_finite() {
+                c[i] += m;
+                for v in &mut d[range.clone()] {
+                    *v -= m;
+                }
+                sigma[i] = local_sigma(&rows.epoch[range.clone()], &d[range], noisy_window, &mut scratch)
+                    .max(cfg.min_sigma_rad);
+            }
+        }
+        // Test 1 (slips, steps, levels).
+        for i in 0..n_tracks {
+            let range = rows.range(i);
+            if round == 1 {
+                out.segment[range.clone()].fill(0);
+                level[range.clone()].fill(0.0);
+                for f in &mut flags[range.clone()] {
+                    *f &= !flag::SLIP;
+                }
+            }
+            if !sigma[i].is_finite() {
+                continue;
+            }
+            let (r0, r1) = (range.start, range.end);
+            let ev = slip_events(
+                &rows.epoch[r0..r1],
+                &d[r0..r1],
+                sigma[i],
+                log_interval_s,
+                cfg,
+                guard,
+                &mut level[r0..r1],
+                &mut flags[r0..r1],
+                &mut out.segment[r0..r1],
+                &mut buf,
+            );
+            out.summaries[i].slips = ev.0;
+            out.summaries[i].steps = ev.1;
+            out.segments[i] = ev.1 + 1;
+        }
+        if round == 0 {
+            // Nothing found: the second round would find the same.
+            if out.summaries.iter().all(|s| s.slips == 0) {
+                break;
+            }
+        }
+    }
+    // Test 4: beyond the linear range on its own: |φ| above the limit while the
+    // common level (the others' median plus the track's offset, φ − d) is well
+    // within it; a log of a single track has no common level to compare with.
+    if let Some(limit) = cfg.max_abs_phase_rad {
+        for i in 0..n_tracks {
+            let range = rows.range(i);
+            for r in range.clone() {
+                let p = rows.phase[r];
+                if p.abs() > limit && (!d[r].is_finite() || (p - d[r]).abs() < 0.5 * limit) {
+                    flags[r] |= flag::PHASE_RANGE;
+                }
+            }
+            spread_with_guard(&rows.epoch[range.clone()], &mut flags[range], flag::PHASE_RANGE, guard);
+        }
+    }
+    let gain_window = epochs_of(cfg.gain_window_s).max(2);
+    let mut fits: Vec<GainFit> = Vec::new();
+    for i in 0..n_tracks {
+        out.summaries[i].deviation_sigma_rad = Some(sigma[i]).filter(|v| v.is_finite());
+        if !sigma[i].is_finite() {
+            continue;
+        }
+        let range = rows.range(i);
+        let (r0, r1) = (range.start, range.end);
+        let (ep, dev, lvl) = (&rows.epoch[r0..r1], &d[r0..r1], &level[r0..r1]);
+        noisy_windows(ep, dev, lvl, sigma[i], noisy_window, cfg.noisy_rms_k, guard, &mut flags[r0..r1]);
+    }
+    let inputs: Vec<Option<GainInput>> = (0..n_tracks)
+        .map(|i| {
+            let range = rows.range(i);
+            sigma[i].is_finite().then(|| GainInput {
+                epoch: &rows.epoch[range.clone()],
+                phase: &rows.phase[range.clone()],
+                reference: &reference[range.clone()],
+                dev: &d[range.clone()],
+                level: &level[range],
+                offset: c[i],
+            })
+        })
+        .collect();
+    for (i, g) in inputs.iter().enumerate() {
+        if let Some(g) = g {
+            gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut fits);
+        }
+    }
+    low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
+    drop(inputs);
+
+    // Whole tracks (the fraction flagged by the cross-channel tests), counts, spans.
+    for i in 0..n_tracks {
+        let range = rows.range(i);
+        let n = range.len();
+        let fl = &mut flags[range.clone()];
+        let excluded = fl.iter().filter(|&&f| f & (flag::SLIP | flag::NOISY | flag::LOW_GAIN) != 0).count();
+        let sum = &mut out.summaries[i];
+        if n > 0 && excluded as f64 > cfg.max_excluded_fraction * n as f64 {
+            sum.track_excluded = true;
+            for f in fl.iter_mut() {
+                *f |= flag::TRACK;
+            }
+        }
+        let mut counts = [0usize; 8];
+        let mut excluded_rows = 0;
+        for &f in fl.iter() {
+            excluded_rows += usize::from(f != 0);
+            for (b, n) in counts.iter_mut().enumerate() {
+                *n += usize::from(f >> b & 1 != 0);
+            }
+        }
+        let count = |bit: u8| counts[bit.trailing_zeros() as usize];
+        sum.rows_excluded = excluded_rows;
+        sum.rows_slip = count(flag::SLIP);
+        sum.rows_noisy = count(flag::NOISY);
+        sum.rows_low_gain = count(flag::LOW_GAIN);
+        sum.rows_phase_range = count(flag::PHASE_RANGE);
+        sum.rows_cn0_drop = count(flag::CN0_DROP);
+        let ep = &rows.epoch[range];
+        let spans = &mut out.spans[i];
+        let mut j = 0;
+        while j < n && spans.len() < MAX_SPANS {
+            if fl[j] == 0 {
+                j += 1;
+                continue;
+            }
+            let mut span = EpochSpan { first_epoch: ep[j], last_epoch: ep[j], rows: 0, flags: 0 };
+            while j < n && fl[j] != 0 {
+                span.last_epoch = ep[j];
+                span.rows += 1;
+                span.flags |= fl[j];
+                j += 1;
+            }
+            spans.push(span);
+        }
+    }
+    out
+}
+
+/// Extends the rows carrying any of `bits` by `guard` epochs on each side
+/// (within the track), setting the same bits there.
+fn spread_with_guard(epoch: &[u32], flags: &mut [u8], bits: u8, guard: u32) {
+    if guard == 0 || !flags.iter().any(|&f| f & bits != 0) {
+        return;
+    }
+    let n = epoch.len();
+    let mut add = vec![0u8; n];
+    for bit in (0..8).map(|b| 1u8 << b).filter(|b| bits & b != 0) {
+        // Forward: rows up to `guard` epochs after a flagged one; then backward.
+        let mut last: Option<u32> = None;
+        for j in 0..n {
+            if flags[j] & bit != 0 {
+                last = Some(epoch[j]);
+            } else if last.is_some_and(|e| epoch[j] - e <= guard) {
+                add[j] |= bit;
+            }
+        }
+        let mut next: Option<u32> = None;
+        for j in (0..n).rev() {
+            if flags[j] & bit != 0 {
+                next = Some(epoch[j]);
+            } else if next.is_some_and(|e| e - epoch[j] <= guard) {
+                add[j] |= bit;
+            }
+        }
+    }
+    for (f, a) in flags.iter_mut().zip(add) {
+        *f |= a;
+    }
+}
+
+/// Sets `bit` on the rows whose epoch lies in `[first, last]` (epochs, saturating).
+fn flag_epochs(epoch: &[u32], flags: &mut [u8], first: u32, last: u32, bit: u8) {
+    let a = epoch.partition_point(|&e| e < first);
+    let b = epoch.partition_point(|&e| e <= last);
+    for f in &mut flags[a..b] {
+        *f |= bit;
+    }
+}
+
+/// Test 1 on one track: returns (events, steps); sets the SLIP flags, the
+/// level of every row and the segment of every row.
+#[allow(clippy::too_many_arguments)]
+fn slip_events(
+    epoch: &[u32],
+    d: &[f64],
+    sigma: f64,
+    log_interval_s: f64,
+    cfg: &ScreeningConfig,
+    guard: u32,
+    level: &mut [f64],
+    flags: &mut [u8],
+    segment: &mut [u16],
+    ev: &mut Vec<usize>,
+) -> (usize, usize) {
+    let n = epoch.len();
+    let thr = cfg.deviation_k * sigma;
+    let alpha = (log_interval_s / cfg.level_tau_s).min(1.0);
+    let to_epochs = |s: f64| ((s / log_interval_s).round() as u32).max(1);
+    let (settle, step_min, step_win) = (to_epochs(cfg.settle_s), to_epochs(cfg.step_min_s), to_epochs(cfg.step_min_s / 2.0));
+    let Some(first_valid) = d.iter().position(|v| v.is_finite()) else {
+        return (0, 0);
+    };
+    // The offset makes the track's median deviation zero: the level of its bulk.
+    let mut l = 0.0;
+    let (mut events, mut steps) = (0usize, 0usize);
+    let mut seg: u16 = 0;
+    // The event: its rows with a deviation (`ev`), the latest out of bounds.
+    ev.clear();
+    let mut last_out = 0usize;
+    let mut window: Vec<f64> = Vec::new();
+    for j in 0..n {
+        segment[j] = seg;
+        let x = d[j] - l;
+        if !x.is_finite() {
+            level[j] = l;
+            continue;
+        }
+        if ev.is_empty() {
+            if x.abs() <= thr {
+                l += alpha * x;
+            } else {
+                ev.push(j);
+                last_out = j;
+            }
+            level[j] = l;
+            continue;
+        }
+        ev.push(j);
+        level[j] = l;
+        if x.abs() > thr {
+            last_out = j;
+        } else if epoch[j] - epoch[last_out] >= settle {
+            // Back within bounds long enough: the event ends.
+            flag_epochs(epoch, flags, epoch[ev[0]].saturating_sub(guard), epoch[last_out] + guard, flag::SLIP);
+            events += 1;
+            ev.clear();
+            continue;
+        }
+        // A step: after step_min, the last step_win epochs quiet around a new level.
+        if epoch[j] - epoch[ev[0]] < step_min {
+            continue;
+        }
+        let from = epoch[j].saturating_sub(step_win - 1);
+        let first = ev.partition_point(|&k| epoch[k] < from);
+        if ev.len() - first < (step_win as usize / 2).max(2) {
+            continue;
+        }
+        window.clear();
+        window.extend(ev[first..].iter().map(|&k| d[k]));
+        let m = median_of(&mut window);
+        if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
+            continue;
+        }
+        // Settled on the level m: the event ends at the earliest row fitting it.
+        let mut b = first;
+        while b > 0 && (d[ev[b - 1]] - m).abs() <= thr {
+            b -= 1;
+        }
+        let rb = ev[b];
+        let eb = epoch[rb];
+        if rb != first_valid {
+            let lo = epoch[ev[0]].saturating_sub(guard);
+            flag_epochs(epoch, flags, lo, eb.saturating_sub(1).max(lo), flag::SLIP);
+            flag_epochs(epoch, flags, eb, eb + guard, flag::SLIP);
+            events += 1;
+            // A new level beyond the bounds of the old one (not at the
+            // track's start): a step, and a new segment from row rb.
+            if (m - l).abs() > thr {
+                steps += 1;
+                seg = seg.saturating_add(1);
+            }
+        }
+        l = m;
+        level[rb..=j].fill(l);
+        segment[rb..=j].fill(seg);
+        ev.clear();
+    }
+    if !ev.is_empty() {
+        // Never settled: excluded to the end of the track.
+        flag_epochs(epoch, flags, epoch[ev[0]].saturating_sub(guard), u32::MAX, flag::SLIP);
+        events += 1;
+    }
+    (events, steps)
+}
+
+/// Test 2 on one track: windows whose deviation RMS (about the level, over the
+/// rows not yet excluded) exceeds `k·σ`.
+#[allow(clippy::too_many_arguments)]
+fn noisy_windows(
+    epoch: &[u32],
+    d: &[f64],
+    level: &[f64],
+    sigma: f64,
+    window: u32,
+    k: f64,
+    guard: u32,
+    flags: &mut [u8],
+) {
+    let n = epoch.len();
+    let limit = (k * sigma).powi(2);
+    let min_rows = (window as usize / 4).max(3);
+    let mut j = 0;
+    while j < n {
+        let w = epoch[j] / window;
+        let mut end = j;
+        let (mut ss, mut m) = (0.0, 0usize);
+        while end < n && epoch[end] / window == w {
+            if d[end].is_finite() && flags[end] == 0 {
+                ss += (d[end] - level[end]).powi(2);
+                m += 1;
+            }
+            end += 1;
+        }
+        if m >= min_rows && ss / m as f64 > limit {
+            flag_epochs(epoch, flags, (w * window).saturating_sub(guard), (w + 1) * window - 1 + guard, flag::NOISY);
+        }
+        j = end;
+    }
+}
+
+/// One track's inputs of the gain test (row-major slices of the track).
+struct GainInput<'a> {
+    epoch: &'a [u32],
+    phase: &'a [f64],
+    reference: &'a [f64],
+    dev: &'a [f64],
+    level: &'a [f64],
+    offset: f64,
+}
+
+impl GainInput<'_> {
+    /// The row enters the fit (a deviation, not excluded yet).
+    #[inline]
+    fn usable(&self, flags: &[u8], j: usize) -> bool {
+        flags[j] == 0 && self.dev[j].is_finite()
+    }
+
+    /// The track's phase less its offset and level (steps removed).
+    #[inline]
+    fn y(&self, j: usize) -> f64 {
+        self.phase[j] - self.offset - self.level[j]
+    }
+}
+
+/// The regression of one track's phase on the median of the others over one window.
+#[derive(Debug, Clone, Copy)]
+struct GainFit {
+    window: u32,
+    track: usize,
+    /// The track's rows `first..=last` (relative to the track) span the window.
+    first: usize,
+    last: usize,
+    rows: usize,
+    mean_x: f64,
+    mean_y: f64,
+    sxx: f64,
+    /// Slope (attenuated by the reference's own noise, as every track's in the window).
+    slope: f64,
+    /// Residual sum of squares.
+    see: f64,
+}
+
+/// Test 3, first half: the sums of each window of one track (rows not yet
+/// excluded), in one pass.
+fn gain_fits(g: &GainInput, track: usize, window: u32, flags: &[u8], fits: &mut Vec<GainFit>) {
+    let n = g.epoch.len();
+    let min_rows = (window as usize / 4).max(10);
+    let mut j = 0;
+    while j < n {
+        let w = g.epoch[j] / window;
+        let first = j;
+        let (mut m, mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0usize, 0.0, 0.0, 0.0, 0.0, 0.0);
+        // Shifted sums (by the window's first values) for accuracy.
+        let (x0, y0) = (g.reference[j], g.y(j));
+        while j < n && g.epoch[j] / window == w {
+            if g.usable(flags, j) {
+                let (x, y) = (g.reference[j] - x0, g.y(j) - y0);
+                m += 1;
+                sx += x;
+                sy += y;
+                sxx += x * x;
+                sxy += x * y;
+                syy += y * y;
+            }
+            j += 1;
+        }
+        if m < min_rows {
+            continue;
+        }
+        let mf = m as f64;
+        let (cxx, cxy, cyy) = (sxx - sx * sx / mf, sxy - sx * sy / mf, syy - sy * sy / mf);
+        if cxx <= 0.0 {
+            continue;
+        }
+        let slope = cxy / cxx;
+        fits.push(GainFit {
+            window: w,
+            track,
+            first,
+            last: j - 1,
+            rows: m,
+            mean_x: x0 + sx / mf,
+            mean_y: y0 + sy / mf,
+            sxx: cxx,
+            slope,
+            see: (cyy - slope * cxy).max(0.0),
+        });
+    }
+}
+
+/// The standard error of a fit's slope, inflated for the residuals' lag-one
+/// correlation (a second pass over the window).
+fn gain_se(g: &GainInput, flags: &[u8], fit: &GainFit) -> f64 {
+    let (mut see, mut lag1, mut prev) = (0.0, 0.0, None);
+    for j in fit.first..=fit.last {
+        if g.usable(flags, j) {
+            let e = (g.y(j) - fit.mean_y) - fit.slope * (g.reference[j] - fit.mean_x);
+            see += e * e;
+            if let Some(p) = prev {
+                lag1 += e * p;
+            }
+            prev = Some(e);
+        }
+    }
+    let rho = if see > 0.0 { (lag1 / see).clamp(0.0, 0.99) } else { 0.0 };
+    let mf = fit.rows as f64;
+    (fit.see / (mf - 2.0).max(1.0) / fit.sxx).sqrt() * ((1.0 + rho) / (1.0 - rho)).sqrt()
+}
+
+/// Test 3, second half: in each window fitted for at least three tracks, the
+/// median slope stands for a track that follows the common signal (the
+/// reference's noise attenuates every slope alike); where it is at least 0.8
+/// (the common signal dominates the reference's noise), a track whose slope
+/// relative to it is below `min_gain` by more than two standard errors is
+/// flagged; so is a whole track whose tested windows pooled are below
+/// `min_track_gain` by more than two standard errors.
+fn low_gain_windows(inputs: &[Option<GainInput>], rows: &Rows, fits: &[GainFit], cfg: &ScreeningConfig, guard: u32, flags: &mut [u8]) {
+    // Per track: the tested windows' gains and standard errors (for the pooled test).
+    let mut tested: Vec<Vec<(f64, f64)>> = vec![Vec::new(); rows.tracks()];
+    let mut low: Vec<(usize, u32, u32)> = Vec::new();
+    let mut order: Vec<usize> = (0..fits.len()).collect();
+    order.sort_by_key(|&f| (fits[f].window, fits[f].track));
+    let mut slopes: Vec<f64> = Vec::new();
+    let mut a = 0;
+    while a < order.len() {
+        let w = fits[order[a]].window;
+        let b = a + order[a..].partition_point(|&f| fits[f].window == w);
+        let group = &order[a..b];
+        a = b;
+        if group.len() < 3 {
+            continue;
+        }
+        slopes.clear();
+        slopes.extend(group.iter().map(|&f| fits[f].slope));
+        let typical = median_of(&mut slopes);
+        if !(typical >= 0.8) {
+            continue;
+        }
+        for &f in group {
+            let fit = &fits[f];
+            let Some(g) = &inputs[fit.track] else { continue };
+            let range = rows.range(fit.track);
+            let se = gain_se(g, &flags[range], fit) / typical;
+            let gain = fit.slope / typical;
+            tested[fit.track].push((gain, se));
+            if gain + 2.0 * se < cfg.min_gain {
+                low.push((fit.track, g.epoch[fit.first], g.epoch[fit.last]));
+            }
+        }
+    }
+    for (track, first, last) in low {
+        let range = rows.range(track);
+        let (ep, fl) = (&rows.epoch[range.clone()], &mut flags[range]);
+        flag_epochs(ep, fl, first.saturating_sub(guard), last + guard, flag::LOW_GAIN);
+    }
+    // The whole track: its windows pooled (inverse-variance weights; the
+    // spread of the windows' gains bounds the standard error from below).
+    for (i, t) in tested.iter().enumerate() {
+        if t.len() < 2 {
+            continue;
+        }
+        let wsum: f64 = t.iter().map(|&(_, se)| 1.0 / (se * se).max(1e-12)).sum();
+        let pooled = t.iter().map(|&(g, se)| g / (se * se).max(1e-12)).sum::<f64>() / wsum;
+        let nf = t.len() as f64;
+        let mean = t.iter().map(|&(g, _)| g).sum::<f64>() / nf;
+        let spread = (t.iter().map(|&(g, _)| (g - mean).powi(2)).sum::<f64>() / (nf - 1.0) / nf).sqrt();
+        let se = (1.0 / wsum).sqrt().max(spread);
+        if pooled + 2.0 * se < cfg.min_track_gain {
+            for f in &mut flags[rows.range(i)] {
+                *f |= flag::LOW_GAIN;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,766 @@
+//! IF sample generator: complex baseband GPS L1 C/A samples of the scenario's
+//! satellites, as a front end with the scenario's oscillator would record them,
+//! for software receivers such as GNSS-SDR.
+//!
+//! # Signal model
+//!
+//! Sample n is taken at receiver time τ = n/fs (the sample clock, like the
+//! local oscillator, is derived from the crystal). Each satellite contributes
+//!
+//! ```text
+//! s(τ) = A·d(τ)·c(τ)·e^{j2πθ(τ)},   A = σ·√(2·(C/N0)/fs)
+//! ```
+//!
+//! with c the C/A code ([`ca_code`]), d the LNAV data ([`lnav`], valid
+//! subframes with preamble, HOW and parity), θ the baseband carrier phase
+//! \[cycles\] and σ the thermal noise per I and Q component, so that the
+//! carrier-to-noise density is C/N0 (complex noise of power 2σ² over fs).
+//! The noise is white Gaussian, the sum is quantized to the output format
+//! ([`IqFormat`]).
+//!
+//! Time advances in blocks of 1 ms of receiver time. During block b
+//! (τ ∈ \[b·1ms, (b+1)·1ms)) the oscillator's fractional frequency error is
+//! y_b = ȳ_b + a(τ_mid)ᵀΓ/f_L1 (the scenario's [`Oscillator`] noise averaged
+//! over the block plus Filler's g-sensitivity at the block's centre, exactly
+//! the Δf_b = f_L1·y_b of conventions.md), and each satellite's Doppler f_D
+//! is its line-of-sight Doppler at the block centre (the satellite geometry is
+//! evaluated every second and interpolated linearly, as in
+//! [`crate::session`]). The crystal drives the whole chain: the local
+//! oscillator runs at f_L1·(1 + y) and the sample clock at fs·(1 + y), so per
+//! second of receiver time the carrier and code advance by
+//!
+//! ```text
+//! f_bb = (f_D − Δf)/(1 + y)          [cycles/s]   (conventions.md: Δf adds to the NCO, i.e. subtracts from the signal)
+//! r    = 1.023e6·(1 + f_D/f_L1)/(1 + y)   [chips/s]
+//! ```
+//!
+//! Phases are continuous across blocks (accumulated in f64 at block
+//! boundaries; within a block the carrier and code run on 32-bit fixed-point
+//! accumulators, error < 1e-6 cycle per block). The code phase starts from the
+//! geometric range (transmit time = GPS time − ρ/c) and the data bits and
+//! subframes follow the transmit time, so bit edges and subframe boundaries
+//! are where a receiver expects them. The carrier phase starts uniform.
+//!
+//! The motion and the satellite geometry are evaluated at receiver time (the
+//! clock's time error, below a microsecond over a session, is neglected there).
+//!
+//! # Satellites
+//!
+//! The satellites above the elevation mask at the start, highest first, at
+//! most `max_satellites` (PRN 1–32: those with a C/A code); they are kept for
+//! the whole file. C/N0 follows the scenario's elevation model, updated every
+//! second.
+//!
+//! # Reproducibility
+//!
+//! The oscillator, motion, IMU errors and noise and C/N0 offsets use the same
+//! random streams as [`crate::session::simulate`] (so a session simulated with
+//! a 1 ms loop interval and the same seed has the same oscillator, motion and
+//! IMU log); the thermal noise and the carrier phases have their own streams.
+
+pub mod ca_code;
+pub mod lnav;
+
+use std::f64::consts::TAU;
+use std::io::Write;
+
+use gsens_core::units::{SPEED_OF_LIGHT_MPS, hz_per_mps2_to_ppb_per_g};
+use rand::{Rng, RngExt};
+use serde::{Deserialize, Serialize};
+
+use crate::imu::{ImuErrors, specific_force_body};
+use crate::motion::Motion;
+use crate::oscillator::Oscillator;
+use crate::rng::{Xoshiro256PlusPlus, substream};
+use crate::satellites::{Constellation, LineOfSight};
+use crate::scenario::Scenario;
+use crate::session::{SessionSink, SimError, stream};
+
+use ca_code::{CA_CHIP_RATE_HZ, CA_CODE_LENGTH, MAX_CA_PRN, ca_code_bipolar};
+use lnav::{SUBFRAME_BITS, subframe_bits};
+
+/// Length of a generator block \[s\]: Δf, Doppler and code rate are constant over it.
+pub const BLOCK_S: f64 = 0.001;
+/// Code periods per data bit (20 ms).
+const PERIODS_PER_BIT: i64 = 20;
+/// Code periods per subframe (6 s).
+const PERIODS_PER_SUBFRAME: i64 = 6000;
+/// Interval of the satellite geometry updates \[s\].
+const GEOMETRY_STEP_S: f64 = 1.0;
+/// Stream ids of the generator's own random draws.
+const STREAM_IQ_NOISE: u64 = 0x1B_0000_0001;
+const STREAM_IQ_PHASES: u64 = 0x1B_0000_0002;
+/// log2 of the carrier lookup table size (1024 entries: phase steps of 0.35°).
+const LUT_BITS: u32 = 10;
+
+/// Sample format of the output file, as GNSS-SDR's `File_Signal_Source` names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IqFormat {
+    /// Interleaved signed 8-bit I, Q.
+    Ibyte,
+    /// Interleaved signed 16-bit little-endian I, Q.
+    Ishort,
+    /// Interleaved 32-bit little-endian floats I, Q (GNU Radio's `gr_complex`).
+    GrComplex,
+}
+
+impl IqFormat {
+    /// Bytes per complex sample.
+    pub fn bytes_per_sample(self) -> usize {
+        match self {
+            IqFormat::Ibyte => 2,
+            IqFormat::Ishort => 4,
+            IqFormat::GrComplex => 8,
+        }
+    }
+
+    /// GNSS-SDR's `SignalSource.item_type` for this format.
+    pub fn gnss_sdr_item_type(self) -> &'static str {
+        match self {
+            IqFormat::Ibyte => "ibyte",
+            IqFormat::Ishort => "ishort",
+            IqFormat::GrComplex => "gr_complex",
+        }
+    }
+
+    /// Default thermal-noise σ per component in output units: 8 LSB for
+    /// `ibyte` (quantization loss < 0.01 dB, no clipping), 1024 LSB for
+    /// `ishort`, 1 for `gr_complex`.
+    pub fn default_noise_sigma(self) -> f64 {
+        match self {
+            IqFormat::Ibyte => 8.0,
+            IqFormat::Ishort => 1024.0,
+            IqFormat::GrComplex => 1.0,
+        }
+    }
+
+    /// Parses `ibyte`, `ishort` or `gr_complex`.
+    pub fn parse(s: &str) -> Option<IqFormat> {
+        match s {
+            "ibyte" => Some(IqFormat::Ibyte),
+            "ishort" => Some(IqFormat::Ishort),
+            "gr_complex" => Some(IqFormat::GrComplex),
+            _ => None,
+        }
+    }
+}
+
+/// Settings of the sample generator (the rest comes from the scenario).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IqConfig {
+    /// Sampling rate \[Hz\] (complex samples per second), at least 1.1 MHz.
+    pub fs_hz: f64,
+    /// Output sample format.
+    pub format: IqFormat,
+    /// Thermal noise σ per I and Q component, in output units (LSB for the integer formats).
+    pub noise_sigma: f64,
+    /// At most this many satellites (the highest at the start).
+    pub max_satellites: u32,
+}
+
+impl IqConfig {
+    /// `fs_hz` and `format` with the format's default noise level and at most
+    /// the scenario's `satellites.max_channels` satellites.
+    pub fn new(fs_hz: f64, format: IqFormat, scenario: &Scenario) -> Self {
+        IqConfig {
+            fs_hz,
+            format,
+            noise_sigma: format.default_noise_sigma(),
+            max_satellites: scenario.satellites.max_channels,
+        }
+    }
+
+    fn validate(&self) -> Result<(), SimError> {
+        let bad = |m: String| Err(SimError::Model(m));
+        if !(self.fs_hz.is_finite() && (1.1e6..=100e6).contains(&self.fs_hz)) {
+            return bad(format!("IQ sampling rate must be within [1.1, 100] MHz (got {} Hz)", self.fs_hz));
+        }
+        if !(self.noise_sigma.is_finite() && self.noise_sigma > 0.0) {
+            return bad(format!("IQ noise sigma must be > 0 (got {})", self.noise_sigma));
+        }
+        if self.max_satellites == 0 {
+            return bad("IQ generator needs at least one satellite".into());
+        }
+        Ok(())
+    }
+}
+
+/// What the generator applied during one 1 ms block (for truth files and tests).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IqBlock<'a> {
+    /// Centre of the block, receiver time \[s\].
+    pub t_mid_s: f64,
+    /// Δf = f_L1·y \[Hz\] over the block (oscillator noise + aᵀΓ).
+    pub delta_f_hz: f64,
+    /// The part aᵀΓ \[Hz\].
+    pub g_induced_hz: f64,
+    /// True specific force at the block centre, body axes \[m/s²\].
+    pub accel_true_mps2: [f64; 3],
+    /// Each satellite's baseband carrier frequency f_bb over the block \[Hz\],
+    /// in the order of [`IqTruth::satellites`].
+    pub carrier_hz: &'a [f64],
+    /// The satellites' PRNs, in the same order.
+    pub prns: &'a [u32],
+}
+
+/// One satellite of the file.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IqSatelliteTruth {
+    /// PRN.
+    pub prn: u32,
+    /// Elevation at the start \[deg\].
+    pub start_elev_deg: f64,
+    /// C/N0 at the start \[dB-Hz\].
+    pub start_cn0_dbhz: f64,
+    /// Line-of-sight Doppler at the start \[Hz\] (the signal's is this minus Δf).
+    pub start_doppler_hz: f64,
+    /// Code phase at the first sample \[chips\].
+    pub start_code_phase_chips: f64,
+    /// Carrier phase at the first sample \[cycles\].
+    pub start_carrier_phase_cycles: f64,
+}
+
+/// The truth of a generated file (`truth.json` of `gsens simulate --iq`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IqTruth {
+    /// Γ \[Hz/(m/s²)\] at the carrier, body axes.
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// Γ \[ppb/g\].
+    pub gamma_ppb_per_g: [f64; 3],
+    /// Γ as seen through the IMU's readings, M⁻ᵀΓ (see [`crate::session::Truth`]).
+    pub gamma_imu_axes_hz_per_mps2: [f64; 3],
+    /// Carrier \[Hz\].
+    pub carrier_hz: f64,
+    /// Seed.
+    pub seed: u64,
+    /// Generator name and version.
+    pub generator: String,
+    /// GPS seconds at the first sample.
+    pub start_gps_s: f64,
+    /// Duration \[s\].
+    pub duration_s: f64,
+    /// Sampling rate \[Hz\].
+    pub fs_hz: f64,
+    /// Sample format.
+    pub format: IqFormat,
+    /// Noise σ per component \[output units\].
+    pub noise_sigma: f64,
+    /// Number of complex samples written.
+    pub samples: u64,
+    /// Block length \[s\] over which Δf and the Dopplers are constant.
+    pub block_s: f64,
+    /// Time convention of the file.
+    pub sample_time: String,
+    /// The satellites in the file.
+    pub satellites: Vec<IqSatelliteTruth>,
+    /// IMU time stamp minus true time \[s\].
+    pub imu_time_offset_s: f64,
+    /// The IMU's realized errors.
+    pub imu_errors: ImuErrors,
+    /// The scenario as run.
+    pub scenario: Scenario,
+}
+
+/// Per-satellite generator state.
+struct Sat {
+    prn: u32,
+    code: [f32; CA_CODE_LENGTH],
+    /// Amplitude A in output units.
+    amp: f32,
+    /// Carrier phase at the start of the current block \[cycles\], in [0, 1).
+    carrier_cycles: f64,
+    /// Transmit time at the start of the current block: whole code periods
+    /// since the GPS epoch and the chip within the period, in [0, 1023).
+    period: i64,
+    chip: f64,
+    /// Doppler at the start of the current geometry second \[Hz\] and its slope \[Hz/s\].
+    doppler0_hz: f64,
+    doppler_slope_hz_per_s: f64,
+    seg_t0_s: f64,
+    next: LineOfSight,
+    /// The subframe whose bits are cached.
+    subframe: i64,
+    bits: [u8; SUBFRAME_BITS],
+    /// Chip table of the current block (amplitude · code · data).
+    table: Vec<f32>,
+}
+
+impl Sat {
+    /// Fills the chip table with `count` chips from chip `first` (relative to
+    /// the current period's chip 0): amplitude · code · data, period by period.
+    fn fill_table(&mut self, first: i64, count: usize) {
+        let n = CA_CODE_LENGTH as i64;
+        let mut period = self.period + first.div_euclid(n);
+        let mut c = first.rem_euclid(n) as usize;
+        self.table.clear();
+        while self.table.len() < count {
+            let v = self.amp * self.data_sign(period);
+            let run = (CA_CODE_LENGTH - c).min(count - self.table.len());
+            let code = &self.code[c..c + run];
+            self.table.extend(code.iter().map(|&x| v * x));
+            c = 0;
+            period += 1;
+        }
+    }
+
+    fn data_sign(&mut self, period: i64) -> f32 {
+        let sf = period.div_euclid(PERIODS_PER_SUBFRAME);
+        if sf != self.subframe {
+            self.subframe = sf;
+            self.bits = subframe_bits(sf);
+        }
+        let bit = period.rem_euclid(PERIODS_PER_SUBFRAME) / PERIODS_PER_BIT;
+        if self.bits[bit as usize] == 0 { 1.0 } else { -1.0 }
+    }
+}
+
+/// Carrier lookup table: (cos, sin) of 2π·k/2^LUT_BITS, sampled at the
+/// centre of each phase bin.
+fn carrier_lut() -> Vec<[f32; 2]> {
+    let n = 1usize << LUT_BITS;
+    (0..n)
+        .map(|k| {
+            let a = TAU * (k as f64 + 0.5) / n as f64;
+            [a.cos() as f32, a.sin() as f32]
+        })
+        .collect()
+}
+
+/// The fixed-point replica accumulators of one satellite over a block:
+/// code position (32.32 chips) and carrier phase (2³² = one cycle), with
+/// their per-sample steps.
+#[derive(Debug, Clone, Copy)]
+struct Accumulators {
+    code: u64,
+    code_step: u64,
+    carrier: u32,
+    carrier_step: u32,
+}
+
+/// Adds one satellite to the block: for each sample, chip value
+/// `table[code >> 32]` times the carrier phasor `lut[carrier >> (32 − LUT_BITS)]`.
+#[inline(never)]
+fn mix_satellite(buf_i: &mut [f32], buf_q: &mut [f32], table: &[f32], lut: &[[f32; 2]], acc: Accumulators) {
+    let lut: &[[f32; 2]; 1 << LUT_BITS] = lut.try_into().expect("LUT size");
+    let (mut code, mut carrier) = (acc.code, acc.carrier);
+    for (bi, bq) in buf_i.iter_mut().zip(buf_q.iter_mut()) {
+        let c = table[(code >> 32) as usize];
+        let [cs, sn] = lut[(carrier >> (32 - LUT_BITS)) as usize];
+        *bi += c * cs;
+        *bq += c * sn;
+        code += acc.code_step;
+        carrier = carrier.wrapping_add(acc.carrier_step);
+    }
+}
+
+/// Quantizes the block into `out` (resized to the block's bytes) in `format`.
+fn quantize(format: IqFormat, buf_i: &[f32], buf_q: &[f32], out: &mut Vec<u8>) {
+    // Round half to even by adding and subtracting 1.5·2²³ (exact for |x| < 2²²;
+    // larger values clip anyway), which vectorizes unlike `f32::round`.
+    const MAGIC: f32 = 12_582_912.0;
+    out.resize(buf_i.len() * format.bytes_per_sample(), 0);
+    let samples = buf_i.iter().zip(buf_q);
+    match format {
+        IqFormat::Ibyte => {
+            let q8 = |x: f32| ((x.clamp(-128.0, 127.0) + MAGIC) - MAGIC) as i8 as u8;
+            for (o, (i, q)) in out.chunks_exact_mut(2).zip(samples) {
+                o[0] = q8(*i);
+                o[1] = q8(*q);
+            }
+        }
+        IqFormat::Ishort => {
+            let q16 = |x: f32| (((x.clamp(-32768.0, 32767.0) + MAGIC) - MAGIC) as i16).to_le_bytes();
+            for (o, (i, q)) in out.chunks_exact_mut(4).zip(samples) {
+                o[..2].copy_from_slice(&q16(*i));
+                o[2..].copy_from_slice(&q16(*q));
+            }
+        }
+        IqFormat::GrComplex => {
+            for (o, (i, q)) in out.chunks_exact_mut(8).zip(samples) {
+                o[..4].copy_from_slice(&i.to_le_bytes());
+                o[4..].copy_from_slice(&q.to_le_bytes());
+            }
+        }
+    }
+}
+
+/// Quantile function of the standard normal distribution, Φ⁻¹(p) for p in
+/// (0, 1): P. J. Acklam's rational approximations (relative error < 1.2e-9),
+/// central region |p − ½| ≤ ½ − 0.02425, tails through q = √(−2 ln p).
+pub fn normal_quantile(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969_683_028_665_376e1,
+        2.209_460_984_245_205e2,
+        -2.759_285_104_469_687e2,
+        1.383_577_518_672_69e2,
+        -3.066_479_806_614_716e1,
+        2.506_628_277_459_239,
+    ];
+    const B: [f64; 5] = [
+        -5.447_609_879_822_406e1,
+        1.615_858_368_580_409e2,
+        -1.556_989_798_598_866e2,
+        6.680_131_188_771_972e1,
+        -1.328_068_155_288_572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784_894_002_430_293e-3,
+        -3.223_964_580_411_365e-1,
+        -2.400_758_277_161_838,
+        -2.549_732_539_343_734,
+        4.374_664_141_464_968,
+        2.938_163_982_698_783,
+    ];
+    const D: [f64; 4] =
+        [7.784_695_709_041_462e-3, 3.224_671_290_700_398e-1, 2.445_134_137_142_996, 3.754_408_661_907_416];
+    const P_LOW: f64 = 0.02425;
+    let tail = |p: f64| {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p < P_LOW {
+        tail(p)
+    } else if p > 1.0 - P_LOW {
+        -tail(1.0 - p)
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
+}
+
+/// Thermal noise source: 2¹⁶ equiprobable quantiles of N(0, 1),
+/// Φ⁻¹((k + ½)/2¹⁶), rescaled to unit variance, indexed by 16-bit slices of
+/// the generator's output (four deviates per 64-bit draw). The distribution
+/// is the normal one discretized to 65 536 equally likely values (tails cut
+/// at ±4.3σ, one value in 65 536 beyond): after correlation over thousands of
+/// samples it is indistinguishable from Gaussian noise, at a fifth of a
+/// ziggurat's cost.
+struct NoiseTable {
+    values: Vec<f32>,
+}
+
+impl NoiseTable {
+    const BITS: u32 = 16;
+
+    fn new(sigma: f64) -> Self {
+        let n = 1usize << Self::BITS;
+        let raw: Vec<f64> = (0..n).map(|k| normal_quantile((k as f64 + 0.5) / n as f64)).collect();
+        let var = raw.iter().map(|x| x * x).sum::<f64>() / n as f64;
+        let scale = sigma / var.sqrt();
+        NoiseTable { values: raw.iter().map(|x| (x * scale) as f32).collect() }
+    }
+
+    /// Fills `buf` with independent deviates.
+    #[inline(never)]
+    fn fill(&self, rng: &mut Xoshiro256PlusPlus, buf: &mut [f32]) {
+        let v: &[f32; 1 << 16] = self.values.as_slice().try_into().expect("table size");
+        let mut chunks = buf.chunks_exact_mut(4);
+        for c in &mut chunks {
+            let r = rng.next_u64();
+            c[0] = v[(r & 0xFFFF) as usize];
+            c[1] = v[((r >> 16) & 0xFFFF) as usize];
+            c[2] = v[((r >> 32) & 0xFFFF) as usize];
+            c[3] = v[(r >> 48) as usize];
+        }
+        let rest = chunks.into_remainder();
+        if !rest.is_empty() {
+            let mut r = rng.next_u64();
+            for x in rest {
+                *x = v[(r & 0xFFFF) as usize];
+                r >>= 16;
+            }
+        }
+    }
+}
+
+fn set_segment(sat: &mut Sat, now: &LineOfSight, next: &LineOfSight, t: f64, carrier_hz: f64) {
+    let d0 = now.doppler_at_hz(carrier_hz);
+    sat.doppler0_hz = d0;
+    sat.doppler_slope_hz_per_s = (next.doppler_at_hz(carrier_hz) - d0) / GEOMETRY_STEP_S;
+    sat.seg_t0_s = t;
+    sat.next = *next;
+}
+
+fn amplitude(noise_sigma: f64, cn0_dbhz: f64, fs_hz: f64) -> f32 {
+    (noise_sigma * (2.0 * 10f64.powf(cn0_dbhz / 10.0) / fs_hz).sqrt()) as f32
+}
+
+/// First sample index of block `b`: ⌈b·fs·1ms⌉ (samples at or after the block start).
+fn block_start_sample(b: u64, fs_hz: f64) -> u64 {
+    let x = b as f64 * fs_hz * BLOCK_S;
+    let r = x.round();
+    // Integer products (fs a multiple of 1 kHz) are exact; otherwise round up.
+    if (x - r).abs() < 1e-6 { r as u64 } else { x.ceil() as u64 }
+}
+
+/// Generates the scenario's IF samples into `out` (`cfg.format`), the IMU log
+/// into `sink` (its `tracking` is not called), reports each block's Δf to
+/// `on_block` and the fraction done to `progress` about once per second of
+/// signal. Returns the truth.
+pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
+    scenario: &Scenario,
+    seed: u64,
+    cfg: &IqConfig,
+    mut out: W,
+    sink: &mut S,
+    mut on_block: impl FnMut(&IqBlock<'_>),
+    mut progress: impl FnMut(f64),
+) -> Result<IqTruth, SimError> {
+    scenario.validate()?;
+    cfg.validate()?;
+    let sc = scenario;
+    let fs = cfg.fs_hz;
+    let duration_s = sc.duration_s();
+    let start_gps_s = sc.start_gps_s()?;
+    let carrier_hz = sc.oscillator.carrier_hz;
+    let gamma = sc.oscillator.gamma_hz_per_mps2;
+    let n_blocks = (duration_s / BLOCK_S + 1e-6).floor() as u64;
+    let blocks_per_geo = (GEOMETRY_STEP_S / BLOCK_S).round() as u64;
+
+    let mut osc = Oscillator::try_new(&sc.oscillator.config(), BLOCK_S, substream(seed, stream::OSCILLATOR))
+        .map_err(SimError::Model)?;
+    let motion = Motion::try_new(&sc.motion, &mut substream(seed, stream::MOTION)).map_err(SimError::Model)?;
+    let imu = ImuErrors::draw(&sc.imu.config(), &mut substream(seed, stream::IMU_ERRORS));
+    let mut imu_rng = substream(seed, stream::IMU_NOISE);
+    let cn0 = sc.satellites.cn0.draw_offsets(&mut substream(seed, stream::CN0_OFFSETS));
+    let mut noise_rng = substream(seed, STREAM_IQ_NOISE);
+    let mut phase_rng = substream(seed, STREAM_IQ_PHASES);
+    let constellation = Constellation::builtin();
+    let antenna = sc.antenna;
+
+    // Satellites in view at the start.
+    let visible: Vec<LineOfSight> = constellation
+        .visible_lines_of_sight(&antenna, start_gps_s, sc.satellites.elevation_mask_deg)
+        .into_iter()
+        .filter(|l| (1..=MAX_CA_PRN).contains(&l.prn))
+        .take(cfg.max_satellites as usize)
+        .collect();
+    if visible.is_empty() {
+        return Err(SimError::Model("no GPS satellite above the elevation mask at the start".into()));
+    }
+    // Milliseconds of GPS time at the start, split exactly.
+    let start_ms_f = start_gps_s * 1000.0;
+    let start_ms = start_ms_f.floor() as i64;
+    let start_ms_frac = start_ms_f - start_ms as f64;
+
+    let mut sats: Vec<Sat> = Vec::with_capacity(visible.len());
+    let mut truth_sats = Vec::with_capacity(visible.len());
+    for los in &visible {
+        let next = constellation.line_of_sight(los.prn, &antenna, start_gps_s + GEOMETRY_STEP_S).expect("visible PRN");
+        let code = ca_code_bipolar(los.prn).expect("PRN with a C/A code").map(f32::from);
+        // Transmit time = GPS time − ρ/c, in code periods (ms) and chips.
+        let tx_ms = start_ms_frac - los.range_m / SPEED_OF_LIGHT_MPS * 1000.0;
+        let whole = tx_ms.floor();
+        let chip = (tx_ms - whole) * CA_CODE_LENGTH as f64;
+        let u: f64 = phase_rng.random();
+        let cn0_dbhz = cn0.cn0_dbhz(los.prn, los.elevation_deg);
+        let mut sat = Sat {
+            prn: los.prn,
+            code,
+            amp: amplitude(cfg.noise_sigma, cn0_dbhz, fs),
+            carrier_cycles: u,
+            period: start_ms + whole as i64,
+            chip,
+            doppler0_hz: 0.0,
+            doppler_slope_hz_per_s: 0.0,
+            seg_t0_s: 0.0,
+            next,
+            subframe: i64::MIN,
+            bits: [0; SUBFRAME_BITS],
+            table: Vec::with_capacity(2 * CA_CODE_LENGTH),
+        };
+        set_segment(&mut sat, los, &next, 0.0, carrier_hz);
+        truth_sats.push(IqSatelliteTruth {
+            prn: los.prn,
+            start_elev_deg: los.elevation_deg,
+            start_cn0_dbhz: cn0_dbhz,
+            start_doppler_hz: los.doppler_at_hz(carrier_hz),
+            start_code_phase_chips: chip,
+            start_carrier_phase_cycles: u,
+        });
+        sats.push(sat);
+    }
+
+    let lut = carrier_lut();
+    let max_block = (fs * BLOCK_S).ceil() as usize + 1;
+    let mut buf_i = vec![0f32; max_block];
+    let mut buf_q = vec![0f32; max_block];
+    let mut bytes: Vec<u8> = Vec::with_capacity(max_block * cfg.format.bytes_per_sample());
+    let noise = NoiseTable::new(cfg.noise_sigma);
+    let two32 = 4_294_967_296.0f64;
+    let mut next_imu = 0u64;
+    let mut samples = 0u64;
+    let mut carrier_hz_now = vec![0.0; sats.len()];
+    let prns: Vec<u32> = sats.iter().map(|s| s.prn).collect();
+    let io_err = |e: std::io::Error| SimError::Sink(Box::new(e));
+
+    for b in 0..n_blocks {
+        let t0 = b as f64 * BLOCK_S;
+        let tm = t0 + 0.5 * BLOCK_S;
+        let y = osc.next_y();
+        let a = specific_force_body(&motion.state(tm));
+        let g_induced_hz = a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2];
+        let delta_f_hz = carrier_hz * y + g_induced_hz;
+        let scale = 1.0 / (1.0 + delta_f_hz / carrier_hz);
+
+        if b % blocks_per_geo == 0 {
+            let t_next_gps = start_gps_s + t0 + GEOMETRY_STEP_S;
+            for sat in sats.iter_mut() {
+                let now = sat.next;
+                let next = constellation.line_of_sight(sat.prn, &antenna, t_next_gps).expect("PRN exists");
+                if b > 0 {
+                    set_segment(sat, &now, &next, t0, carrier_hz);
+                }
+                sat.amp = amplitude(cfg.noise_sigma, cn0.cn0_dbhz(sat.prn, now.elevation_deg), fs);
+            }
+            progress((t0 / duration_s).min(1.0));
+        }
+
+        let n0 = block_start_sample(b, fs);
+        let n1 = block_start_sample(b + 1, fs);
+        let len = (n1 - n0) as usize;
+        let (bi, bq) = (&mut buf_i[..len], &mut buf_q[..len]);
+        noise.fill(&mut noise_rng, bi);
+        noise.fill(&mut noise_rng, bq);
+        // Receiver time of the first sample minus the block start (≤ 0, above −1/fs).
+        let lead_s = n0 as f64 / fs - t0;
+        for (sat, f_now) in sats.iter_mut().zip(carrier_hz_now.iter_mut()) {
+            let f_d = sat.doppler0_hz + sat.doppler_slope_hz_per_s * (tm - sat.seg_t0_s);
+            let f_bb = (f_d - delta_f_hz) * scale;
+            *f_now = f_bb;
+            let rate = CA_CHIP_RATE_HZ * (1.0 + f_d / carrier_hz) * scale;
+            // Phases at the first sample.
+            let theta = sat.carrier_cycles + f_bb * lead_s;
+            let chip0 = sat.chip + rate * lead_s;
+            let first = chip0.floor();
+            let frac = chip0 - first;
+            let first = first as i64;
+            // Chip table: the chips this block touches (with a margin), amplitude and data applied.
+            let chips_needed = (rate * len as f64 / fs).ceil() as i64 + 3;
+            sat.fill_table(first, chips_needed as usize);
+            let acc = Accumulators {
+                code: (frac * two32) as u64,
+                code_step: (rate / fs * two32).round() as u64,
+                carrier: (theta.rem_euclid(1.0) * two32) as u64 as u32,
+                carrier_step: (f_bb / fs * two32).round() as i64 as u32,
+            };
+            mix_satellite(bi, bq, &sat.table, &lut, acc);
+            // Advance to the next block start.
+            sat.carrier_cycles = (sat.carrier_cycles + f_bb * BLOCK_S).rem_euclid(1.0);
+            sat.chip += rate * BLOCK_S;
+            let wraps = (sat.chip / CA_CODE_LENGTH as f64).floor();
+            sat.chip -= wraps * CA_CODE_LENGTH as f64;
+            sat.period += wraps as i64;
+        }
+        quantize(cfg.format, bi, bq, &mut bytes);
+        out.write_all(&bytes).map_err(io_err)?;
+        samples += len as u64;
+        on_block(&IqBlock {
+            t_mid_s: tm,
+            delta_f_hz,
+            g_induced_hz,
+            accel_true_mps2: a,
+            carrier_hz: &carrier_hz_now,
+            prns: &prns,
+        });
+
+        // IMU samples stamped within this block (and the duration).
+        let t_end = t0 + BLOCK_S;
+        loop {
+            let stamp = imu.stamp_s(next_imu);
+            if stamp >= t_end || stamp > duration_s + 1e-9 {
+                break;
+            }
+            let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
+            let m = imu.measure(f_true, &mut imu_rng);
+            sink.imu(stamp, m).map_err(SimError::Sink)?;
+            next_imu += 1;
+        }
+    }
+    // IMU stamps at the very end of the duration.
+    loop {
+        let stamp = imu.stamp_s(next_imu);
+        if stamp > duration_s + 1e-9 {
+            break;
+        }
+        let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
+        let m = imu.measure(f_true, &mut imu_rng);
+        sink.imu(stamp, m).map_err(SimError::Sink)?;
+        next_imu += 1;
+    }
+    out.flush().map_err(io_err)?;
+    progress(1.0);
+
+    Ok(IqTruth {
+        gamma_hz_per_mps2: gamma,
+        gamma_ppb_per_g: gamma.map(|g| hz_per_mps2_to_ppb_per_g(g, carrier_hz)),
+        gamma_imu_axes_hz_per_mps2: crate::session::inverse_transpose_times(&imu.sensing_matrix(), &gamma),
+        carrier_hz,
+        seed,
+        generator: format!("{} {} (iq)", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
+        start_gps_s,
+        duration_s: n_blocks as f64 * BLOCK_S,
+        fs_hz: fs,
+        format: cfg.format,
+        noise_sigma: cfg.noise_sigma,
+        samples,
+        block_s: BLOCK_S,
+        sample_time: "sample n at receiver time n/fs_hz; Δf and Dopplers constant over 1 ms blocks \
+                      [b·1ms, (b+1)·1ms) of receiver time, evaluated at the block centre"
+            .into(),
+        satellites: truth_sats,
+        imu_time_offset_s: imu.time_offset_s,
+        imu_errors: imu,
+        scenario: sc.clone(),
+    })
+}
+
+/// A [`SessionSink`] that ignores tracking rows and forwards IMU samples to a closure.
+pub struct ImuOnlySink<F: FnMut(f64, [f64; 3]) -> Result<(), crate::session::SinkError>>(pub F);
+
+impl<F: FnMut(f64, [f64; 3]) -> Result<(), crate::session::SinkError>> SessionSink for ImuOnlySink<F> {
+    fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), crate::session::SinkError> {
+        (self.0)(t_s, f_mps2)
+    }
+    fn tracking(&mut self, _row: &crate::session::TrackingRow) -> Result<(), crate::session::SinkError> {
+        Ok(())
+    }
+}
+
+/// Correlates `samples` (complex baseband, interleaved f32 pairs as produced by
+/// `gr_complex`) with a replica of `prn` at code phase `code_phase_chips`,
+/// code rate `chip_rate_hz` and carrier `carrier_hz` starting at phase
+/// `carrier_cycles`, over the whole slice: returns the complex prompt
+/// correlation normalized by the number of samples. A test helper for
+/// checking generated files.
+pub fn correlate(
+    samples: &[[f32; 2]],
+    fs_hz: f64,
+    prn: u32,
+    code_phase_chips: f64,
+    chip_rate_hz: f64,
+    carrier_hz: f64,
+    carrier_cycles: f64,
+) -> Option<(f64, f64)> {
+    let code = ca_code_bipolar(prn)?;
+    let (mut si, mut sq) = (0.0, 0.0);
+    for (n, s) in samples.iter().enumerate() {
+        let t = n as f64 / fs_hz;
+        let chip = (code_phase_chips + chip_rate_hz * t).rem_euclid(CA_CODE_LENGTH as f64) as usize;
+        let c = f64::from(code[chip.min(CA_CODE_LENGTH - 1)]);
+        let ph = -TAU * (carrier_cycles + carrier_hz * t);
+        let (sn, cs) = ph.sin_cos();
+        let (i, q) = (f64::from(s[0]), f64::from(s[1]));
+        si += c * (i * cs - q * sn);
+        sq += c * (i * sn + q * cs);
+    }
+    let n = samples.len().max(1) as f64;
+    Some((si / n, sq / n))
+}
+
+#[cfg(test)]
+mod tests;
