@@ -1,13 +1,14 @@
 //! The plain verdict per axis: was the shaking good enough?
 //!
 //! For each axis: the dominant shaking frequency of the specific force (the
-//! peak of its periodogram over 0.1–5 Hz, by Goertzel's recurrence on a
-//! log-spaced grid), the fraction of the loop's peak sensitivity |L| reached
+//! peak of its periodogram over 0.1–5 Hz, by FFT), the fraction of the loop's peak sensitivity |L| reached
 //! there, the unexplained excitation from the information matrix, and whether
 //! the predicted g-induced phase error stays in the discriminator's linear
 //! range (the Costas rule of thumb: 3σ of the phase error below 45°).
 
 use gsens_core::pll::LoopFilterCoeffs;
+use rustfft::FftPlanner;
+use rustfft::num_complex::Complex;
 use serde::Serialize;
 
 /// The linear range assumed for the discriminator [rad]: π/4.
@@ -30,34 +31,28 @@ pub struct AxisVerdict {
     pub text: String,
 }
 
-/// Periodogram peak of `x` (mean removed) over 0.1–5 Hz (or up to Nyquist).
+/// Periodogram peak of `x` (mean removed) over 0.1–5 Hz (or up to 90 % of
+/// Nyquist), by FFT of the zero-padded series.
 fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
     let n = x.len();
     if n < 16 {
         return None;
     }
     let mean = x.iter().sum::<f64>() / n as f64;
+    let len = (2 * n).next_power_of_two();
+    let mut buf: Vec<Complex<f64>> = x
+        .iter()
+        .map(|v| Complex::new(v - mean, 0.0))
+        .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
+        .take(len)
+        .collect();
+    FftPlanner::new().plan_fft_forward(len).process(&mut buf);
+    let df = 1.0 / (len as f64 * interval_s);
     let nyquist = 0.5 / interval_s;
     let (lo, hi) = (0.1f64, 5.0f64.min(0.9 * nyquist));
-    let points = 300;
-    let mut best = (0.0, f64::NAN);
-    for i in 0..points {
-        let f = lo * (hi / lo).powf(i as f64 / (points - 1) as f64);
-        // Goertzel: |Σ x_k e^{−jωk}|².
-        let w = core::f64::consts::TAU * f * interval_s;
-        let c = 2.0 * w.cos();
-        let (mut s1, mut s2) = (0.0, 0.0);
-        for &v in x {
-            let s0 = (v - mean) + c * s1 - s2;
-            s2 = s1;
-            s1 = s0;
-        }
-        let power = s1 * s1 + s2 * s2 - c * s1 * s2;
-        if power > best.0 {
-            best = (power, f);
-        }
-    }
-    best.1.is_finite().then_some(best.1)
+    let (k_lo, k_hi) = ((lo / df).ceil() as usize, ((hi / df).floor() as usize).min(len / 2));
+    let k = (k_lo..=k_hi).max_by(|&a, &b| buf[a].norm_sqr().total_cmp(&buf[b].norm_sqr()))?;
+    Some(k as f64 * df)
 }
 
 /// The verdict for every axis.
