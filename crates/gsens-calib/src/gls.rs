@@ -27,19 +27,19 @@
 //!    the noise spectrum).
 //!
 //! The series may have gaps: it comes as contiguous segments, each filtered on
-//! its own, and Burg's sums run over all segments. A segment's first p
-//! epochs are whitened by the model's lower-order predictors
-//! ([`ArModel::ladder`]), so the prewhitened least squares is the exact
-//! Gaussian maximum likelihood for the model and no epoch is lost to the
-//! filter's start (which matters when gaps cut a session into short pieces).
+//! its own, and Burg's sums run over all segments. By default a segment's
+//! first p epochs only prime the filter (the conditional likelihood); with
+//! [`GlsSettings::exact_start`] they are whitened by the model's lower-order
+//! predictors ([`ArModel::ladder`]), the exact Gaussian likelihood when every
+//! segment starts in the stationary state.
 //!
 //! # The bound
 //!
 //! For Gaussian noise of spectrum S(f) the Fisher information on Γ is (Whittle)
 //! J = Σ_f X(f)ᴴ S(f)⁻¹ X(f), X the regressors' transform; for AR noise this is
-//! exactly J = X_wᵀX_w/σ², X_w the prewhitened regressors (segments taken as
-//! independent). The
-//! Cramér–Rao bound on each component is √(J⁻¹)_ii, reported by
+//! J = X_wᵀX_w/σ², X_w the prewhitened regressors (exact for the conditional
+//! likelihood, segments taken as independent). The Cramér–Rao bound on each
+//! component is √(J⁻¹)_ii, reported by
 //! [`GlsFit::crlb_hz_per_mps2`]. It depends on the data and the noise, not on
 //! the method: an unbiased estimator's spread cannot be below it, and
 //! the GLS estimate reaches it when the AR model captures the noise.
@@ -106,23 +106,32 @@ impl ArModel {
         Some(out)
     }
 
-    /// The innovations of one contiguous segment, normalized to variance σ²:
-    /// e_k = x_k + Σ_{j=1..p} a_j x_{k−j} once p samples are past, and before
-    /// that the order-k prediction error of the model's lower-order predictor
-    /// scaled by √(σ_p²/σ_k²) (see [`ArModel::ladder`]). For Gaussian noise of
-    /// this model the e_k are independent with variance σ² from the first
-    /// sample on: Σ e_k² is the exact quadratic form xᵀΣ⁻¹x·σ² (the Cholesky
-    /// factor of the Toeplitz inverse), so no sample is lost at a segment's
-    /// start. A non-stationary model starts at k = p instead.
+    /// The innovations e_k = x_k + Σ_{j=1..p} a_j x_{k−j} of one contiguous
+    /// segment for k = p … len−1: the conditional likelihood, the first p
+    /// samples only prime the filter (empty when the segment is not longer
+    /// than p).
     pub fn whiten(&self, x: &[f64]) -> Vec<f64> {
         let mut out = Vec::with_capacity(x.len());
-        self.whiten_lanes::<1>(&x.iter().map(|v| [*v]).collect::<Vec<_>>(), &mut |e| out.push(e[0]));
+        self.whiten_lanes::<1>(&x.iter().map(|v| [*v]).collect::<Vec<_>>(), false, &mut |e| out.push(e[0]));
         out
     }
 
-    /// [`ArModel::whiten`] of N series side by side (N lanes per tap), each
-    /// innovation vector handed to `out` in order.
-    fn whiten_lanes<const N: usize>(&self, z: &[[f64; N]], out: &mut impl FnMut([f64; N])) {
+    /// [`ArModel::whiten`] from the first sample on: before p samples are past,
+    /// the order-k prediction error of the model's lower-order predictor,
+    /// scaled by √(σ_p²/σ_k²) (see [`ArModel::ladder`]). For stationary
+    /// Gaussian noise of this model the e_k are independent with variance σ²:
+    /// Σ e_k² is the exact quadratic form xᵀΣ⁻¹x·σ² (the Cholesky factor of the
+    /// Toeplitz inverse) and no sample is lost. It assumes each segment starts
+    /// in the stationary state; a non-stationary model starts at k = p.
+    pub fn whiten_exact(&self, x: &[f64]) -> Vec<f64> {
+        let mut out = Vec::with_capacity(x.len());
+        self.whiten_lanes::<1>(&x.iter().map(|v| [*v]).collect::<Vec<_>>(), true, &mut |e| out.push(e[0]));
+        out
+    }
+
+    /// Whitening of N series side by side (N lanes per tap), each innovation
+    /// vector handed to `out` in order; `exact_start` as in [`ArModel::whiten_exact`].
+    fn whiten_lanes<const N: usize>(&self, z: &[[f64; N]], exact_start: bool, out: &mut impl FnMut([f64; N])) {
         let p = self.order();
         let filter = |a: &[f64], scale: f64, k: usize| {
             let mut e = z[k];
@@ -134,7 +143,7 @@ impl ArModel {
             }
             e.map(|v| v * scale)
         };
-        let start = match self.ladder() {
+        let start = match self.ladder().filter(|_| exact_start) {
             Some(ladder) => {
                 for (k, (a, scale)) in ladder.iter().enumerate().take(p.min(z.len())) {
                     out(filter(a, *scale, k));
@@ -259,6 +268,13 @@ pub struct GlsSettings {
     /// segment by segment): enough for its spectrum, and a long log costs
     /// only its O(n·p) prewhitening.
     pub max_fit_samples: usize,
+    /// Whiten each segment from its first sample ([`ArModel::whiten_exact`])
+    /// rather than from its p-th. Exact when every segment starts in the
+    /// noise's stationary state; the calibration's segments do not (the
+    /// high-pass's start-up, the bridging of gaps), and there the exact start
+    /// made the bound ~10 % optimistic on synthetic series, so it is off by
+    /// default.
+    pub exact_start: bool,
     /// Longest lag of the autocorrelation-robust covariance of the
     /// prewhitened fit, in epochs (what colour the AR model missed); `None`
     /// skips it.
@@ -272,6 +288,7 @@ impl Default for GlsSettings {
             max_ar_order: DEFAULT_MAX_AR_ORDER,
             iterations: 1,
             max_fit_samples: 40_000,
+            exact_start: false,
             hac_max_lag: None,
         }
     }
@@ -329,13 +346,14 @@ fn whitened(
     phi_a: &[[f64; 3]],
     segments: &[Range<usize>],
     ar: &ArModel,
+    exact_start: bool,
 ) -> (NormalEquations, Vec<[f64; 3]>, Vec<f64>) {
     let mut ne = NormalEquations::default();
     let (mut xw, mut yw) = (Vec::new(), Vec::new());
     for r in segments {
         // φ and φ_a side by side, filtered together.
         let z: Vec<[f64; 4]> = r.clone().map(|k| [phase[k], phi_a[k][0], phi_a[k][1], phi_a[k][2]]).collect();
-        ar.whiten_lanes(&z, &mut |e| {
+        ar.whiten_lanes(&z, exact_start, &mut |e| {
             let v = [e[1], e[2], e[3]];
             ne.add(e[0], &v);
             xw.push(v);
@@ -358,7 +376,7 @@ fn residuals(phase: &[f64], phi_a: &[[f64; 3]], segments: &[Range<usize>], gamma
 /// than 10 prewhitened epochs remain.
 pub fn gls(phase: &[f64], phi_a: &[[f64; 3]], segments: &[Range<usize>], settings: &GlsSettings) -> Option<GlsFit> {
     let mut ar = ArModel::white(1.0);
-    let (mut ne, mut xw, mut yw) = whitened(phase, phi_a, segments, &ar);
+    let (mut ne, mut xw, mut yw) = whitened(phase, phi_a, segments, &ar, settings.exact_start);
     if ne.n < 10 {
         return None;
     }
@@ -377,7 +395,7 @@ pub fn gls(phase: &[f64], phi_a: &[[f64; 3]], segments: &[Range<usize>], setting
         // Keep at least ~20 samples per AR coefficient.
         let max_order = settings.max_ar_order.min(n / 20);
         let candidate = fit_ar_orders(&refs, settings.min_ar_order.min(max_order), max_order);
-        let (ne_c, xw_c, yw_c) = whitened(phase, phi_a, segments, &candidate);
+        let (ne_c, xw_c, yw_c) = whitened(phase, phi_a, segments, &candidate, settings.exact_start);
         if ne_c.n < 10 {
             break;
         }
@@ -508,7 +526,7 @@ mod tests {
         let segments = [0..450, 460..465, 470..700];
         for (coeffs, s2) in [(vec![-0.9], 0.3), (vec![-1.6, 0.8], 2.0), (vec![-0.5, 0.2, -0.3, 0.1], 1.0)] {
             let ar = ArModel { coeffs: coeffs.clone(), innovation_variance: s2 };
-            let (ne, _, _) = whitened(&vec![0.0; x.len()], &x, &segments, &ar);
+            let (ne, _, _) = whitened(&vec![0.0; x.len()], &x, &segments, &ar, true);
             let j_fast = ne.ata / s2;
             // Autocovariance γ(l) = σ² Σ_i h_i h_{i+l}, h the impulse response of 1/A(z).
             let m = 20_000;

@@ -431,9 +431,9 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         let own = estimate.covariance[i][i];
         let ratio = match (&settings.method, &noise_fit) {
             // Huber: its own sandwich, with the autocorrelation terms.
-            _ if huber.is_some() => huber.as_ref().map_or(1.0, |h| {
-                if own > 0.0 { (h.covariance[i][i] / own).max(1.0) } else { 1.0 }
-            }),
+            _ if huber.is_some() => {
+                huber.as_ref().map_or(1.0, |h| if own > 0.0 { (h.covariance[i][i] / own).max(1.0) } else { 1.0 })
+            }
             // GLS: what colour its AR model missed, from its own prewhitened residuals.
             (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance.map_or(own, |c| c[i][i]) / own).max(1.0),
             _ if white_batch.covariance[i][i] > 0.0 => (hac[i][i] / white_batch.covariance[i][i]).max(1.0),

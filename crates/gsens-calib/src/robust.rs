@@ -32,17 +32,17 @@ pub const MAX_ITERATIONS: u32 = 50;
 /// A Huber fit of Γ.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HuberFit {
-    /// Γ̂ [Hz/(m/s²)].
+    /// Γ̂ \[Hz/(m/s²)\].
     pub gamma_hz_per_mps2: [f64; 3],
-    /// Sandwich covariance, autocorrelation-robust [(Hz/(m/s²))²].
+    /// Sandwich covariance, autocorrelation-robust \[(Hz/(m/s²))²\].
     #[serde(skip)]
     pub covariance: [[f64; 3]; 3],
     /// Sandwich covariance without the autocorrelation terms (white residuals).
     #[serde(skip)]
     pub covariance_white: [[f64; 3]; 3],
-    /// The residuals' robust scale σ̂ [rad].
+    /// The residuals' robust scale σ̂ \[rad\].
     pub scale_rad: f64,
-    /// The threshold c = 1.345·σ̂ [rad].
+    /// The threshold c = 1.345·σ̂ \[rad\].
     pub threshold_rad: f64,
     /// Epochs with |r| > c (down-weighted).
     pub epochs_downweighted: usize,

@@ -55,7 +55,10 @@ fn huber_resists_one_percent_of_outliers_where_least_squares_is_pulled() {
         let (err_h, err_ls) = (h.gamma_hz_per_mps2[i] - GAMMA[i], ls[i] - GAMMA[i]);
         eprintln!("axis {i}: Huber {err_h:+.5} ({:+.2}σ), LS {err_ls:+.5} ({:+.1}σ)", err_h / sigma, err_ls / sigma);
         assert!(err_h.abs() < 3.0 * sigma && err_h.abs() < 0.01 * GAMMA[i].abs(), "axis {i}: Huber off by {err_h}");
-        assert!(err_ls.abs() > 20.0 * sigma && err_ls.abs() > 0.05 * GAMMA[i].abs(), "axis {i}: LS off by only {err_ls}");
+        assert!(
+            err_ls.abs() > 20.0 * sigma && err_ls.abs() > 0.05 * GAMMA[i].abs(),
+            "axis {i}: LS off by only {err_ls}"
+        );
     }
     // About 1 % of the epochs are beyond the threshold, plus the Gaussian tail beyond 1.345σ (18 %).
     let frac = h.epochs_downweighted as f64 / h.epochs as f64;
@@ -120,8 +123,13 @@ fn calibrate_with_huber() {
     let times: Vec<f64> = (0..3200).map(|k| k as f64 * T).collect();
     let run = |outliers: bool, robust: Robust| {
         let (phase, accel) = session(3, outliers);
-        let series =
-            EpochSeries { log_interval_s: T, t_s: &times, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+        let series = EpochSeries {
+            log_interval_s: T,
+            t_s: &times,
+            phase_err_rad: &phase,
+            accel_mps2: &accel,
+            imu_time_offset_s: 0.0,
+        };
         calibrate(&series, &EstimateSettings { robust, ..EstimateSettings::default() }).unwrap()
     };
     let (ls, huber) = (run(true, Robust::None), run(true, Robust::Huber));
@@ -153,8 +161,13 @@ fn calibrate_with_huber() {
 fn huber_needs_the_batch_method() {
     let times: Vec<f64> = (0..3200).map(|k| k as f64 * T).collect();
     let (phase, accel) = session(3, false);
-    let series =
-        EpochSeries { log_interval_s: T, t_s: &times, phase_err_rad: &phase, accel_mps2: &accel, imu_time_offset_s: 0.0 };
+    let series = EpochSeries {
+        log_interval_s: T,
+        t_s: &times,
+        phase_err_rad: &phase,
+        accel_mps2: &accel,
+        imu_time_offset_s: 0.0,
+    };
     for method in [Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }, Method::Gls] {
         let e = calibrate(&series, &EstimateSettings { robust: Robust::Huber, method, ..EstimateSettings::default() })
             .unwrap_err()

@@ -41,7 +41,8 @@ fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
     let d = dir.to_str().unwrap();
     gsens(&["simulate", "--scenario", scenario.to_str().unwrap(), "--out", d, "--seed", "1"]);
     let truth = json(&dir.join("truth.json"));
-    let slips: u64 = truth["channels"].as_array().unwrap().iter().map(|c| c["stats"]["cycle_slips"].as_u64().unwrap()).sum();
+    let slips: u64 =
+        truth["channels"].as_array().unwrap().iter().map(|c| c["stats"]["cycle_slips"].as_u64().unwrap()).sum();
     assert!(slips > 1000, "the scenario should make the weak channels slip ({slips})");
     let t = vec3(&truth["gamma_imu_axes_hz_per_mps2"]);
     let norm = t.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -100,5 +101,13 @@ fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
     assert_eq!(on["selection"]["screening"]["enabled"], true);
     assert_eq!(off["selection"]["screening"]["enabled"], false);
     assert!(text.contains("whole track excluded"), "{text}");
+
+    // Huber on top: the same estimate within its σ (the screening left no outliers to resist).
+    let (text, huber) = estimate(&["--robust", "huber"], "huber.json");
+    assert!(text.contains("robust: Huber"), "{text}");
+    assert_eq!(huber["settings"]["robust"], "huber");
+    let (err_h, z_h) = report(&huber);
+    eprintln!("screening on, Huber: |Γ̂ − Γ| = {:.2} %, z = {z_h:+.2?}", 100.0 * err_h);
+    assert!(err_h < 0.02 && z_h.iter().all(|z| z.abs() < 3.0), "Huber: {err_h}, {z_h:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -67,7 +67,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::FormatError;
 use crate::imu::{ImuSeries, read_imu_file};
 use crate::parse::path_name;
-use crate::screening::{self, ExcludedSpan, Rows, ScreeningConfig, Screened, TrackScreening};
+use crate::screening::{self, ExcludedSpan, Rows, Screened, ScreeningConfig, TrackScreening};
 use crate::tracking::{TrackingLog, read_tracking_file};
 
 /// The most epochs (gaps included) a prepared session may hold.

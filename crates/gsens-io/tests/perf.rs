@@ -93,7 +93,8 @@ fn one_hour_twelve_channels_40hz() {
     let prep_s = t.elapsed().as_secs_f64();
     assert_eq!(s.len(), EPOCHS);
     eprintln!("imu: {} rows in {imu_s:.3} s; prepare_session (12 channels, offsets): {prep_s:.3} s", imu_back.len());
-    for (label, screening) in [("screening off", gsens_io::ScreeningConfig::off()), ("screening on", Default::default())]
+    for (label, screening) in
+        [("screening off", gsens_io::ScreeningConfig::off()), ("screening on", Default::default())]
     {
         for max_channels in [Some(4), None] {
             let cfg = SelectionConfig { max_channels, screening: screening.clone(), ..SelectionConfig::default() };

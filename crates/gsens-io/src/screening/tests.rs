@@ -126,7 +126,14 @@ fn faulty_log(f: Faults) -> TrackingLog {
                 cn0 -= 15.0;
                 phase = 0.5 * common(k) + OFFSETS[3] + 0.3 * extra_noise;
             }
-            let row = TrackingRow { t_s: 100.0 + t, channel: ch, prn: ch + 10, cn0_dbhz: cn0, elev_deg: None, phase_err_rad: phase };
+            let row = TrackingRow {
+                t_s: 100.0 + t,
+                channel: ch,
+                prn: ch + 10,
+                cn0_dbhz: cn0,
+                elev_deg: None,
+                phase_err_rad: phase,
+            };
             w.write_row(&row).unwrap();
         }
     }
@@ -171,7 +178,13 @@ fn screening_keeps_the_average_of_a_faulty_log_close_to_the_clean_one() {
     let (max_n, rms_n, _) = compare(&naive, &clean);
     eprintln!("screened: max {max_s:.4} rad, RMS {rms_s:.4} rad, {gaps} gaps; naive: max {max_n:.4}, RMS {rms_n:.4}");
     for c in &screened.channels {
-        eprintln!("{} {:?} {:?} {:?}", c.channel, c.phase_offset_rad, c.screening.brief(), c.screening.spans.iter().map(|s| (s.start_s, s.end_s)).collect::<Vec<_>>());
+        eprintln!(
+            "{} {:?} {:?} {:?}",
+            c.channel,
+            c.phase_offset_rad,
+            c.screening.brief(),
+            c.screening.spans.iter().map(|s| (s.start_s, s.end_s)).collect::<Vec<_>>()
+        );
     }
     for k in (0..EPOCHS).step_by(200) {
         eprintln!("{k} {:?} {:?}", screened.phase_err_rad[k], clean.phase_err_rad[k]);
@@ -236,8 +249,14 @@ fn a_channel_that_does_not_follow_the_common_signal_is_dropped() {
         for ch in 0..5u32 {
             let n = noise.normal();
             let phase = if ch == 2 { 0.15 * n } else { common(k) + 0.03 * n };
-            let row =
-                TrackingRow { t_s: k as f64 * T + 100.0, channel: ch, prn: ch + 10, cn0_dbhz: 40.0, elev_deg: None, phase_err_rad: phase };
+            let row = TrackingRow {
+                t_s: k as f64 * T + 100.0,
+                channel: ch,
+                prn: ch + 10,
+                cn0_dbhz: 40.0,
+                elev_deg: None,
+                phase_err_rad: phase,
+            };
             w.write_row(&row).unwrap();
         }
     }
@@ -269,7 +288,14 @@ fn a_lone_excursion_beyond_the_linear_range_is_excluded_a_common_one_kept() {
             if ch == 0 && (20.0..20.5).contains(&t) {
                 phase = 0.9;
             }
-            let row = TrackingRow { t_s: t + 100.0, channel: ch, prn: ch + 1, cn0_dbhz: 45.0, elev_deg: None, phase_err_rad: phase };
+            let row = TrackingRow {
+                t_s: t + 100.0,
+                channel: ch,
+                prn: ch + 1,
+                cn0_dbhz: 45.0,
+                elev_deg: None,
+                phase_err_rad: phase,
+            };
             w.write_row(&row).unwrap();
         }
     }

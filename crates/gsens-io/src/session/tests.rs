@@ -317,8 +317,7 @@ fn cn0_weights_are_the_cn0_ratio() {
         rows.push(row(tk(k), 2, 43.0, None, 0.0));
     }
     let log = log_from(&rows);
-    let cfg =
-        SelectionConfig { weighting: Weighting::Cn0, remove_channel_offsets: false, ..base() };
+    let cfg = SelectionConfig { weighting: Weighting::Cn0, remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     let (w1, w2) = (10f64.powf(4.0), 10f64.powf(4.3));
     let want = w1 / (w1 + w2);
@@ -372,12 +371,7 @@ fn selection_by_cn0_threshold_drops_rows() {
     // Channel 1 alternates 33 / 37 dB-Hz: half its rows pass a 35 dB-Hz threshold.
     let cn0 = |ch: u32, k: usize| if ch == 1 { if k & 1 == 0 { 33.0 } else { 37.0 } } else { 30.0 + 2.0 * ch as f64 };
     let log = six_channels(|_, _| None, cn0);
-    let cfg = SelectionConfig {
-        max_channels: None,
-        min_cn0_dbhz: Some(35.0),
-        remove_channel_offsets: false,
-        ..base()
-    };
+    let cfg = SelectionConfig { max_channels: None, min_cn0_dbhz: Some(35.0), remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert_eq!(used(&s), vec![1, 3, 4, 5]);
     let c0 = &s.channels[0];
@@ -398,12 +392,8 @@ fn selection_by_elevation_mask() {
         _ => Some(60.0),
     };
     let log = six_channels(elev, |ch, _| 30.0 + 2.0 * ch as f64);
-    let cfg = SelectionConfig {
-        max_channels: None,
-        elevation_mask_deg: Some(10.0),
-        remove_channel_offsets: false,
-        ..base()
-    };
+    let cfg =
+        SelectionConfig { max_channels: None, elevation_mask_deg: Some(10.0), remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
     assert_eq!(used(&s), vec![1, 2, 3, 4, 5]);
     assert!(s.channels[0].reason.contains("below the elevation mask of 10 deg"), "{}", s.channels[0].reason);
