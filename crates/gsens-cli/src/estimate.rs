@@ -7,7 +7,7 @@ use gsens_calib::{Calibration, EpochSeries, EstimateSettings, Method, Robust, ca
 use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
 use gsens_core::regressor::LoggedPhase;
 use gsens_io::screening::ScreeningConfig;
-use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session};
+use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session, reinterpolate_imu};
 use gsens_io::{ImuSeries, TrackingLog, read_imu_file, read_tracking_file};
 use std::path::{Path, PathBuf};
 
@@ -379,7 +379,7 @@ pub fn estimate_logs(
                 systematic.time_offset_max_s
             );
         }
-        session = prepare(found.imu_time_offset_s)?;
+        reinterpolate_imu(&mut session, imu_series, found.imu_time_offset_s);
         offset_sigma = Some(found.sigma_s);
     }
     let mut calibration = calibrate(&series_of(&session), &settings)?;

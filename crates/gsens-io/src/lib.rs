@@ -35,6 +35,7 @@ pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use screening::{ExcludedSpan, ScreeningConfig, TrackScreening};
 pub use session::{
     ChannelSummary, PreparedSession, SelectionConfig, Weighting, prepare_session, prepare_session_files,
+    reinterpolate_imu,
 };
 pub use tracking::{ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
 pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv};

@@ -621,6 +621,25 @@ pub fn prepare_session(
     })
 }
 
+/// Re-interpolates the IMU onto the session's epochs for another IMU time
+/// offset (IMU time stamp minus true time) [s], keeping the selection and the
+/// averaged phases: the average does not depend on the offset, so a search
+/// over offsets needs the logs prepared once. Epochs whose IMU read time falls
+/// outside the IMU's span get no phase (the specific force is held at the
+/// nearest sample so the loop models keep running).
+pub fn reinterpolate_imu(session: &mut PreparedSession, imu: &ImuSeries, imu_time_offset_s: f64) {
+    let (first, last) = (imu.t_s[0], *imu.t_s.last().expect("a prepared session has IMU samples"));
+    let mut cursor = 0;
+    for k in 0..session.t_s.len() {
+        let tau = session.t_s[k] + imu_time_offset_s;
+        if tau < first || tau > last {
+            session.phase_err_rad[k] = None;
+        }
+        session.accel_mps2[k] = interpolate(imu, tau.clamp(first, last), &mut cursor);
+    }
+    session.imu_time_offset_s = imu_time_offset_s;
+}
+
 fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f64) -> Result<(), FormatError> {
     let fail = |reason: String| Err(FormatError::InvalidSelection { file: file.to_owned(), reason });
     if selection.max_channels == Some(0) {

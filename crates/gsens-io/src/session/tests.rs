@@ -465,3 +465,31 @@ fn selection_config_serde() {
     let text = serde_json::to_string(&SelectionConfig::default()).unwrap();
     assert!(text.contains(r#""weighting":"equal""#) && text.contains(r#""max_channels":4"#), "{text}");
 }
+
+#[test]
+fn reinterpolating_the_imu_matches_a_fresh_preparation_inside_the_span() {
+    // IMU at 100 Hz over 0…10 s, a linear-in-time specific force; tracking at 40 Hz.
+    let imu = ImuSeries {
+        t_s: (0..=1000).map(|k| k as f64 * 0.01).collect(),
+        accel_mps2: (0..=1000).map(|k| [k as f64 * 0.01, 1.0 - k as f64 * 0.002, 9.8]).collect(),
+    };
+    let mut text = String::from("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n");
+    for k in 0..400 {
+        text.push_str(&format!("{},1,5,45,,{}\n", k as f64 * 0.025, (k as f64 * 0.3).sin() * 0.01));
+    }
+    let log = crate::tracking::read_tracking(text.as_bytes(), "t.csv").unwrap();
+    let sel = SelectionConfig::default();
+    let mut moved = prepare_session(&log, &imu, "imu.csv", &sel, 0.0).unwrap();
+    reinterpolate_imu(&mut moved, &imu, 0.037);
+    let fresh = prepare_session(&log, &imu, "imu.csv", &sel, 0.037).unwrap();
+    for (k, t) in fresh.t_s.iter().enumerate() {
+        let j = moved.t_s.iter().position(|x| x == t).unwrap();
+        for i in 0..3 {
+            assert!((moved.accel_mps2[j][i] - fresh.accel_mps2[k][i]).abs() < 1e-12);
+        }
+        assert_eq!(moved.phase_err_rad[j].is_some(), fresh.phase_err_rad[k].is_some());
+    }
+    // The epoch that reads past the IMU's end has no phase.
+    assert!(moved.phase_err_rad.last().unwrap().is_none());
+    assert_eq!(moved.imu_time_offset_s, 0.037);
+}
