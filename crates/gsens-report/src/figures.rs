@@ -20,6 +20,8 @@ use gsens_calib::HistoryPoint;
 use gsens_core::pll::{Complex, LoopFilterCoeffs};
 use plotters::coord::Shift;
 use plotters::coord::combinators::{LogCoord, WithKeyPoints};
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -173,7 +175,6 @@ fn render<P: Plot>(p: &P, format: Format, size: (u32, u32)) -> Result<Image, Ren
     }
     ensure_font();
     let st = Style::new(size);
-    let draw_err = |e: &dyn std::fmt::Display| RenderError::Draw(e.to_string());
     match format {
         Format::Png => {
             // Drawn at twice the size and averaged down 2×2: anti-aliased lines
@@ -183,10 +184,7 @@ fn render<P: Plot>(p: &P, format: Format, size: (u32, u32)) -> Result<Image, Ren
             let st = Style::new(big);
             let mut rgb = vec![255u8; big.0 as usize * big.1 as usize * 3];
             {
-                let root = BitMapBackend::with_buffer(&mut rgb, big).into_drawing_area();
-                root.fill(&WHITE).map_err(|e| draw_err(&e))?;
-                p.plot(&root, &st).map_err(|e| draw_err(&e))?;
-                root.present().map_err(|e| draw_err(&e))?;
+                paint(&BitMapBackend::with_buffer(&mut rgb, big).into_drawing_area(), p, &st)?;
             }
             let rgb = if ss == 2 { downsample2(&rgb, w as usize, h as usize) } else { rgb };
             encode_png(&rgb, w, h)
@@ -194,14 +192,19 @@ fn render<P: Plot>(p: &P, format: Format, size: (u32, u32)) -> Result<Image, Ren
         Format::Svg => {
             let mut s = String::new();
             {
-                let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
-                root.fill(&WHITE).map_err(|e| draw_err(&e))?;
-                p.plot(&root, &st).map_err(|e| draw_err(&e))?;
-                root.present().map_err(|e| draw_err(&e))?;
+                paint(&SVGBackend::with_string(&mut s, size).into_drawing_area(), p, &st)?;
             }
             Ok(Image::Svg(s))
         }
     }
+}
+
+/// Fills `root` white, draws `p` on it and presents it.
+fn paint<DB: DrawingBackend, P: Plot>(root: &DrawingArea<DB, Shift>, p: &P, st: &Style) -> Result<(), RenderError> {
+    let draw_err = |e: DrawingAreaErrorKind<DB::ErrorType>| RenderError::Draw(e.to_string());
+    root.fill(&WHITE).map_err(draw_err)?;
+    p.plot(root, st).map_err(draw_err)?;
+    root.present().map_err(draw_err)
 }
 
 /// Averages 2×2 blocks of an RGB image of (2w, 2h) pixels.
@@ -329,8 +332,11 @@ fn log_ticks(r: &Range<f64>) -> (Vec<f64>, Vec<f64>) {
     (bold, light)
 }
 
+/// A log axis with chosen bold and light tick points.
+type LogAxis = WithKeyPoints<LogCoord<f64>>;
+
 /// A log axis over `r` with [`log_ticks`].
-fn log_axis(r: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
+fn log_axis(r: Range<f64>) -> LogAxis {
     let (bold, light) = log_ticks(&r);
     r.log_scale().with_key_points(bold).with_light_points(light)
 }
@@ -504,6 +510,142 @@ fn check_size(n: usize, what: &str) -> Result<(), RenderError> {
     if n == 0 { Err(RenderError::NoData(format!("{what} is empty"))) } else { Ok(()) }
 }
 
+/// Tick labels for an axis spanning `r` ([`fmt_tick`] with its span).
+fn span_fmt(r: &Range<f64>) -> impl Fn(&f64) -> String + use<> {
+    let span = r.end - r.start;
+    move |v: &f64| fmt_tick(*v, span)
+}
+
+/// The layout and mesh of one chart: margins, label areas, axis descriptions and tick labels.
+struct Frame<'s> {
+    /// Top margin (before scaling).
+    top: f64,
+    /// Height of the x label area (before scaling).
+    x_area: f64,
+    /// Width of the y label area [px].
+    y_area: i32,
+    /// The x axis description, if drawn.
+    x_desc: Option<&'s str>,
+    /// The y axis description.
+    y_desc: &'s str,
+    /// How many y labels, if not the default.
+    y_labels: Option<usize>,
+    fmt_x: &'s dyn Fn(&f64) -> String,
+    fmt_y: &'s dyn Fn(&f64) -> String,
+}
+
+type Chart<'a, DB, X, Y> = ChartContext<'a, DB, Cartesian2d<X, Y>>;
+type AreaResult<DB, T> = Result<T, DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+/// A chart on `area` over `x` × `y` laid out by `frame`, its mesh (grid, ticks
+/// and axis descriptions) already drawn.
+fn framed_chart<'a, DB, X, Y>(
+    area: &'a DrawingArea<DB, Shift>,
+    st: &Style,
+    frame: &Frame,
+    x: X,
+    y: Y,
+) -> AreaResult<DB, Chart<'a, DB, X::CoordDescType, Y::CoordDescType>>
+where
+    DB: DrawingBackend,
+    X: AsRangedCoord,
+    Y: AsRangedCoord,
+    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(area)
+        .margin(st.i(10.0))
+        .margin_top(st.i(frame.top))
+        .margin_right(st.i(24.0))
+        .x_label_area_size(st.i(frame.x_area))
+        .y_label_area_size(frame.y_area)
+        .build_cartesian_2d(x, y)?;
+    let mut mesh = chart.configure_mesh();
+    if let Some(d) = frame.x_desc {
+        mesh.x_desc(d);
+    }
+    if let Some(n) = frame.y_labels {
+        mesh.y_labels(n);
+    }
+    mesh.y_desc(frame.y_desc)
+        .x_label_formatter(frame.fmt_x)
+        .y_label_formatter(frame.fmt_y)
+        .max_light_lines(4)
+        .label_style(st.label())
+        .axis_desc_style(st.desc())
+        .light_line_style(GRID_LIGHT)
+        .bold_line_style(GRID_BOLD)
+        .draw()?;
+    Ok(chart)
+}
+
+/// A chart of a quantity over time `xr` × `yr` under a legend: the time axis
+/// described at the bottom, 8 y labels, ticks formatted to the spans.
+fn time_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    st: &Style,
+    y_area: i32,
+    y_desc: &str,
+    xr: Range<f64>,
+    yr: Range<f64>,
+) -> AreaResult<DB, Chart<'a, DB, RangedCoordf64, RangedCoordf64>> {
+    let (fmt_x, fmt_y) = (span_fmt(&xr), span_fmt(&yr));
+    let frame = Frame {
+        top: 2.0,
+        x_area: 48.0,
+        y_area,
+        x_desc: Some("time t [s]"),
+        y_desc,
+        y_labels: Some(8),
+        fmt_x: &fmt_x,
+        fmt_y: &fmt_y,
+    };
+    framed_chart(area, st, &frame, xr, yr)
+}
+
+/// A log-log chart over `xr` × `yr` ([`log_axis`]) under a legend, its axes
+/// described by `(x_desc, y_desc)`.
+fn loglog_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    st: &Style,
+    y_area: i32,
+    (x_desc, y_desc): (&str, &str),
+    xr: Range<f64>,
+    yr: Range<f64>,
+) -> AreaResult<DB, Chart<'a, DB, LogAxis, LogAxis>> {
+    let fmt = |v: &f64| fmt_tick(*v, 0.0);
+    let frame = Frame {
+        top: 2.0,
+        x_area: 48.0,
+        y_area,
+        x_desc: Some(x_desc),
+        y_desc,
+        y_labels: None,
+        fmt_x: &fmt,
+        fmt_y: &fmt,
+    };
+    framed_chart(area, st, &frame, log_axis(xr), log_axis(yr))
+}
+
+/// Draws the series `y` over `t` as [`polylines`] of `buckets`, in `style`.
+fn draw_polylines<DB, X, Y>(
+    chart: &mut Chart<'_, DB, X, Y>,
+    t: &[f64],
+    y: impl Fn(usize) -> Option<f64>,
+    buckets: usize,
+    style: ShapeStyle,
+) -> DrawResult<DB>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for l in polylines(t, y, buckets) {
+        chart.draw_series(LineSeries::new(l, style))?;
+    }
+    Ok(())
+}
+
 // ---------------------------------------------------------------- Fig. 3
 
 /// The loop response to plot (the paper's Fig. 3).
@@ -637,24 +779,17 @@ impl Plot for ResponseData {
         let ymax = self.magnitude_rad_per_hz.iter().cloned().fold(self.peak_rad_per_hz, f64::max) * 1.1;
         let fmt_log = |v: &f64| fmt_tick(*v, 0.0);
         let fmt_mag = |v: &f64| fmt_tick(*v, ymax);
-        let mut chart = ChartBuilder::on(&top)
-            .margin(st.i(10.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(30.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(xr(), 0.0..ymax)?;
-        chart
-            .configure_mesh()
-            .y_desc("|L| [rad/Hz]")
-            .x_label_formatter(&fmt_log)
-            .y_label_formatter(&fmt_mag)
-            .y_labels(6)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let frame = Frame {
+            top: 10.0,
+            x_area: 30.0,
+            y_area,
+            x_desc: None,
+            y_desc: "|L| [rad/Hz]",
+            y_labels: Some(6),
+            fmt_x: &fmt_log,
+            fmt_y: &fmt_mag,
+        };
+        let mut chart = framed_chart(&top, st, &frame, xr(), 0.0..ymax)?;
         if let Some((lo, hi)) = band {
             chart.draw_series(std::iter::once(Rectangle::new([(lo, 0.0), (hi, ymax)], shade.filled())))?;
         }
@@ -672,25 +807,17 @@ impl Plot for ResponseData {
             self.phase_deg.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &p| (a.min(p), b.max(p)));
         let pr = (plo / 45.0).floor() * 45.0..(phi / 45.0).ceil() * 45.0;
         let fmt_deg = |v: &f64| format!("{v:.0}");
-        let mut chart = ChartBuilder::on(&bottom)
-            .margin(st.i(10.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(48.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(xr(), pr.clone())?;
-        chart
-            .configure_mesh()
-            .x_desc("frequency f [Hz]")
-            .y_desc("phase of L [deg]")
-            .x_label_formatter(&fmt_log)
-            .y_label_formatter(&fmt_deg)
-            .y_labels(((pr.end - pr.start) / 45.0) as usize + 1)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let frame = Frame {
+            top: 10.0,
+            x_area: 48.0,
+            y_area,
+            x_desc: Some("frequency f [Hz]"),
+            y_desc: "phase of L [deg]",
+            y_labels: Some(((pr.end - pr.start) / 45.0) as usize + 1),
+            fmt_x: &fmt_log,
+            fmt_y: &fmt_deg,
+        };
+        let mut chart = framed_chart(&bottom, st, &frame, xr(), pr.clone())?;
         if let Some((lo, hi)) = band {
             chart.draw_series(std::iter::once(Rectangle::new([(lo, pr.start), (hi, pr.end)], shade.filled())))?;
         }
@@ -758,8 +885,7 @@ impl Plot for EstimationData<'_> {
         let t1 = self.t_s.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let t1 = self.history.iter().map(|p| p.t_s).fold(t1, f64::max);
         let xr = t0..if t1 > t0 { t1 } else { t0 + 1.0 };
-        let xspan = xr.end - xr.start;
-        let fmt_x = move |v: &f64| fmt_tick(*v, xspan);
+        let fmt_x = span_fmt(&xr);
         let buckets = (top.dim_in_pixel().0 as usize).max(200);
 
         // Top: specific force.
@@ -767,32 +893,21 @@ impl Plot for EstimationData<'_> {
             (0..3).map(|i| (format!("a{}", crate::AXES[i]), Mark::Line(AXIS_COLORS[i].mix(0.9), 3))).collect();
         let top = legend_strip(&top, &entries, x0, st)?;
         let ar = padded_range(self.accel_mps2.iter().flat_map(|a| a.iter().cloned()), 0.05).unwrap_or(-1.0..1.0);
-        let aspan = ar.end - ar.start;
-        let fmt_a = move |v: &f64| fmt_tick(*v, aspan);
-        let mut chart = ChartBuilder::on(&top)
-            .margin(st.i(10.0))
-            .margin_top(st.i(2.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(30.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(xr.clone(), ar)?;
-        chart
-            .configure_mesh()
-            .y_desc("specific force a [m/s²]")
-            .x_label_formatter(&fmt_x)
-            .y_label_formatter(&fmt_a)
-            .y_labels(6)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let fmt_a = span_fmt(&ar);
+        let frame = Frame {
+            top: 2.0,
+            x_area: 30.0,
+            y_area,
+            x_desc: None,
+            y_desc: "specific force a [m/s²]",
+            y_labels: Some(6),
+            fmt_x: &fmt_x,
+            fmt_y: &fmt_a,
+        };
+        let mut chart = framed_chart(&top, st, &frame, xr.clone(), ar)?;
         for i in 0..3 {
-            let color = AXIS_COLORS[i].mix(0.9);
-            for l in polylines(self.t_s, |k| self.accel_mps2.get(k).map(|a| a[i]), buckets) {
-                chart.draw_series(LineSeries::new(l, color.stroke_width(st.i(1.3).max(1) as u32)))?;
-            }
+            let style = AXIS_COLORS[i].mix(0.9).stroke_width(st.i(1.3).max(1) as u32);
+            draw_polylines(&mut chart, self.t_s, |k| self.accel_mps2.get(k).map(|a| a[i]), buckets, style)?;
         }
 
         // Bottom: Γ̂ with ±1σ bands and the truth.
@@ -836,28 +951,7 @@ impl Plot for EstimationData<'_> {
             entries.push(("truth (dashed)".to_string(), Mark::Dashed(BLACK.mix(0.8))));
         }
         let bottom = legend_strip(&bottom, &entries, x0, st)?;
-        let gspan = gr.end - gr.start;
-        let fmt_g = move |v: &f64| fmt_tick(*v, gspan);
-        let mut chart = ChartBuilder::on(&bottom)
-            .margin(st.i(10.0))
-            .margin_top(st.i(2.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(48.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(xr.clone(), gr.clone())?;
-        chart
-            .configure_mesh()
-            .x_desc("time t [s]")
-            .y_desc("Γ estimate [Hz/(m/s²)]")
-            .x_label_formatter(&fmt_x)
-            .y_label_formatter(&fmt_g)
-            .y_labels(8)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let mut chart = time_chart(&bottom, st, y_area, "Γ estimate [Hz/(m/s²)]", xr.clone(), gr.clone())?;
         for i in 0..3 {
             let strong = self.observable[i];
             let color = AXIS_COLORS[i].mix(if strong { 1.0 } else { 0.35 });
@@ -957,37 +1051,13 @@ impl Plot for CompensationData<'_> {
         let area = legend_strip(&area, &entries, y_area + st.i(10.0), st)?;
         let t = self.t_s;
         let xr = t[0]..if t[t.len() - 1] > t[0] { t[t.len() - 1] } else { t[0] + 1.0 };
-        let xspan = xr.end - xr.start;
         let yr =
             padded_range(self.before_rad.iter().chain(self.after_rad).flatten().cloned(), 0.05).unwrap_or(-1.0..1.0);
-        let yspan = yr.end - yr.start;
-        let fmt_x = move |v: &f64| fmt_tick(*v, xspan);
-        let fmt_y = move |v: &f64| fmt_tick(*v, yspan);
-        let mut chart = ChartBuilder::on(&area)
-            .margin(st.i(10.0))
-            .margin_top(st.i(2.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(48.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(xr, yr)?;
-        chart
-            .configure_mesh()
-            .x_desc("time t [s]")
-            .y_desc("phase tracking error [rad]")
-            .x_label_formatter(&fmt_x)
-            .y_label_formatter(&fmt_y)
-            .y_labels(8)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let mut chart = time_chart(&area, st, y_area, "phase tracking error [rad]", xr, yr)?;
         let buckets = (area.dim_in_pixel().0 as usize).max(200);
         for (data, color, _) in series {
-            for l in polylines(t, |k| data.get(k).copied().flatten(), buckets) {
-                chart.draw_series(LineSeries::new(l, color.stroke_width(st.i(1.3).max(1) as u32)))?;
-            }
+            let style = color.stroke_width(st.i(1.3).max(1) as u32);
+            draw_polylines(&mut chart, t, |k| data.get(k).copied().flatten(), buckets, style)?;
         }
         Ok(())
     }
@@ -1054,36 +1124,12 @@ impl Plot for Cn0Plot<'_, '_> {
         let ts = || self.0.iter().flat_map(|c| c.t_s.iter().cloned());
         let xr = padded_range(ts(), 0.0).unwrap_or(0.0..1.0);
         let yr = padded_range(self.0.iter().flat_map(|c| c.cn0_dbhz.iter().cloned()), 0.08).unwrap_or(30.0..50.0);
-        let (xspan, yspan) = (xr.end - xr.start, yr.end - yr.start);
-        let fmt_x = move |v: &f64| fmt_tick(*v, xspan);
-        let fmt_y = move |v: &f64| fmt_tick(*v, yspan);
-        let mut chart = ChartBuilder::on(&area)
-            .margin(st.i(10.0))
-            .margin_top(st.i(2.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(48.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(xr, yr)?;
-        chart
-            .configure_mesh()
-            .x_desc("time t [s]")
-            .y_desc("C/N0 [dB-Hz]")
-            .x_label_formatter(&fmt_x)
-            .y_label_formatter(&fmt_y)
-            .y_labels(8)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let mut chart = time_chart(&area, st, y_area, "C/N0 [dB-Hz]", xr, yr)?;
         let buckets = (area.dim_in_pixel().0 as usize).max(200);
         // Unused first, so that the used ones lie on top.
         for pass_used in [false, true] {
             for (c, &(color, width)) in self.0.iter().zip(&colors).filter(|(c, _)| c.used == pass_used) {
-                for l in polylines(c.t_s, |i| c.cn0_dbhz.get(i).copied(), buckets) {
-                    chart.draw_series(LineSeries::new(l, color.stroke_width(width)))?;
-                }
+                draw_polylines(&mut chart, c.t_s, |i| c.cn0_dbhz.get(i).copied(), buckets, color.stroke_width(width))?;
             }
         }
         Ok(())
@@ -1152,26 +1198,7 @@ impl Plot for SpectrumPlot {
             entries.push((format!("loop natural frequency {f:.3} Hz"), Mark::Dashed(marker_color)));
         }
         let area = legend_strip(&area, &entries, y_area + st.i(10.0), st)?;
-        let fmt = |v: &f64| fmt_tick(*v, 0.0);
-        let mut chart = ChartBuilder::on(&area)
-            .margin(st.i(10.0))
-            .margin_top(st.i(2.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(48.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(log_axis(xr.clone()), log_axis(yr.clone()))?;
-        chart
-            .configure_mesh()
-            .x_desc("frequency f [Hz]")
-            .y_desc("PSD [rad²/Hz]")
-            .x_label_formatter(&fmt)
-            .y_label_formatter(&fmt)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let mut chart = loglog_chart(&area, st, y_area, ("frequency f [Hz]", "PSD [rad²/Hz]"), xr, yr.clone())?;
         if let Some(f) = marker {
             chart.draw_series(DashedLineSeries::new(
                 vec![(f, yr.start), (f, yr.end)],
@@ -1249,26 +1276,8 @@ impl Plot for AllanData<'_> {
         let area = legend_strip(&area, &entries, y_area + st.i(10.0), st)?;
         let xr = log_range(sim.iter().chain(&th).map(|p| p.0)).unwrap_or(0.01..100.0);
         let yr = log_range(sim.iter().chain(&th).map(|p| p.1)).unwrap_or(1e-13..1e-9);
-        let fmt = |v: &f64| fmt_tick(*v, 0.0);
-        let mut chart = ChartBuilder::on(&area)
-            .margin(st.i(10.0))
-            .margin_top(st.i(2.0))
-            .margin_right(st.i(24.0))
-            .x_label_area_size(st.i(48.0))
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(log_axis(xr), log_axis(yr))?;
-        chart
-            .configure_mesh()
-            .x_desc("averaging time τ [s]")
-            .y_desc("Allan deviation σy(τ)")
-            .x_label_formatter(&fmt)
-            .y_label_formatter(&fmt)
-            .max_light_lines(4)
-            .label_style(st.label())
-            .axis_desc_style(st.desc())
-            .light_line_style(GRID_LIGHT)
-            .bold_line_style(GRID_BOLD)
-            .draw()?;
+        let descs = ("averaging time τ [s]", "Allan deviation σy(τ)");
+        let mut chart = loglog_chart(&area, st, y_area, descs, xr, yr)?;
         chart.draw_series(DashedLineSeries::new(th, st.i(10.0).max(3), st.i(6.0).max(2), tc.stroke_width(2)))?;
         chart.draw_series(LineSeries::new(sim.iter().cloned(), sc.stroke_width(st.i(1.5).max(1) as u32)))?;
         chart.draw_series(sim.iter().map(|&p| Circle::new(p, st.i(4.0).max(2), sc.filled())))?;
