@@ -318,6 +318,25 @@ pub fn regressors(series: &EpochSeries, settings: &EstimateSettings) -> Result<V
     Ok(accel.iter().map(|a| model.epoch(a)).collect())
 }
 
+/// One epoch of [`compensation_series`]: (φ, φ − φ_aᵀΓ̂) [rad], `None` where no
+/// phase was measured.
+pub type CompensatedEpoch = (Option<f64>, Option<f64>);
+
+/// φ and φ − φ_aᵀΓ̂ per epoch as the estimator saw them: through the same
+/// loop models, identical high-pass and gap handling (the paper's Fig. 5).
+/// `None` where no phase was measured.
+pub fn compensation_series(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    gamma_hz_per_mps2: &[f64; 3],
+) -> Result<Vec<CompensatedEpoch>, CalibError> {
+    let (fed, _) = search::batch_pass(series, settings)?;
+    Ok(fed
+        .iter()
+        .map(|e| (e.phase_err_rad, e.phase_err_rad.map(|p| compensated_phase_rad(p, &e.phi_a, gamma_hz_per_mps2))))
+        .collect())
+}
+
 /// What the loop models are fed: the specific force compensated for the
 /// model's linear interpolation between epochs
 /// ([`gsens_core::regressor::compensate_interpolation`]; without it Γ̂ is too

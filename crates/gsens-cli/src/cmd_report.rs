@@ -5,8 +5,7 @@
 use crate::estimate::{EstimatorArgs, LoopArgs, SelectionArgs, SystematicArgs, estimate_files};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use gsens_calib::{Calibration, EpochSeries, regressors};
-use gsens_core::filter::HighPass;
+use gsens_calib::{Calibration, EpochSeries, compensation_series};
 use gsens_io::TrackingLog;
 use gsens_io::session::PreparedSession;
 use gsens_report::figures::{
@@ -85,20 +84,11 @@ impl<'a> FigureInputs<'a> {
             imu_time_offset_s: session.imu_time_offset_s,
         };
         // φ and φ − φ_aᵀΓ̂ (the estimate of every axis, as the reported RMS
-        // after compensation), both through the estimator's high-pass so that
-        // the slow steady-state error of the satellites' Doppler rate is gone.
-        let phi_a = regressors(&series, &calibration.settings)?;
-        let g = calibration.gamma_raw_hz_per_mps2;
-        let hp_hz = calibration.settings.highpass_hz;
-        let mut hp_phase = HighPass::new(hp_hz, session.log_interval_s);
-        let mut hp_a = [HighPass::new(hp_hz, session.log_interval_s); 3];
-        let (mut before, mut after) = (Vec::with_capacity(phi_a.len()), Vec::with_capacity(phi_a.len()));
-        for (p, a) in session.phase_err_rad.iter().zip(&phi_a) {
-            let a = if hp_hz > 0.0 { [hp_a[0].step(a[0]), hp_a[1].step(a[1]), hp_a[2].step(a[2])] } else { *a };
-            let p = p.filter(|p| p.is_finite()).map(|p| if hp_hz > 0.0 { hp_phase.step(p) } else { p });
-            before.push(p);
-            after.push(p.map(|p| p - (a[0] * g[0] + a[1] * g[1] + a[2] * g[2])));
-        }
+        // after compensation), high-passed exactly as the estimator saw them.
+        let (before, after): (Vec<_>, Vec<_>) =
+            compensation_series(&series, &calibration.settings, &calibration.gamma_raw_hz_per_mps2)?
+                .into_iter()
+                .unzip();
         // The spectrum over the longest gap-free run after the warm-up.
         let skip = (calibration.settings.warmup_s / session.log_interval_s).ceil() as usize;
         let (mut best, mut start) = (0..0, None);
