@@ -19,6 +19,7 @@ pub mod calibrator;
 pub mod compensate;
 pub mod estimator;
 pub mod filter;
+mod loop_model;
 pub mod math;
 pub mod observability;
 pub mod pll;
@@ -28,5 +29,6 @@ pub mod units;
 
 pub use calibrator::{Calibrator, average_phase_rad};
 pub use estimator::{BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, RecursiveLeastSquares};
+pub use loop_model::{LoopModel, LoopPeak};
 pub use pll::{CarrierLoop, DiscretePll, LoopFilter, LoopFilterCoeffs, LoopSpec};
 pub use regressor::{LoggedPhase, RegressorModel};

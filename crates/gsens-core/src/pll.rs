@@ -520,10 +520,3 @@ impl LinearLoop for ModelLoop {
         }
     }
 }
-
-/// The frequency |L| peaks at for a 2nd-order loop: ω = ωn, value π/(ζ·ωn)
-/// [rad/Hz] (conventions.md). Returns (peak_hz, peak_rad_per_hz).
-pub fn second_order_peak(bn_hz: f64, zeta: f64) -> (f64, f64) {
-    let wn = second_order_wn_from_bn(bn_hz, zeta);
-    (wn / TAU, PI / (zeta * wn))
-}

@@ -1,5 +1,6 @@
 //! Known answers for the loop models (conventions.md, "PLL parametrization").
 
+use gsens_core::LoopModel;
 use gsens_core::pll::*;
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
@@ -56,8 +57,9 @@ fn second_order_response_peaks_at_wn_with_pi_over_zeta_wn() {
     let peak = c.response_continuous(peak_hz).norm();
     assert!((peak - PI / (FRAC_1_SQRT_2 * wn)).abs() < 1e-9, "{peak}");
     assert!((peak - 0.785).abs() < 1e-3);
-    let (f, v) = second_order_peak(3.0, FRAC_1_SQRT_2);
-    assert!((f - peak_hz).abs() < 1e-6 && (v - peak).abs() < 1e-9);
+    // The one loop abstraction finds the same peak (closed form: ωn, π/(ζωn)).
+    let p = gsens_core::LoopModel::kaplan(LoopSpec::PAPER, None).peak().unwrap();
+    assert!((p.f_hz - wn / TAU).abs() < 1e-6 && (p.rad_per_hz - PI / (FRAC_1_SQRT_2 * wn)).abs() < 1e-9, "{p:?}");
     // A constant Δf leaves no steady-state phase error; the sign is negative at low f
     // (a positive NCO bias makes the replica lead: φ = θ_s − θ_r < 0).
     assert_eq!(c.response_continuous(0.0).norm(), 0.0);
@@ -175,4 +177,43 @@ fn preloaded_loop_tracks_constant_frequency_with_zero_error() {
     assert_eq!(l.nco_freq_hz(), 1234.5);
     l.close(0.0);
     assert!((l.nco_freq_hz() - 1234.5).abs() < 1e-9);
+}
+
+#[test]
+fn half_power_band_of_the_second_order_loop_in_closed_form() {
+    // |L|² = 4π²ω²/((ωn² − ω²)² + 4ζ²ωn²ω²) falls to half its peak where
+    // |ωn² − ω²| = 2ζωnω, i.e. at ω = ωn·(√(1 + ζ²) ∓ ζ).
+    for zeta in [0.5, FRAC_1_SQRT_2, 1.0] {
+        let wn = second_order_wn_from_bn(3.0, zeta);
+        let m = LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 3.0, zeta }, None);
+        let [lo, hi] = m.half_power_band_hz().unwrap();
+        let want = [wn * ((1.0 + zeta * zeta).sqrt() - zeta) / TAU, wn * ((1.0 + zeta * zeta).sqrt() + zeta) / TAU];
+        assert!((lo - want[0]).abs() < 1e-6 * want[0] && (hi - want[1]).abs() < 1e-6 * want[1], "ζ {zeta}: {lo} {hi}");
+    }
+}
+
+#[test]
+fn loop_model_refuses_an_unstable_loop_and_tends_to_the_continuous_one() {
+    // Bn = 3 Hz updated every 0.5 s is unstable: no peak, no runnable model.
+    let fast = LoopModel::kaplan(LoopSpec::PAPER, Some(0.5));
+    assert_eq!(fast.peak(), Err(LoopError::UnstableAtInterval));
+    assert!(fast.runnable().is_err());
+    // At 1 ms the discrete peak is within 0.5 % of the continuous one.
+    let cont = LoopModel::kaplan(LoopSpec::PAPER, None).peak().unwrap();
+    let disc = LoopModel::kaplan(LoopSpec::PAPER, Some(1e-3)).peak().unwrap();
+    assert!((disc.f_hz / cont.f_hz - 1.0).abs() < 5e-3 && (disc.rad_per_hz / cont.rad_per_hz - 1.0).abs() < 5e-3);
+}
+
+#[test]
+fn gnss_sdr_loop_equivalent_coefficients_match_its_exact_response_at_low_rate() {
+    use gsens_core::pll::gnss_sdr::GnssSdrStage;
+    // At 1 ms integrations the exact GNSS-SDR loop is close to its continuous equivalent.
+    for order in [2, 3] {
+        let m = LoopModel::GnssSdr(GnssSdrStage { order, bw_hz: 3.0, symbols: 1 });
+        let c = LoopModel::kaplan(LoopSpec::Coefficients(m.coeffs().unwrap()), None);
+        let (pm, pc) = (m.peak().unwrap(), c.peak().unwrap());
+        assert!((pm.f_hz / pc.f_hz - 1.0).abs() < 1e-2, "order {order}: {pm:?} {pc:?}");
+        assert!((pm.rad_per_hz / pc.rad_per_hz - 1.0).abs() < 1e-2, "order {order}: {pm:?} {pc:?}");
+        assert_eq!(m.order(), order);
+    }
 }

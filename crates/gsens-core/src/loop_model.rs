@@ -1,0 +1,289 @@
+//! The one loop abstraction: a receiver's carrier loop as gsens models it.
+//!
+//! A [`LoopModel`] answers every question gsens asks about a loop — its
+//! response L(j2πf) = φ/Δf, the peak of |L| and the shaking period it
+//! implies, the half-power band, the equivalent continuous filter
+//! coefficients, stability — and builds the runnable model
+//! ([`ModelLoop`]) the regressor triad steps. The regressors, the verdicts,
+//! `gsens response`, Fig. 3 and the shaking advice all ask the same object,
+//! so a session is described everywhere by the loop that produced it
+//! (`docs/conventions.md#loop-models`).
+
+use crate::math::{TAU, exp, ln, sqrt};
+use crate::pll::gnss_sdr::{A2, A3, B3, BN_OVER_WN_ORDER2, BN_OVER_WN_ORDER3, GnssSdrPll, GnssSdrStage};
+use crate::pll::{Complex, DiscretePll, LoopError, LoopFilterCoeffs, LoopSpec, ModelLoop};
+
+/// Lowest frequency searched for the peak of |L| \[Hz\].
+const SEARCH_LO_HZ: f64 = 1e-3;
+/// Highest frequency searched for the peak of |L| (below Nyquist) \[Hz\].
+const SEARCH_HI_HZ: f64 = 1e3;
+/// Lowest frequency searched for the lower half-power edge \[Hz\].
+const BAND_LO_HZ: f64 = 1e-4;
+
+/// A receiver's carrier loop: which implementation, its filter and how often
+/// it is updated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum LoopModel {
+    /// The loop of [`crate::pll`]'s docs (Kaplan & Hegarty's filter,
+    /// integrators clocked once per update) with the filter of `spec`,
+    /// updated every `interval_s` seconds (`None`: the continuous-time limit).
+    Kaplan {
+        /// The loop filter.
+        spec: LoopSpec,
+        /// Update interval T \[s\]; `None` = continuous time.
+        interval_s: Option<f64>,
+    },
+    /// GNSS-SDR's `dll_pll_veml` carrier loop after bit synchronization,
+    /// exactly ([`crate::pll::gnss_sdr`]).
+    GnssSdr(GnssSdrStage),
+}
+
+/// The peak of |L(j2πf)|: where shaking makes the largest phase error per Hz
+/// of frequency bias.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopPeak {
+    /// Frequency of the peak \[Hz\].
+    pub f_hz: f64,
+    /// |L| there \[rad/Hz\].
+    pub rad_per_hz: f64,
+}
+
+impl LoopPeak {
+    /// The shaking period that excites the loop most, 1/f_peak \[s\].
+    pub fn period_s(&self) -> f64 {
+        1.0 / self.f_hz
+    }
+}
+
+impl LoopModel {
+    /// The loop of `spec` updated every `interval_s` seconds (`None`:
+    /// continuous time).
+    pub fn kaplan(spec: LoopSpec, interval_s: Option<f64>) -> Self {
+        LoopModel::Kaplan { spec, interval_s }
+    }
+
+    /// The same loop updated every `interval_s` when no interval was given
+    /// (a log's interval stands in for an unstated loop interval).
+    pub fn with_default_interval(self, interval_s: f64) -> Self {
+        match self {
+            LoopModel::Kaplan { spec, interval_s: None } => LoopModel::Kaplan { spec, interval_s: Some(interval_s) },
+            other => other,
+        }
+    }
+
+    /// The loop update interval T \[s\] (`None`: continuous time).
+    pub fn interval_s(&self) -> Option<f64> {
+        match self {
+            LoopModel::Kaplan { interval_s, .. } => *interval_s,
+            LoopModel::GnssSdr(stage) => Some(stage.interval_s()),
+        }
+    }
+
+    /// The Nyquist frequency of the update rate, 1/(2T) \[Hz\] (`None`:
+    /// continuous time).
+    pub fn nyquist_hz(&self) -> Option<f64> {
+        self.interval_s().map(|t| 0.5 / t)
+    }
+
+    /// The equivalent continuous loop filter F(s) = c0 + c1/s + c2/s²,
+    /// checked for stability of the continuous loop (Routh–Hurwitz).
+    ///
+    /// For GNSS-SDR's loops (module docs of [`crate::pll::gnss_sdr`]): order 2,
+    /// ωn = Bn/0.53, F = 1.414·ωn + ωn²/s; order 3, ωn = Bn/0.7845,
+    /// F = 2.4·ωn + 0.55·ωn²/s + 0.25·ωn³/s².
+    pub fn coeffs(&self) -> Result<LoopFilterCoeffs, LoopError> {
+        match self {
+            LoopModel::Kaplan { spec, .. } => spec.coeffs(),
+            LoopModel::GnssSdr(stage) => {
+                GnssSdrPll::new(*stage)?;
+                let c = if stage.order == 3 {
+                    let wn = stage.bw_hz / BN_OVER_WN_ORDER3;
+                    LoopFilterCoeffs { c0_per_s: B3 * wn, c1_per_s2: 0.5 * A3 * wn * wn, c2_per_s3: 0.25 * wn * wn * wn }
+                } else {
+                    let wn = stage.bw_hz / BN_OVER_WN_ORDER2;
+                    LoopFilterCoeffs { c0_per_s: A2 * wn, c1_per_s2: wn * wn, c2_per_s3: 0.0 }
+                };
+                LoopSpec::Coefficients(c).coeffs()
+            }
+        }
+    }
+
+    /// The filter as a [`LoopSpec`] (GNSS-SDR's as its equivalent coefficients).
+    pub fn spec(&self) -> Result<LoopSpec, LoopError> {
+        match self {
+            LoopModel::Kaplan { spec, .. } => Ok(*spec),
+            LoopModel::GnssSdr(_) => self.coeffs().map(LoopSpec::Coefficients),
+        }
+    }
+
+    /// Loop order: the number of integrators (2 or 3 for receiver loops).
+    pub fn order(&self) -> u8 {
+        match self {
+            LoopModel::Kaplan { spec, .. } => spec.order(),
+            LoopModel::GnssSdr(stage) => stage.order,
+        }
+    }
+
+    /// The nominal noise bandwidth Bn \[Hz\] where the loop is specified by it.
+    pub fn bn_hz(&self) -> Option<f64> {
+        match self {
+            LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz, .. } | LoopSpec::ThirdOrder { bn_hz, .. }, .. } => {
+                Some(*bn_hz)
+            }
+            LoopModel::Kaplan { .. } => None,
+            LoopModel::GnssSdr(stage) => Some(stage.bw_hz),
+        }
+    }
+
+    /// Natural frequency ωn/2π \[Hz\]: of the specification, or c2^(1/3)
+    /// (c1^(1/2) without a second integrator) of the filter coefficients.
+    pub fn natural_frequency_hz(&self) -> Option<f64> {
+        let wn = match self {
+            LoopModel::Kaplan { spec, .. } => spec.wn_rad_per_s(),
+            LoopModel::GnssSdr(_) => self.coeffs().ok().and_then(|c| LoopSpec::Coefficients(c).wn_rad_per_s()),
+        };
+        wn.map(|w| w / TAU)
+    }
+
+    /// Checks the loop: a valid, stable continuous filter and, when updated
+    /// every T, a stable discrete loop at T (roots of its characteristic
+    /// polynomial, or the eigenvalues of GNSS-SDR's one-record transition).
+    pub fn check(&self) -> Result<(), LoopError> {
+        match self {
+            LoopModel::Kaplan { spec, interval_s } => {
+                let c = spec.coeffs()?;
+                match interval_s {
+                    Some(t) if !c.is_stable_at(*t) => Err(LoopError::UnstableAtInterval),
+                    _ => Ok(()),
+                }
+            }
+            LoopModel::GnssSdr(stage) => {
+                if GnssSdrPll::new(*stage)?.is_stable() {
+                    Ok(())
+                } else {
+                    Err(LoopError::UnstableAtInterval)
+                }
+            }
+        }
+    }
+
+    /// The response L = φ/Δf at `f_hz` \[rad/Hz\]: the discrete loop's
+    /// L_d(e^{j2πfT}) when updated every T ([`LoopFilterCoeffs::response_discrete`],
+    /// [`GnssSdrPll::response`]), else the continuous −2π/(s + F(s)) at
+    /// s = j2πf. Zero for an invalid loop (call [`LoopModel::check`] first).
+    pub fn response(&self, f_hz: f64) -> Complex<f64> {
+        match self {
+            LoopModel::Kaplan { spec, interval_s } => match (spec.coeffs(), interval_s) {
+                (Ok(c), Some(t)) => c.response_discrete(f_hz, *t),
+                (Ok(c), None) => c.response_continuous(f_hz),
+                (Err(_), _) => Complex::new(0.0, 0.0),
+            },
+            LoopModel::GnssSdr(stage) => match GnssSdrPll::new(*stage) {
+                Ok(p) => p.response(f_hz),
+                Err(_) => Complex::new(0.0, 0.0),
+            },
+        }
+    }
+
+    /// |L| \[rad/Hz\].
+    pub fn magnitude(&self, f_hz: f64) -> f64 {
+        self.response(f_hz).norm()
+    }
+
+    /// Highest frequency the response is searched to: 1 kHz or just below Nyquist.
+    fn search_hi_hz(&self) -> f64 {
+        self.nyquist_hz().map_or(SEARCH_HI_HZ, |n| (0.999 * n).min(SEARCH_HI_HZ))
+    }
+
+    /// The peak of |L| by golden-section search on a log-frequency axis from
+    /// 1 mHz to 1 kHz (or just below Nyquist). |L| = 2π·|s|²/|s³ + c0s² + c1s + c2|
+    /// rises as f², falls as 1/f and is unimodal between for the stable loops
+    /// gsens models. For a 2nd-order continuous loop the peak is at ωn with
+    /// |L| = π/(ζ·ωn) (conventions, `docs/conventions.md#loop-models`).
+    pub fn peak(&self) -> Result<LoopPeak, LoopError> {
+        self.check()?;
+        let mag = |lf: f64| self.magnitude(exp(lf));
+        let (mut a, mut b) = (ln(SEARCH_LO_HZ), ln(self.search_hi_hz()));
+        let r = (sqrt(5.0) - 1.0) / 2.0;
+        for _ in 0..100 {
+            let x1 = b - r * (b - a);
+            let x2 = a + r * (b - a);
+            if mag(x1) > mag(x2) {
+                b = x2;
+            } else {
+                a = x1;
+            }
+        }
+        let f_hz = exp(0.5 * (a + b));
+        Ok(LoopPeak { f_hz, rad_per_hz: self.magnitude(f_hz) })
+    }
+
+    /// Where |L| falls to peak/√2 on either side of the peak \[Hz\]
+    /// (bisection on a log axis): shaking inside this band gets at least half
+    /// of the loop's peak power sensitivity.
+    pub fn half_power_band_hz(&self) -> Result<[f64; 2], LoopError> {
+        let peak = self.peak()?;
+        let target = peak.rad_per_hz / sqrt(2.0);
+        let find = |mut lo: f64, mut hi: f64, rising: bool| {
+            for _ in 0..100 {
+                let m = sqrt(lo * hi);
+                if (self.magnitude(m) > target) == rising {
+                    hi = m;
+                } else {
+                    lo = m;
+                }
+            }
+            sqrt(lo * hi)
+        };
+        Ok([find(BAND_LO_HZ, peak.f_hz, true), find(peak.f_hz, self.search_hi_hz(), false)])
+    }
+
+    /// The runnable linear model Δf → φ, one loop update per step (what the
+    /// regressor triad runs three of). Needs an update interval; checks the loop.
+    pub fn runnable(&self) -> Result<ModelLoop, LoopError> {
+        self.check()?;
+        match self {
+            LoopModel::Kaplan { spec, interval_s: Some(t) } => Ok(DiscretePll::new(spec.coeffs()?, *t).into()),
+            LoopModel::Kaplan { interval_s: None, .. } => Err(LoopError::NonPositiveParameter("interval_s")),
+            LoopModel::GnssSdr(stage) => Ok(GnssSdrPll::new(*stage)?.into()),
+        }
+    }
+}
+
+impl core::fmt::Display for LoopModel {
+    /// The loop in words, e.g. `2nd order, Bn 3 Hz, ζ 0.707, ωn/2π 0.900 Hz,
+    /// updated every 0.001 s`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let nat = |f: &mut core::fmt::Formatter<'_>| match self.natural_frequency_hz() {
+            Some(fn_hz) => write!(f, ", ωn/2π {fn_hz:.3} Hz"),
+            None => Ok(()),
+        };
+        match self {
+            LoopModel::Kaplan { spec, interval_s } => {
+                match *spec {
+                    LoopSpec::SecondOrder { bn_hz, zeta } => write!(f, "2nd order, Bn {bn_hz} Hz, ζ {zeta:.3}")?,
+                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
+                        write!(f, "3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}")?
+                    }
+                    LoopSpec::Coefficients(c) => {
+                        write!(f, "filter c0 {} /s, c1 {} /s², c2 {} /s³", c.c0_per_s, c.c1_per_s2, c.c2_per_s3)?
+                    }
+                }
+                nat(f)?;
+                match interval_s {
+                    Some(t) => write!(f, ", updated every {t} s"),
+                    None => write!(f, ", continuous"),
+                }
+            }
+            LoopModel::GnssSdr(stage) => {
+                write!(
+                    f,
+                    "GNSS-SDR dll_pll_veml, order {}, Bn {} Hz, {} ms integrations",
+                    stage.order, stage.bw_hz, stage.symbols
+                )?;
+                nat(f)
+            }
+        }
+    }
+}
