@@ -87,23 +87,52 @@ fn every_estimator_recovers_gamma_noiseless() {
     }
 }
 
+/// Seeds per σ-honesty test: the spread of N independent z-scores has a
+/// standard error of ≈ 1/√(2N), and 3 of them must be ≤ 0.05 (N ≥ 1800).
+const SIGMA_SEEDS: u64 = 2000;
+
+/// Tolerance on the spread of `n` independent z-scores: 3 standard errors of
+/// the sample SD of N(0,1) about its known mean 0, 3/√(2n) (Var z² = 2, and
+/// SD = √(mean z²) halves the relative error).
+fn three_se_of_spread(n: usize) -> f64 {
+    3.0 / (2.0 * n as f64).sqrt()
+}
+
+/// Spread √(mean z²) of each axis' z-scores over the seeds. Per axis because
+/// the three components of one estimate are correlated in general (through the
+/// off-diagonals of AᵀA), so only the seeds are independent samples.
+fn spread_per_axis(zs: &[[f64; 3]]) -> [f64; 3] {
+    [0, 1, 2].map(|i| (zs.iter().map(|z| z[i] * z[i]).sum::<f64>() / zs.len() as f64).sqrt())
+}
+
+fn assert_spread_is_one(zs: &[[f64; 3]], what: &str) {
+    let tol = three_se_of_spread(zs.len());
+    let sd = spread_per_axis(zs);
+    for i in 0..3 {
+        assert!(
+            (sd[i] - 1.0).abs() < tol,
+            "{what}: spread of z on axis {i} = {} (N = {}, 1 ± {tol:.4})",
+            sd[i],
+            zs.len()
+        );
+    }
+}
+
 #[test]
 fn batch_sigma_is_honest_under_white_noise() {
-    // z = (Γ̂ − Γ)/σ̂ over many seeds: ~N(0,1). At most 1% outside 3σ; spread 1 ± 0.15.
-    let seeds = 300;
+    // z = (Γ̂ − Γ)/σ̂ over many seeds: ~N(0,1) (Student t with n − 3 ≈ 1200
+    // degrees of freedom: SD 1 + 1e-3). At most 1% outside 3σ; spread of each
+    // axis 1 ± 3/√(2N) = 1 ± 0.047.
     let mut zs = Vec::new();
-    for seed in 0..seeds {
+    for seed in 0..SIGMA_SEEDS {
         let data = synth(30.0, 1, LoggedPhase::Last, [true; 3], 0.02, 1000 + seed);
         let est = run(BatchLeastSquares::new(), &data);
         let s = est.sigma_hz_per_mps2();
-        for i in 0..3 {
-            zs.push((est.gamma_hz_per_mps2[i] - GAMMA[i]) / s[i]);
-        }
+        zs.push([0, 1, 2].map(|i| (est.gamma_hz_per_mps2[i] - GAMMA[i]) / s[i]));
     }
-    let outside = zs.iter().filter(|z| z.abs() > 3.0).count() as f64 / zs.len() as f64;
-    let sd = (zs.iter().map(|z| z * z).sum::<f64>() / zs.len() as f64).sqrt();
+    let outside = zs.iter().flatten().filter(|z| z.abs() > 3.0).count() as f64 / (3 * zs.len()) as f64;
     assert!(outside <= 0.01, "{outside}");
-    assert!((sd - 1.0).abs() < 0.15, "spread of z = {sd}");
+    assert_spread_is_one(&zs, "batch");
 }
 
 #[test]
@@ -118,20 +147,39 @@ fn rls_without_forgetting_equals_batch_and_its_sigma_too() {
     }
 }
 
+/// z-scores of the gradient observer with gain `gain_k` over `seeds` seeds:
+/// with its reported σ, and with its propagated covariance scaled by the true
+/// noise variance instead of its σ̂².
+fn gradient_z_scores(gain_k: f64, seeds: u64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let noise_rad = 0.02;
+    let (mut reported, mut known_noise) = (Vec::new(), Vec::new());
+    for seed in 0..seeds {
+        let data = synth(60.0, 1, LoggedPhase::Last, [true; 3], noise_rad, 5000 + seed);
+        let est = run(GradientObserver::new(gain_k, LOG_T), &data);
+        let s = est.sigma_hz_per_mps2();
+        let to_known = noise_rad / est.residual_variance_rad2.sqrt();
+        let err = [0, 1, 2].map(|i| est.gamma_hz_per_mps2[i] - GAMMA[i]);
+        reported.push([0, 1, 2].map(|i| err[i] / s[i]));
+        known_noise.push([0, 1, 2].map(|i| err[i] / (s[i] * to_known)));
+    }
+    (reported, known_noise)
+}
+
 #[test]
 fn gradient_observer_sigma_matches_its_spread() {
-    // The propagated covariance must describe the observer's own scatter.
-    let mut zs = Vec::new();
-    for seed in 0..100 {
-        let data = synth(60.0, 1, LoggedPhase::Last, [true; 3], 0.02, 5000 + seed);
-        let est = run(GradientObserver::new(0.5, LOG_T), &data);
-        let s = est.sigma_hz_per_mps2();
-        for i in 0..3 {
-            zs.push((est.gamma_hz_per_mps2[i] - GAMMA[i]) / s[i]);
-        }
-    }
-    let sd = (zs.iter().map(|z| z * z).sum::<f64>() / zs.len() as f64).sqrt();
-    assert!((sd - 1.0).abs() < 0.2, "spread of z = {sd}");
+    // The propagated covariance must describe the observer's own scatter: with
+    // the true noise variance, and as reported (scaled by σ̂²), each axis'
+    // spread of z is 1 ± 3/√(2N) = 1 ± 0.047.
+    //
+    // At this gain the reported σ is ~2.5% pessimistic: σ̂² = RSS(Γ̂)/(n − 3) is
+    // taken at the observer's Γ̂, whose excess scatter over least squares (a
+    // memory of some tens of epochs) inflates it, by 3.7% on average here
+    // (0.6% at k = 0.1). With these fixed seeds the reported-σ check passes,
+    // but only just (axis 1: 0.955 against 1 − 0.047); see
+    // `gradient_observer_reported_sigma_at_high_gain_large_n`.
+    let (reported, known_noise) = gradient_z_scores(0.5, SIGMA_SEEDS);
+    assert_spread_is_one(&known_noise, "gradient, known noise σ");
+    assert_spread_is_one(&reported, "gradient, reported σ");
 }
 
 #[test]
