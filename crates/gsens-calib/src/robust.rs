@@ -1,6 +1,6 @@
 //! Huber's M-estimate of Γ by iteratively reweighted least squares (IRLS),
 //! for logs with outliers the screening of the channels did not remove
-//! (`--robust huber`).
+//! (setting `robust = huber`).
 //!
 //! Over the epochs the batch fit used (φ and φ_a high-passed), starting from
 //! the least-squares Γ̂:
@@ -24,13 +24,13 @@
 
 use gsens_core::estimator::NormalEquations;
 use gsens_core::robust::{HuberWeights, sandwich_covariance};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Most IRLS iterations.
 pub const MAX_ITERATIONS: u32 = 50;
 
 /// A Huber fit of Γ.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HuberFit {
     /// Γ̂ \[Hz/(m/s²)\].
     pub gamma_hz_per_mps2: [f64; 3],

@@ -16,12 +16,14 @@
 //! σ_p² = 2σ̂²/RSS''(p̂), σ̂² = RSS(p̂)/(n − 3) (Gaussian-noise Fisher
 //! information; coloured residuals make it optimistic, as it is stated).
 
-use crate::{CalibError, EpochSeries, EstimateSettings, build_model};
+use crate::estimate::{build_model, model_input};
+use crate::{CalibError, EpochSeries, EstimateSettings};
 use gsens_core::Calibrator;
+use gsens_core::LoopModel;
 use gsens_core::calibrator::FedEpoch;
 use gsens_core::estimator::{BatchLeastSquares, NormalEquations};
 use gsens_core::pll::LoopSpec;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Runs the batch estimator over the series; returns every epoch as fed
 /// (high-passed φ and φ_a, used or not) and the normal equations.
@@ -30,7 +32,7 @@ pub(crate) fn batch_pass(
     settings: &EstimateSettings,
 ) -> Result<(Vec<FedEpoch>, NormalEquations), CalibError> {
     let model = build_model(series.log_interval_s, settings)?;
-    let accel = crate::model_input(series.accel_mps2, &model);
+    let accel = model_input(series.accel_mps2, &model);
     let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
     let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, series.log_interval_s);
     let fed: Vec<FedEpoch> = accel.iter().zip(series.phase_err_rad).map(|(a, p)| cal.feed(a, *p)).collect();
@@ -104,7 +106,7 @@ fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, h: f64, mut f: impl FnMu
 }
 
 /// The estimated IMU time offset.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TimeOffsetEstimate {
     /// IMU time stamp minus true time [s], in total (the assumed offset of the
     /// series plus the correction found).
@@ -132,10 +134,7 @@ fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result<OffsetProf
     let mut used: Vec<usize> =
         (margin..fed.len().saturating_sub(margin)).filter(|&k| fed[k].used && fed[k].phase_err_rad.is_some()).collect();
     if used.len() < 10 {
-        return Err(CalibError::Input(format!(
-            "the log is too short to search a time offset of ±{max_abs_s} s ({} usable epochs)",
-            used.len()
-        )));
+        return Err(CalibError::TooShortForOffsetSearch { max_abs_s, epochs: used.len() });
     }
     // Long logs: a regular subset of at most 40 000 epochs pins τ as well.
     let stride = used.len().div_ceil(40_000).max(1);
@@ -177,7 +176,7 @@ pub fn estimate_time_offset(
 }
 
 /// The result of identifying the receiver loop from the data.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LoopIdentification {
     /// Natural frequency of the assumed loop, ωn/2π [Hz].
     pub assumed_natural_frequency_hz: f64,
@@ -206,9 +205,19 @@ pub struct LoopIdentification {
     pub imu_time_offset_s: Option<f64>,
 }
 
-/// The loop spec with natural frequency scaled by `scale` and, for a 2nd-order
-/// loop, damping `zeta`.
-fn scaled_loop(spec: &LoopSpec, scale: f64, zeta: Option<f64>) -> LoopSpec {
+/// The loop with natural frequency scaled by `scale` and, for a 2nd-order
+/// loop, damping `zeta` (GNSS-SDR's loops: their bandwidth scaled).
+fn scaled_loop(model: &LoopModel, scale: f64, zeta: Option<f64>) -> LoopModel {
+    match *model {
+        LoopModel::Kaplan { spec, interval_s } => LoopModel::kaplan(scaled_spec(&spec, scale, zeta), interval_s),
+        LoopModel::GnssSdr(stage) => {
+            LoopModel::GnssSdr(gsens_core::pll::gnss_sdr::GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage })
+        }
+        other => other,
+    }
+}
+
+fn scaled_spec(spec: &LoopSpec, scale: f64, zeta: Option<f64>) -> LoopSpec {
     match *spec {
         LoopSpec::SecondOrder { bn_hz, zeta: z0 } => {
             let z = zeta.unwrap_or(z0);
@@ -221,13 +230,6 @@ fn scaled_loop(spec: &LoopSpec, scale: f64, zeta: Option<f64>) -> LoopSpec {
             c1_per_s2: c.c1_per_s2 * scale * scale,
             c2_per_s3: c.c2_per_s3 * scale * scale * scale,
         }),
-    }
-}
-
-fn bn_of(spec: &LoopSpec) -> f64 {
-    match *spec {
-        LoopSpec::SecondOrder { bn_hz, .. } | LoopSpec::ThirdOrder { bn_hz, .. } => bn_hz,
-        LoopSpec::Coefficients(_) => f64::NAN,
     }
 }
 
@@ -251,14 +253,15 @@ pub fn identify_loop(
     identify_damping: bool,
     offset_search_s: Option<f64>,
 ) -> Result<LoopIdentification, CalibError> {
-    let spec0 = settings.loop_spec;
-    let wn0 = spec0.wn_rad_per_s().ok_or_else(|| CalibError::Input("the loop has no natural frequency".into()))?;
-    let zeta0 = match spec0 {
-        LoopSpec::SecondOrder { zeta, .. } => Some(zeta),
+    let loop0 = settings.receiver_loop;
+    let wn0 = loop0.natural_frequency_hz().ok_or(CalibError::NoNaturalFrequency)? * core::f64::consts::TAU;
+    let zeta0 = match loop0 {
+        LoopModel::Kaplan { spec: LoopSpec::SecondOrder { zeta, .. }, .. } => Some(zeta),
         _ => None,
     };
     let eval = |scale: f64, zeta: Option<f64>| -> Result<(f64, NormalEquations, f64), CalibError> {
-        let s = EstimateSettings { loop_spec: scaled_loop(&spec0, scale, zeta), ..*settings };
+        let mut s = *settings;
+        s.receiver_loop = scaled_loop(&loop0, scale, zeta);
         let (fed, ne) = batch_pass(series, &s)?;
         match offset_search_s {
             None => Ok((rss(&ne), ne, 0.0)),
@@ -305,14 +308,14 @@ pub fn identify_loop(
     let (gp, gm) = (gamma_at(ln_scale.exp() * 1.01)?, gamma_at(ln_scale.exp() / 1.01)?);
     let g0 = ne_id.solve().gamma_hz_per_mps2;
     let sens = [0, 1, 2].map(|i| if g0[i] != 0.0 { (gp[i] - gm[i]) / (2.0 * g0[i]) } else { 0.0 });
-    let identified = scaled_loop(&spec0, ln_scale.exp(), zeta);
+    let identified = scaled_loop(&loop0, ln_scale.exp(), zeta);
     Ok(LoopIdentification {
         assumed_natural_frequency_hz: wn0 / core::f64::consts::TAU,
         assumed_zeta: zeta0,
         natural_frequency_hz: wn / core::f64::consts::TAU,
         sigma_natural_frequency_hz: wn * sigma_ln / core::f64::consts::TAU,
         zeta,
-        bn_hz: bn_of(&identified),
+        bn_hz: identified.bn_hz().unwrap_or(f64::NAN),
         rss_ratio: rss_assumed / rss_id,
         likelihood_ratio: lr,
         assumed_loop_rejected: lr > 13.8,
@@ -322,8 +325,8 @@ pub fn identify_loop(
 }
 
 impl LoopIdentification {
-    /// The identified loop as a spec, given the assumed one.
-    pub fn spec(&self, assumed: &LoopSpec) -> LoopSpec {
+    /// The identified loop, given the assumed one.
+    pub fn identified(&self, assumed: &LoopModel) -> LoopModel {
         let scale = self.natural_frequency_hz / self.assumed_natural_frequency_hz;
         scaled_loop(assumed, scale, self.zeta)
     }

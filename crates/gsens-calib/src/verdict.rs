@@ -6,19 +6,19 @@
 //! the predicted g-induced phase error stays in the discriminator's linear
 //! range (the Costas rule of thumb: 3σ of the phase error below 45°).
 
-use gsens_core::pll::LoopFilterCoeffs;
+use gsens_core::LoopModel;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The linear range assumed for the discriminator [rad]: π/4.
 pub const DISCRIMINATOR_LINEAR_RANGE_RAD: f64 = core::f64::consts::FRAC_PI_4;
 
 /// What the data say about one axis.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AxisVerdict {
     /// "x", "y" or "z".
-    pub axis: &'static str,
+    pub axis: String,
     /// Whether Γ along this axis is observable.
     pub observable: bool,
     /// Dominant frequency of the specific force along the axis [Hz] (None if it never moved).
@@ -59,28 +59,20 @@ fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
 pub fn axis_verdicts(
     accel_mps2: &[[f64; 3]],
     interval_s: f64,
-    coeffs: &LoopFilterCoeffs,
-    loop_interval_s: f64,
+    receiver_loop: &LoopModel,
     observable: [bool; 3],
     excitation_rms: [f64; 3],
 ) -> [AxisVerdict; 3] {
-    let response = |f: f64| coeffs.response_discrete(f, loop_interval_s).norm();
-    // The loop's peak sensitivity, by a fine log grid (unimodal for these loops).
-    let (mut peak_hz, mut peak) = (0.0, 0.0);
-    for i in 0..400 {
-        let f = 0.02 * (20.0f64 / 0.02).powf(i as f64 / 399.0);
-        if f < 0.5 / loop_interval_s && response(f) > peak {
-            peak = response(f);
-            peak_hz = f;
-        }
-    }
+    // The loop's peak sensitivity; a loop without one (unstable) gets no fraction.
+    let (peak_hz, peak) = receiver_loop.peak().map_or((f64::NAN, f64::NAN), |p| (p.f_hz, p.rad_per_hz));
+    let response = |f: f64| receiver_loop.magnitude(f);
     let names = ["x", "y", "z"];
     [0, 1, 2].map(|i| {
         let x: Vec<f64> = accel_mps2.iter().map(|a| a[i]).collect();
         let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
         let rms = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / x.len().max(1) as f64).sqrt();
         let f = if rms > 1e-3 { dominant_frequency_hz(&x, interval_s) } else { None };
-        let frac = f.map(|f| response(f) / peak);
+        let frac = f.map(|f| response(f) / peak).filter(|q| q.is_finite());
         let text = if observable[i] {
             match (f, frac) {
                 (Some(f), Some(q)) if q < 0.5 => format!(
@@ -107,7 +99,7 @@ pub fn axis_verdicts(
             )
         };
         AxisVerdict {
-            axis: names[i],
+            axis: names[i].to_string(),
             observable: observable[i],
             shaking_frequency_hz: f,
             shaking_rms_mps2: rms,
@@ -129,8 +121,8 @@ mod tests {
                 [2.0 * (core::f64::consts::TAU * 0.9 * tt).sin(), 1.5 * (core::f64::consts::TAU * 0.2 * tt).sin(), 9.8]
             })
             .collect();
-        let c = gsens_core::pll::LoopSpec::PAPER.coeffs().unwrap();
-        let v = axis_verdicts(&a, t, &c, t, [true, true, false], [1.0, 0.1, 0.0]);
+        let l = LoopModel::kaplan(gsens_core::pll::LoopSpec::PAPER, Some(t));
+        let v = axis_verdicts(&a, t, &l, [true, true, false], [1.0, 0.1, 0.0]);
         assert!((v[0].shaking_frequency_hz.unwrap() - 0.9).abs() < 0.02, "{:?}", v[0]);
         assert!(v[0].fraction_of_peak_sensitivity.unwrap() > 0.95);
         assert!((v[1].shaking_frequency_hz.unwrap() - 0.2).abs() < 0.01, "{:?}", v[1]);

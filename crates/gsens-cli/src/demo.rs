@@ -2,13 +2,15 @@
 //! write the logs, estimate Γ from the files as a user would, and show the
 //! estimate next to the truth.
 
-use crate::estimate::{EstimatorArgs, LoggedArg, LoopArgs, SelectionArgs, SystematicArgs, estimate_files};
+use crate::args::{EstimatorArgs, SelectionArgs, SystematicArgs, pipeline_settings};
 use crate::simulate::{load_scenario, simulate_to_dir};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gsens_calib::EstimateSettings;
-use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
-use std::path::PathBuf;
+use gsens_calib::montecarlo::scenario_settings;
+use gsens_calib::{Outcome, calibrate_files};
+use gsens_report::{Figure, FigureInputs, write_figures};
+use gsens_sim::scenario::{LoggedPhaseMode, OscillatorKind, Scenario};
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct DemoArgs {
@@ -21,101 +23,109 @@ pub struct DemoArgs {
     /// Where the simulated logs go (default: a `gsens-demo` folder in the system's temporary directory).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub estimator: EstimatorArgs,
-    #[command(flatten)]
-    pub selection: SelectionArgs,
-    #[command(flatten)]
-    pub systematic: SystematicArgs,
-    /// Write the estimate as JSON here.
+    /// Write the result document (JSON) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Also draw the figures here as PNG and SVG: the paper's Figs. 3–5, C/N0, the
     /// residual spectrum and the Allan deviation of the simulated oscillator.
     #[arg(long)]
     pub figures: Option<PathBuf>,
-}
-
-/// The estimator settings for a simulated scenario: the receiver loop the
-/// scenario ran, its carrier, and its IMU's datasheet accuracy (where the
-/// options leave them at 0), as a user would give them.
-pub fn scenario_settings(scenario: &Scenario, estimator: &EstimatorArgs) -> Result<EstimateSettings> {
-    let l = &scenario.tracking_loop;
-    let loop_args = LoopArgs {
-        order: l.order,
-        bn_hz: l.bn_hz,
-        zeta: l.zeta,
-        a3: l.a3,
-        b3: l.b3,
-        loop_interval_s: Some(l.interval_s),
-        logged_phase: match scenario.log.phase {
-            LoggedPhaseMode::Last => LoggedArg::Last,
-            LoggedPhaseMode::Mean => LoggedArg::Mean,
-        },
-    };
-    let mut settings = estimator.settings(&loop_args)?;
-    settings.carrier_hz = scenario.oscillator.carrier_hz;
-    let imu = scenario.imu.config();
-    if settings.imu_scale_sigma == 0.0 {
-        settings.imu_scale_sigma = imu.scale_factor_sigma_ppm * 1e-6;
-    }
-    if settings.imu_misalignment_sigma_rad == 0.0 {
-        settings.imu_misalignment_sigma_rad = imu.misalignment_sigma_rad;
-    }
-    Ok(settings)
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
+    #[command(flatten)]
+    pub selection: SelectionArgs,
+    #[command(flatten)]
+    pub systematic: SystematicArgs,
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     let scenario = load_scenario(args.scenario.as_deref())?;
     let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
-    println!(
-        "simulating {:.0} s of the {} (seed {}) into {} …",
+    crate::out(&format!(
+        "simulating {:.0} s of the {} (seed {}) into {} …\n",
         scenario.duration_s(),
         if args.scenario.is_some() { "given scenario" } else { "paper's experiment" },
         args.seed,
         dir.display()
-    );
+    ))?;
     let truth = simulate_to_dir(&scenario, args.seed, &dir)?;
-    let settings = scenario_settings(&scenario, &args.estimator)?;
+    let base = args.estimator.settings();
+    let settings = pipeline_settings(scenario_settings(&scenario, &base)?, &args.selection, &args.systematic);
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
-    let (session, calibration) =
-        estimate_files(&imu, &tracking, &args.selection.selection(), &args.systematic, &settings)?;
-    println!(
-        "estimating from {} and {} (the command line: gsens estimate --imu {} --tracking {} --order {} --bn-hz {} --loop-interval-s {} --logged-phase {})\n",
-        imu.display(),
-        tracking.display(),
-        imu.display(),
-        tracking.display(),
-        l.order,
-        l.bn_hz,
-        l.interval_s,
-        match scenario.log.phase {
-            LoggedPhaseMode::Last => "last",
-            LoggedPhaseMode::Mean => "mean",
-        }
-    );
-    print!("{}", crate::report::text(&session, &calibration, Some(truth.gamma_hz_per_mps2)));
+    let outcome = calibrate_files(&tracking, &imu, &settings)?;
+    let logged = match scenario.log.phase {
+        LoggedPhaseMode::Last => "last",
+        LoggedPhaseMode::Mean => "mean",
+    };
+    let (i, t) = (imu.display(), tracking.display());
+    crate::out(&format!(
+        "estimating from {i} and {t} (the command line: gsens estimate --imu {i} --tracking {t} --order {} --bn-hz {} \
+         --loop-interval-s {} --logged-phase {logged})\n\n",
+        l.order, l.bn_hz, l.interval_s
+    ))?;
+    let inputs = [("imu", i.to_string()), ("tracking", t.to_string())];
+    let doc = outcome.document(&crate::estimate::input_refs(&inputs), Some(truth.gamma_hz_per_mps2));
+    crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
-        crate::report::write_json(
-            path,
-            &session,
-            &calibration,
-            Some(truth.gamma_hz_per_mps2),
-            &[("imu", &imu), ("tracking", &tracking)],
-        )
-        .with_context(|| format!("writing {}", path.display()))?;
+        crate::estimate::write_json(path, &doc)?;
     }
     if let Some(fig_dir) = &args.figures {
-        crate::cmd_report::write_demo_figures(
-            fig_dir,
-            &session,
-            &calibration,
-            &tracking,
-            truth.gamma_hz_per_mps2,
-            &scenario,
-            args.seed,
-        )?;
+        write_demo_figures(fig_dir, &outcome, &tracking, truth.gamma_hz_per_mps2, &scenario, args.seed)?;
     }
     Ok(())
+}
+
+/// The figures of the demo's calibration plus the Allan deviation of the
+/// scenario's oscillator, as PNG and SVG.
+fn write_demo_figures(
+    dir: &Path,
+    outcome: &Outcome,
+    tracking: &Path,
+    truth: [f64; 3],
+    scenario: &Scenario,
+    seed: u64,
+) -> Result<()> {
+    let bar = crate::spinner();
+    let log = gsens_io::read_tracking_file(tracking)?;
+    let inputs = FigureInputs::new(outcome, Some(&log), Some(truth))?;
+    let mut figs = inputs.figures();
+    let cfg = scenario.oscillator.config();
+    if cfg.h0 + cfg.h_neg1 + cfg.h_neg2 + cfg.h2 > 0.0 {
+        let label = match scenario.oscillator.preset {
+            OscillatorKind::Ocxo => "OCXO preset",
+            OscillatorKind::Tcxo => "TCXO preset",
+            OscillatorKind::TcxoLowQuality => "low-quality TCXO preset",
+            OscillatorKind::Ideal => "ideal preset with noise overrides",
+        };
+        figs.push(allan_figure(&cfg, label, seed)?);
+    }
+    write_figures(&figs, dir, |id| bar.set_message(format!("drawing {id}")))?;
+    bar.finish_and_clear();
+    let ids: Vec<&str> = figs.iter().map(|f| f.id).collect();
+    crate::out(&format!("figures: {} ({})\n", dir.display(), ids.join(", ")))
+}
+
+/// The Allan deviation of `cfg` simulated for 20 minutes at 40 Hz against its model.
+fn allan_figure(cfg: &gsens_sim::oscillator::OscillatorConfig, label: &str, seed: u64) -> Result<Figure<'static>> {
+    use gsens_report::figures::{AllanData, fig_allan};
+    use gsens_sim::oscillator::{Oscillator, allan_deviation_theory_with_pm, allan_deviations};
+    let (dt, n) = (0.025, 48_000);
+    let mut osc = Oscillator::try_new(cfg, dt, gsens_sim::rng::seeded(seed)).map_err(anyhow::Error::msg)?;
+    let mut y = vec![0.0; n];
+    osc.fill(&mut y);
+    let taus: Vec<f64> = (0..16).map(|k| dt * 2f64.powi(k)).filter(|t| *t <= n as f64 * dt / 4.0).collect();
+    let sim = allan_deviations(&y, dt, &taus);
+    let theory: Vec<f64> = taus.iter().map(|&t| allan_deviation_theory_with_pm(cfg, t, dt)).collect();
+    let label = label.to_string();
+    let caption = format!(
+        "Overlapping Allan deviation of {:.0} minutes of the simulator's fractional frequency ({label}) against \
+         the power-law model of its preset; deterministic terms (offset, drift, temperature cycle) are in the \
+         simulation but not in the model.",
+        n as f64 * dt / 60.0
+    );
+    Ok(Figure::new("allan", "Allan deviation of the simulated oscillator".into(), caption, move |f| {
+        let d = AllanData { taus_s: &taus, simulated: &sim, theory: &theory, label: &label };
+        fig_allan(&d, f, (900, 600))
+    }))
 }

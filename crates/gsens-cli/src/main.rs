@@ -2,10 +2,10 @@
 //! phase errors and its IMU. A thin shell over the library crates: argument
 //! parsing, files, printing.
 
-mod cmd_report;
+mod args;
 mod demo;
 mod estimate;
-mod gnss_sdr_cmd;
+mod import;
 mod montecarlo;
 mod report;
 mod response;
@@ -13,7 +13,10 @@ mod simulate;
 mod simulate_iq;
 
 use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::Write;
 use std::process::ExitCode;
+use std::time::Duration;
 
 #[derive(Parser)]
 #[command(
@@ -31,7 +34,7 @@ enum Command {
     /// Simulate a calibration session (the paper's experiment by default),
     /// estimate Γ from it and show the estimate next to the truth.
     Demo(demo::DemoArgs),
-    /// Estimate Γ from receiver logs (imu.csv + tracking.csv).
+    /// Estimate Γ from receiver logs (imu.csv + tracking.csv, or GNSS-SDR dumps).
     Estimate(estimate::EstimateArgs),
     /// Simulate a calibration session and write imu.csv, tracking.csv, truth.json.
     Simulate(simulate::SimulateArgs),
@@ -41,11 +44,28 @@ enum Command {
     Montecarlo(montecarlo::MonteCarloArgs),
     /// Estimate Γ and write a report: one self-contained HTML file, the same as JSON,
     /// a C header for firmware and the figures (PNG, SVG).
-    Report(cmd_report::ReportArgs),
+    Report(report::ReportArgs),
     /// Convert another receiver's logs to gsens's (GNSS-SDR tracking dumps → tracking.csv).
-    Import(gnss_sdr_cmd::ImportArgs),
+    Import(import::ImportArgs),
     /// Print the default scenario as commented TOML (edit it, pass it with --scenario).
     Scenario,
+}
+
+/// Writes `text` to standard output; a closed pipe (`gsens response | head`)
+/// ends the output quietly.
+pub fn out(text: &str) -> anyhow::Result<()> {
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        r => Ok(r?),
+    }
+}
+
+/// A spinner on stderr (drawn only on a terminal).
+pub fn spinner() -> ProgressBar {
+    let bar = ProgressBar::new_spinner();
+    bar.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"));
+    bar.enable_steady_tick(Duration::from_millis(120));
+    bar
 }
 
 fn main() -> ExitCode {
@@ -56,15 +76,15 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Response(args) => response::run(&args),
         Command::Montecarlo(args) => montecarlo::run(&args),
-        Command::Report(args) => cmd_report::run(&args),
-        Command::Import(args) => gnss_sdr_cmd::import(&args),
-        Command::Scenario => {
-            print!("{}", gsens_sim::scenario::Scenario::default_toml());
-            Ok(())
-        }
+        Command::Report(args) => report::run(&args),
+        Command::Import(args) => import::run(&args),
+        Command::Scenario => out(gsens_sim::scenario::Scenario::default_toml()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) => {
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)

@@ -23,6 +23,8 @@ const BAND_LO_HZ: f64 = 1e-4;
 /// A receiver's carrier loop: which implementation, its filter and how often
 /// it is updated.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(tag = "implementation", rename_all = "snake_case"))]
 #[non_exhaustive]
 pub enum LoopModel {
     /// The loop of [`crate::pll`]'s docs (Kaplan & Hegarty's filter,
@@ -42,6 +44,7 @@ pub enum LoopModel {
 /// The peak of |L(j2πf)|: where shaking makes the largest phase error per Hz
 /// of frequency bias.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LoopPeak {
     /// Frequency of the peak \[Hz\].
     pub f_hz: f64,
@@ -99,7 +102,11 @@ impl LoopModel {
                 GnssSdrPll::new(*stage)?;
                 let c = if stage.order == 3 {
                     let wn = stage.bw_hz / BN_OVER_WN_ORDER3;
-                    LoopFilterCoeffs { c0_per_s: B3 * wn, c1_per_s2: 0.5 * A3 * wn * wn, c2_per_s3: 0.25 * wn * wn * wn }
+                    LoopFilterCoeffs {
+                        c0_per_s: B3 * wn,
+                        c1_per_s2: 0.5 * A3 * wn * wn,
+                        c2_per_s3: 0.25 * wn * wn * wn,
+                    }
                 } else {
                     let wn = stage.bw_hz / BN_OVER_WN_ORDER2;
                     LoopFilterCoeffs { c0_per_s: A2 * wn, c1_per_s2: wn * wn, c2_per_s3: 0.0 }
@@ -128,9 +135,10 @@ impl LoopModel {
     /// The nominal noise bandwidth Bn \[Hz\] where the loop is specified by it.
     pub fn bn_hz(&self) -> Option<f64> {
         match self {
-            LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz, .. } | LoopSpec::ThirdOrder { bn_hz, .. }, .. } => {
-                Some(*bn_hz)
-            }
+            LoopModel::Kaplan {
+                spec: LoopSpec::SecondOrder { bn_hz, .. } | LoopSpec::ThirdOrder { bn_hz, .. },
+                ..
+            } => Some(*bn_hz),
             LoopModel::Kaplan { .. } => None,
             LoopModel::GnssSdr(stage) => Some(stage.bw_hz),
         }
@@ -198,8 +206,8 @@ impl LoopModel {
 
     /// The peak of |L| by golden-section search on a log-frequency axis from
     /// 1 mHz to 1 kHz (or just below Nyquist). |L| = 2π·|s|²/|s³ + c0s² + c1s + c2|
-    /// rises as f², falls as 1/f and is unimodal between for the stable loops
-    /// gsens models. For a 2nd-order continuous loop the peak is at ωn with
+    /// rises as f (2nd order) or f² (3rd order), falls as 1/f and is unimodal
+    /// between for the stable loops gsens models. For a 2nd-order continuous loop the peak is at ωn with
     /// |L| = π/(ζ·ωn) (conventions, `docs/conventions.md#loop-models`).
     pub fn peak(&self) -> Result<LoopPeak, LoopError> {
         self.check()?;
@@ -263,9 +271,7 @@ impl core::fmt::Display for LoopModel {
             LoopModel::Kaplan { spec, interval_s } => {
                 match *spec {
                     LoopSpec::SecondOrder { bn_hz, zeta } => write!(f, "2nd order, Bn {bn_hz} Hz, ζ {zeta:.3}")?,
-                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
-                        write!(f, "3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}")?
-                    }
+                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => write!(f, "3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}")?,
                     LoopSpec::Coefficients(c) => {
                         write!(f, "filter c0 {} /s, c1 {} /s², c2 {} /s³", c.c0_per_s, c.c1_per_s2, c.c2_per_s3)?
                     }

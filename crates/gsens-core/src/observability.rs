@@ -13,6 +13,7 @@ use nalgebra::SymmetricEigen;
 
 /// Thresholds of the observability verdict.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ObservabilityCriteria {
     /// Minimum unexplained excitation RMS √(S_i/n) [rad/(Hz/(m/s²))].
     /// Default 0.05: a 0.06 m/s² oscillation at the loop's peak sensitivity.

@@ -54,6 +54,7 @@ pub use nalgebra::Complex;
 
 /// Loop-filter coefficients of F(s) = c0 + c1/s + c2/s² [rad/s per rad].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LoopFilterCoeffs {
     /// Proportional gain c0 [1/s].
     pub c0_per_s: f64,
@@ -70,6 +71,8 @@ pub const KAPLAN_B3: f64 = 2.4;
 
 /// How a carrier loop is specified by a user.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(tag = "kind", rename_all = "snake_case"))]
 pub enum LoopSpec {
     /// 2nd-order loop from its one-sided noise bandwidth and damping.
     SecondOrder {

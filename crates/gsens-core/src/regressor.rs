@@ -30,6 +30,8 @@ use crate::pll::{DiscretePll, LinearLoop, LoopFilterCoeffs, ModelLoop};
 
 /// What a tracking-log row reports when the loop runs faster than the log.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
 pub enum LoggedPhase {
     /// The latest discriminator output.
     Last,

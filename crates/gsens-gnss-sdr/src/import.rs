@@ -48,6 +48,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use gsens_core::pll::gnss_sdr::{GnssSdrPll, GnssSdrStage};
+use gsens_io::TrackingRow;
 
 use crate::conf::TrackingConf;
 use crate::dump::{DumpLayout, TrackingDump, find_dumps, read_dump};
@@ -332,24 +333,9 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
     Ok(Imported { rows, tracks, interval_s: settings.interval_s() })
 }
 
-/// One row of the common-grid tracking log ([`resample`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GridRow {
-    /// Grid time j·T \[s\].
-    pub t_s: f64,
-    /// Channel.
-    pub channel: u32,
-    /// PRN.
-    pub prn: u32,
-    /// C/N0 \[dB-Hz\] (interpolated linearly).
-    pub cn0_dbhz: f64,
-    /// Phase error \[rad\] (cubic interpolation).
-    pub phase_err_rad: f64,
-}
-
-/// Puts every track on the common grid t = j·`interval_s` (module docs); rows
-/// by time then channel.
-pub fn resample(imported: &Imported, interval_s: f64) -> Vec<GridRow> {
+/// Puts every track on the common grid t = j·`interval_s` (module docs): rows
+/// of `tracking.csv` (elevation unknown) by time then channel.
+pub fn resample(imported: &Imported, interval_s: f64) -> Vec<TrackingRow> {
     let mut by_track: Vec<Vec<&ImportedRow>> = vec![Vec::new(); imported.tracks.len()];
     for r in &imported.rows {
         by_track[r.track].push(r);
@@ -377,11 +363,12 @@ pub fn resample(imported: &Imported, interval_s: f64) -> Vec<GridRow> {
                     (Some(p), Some(n)) => cubic(p.phase_err_rad, a.phase_err_rad, b.phase_err_rad, n.phase_err_rad, u),
                     _ => a.phase_err_rad + u * (b.phase_err_rad - a.phase_err_rad),
                 };
-                out.push(GridRow {
+                out.push(TrackingRow {
                     t_s: tg,
                     channel: a.channel,
                     prn: a.prn,
                     cn0_dbhz: a.cn0_dbhz + u * (b.cn0_dbhz - a.cn0_dbhz),
+                    elev_deg: None,
                     phase_err_rad: phase,
                 });
             }

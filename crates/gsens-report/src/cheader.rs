@@ -15,7 +15,7 @@
 //! unobservable axis never gets a made-up number: its value is 0 with a
 //! comment saying why, and it has no σ macro.
 
-use crate::{ReportMeta, loop_description};
+use crate::ReportMeta;
 use gsens_calib::Calibration;
 use gsens_core::units::STANDARD_GRAVITY_MPS2;
 use std::fmt::Write as _;
@@ -95,11 +95,11 @@ pub fn render_c_header(c: &Calibration, meta: &ReportMeta) -> String {
     let _ = writeln!(h, " *");
     let _ = writeln!(
         h,
-        " * Estimate: {:?} over {} epochs at {:.3} Hz; receiver loop {}.",
+        " * Estimate: {} over {} epochs at {:.3} Hz; receiver loop {}.",
         c.settings.method,
         c.epochs_used,
         1.0 / c.log_interval_s,
-        c_comment(&loop_description(&c.settings.loop_spec))
+        c_comment(&c.loop_used.to_string())
     );
     let _ = writeln!(
         h,

@@ -17,7 +17,8 @@
 
 use crate::spectrum::welch_psd;
 use gsens_calib::HistoryPoint;
-use gsens_core::pll::{Complex, LoopFilterCoeffs};
+use gsens_core::LoopModel;
+use gsens_core::pll::{Complex, LoopError};
 use plotters::coord::Shift;
 use plotters::coord::combinators::{LogCoord, WithKeyPoints};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
@@ -663,35 +664,30 @@ pub struct ResponseData {
     pub peak_rad_per_hz: f64,
     /// Where |L| is above peak/√2 [Hz], if known.
     pub half_power_band_hz: Option<[f64; 2]>,
-    /// The loop in words (drawn in the title), e.g. from [`crate::loop_description`].
+    /// The loop in words (drawn in the title), e.g. [`LoopModel`]'s `Display`.
     pub description: String,
 }
 
 impl ResponseData {
-    /// Samples the response of `coeffs` at `points` log-spaced frequencies from
-    /// `f_min_hz` to `f_max_hz` (the discrete loop's response below its Nyquist
-    /// frequency when `loop_interval_s` is given, else the continuous one) and
-    /// finds its peak and half-power band.
+    /// Samples the response of `model` at `points` log-spaced frequencies from
+    /// `f_min_hz` to `f_max_hz` (below the Nyquist frequency of its update
+    /// rate) with its peak and half-power band, all from the loop itself
+    /// ([`LoopModel::response`], [`LoopModel::peak`], [`LoopModel::half_power_band_hz`]).
     pub fn from_loop(
-        coeffs: &LoopFilterCoeffs,
-        loop_interval_s: Option<f64>,
+        model: &LoopModel,
         f_min_hz: f64,
         f_max_hz: f64,
         points: usize,
         description: impl Into<String>,
-    ) -> Self {
-        let resp = |f: f64| -> Complex<f64> {
-            match loop_interval_s {
-                Some(t) => coeffs.response_discrete(f, t),
-                None => coeffs.response_continuous(f),
-            }
-        };
-        let nyq = loop_interval_s.map(|t| 0.5 / t).unwrap_or(f64::INFINITY);
+    ) -> Result<Self, LoopError> {
+        let peak = model.peak()?;
+        let band = model.half_power_band_hz()?;
+        let nyq = model.nyquist_hz().unwrap_or(f64::INFINITY);
         let hi = f_max_hz.min(0.999 * nyq);
         let n = points.max(2);
         let ratio = (hi / f_min_hz).powf(1.0 / (n - 1) as f64);
         let frequency_hz: Vec<f64> = (0..n).map(|k| f_min_hz * ratio.powi(k as i32)).collect();
-        let l: Vec<Complex<f64>> = frequency_hz.iter().map(|&f| resp(f)).collect();
+        let l: Vec<Complex<f64>> = frequency_hz.iter().map(|&f| model.response(f)).collect();
         let mut phase_deg = Vec::with_capacity(n);
         let mut prev = f64::NAN;
         for z in &l {
@@ -702,43 +698,15 @@ impl ResponseData {
             phase_deg.push(p);
             prev = p;
         }
-        // Peak: golden-section search on log f (|L| is unimodal for these loops).
-        let search_hi = (1e3f64).min(0.999 * nyq);
-        let mag = |lf: f64| resp(lf.exp()).norm();
-        let (mut a, mut b) = ((1e-3f64).ln(), search_hi.ln());
-        let g = (5f64.sqrt() - 1.0) / 2.0;
-        for _ in 0..100 {
-            let (x1, x2) = (b - g * (b - a), a + g * (b - a));
-            if mag(x1) > mag(x2) {
-                b = x2;
-            } else {
-                a = x1;
-            }
-        }
-        let peak_hz = (0.5 * (a + b)).exp();
-        let peak = resp(peak_hz).norm();
-        let target = peak / 2f64.sqrt();
-        let cross = |mut lo: f64, mut hi: f64, rising: bool| {
-            for _ in 0..100 {
-                let m = (lo * hi).sqrt();
-                if (resp(m).norm() > target) == rising {
-                    hi = m;
-                } else {
-                    lo = m;
-                }
-            }
-            (lo * hi).sqrt()
-        };
-        let band = [cross(1e-4, peak_hz, true), cross(peak_hz, search_hi, false)];
-        ResponseData {
+        Ok(ResponseData {
             magnitude_rad_per_hz: l.iter().map(|z| z.norm()).collect(),
             frequency_hz,
             phase_deg,
-            peak_hz,
-            peak_rad_per_hz: peak,
+            peak_hz: peak.f_hz,
+            peak_rad_per_hz: peak.rad_per_hz,
             half_power_band_hz: Some(band),
             description: description.into(),
-        }
+        })
     }
 }
 

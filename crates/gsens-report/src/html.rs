@@ -106,7 +106,8 @@ nav a { margin-right: 14px; color: var(--accent); text-decoration: none; font-si
 
 /// The report as one HTML document.
 pub fn render_html(d: &ReportData) -> String {
-    let c = d.calibration;
+    let c = &d.document.calibration;
+    let truth = d.document.truth_gamma_hz_per_mps2;
     let mut h = String::with_capacity(64 * 1024 + d.figures.iter().map(|f| f.svg.len()).sum::<usize>());
     let _ = write!(
         h,
@@ -148,13 +149,13 @@ pub fn render_html(d: &ReportData) -> String {
             if missing.len() == 1 { "that axis" } else { "those axes" }
         );
     }
-    let fn_hz = c.settings.loop_spec.wn_rad_per_s().map(|w| w / core::f64::consts::TAU);
+    let peak_hz = d.document.loop_summary.peak_hz;
     let _ = write!(
         h,
         "<table id=\"estimate-table\"><thead><tr><th>axis</th><th>Γ̂ [Hz/(m/s²)]</th><th>1σ</th>\
          <th>Γ̂ [ppb/g]</th><th>1σ</th><th>excitation RMS<br>[rad per Hz/(m/s²)]</th><th>verdict</th>"
     );
-    if d.truth.is_some() {
+    if truth.is_some() {
         let _ = write!(h, "<th>truth [Hz/(m/s²)]</th><th>error</th>");
     }
     let _ = writeln!(h, "</tr></thead><tbody>");
@@ -166,7 +167,7 @@ pub fn render_html(d: &ReportData) -> String {
                 "<span class=\"tag bad\">unobservable</span> excitation below {} or 1σ above {} Hz/(m/s²){}",
                 c.settings.criteria.min_excitation_rms,
                 c.settings.criteria.max_sigma_hz_per_mps2,
-                fn_hz.map(|f| format!(": shake harder along {} or closer to {f:.2} Hz", AXES[i])).unwrap_or_default()
+                peak_hz.map(|f| format!(": shake harder along {} or closer to {f:.2} Hz", AXES[i])).unwrap_or_default()
             )
         };
         let _ = write!(
@@ -180,7 +181,7 @@ pub fn render_html(d: &ReportData) -> String {
             num(c.sigma_ppb_per_g[i], 4, false),
             c.excitation_rms[i],
         );
-        if let Some(t) = d.truth {
+        if let Some(t) = truth {
             let err = match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i]) {
                 (Some(g), Some(s)) if s > 0.0 => format!("{:+.5} ({:+.2}σ)", g - t[i], (g - t[i]) / s),
                 (Some(g), _) => format!("{:+.5}", g - t[i]),
@@ -191,7 +192,7 @@ pub fn render_html(d: &ReportData) -> String {
         let _ = writeln!(h, "</tr>");
     }
     let _ = writeln!(h, "</tbody></table>");
-    if let Some(t) = d.truth {
+    if let Some(t) = truth {
         let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
         let err: f64 = (0..3).filter_map(|i| c.gamma_hz_per_mps2[i].map(|g| (g - t[i]).powi(2))).sum::<f64>().sqrt();
         let _ = writeln!(
@@ -254,7 +255,7 @@ pub fn render_html(d: &ReportData) -> String {
         "<table><thead><tr><th>channel</th><th>PRN</th><th>mean C/N0 [dB-Hz]</th><th>epochs</th><th>used</th>\
          <th>offset removed [rad]</th><th>reason</th></tr></thead><tbody>"
     );
-    for ch in &d.channels {
+    for ch in &d.document.channels {
         let _ = writeln!(
             h,
             "<tr><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{:.1}</td><td class=\"num\">{}</td>\
@@ -273,7 +274,7 @@ pub fn render_html(d: &ReportData) -> String {
     // Settings: everything that decided the estimate.
     let _ = writeln!(h, "<h2 id=\"settings\">Settings</h2>");
     let mut rows = vec![
-        ("receiver loop".to_string(), crate::loop_description(&c.settings.loop_spec)),
+        ("receiver loop".to_string(), c.loop_used.to_string()),
         ("log interval [s]".to_string(), format!("{}", c.log_interval_s)),
         ("loop updates per log epoch (model)".to_string(), c.model_substeps.to_string()),
         (
@@ -289,7 +290,9 @@ pub fn render_html(d: &ReportData) -> String {
     if let Ok(v) = serde_json::to_value(c.settings) {
         flatten("settings", &v, &mut rows);
     }
-    flatten("selection", &d.selection, &mut rows);
+    if let Ok(v) = serde_json::to_value(&d.document.selection) {
+        flatten("selection", &v, &mut rows);
+    }
     for (k, p) in &d.meta.inputs {
         rows.push((format!("input.{k}"), p.clone()));
     }

@@ -1,35 +1,20 @@
-//! The report as JSON.
-//!
-//! The shape of `gsens estimate --json` (every key of
-//! [`gsens_calib::Calibration`], `channels`, `selection`, `inputs`,
-//! `truth_gamma_hz_per_mps2` when known) plus a `report` object:
+//! The report as JSON: the result document ([`gsens_calib::ResultDocument`],
+//! the same as `gsens estimate --json`) with its `report` block filled in:
 //! `generated_utc`, `tool`, `title` and the `figures` shown.
 
 use crate::ReportData;
-use serde_json::{Map, Value, json};
+use gsens_calib::{FigureInfo, ReportInfo};
 
-/// The report as a JSON value.
-pub fn report_json(data: &ReportData) -> Result<Value, serde_json::Error> {
-    let mut v = serde_json::to_value(data.calibration)?;
-    let obj = v.as_object_mut().ok_or_else(|| serde::ser::Error::custom("a calibration serializes to an object"))?;
-    obj.insert("channels".into(), serde_json::to_value(&data.channels)?);
-    obj.insert("selection".into(), data.selection.clone());
-    let inputs: Map<String, Value> =
-        data.meta.inputs.iter().map(|(k, p)| (k.clone(), Value::String(p.clone()))).collect();
-    obj.insert("inputs".into(), inputs.into());
-    if let Some(t) = data.truth {
-        obj.insert("truth_gamma_hz_per_mps2".into(), serde_json::to_value(t)?);
-    }
-    obj.insert(
-        "report".into(),
-        json!({
-            "generated_utc": data.meta.generated_utc,
-            "tool": data.meta.tool,
-            "title": data.title,
-            "figures": data.figures.iter().map(|f| json!({"id": f.id, "title": f.title})).collect::<Vec<_>>(),
-        }),
-    );
-    Ok(v)
+/// The report's result document as a JSON value.
+pub fn report_json(data: &ReportData) -> Result<serde_json::Value, serde_json::Error> {
+    let mut doc = data.document.clone();
+    doc.report = Some(ReportInfo {
+        generated_utc: data.meta.generated_utc.clone(),
+        tool: data.meta.tool.clone(),
+        title: data.title.clone(),
+        figures: data.figures.iter().map(|f| FigureInfo { id: f.id.clone(), title: f.title.clone() }).collect(),
+    });
+    serde_json::to_value(&doc)
 }
 
 /// [`report_json`] pretty-printed, with a final newline.

@@ -13,22 +13,31 @@
 //! - [`html`]: one self-contained HTML file (inline SVG and CSS, no script, no
 //!   external request) with the estimate, uncertainty, observability verdicts,
 //!   RMS before and after compensation and every setting used.
-//! - [`json`]: the same report as JSON (the shape of `gsens estimate --json`
-//!   plus a `report` block).
-//! - [`cheader`]: Γ̂ as C preprocessor constants (Hz/(m/s²) and ppb/g).
+//! - [`json`]: the same report as JSON (the result document of
+//!   `gsens estimate --json` with its `report` block).
+//! - [`cheader`]: Γ̂ as C preprocessor constants (Hz/(m/s²) and ppb/g);
+//! - [`render_text`]: the text report the CLI prints;
+//! - [`FigureInputs`]: the figure set of a calibration, drawn from its
+//!   [`gsens_calib::Outcome`], and [`write_figures`] to write it as PNG and SVG.
 //!
-//! The crate takes plain data (slices and small structs, [`gsens_calib::Calibration`])
-//! and does no file reading: the CLI converts its logs.
+//! Every output is rendered from the one [`gsens_calib::ResultDocument`]; the
+//! crate reads no file.
 #![deny(missing_docs)]
 
 pub mod cheader;
+mod figure_set;
 pub mod figures;
 pub mod html;
 pub mod json;
+mod montecarlo_text;
 pub mod spectrum;
+mod text;
 mod time;
 
+pub use figure_set::{Figure, FigureInputs, WriteError, write_figures};
 pub use figures::{Format, Image, RenderError};
+pub use montecarlo_text::render_montecarlo_text;
+pub use text::render_text;
 pub use time::{utc_date_string, utc_now_string, utc_timestamp_string};
 
 /// Names the Cartesian axes in every output.
@@ -56,39 +65,6 @@ impl ReportMeta {
     }
 }
 
-/// Loop description in words, e.g. `2nd order, Bn 3 Hz, ζ 0.707, ωn/2π 0.900 Hz`.
-pub fn loop_description(l: &gsens_core::pll::LoopSpec) -> String {
-    use gsens_core::pll::LoopSpec;
-    let nat = l.wn_rad_per_s().map(|w| format!(", ωn/2π {:.3} Hz", w / core::f64::consts::TAU)).unwrap_or_default();
-    match *l {
-        LoopSpec::SecondOrder { bn_hz, zeta } => format!("2nd order, Bn {bn_hz} Hz, ζ {zeta:.3}{nat}"),
-        LoopSpec::ThirdOrder { bn_hz, a3, b3 } => format!("3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}{nat}"),
-        LoopSpec::Coefficients(c) => {
-            format!("filter c0 {} /s, c1 {} /s², c2 {} /s³{nat}", c.c0_per_s, c.c1_per_s2, c.c2_per_s3)
-        }
-    }
-}
-
-/// One track of the tracking log and what became of it (the fields of
-/// `gsens_io::session::ChannelSummary`, which the CLI converts).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct ChannelRow {
-    /// Receiver channel number.
-    pub channel: u32,
-    /// Satellite PRN.
-    pub prn: u32,
-    /// Mean C/N0 [dB-Hz].
-    pub mean_cn0_dbhz: f64,
-    /// Epochs the track contributes.
-    pub epochs: usize,
-    /// Whether the track enters the average.
-    pub used: bool,
-    /// `"used"`, or why the track is excluded.
-    pub reason: String,
-    /// The constant phase offset removed from the track [rad], if any.
-    pub phase_offset_rad: Option<f64>,
-}
-
 /// A figure of the report: an inline SVG with its title and caption.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FigureBlock {
@@ -107,14 +83,9 @@ pub struct FigureBlock {
 pub struct ReportData<'a> {
     /// Heading of the report.
     pub title: String,
-    /// The calibration.
-    pub calibration: &'a gsens_calib::Calibration,
-    /// The true Γ [Hz/(m/s²)] when known (simulated logs).
-    pub truth: Option<[f64; 3]>,
-    /// Every track of the log and whether it was used.
-    pub channels: Vec<ChannelRow>,
-    /// The channel-selection settings, as the JSON object the CLI reports.
-    pub selection: serde_json::Value,
+    /// The result document: the estimate, the channels, the settings, the
+    /// inputs and the truth when known.
+    pub document: &'a gsens_calib::ResultDocument,
     /// Who made the report, when, from which logs.
     pub meta: ReportMeta,
     /// Figures, in the order shown.

@@ -82,6 +82,7 @@ pub const B3: f64 = 2.4;
 
 /// One stage of GNSS-SDR's carrier loop: order, bandwidth and integration.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GnssSdrStage {
     /// `pll_filter_order`: 2 or 3.
     pub order: u8,

@@ -1,0 +1,63 @@
+//! Why a calibration could not run.
+
+use gsens_core::pll::LoopError;
+use gsens_core::regressor::RegressorError;
+
+/// Why a calibration (or one of its searches) could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CalibError {
+    /// The loop specification is invalid.
+    #[error("invalid loop: {0}")]
+    Loop(LoopError),
+    /// Loop and log intervals do not fit together.
+    #[error("{0}")]
+    Intervals(RegressorError),
+    /// The discrete loop at this interval is unstable.
+    #[error("the loop (Bn, order) is unstable when updated every {0} s; is the loop update interval right?")]
+    UnstableAtInterval(f64),
+    /// A setting outside its range.
+    #[error("setting {name} = {value} is out of range: expected {expected}")]
+    Setting {
+        /// The setting's name (as in the result document's `settings`).
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The range it must be in.
+        expected: &'static str,
+    },
+    /// A combination of settings gsens does not support.
+    #[error("{0}")]
+    Unsupported(&'static str),
+    /// The series differ in length.
+    #[error(
+        "the series differ in length: {t_s} epoch times, {phase_err_rad} phase errors, {accel_mps2} specific forces"
+    )]
+    LengthMismatch {
+        /// Epoch times.
+        t_s: usize,
+        /// Phase errors.
+        phase_err_rad: usize,
+        /// Specific forces.
+        accel_mps2: usize,
+    },
+    /// Too few epochs to estimate.
+    #[error("only {epochs} epochs with a phase measurement after the {warmup_s} s warm-up; need at least 10")]
+    TooFewEpochs {
+        /// Usable epochs.
+        epochs: u64,
+        /// The warm-up [s].
+        warmup_s: f64,
+    },
+    /// The log is too short for the time-offset search.
+    #[error("the log is too short to search a time offset of ±{max_abs_s} s ({epochs} usable epochs)")]
+    TooShortForOffsetSearch {
+        /// The search range [s].
+        max_abs_s: f64,
+        /// Usable epochs.
+        epochs: usize,
+    },
+    /// The loop has no natural frequency to identify.
+    #[error("the loop has no natural frequency to identify")]
+    NoNaturalFrequency,
+}

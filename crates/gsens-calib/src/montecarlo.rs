@@ -1,0 +1,350 @@
+//! Monte Carlo: simulate and estimate many times, in parallel, and compare
+//! each method's spread with the Cramér–Rao bound.
+//!
+//! Run i simulates the scenario with seed S + i into memory, prepares the
+//! session exactly as the pipeline prepares files (the same readers'
+//! checks, selection and interpolation), and calibrates it with every method.
+//! The error of a method is Γ̂ − Γ_imu, Γ_imu = M⁻ᵀΓ the g-sensitivity as seen
+//! through the IMU's readings (truth.json's `gamma_imu_axes_hz_per_mps2`):
+//! what an estimator fed the IMU log converges to, so that the IMU's fixed
+//! scale-factor and misalignment errors do not count as noise. The errors
+//! against the body-frame Γ are reported too.
+//!
+//! Per method and axis: the bias and RMSE over the runs, the bound as the RMS
+//! over the runs of each run's Cramér–Rao bound (RMSE² ≥ mean CRLB² for an
+//! unbiased estimator), their ratio, the fraction of runs whose error is
+//! within 3σ (the statistical σ the method reported) and the RMS of the error
+//! over that σ.
+
+use crate::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
+use gsens_core::LoopModel;
+use gsens_core::pll::LoopSpec;
+use gsens_core::regressor::LoggedPhase;
+use gsens_io::{FormatError, ImuSeries, TrackingLog};
+use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
+use gsens_sim::session::{MemorySink, Truth, simulate};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// One method's result in one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodRun {
+    /// Γ̂ [Hz/(m/s²)] (null: unobservable).
+    pub gamma_hz_per_mps2: [Option<f64>; 3],
+    /// The method's statistical 1σ [Hz/(m/s²)].
+    pub sigma_statistical_hz_per_mps2: [Option<f64>; 3],
+    /// The Cramér–Rao bound of the run [Hz/(m/s²)].
+    pub crlb_hz_per_mps2: [Option<f64>; 3],
+    /// Estimated minus true IMU time offset [s] (when estimated).
+    pub time_offset_error_s: Option<f64>,
+    /// Identified minus true natural frequency ωn/2π [Hz] (when identified).
+    pub natural_frequency_error_hz: Option<f64>,
+    /// Order of the AR noise model.
+    pub noise_ar_order: usize,
+}
+
+/// One run: its seed, truth and each method's result (or why it failed).
+#[derive(Debug, Clone, Serialize)]
+pub struct Run {
+    /// Seed of the simulation.
+    pub seed: u64,
+    /// Γ in the body frame [Hz/(m/s²)].
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// Γ as seen through the IMU, M⁻ᵀΓ [Hz/(m/s²)].
+    pub gamma_imu_axes_hz_per_mps2: [f64; 3],
+    /// Per method, in the order given.
+    pub methods: Vec<MethodOutcome>,
+}
+
+/// One method's outcome in one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodOutcome {
+    /// The method's name.
+    pub method: &'static str,
+    /// Its result.
+    #[serde(flatten)]
+    pub result: Option<MethodRun>,
+    /// Why it failed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+/// Mean and RMS of a sample.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct MeanRms {
+    /// Mean.
+    pub mean: f64,
+    /// Root mean square.
+    pub rms: f64,
+}
+
+fn mean_rms(x: &[f64]) -> Option<MeanRms> {
+    if x.is_empty() {
+        return None;
+    }
+    let n = x.len() as f64;
+    Some(MeanRms { mean: x.iter().sum::<f64>() / n, rms: (x.iter().map(|v| v * v).sum::<f64>() / n).sqrt() })
+}
+
+/// Statistics of one method over the runs (per axis: three numbers each).
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodStats {
+    /// Runs where the method produced an estimate of every axis.
+    pub runs: usize,
+    /// Runs where it failed or left an axis unobservable.
+    pub failures: usize,
+    /// Mean of Γ̂ − Γ_imu [Hz/(m/s²)].
+    pub bias: [f64; 3],
+    /// RMS of Γ̂ − Γ_imu [Hz/(m/s²)].
+    pub rmse: [f64; 3],
+    /// RMS over the runs of the per-run Cramér–Rao bound [Hz/(m/s²)].
+    pub crlb: [f64; 3],
+    /// rmse / crlb.
+    pub rmse_over_crlb: [f64; 3],
+    /// Fraction of runs with |Γ̂ − Γ_imu| ≤ 3σ (the method's statistical σ).
+    pub within_3sigma: [f64; 3],
+    /// RMS of (Γ̂ − Γ_imu)/σ: 1 when the reported σ is honest.
+    pub z_rms: [f64; 3],
+    /// Mean of Γ̂ − Γ (body frame) [Hz/(m/s²)].
+    pub bias_body: [f64; 3],
+    /// RMS of Γ̂ − Γ (body frame) [Hz/(m/s²)].
+    pub rmse_body: [f64; 3],
+    /// Estimated minus true IMU time offset [s] (when estimated).
+    pub time_offset_error_s: Option<MeanRms>,
+    /// Identified minus true ωn/2π [Hz] (when identified).
+    pub natural_frequency_error_hz: Option<MeanRms>,
+}
+
+/// The short name of a method, as in the result document's `settings.method.name`.
+pub fn method_name(m: &Method) -> &'static str {
+    match m {
+        Method::Batch => "batch",
+        Method::Rls { .. } => "rls",
+        Method::Gradient { .. } => "gradient",
+        Method::Gls => "gls",
+    }
+}
+
+/// The statistics of method `j` over `runs`.
+pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
+    let ok: Vec<(&Run, &MethodRun)> = runs
+        .iter()
+        .filter_map(|r| match &r.methods[j].result {
+            Some(m) if (0..3).all(|i| m.gamma_hz_per_mps2[i].is_some() && m.crlb_hz_per_mps2[i].is_some()) => {
+                Some((r, m))
+            }
+            _ => None,
+        })
+        .collect();
+    let n = ok.len().max(1) as f64;
+    type PerRun<'a> = &'a dyn Fn(&Run, &MethodRun, usize) -> f64;
+    let mean = |f: PerRun| [0, 1, 2].map(|i| ok.iter().map(|(r, m)| f(r, m, i)).sum::<f64>() / n);
+    let rms = |f: PerRun| [0, 1, 2].map(|i| (ok.iter().map(|(r, m)| f(r, m, i).powi(2)).sum::<f64>() / n).sqrt());
+    let err =
+        |r: &Run, m: &MethodRun, i: usize| m.gamma_hz_per_mps2[i].unwrap_or(0.0) - r.gamma_imu_axes_hz_per_mps2[i];
+    let err_body = |r: &Run, m: &MethodRun, i: usize| m.gamma_hz_per_mps2[i].unwrap_or(0.0) - r.gamma_hz_per_mps2[i];
+    let crlb = |_: &Run, m: &MethodRun, i: usize| m.crlb_hz_per_mps2[i].unwrap_or(f64::NAN);
+    let z = |r: &Run, m: &MethodRun, i: usize| err(r, m, i) / m.sigma_statistical_hz_per_mps2[i].unwrap_or(f64::NAN);
+    let within = |r: &Run, m: &MethodRun, i: usize| if z(r, m, i).abs() <= 3.0 { 1.0 } else { 0.0 };
+    let rmse = rms(&err);
+    let crlb_rms = rms(&crlb);
+    let collect = |f: &dyn Fn(&MethodRun) -> Option<f64>| -> Vec<f64> { ok.iter().filter_map(|(_, m)| f(m)).collect() };
+    MethodStats {
+        runs: ok.len(),
+        failures: runs.len() - ok.len(),
+        bias: mean(&err),
+        rmse,
+        crlb: crlb_rms,
+        rmse_over_crlb: [0, 1, 2].map(|i| rmse[i] / crlb_rms[i]),
+        within_3sigma: mean(&within),
+        z_rms: rms(&z),
+        bias_body: mean(&err_body),
+        rmse_body: rms(&err_body),
+        time_offset_error_s: mean_rms(&collect(&|m| m.time_offset_error_s)),
+        natural_frequency_error_hz: mean_rms(&collect(&|m| m.natural_frequency_error_hz)),
+    }
+}
+
+/// Simulates run `seed` into memory and calibrates it with each of `methods`
+/// (pipeline settings, one per method), as `gsens estimate` would the files.
+pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> Result<Run, MonteCarloError> {
+    let mut sink = MemorySink::default();
+    let truth: Truth = simulate(scenario, seed, &mut sink, |_| {})
+        .map_err(|e| MonteCarloError::Simulation { seed, message: e.to_string() })?;
+    let rows: Vec<gsens_io::TrackingRow> = sink
+        .tracking
+        .iter()
+        .map(|r| gsens_io::TrackingRow {
+            t_s: r.t_s,
+            channel: r.channel,
+            prn: r.prn,
+            cn0_dbhz: r.cn0_dbhz,
+            elev_deg: Some(r.elev_deg),
+            phase_err_rad: r.phase_err_rad,
+        })
+        .collect();
+    let tracking = TrackingLog::from_rows(&format!("simulated tracking (seed {seed})"), &rows)?;
+    let imu =
+        ImuSeries { t_s: sink.imu.iter().map(|s| s.0).collect(), accel_mps2: sink.imu.iter().map(|s| s.1).collect() };
+    drop(sink);
+    let imu_name = format!("simulated imu (seed {seed})");
+    let true_fn_hz = scenario
+        .tracking_loop
+        .coeffs()
+        .ok()
+        .and_then(|c| gsens_core::pll::LoopSpec::Coefficients(c).wn_rad_per_s())
+        .map(|wn| wn / std::f64::consts::TAU);
+    let results = methods
+        .iter()
+        .map(|settings| {
+            let method = method_name(&settings.estimate.method);
+            let c: Calibration = match calibrate_logs(&tracking, &imu, &imu_name, settings) {
+                Ok(o) => o.calibration,
+                Err(e) => return MethodOutcome { method, result: None, error: Some(e.to_string()) },
+            };
+            let result = MethodRun {
+                gamma_hz_per_mps2: c.gamma_hz_per_mps2,
+                sigma_statistical_hz_per_mps2: c.sigma_statistical_hz_per_mps2,
+                crlb_hz_per_mps2: c.crlb_hz_per_mps2,
+                time_offset_error_s: c
+                    .imu_time_offset_estimated
+                    .then_some(c.imu_time_offset_s - truth.imu_time_offset_s),
+                natural_frequency_error_hz: c
+                    .loop_identification
+                    .as_ref()
+                    .and_then(|id| true_fn_hz.map(|t| id.natural_frequency_hz - t)),
+                noise_ar_order: c.noise_ar_order,
+            };
+            MethodOutcome { method, result: Some(result), error: None }
+        })
+        .collect();
+    Ok(Run {
+        seed,
+        gamma_hz_per_mps2: truth.gamma_hz_per_mps2,
+        gamma_imu_axes_hz_per_mps2: truth.gamma_imu_axes_hz_per_mps2,
+        methods: results,
+    })
+}
+
+/// The whole Monte Carlo: runs, statistics per method, timing.
+#[derive(Debug, Clone, Serialize)]
+pub struct MonteCarlo {
+    /// Number of runs.
+    pub runs: u64,
+    /// Seed of run 0 (run i: seed + i).
+    pub seed: u64,
+    /// Scenario file, or "default".
+    pub scenario: String,
+    /// Wall time [s].
+    pub wall_s: f64,
+    /// Worker threads.
+    pub threads: usize,
+    /// The method whose largest RMSE/CRLB over the axes is smallest.
+    pub best_method: Option<String>,
+    /// Statistics per method, in the order given.
+    #[serde(serialize_with = "ser_stats")]
+    pub methods: Vec<(&'static str, MethodStats)>,
+    /// Every run's estimates.
+    pub per_run: Vec<Run>,
+}
+
+fn ser_stats<S: serde::Serializer>(m: &[(&'static str, MethodStats)], s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut map = s.serialize_map(Some(m.len()))?;
+    for (name, st) in m {
+        map.serialize_entry(name, st)?;
+    }
+    map.end()
+}
+
+/// Why a Monte Carlo could not run.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MonteCarloError {
+    /// No run or no method asked for.
+    #[error("a Monte Carlo needs at least one run and one method")]
+    Empty,
+    /// A run's simulation failed.
+    #[error("simulating seed {seed}: {message}")]
+    Simulation {
+        /// Its seed.
+        seed: u64,
+        /// Why.
+        message: String,
+    },
+    /// A simulated log did not pass the readers' checks.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+}
+
+/// The estimation settings for a simulated scenario: the receiver loop the
+/// scenario ran (its filter and update interval), its logged phase, its
+/// carrier and its IMU's datasheet accuracy (where `base` leaves them at 0),
+/// as a user who knows the receiver would state them.
+pub fn scenario_settings(scenario: &Scenario, base: &EstimateSettings) -> Result<EstimateSettings, MonteCarloError> {
+    let l = &scenario.tracking_loop;
+    let spec = match l.order {
+        3 => LoopSpec::ThirdOrder { bn_hz: l.bn_hz, a3: l.a3, b3: l.b3 },
+        _ => LoopSpec::SecondOrder { bn_hz: l.bn_hz, zeta: l.zeta },
+    };
+    let mut s = *base;
+    s.receiver_loop = LoopModel::kaplan(spec, Some(l.interval_s));
+    s.logged_phase = match scenario.log.phase {
+        LoggedPhaseMode::Last => LoggedPhase::Last,
+        LoggedPhaseMode::Mean => LoggedPhase::Mean,
+    };
+    s.carrier_hz = scenario.oscillator.carrier_hz;
+    let imu = scenario.imu.config();
+    if s.imu_scale_sigma == 0.0 {
+        s.imu_scale_sigma = imu.scale_factor_sigma_ppm * 1e-6;
+    }
+    if s.imu_misalignment_sigma_rad == 0.0 {
+        s.imu_misalignment_sigma_rad = imu.misalignment_sigma_rad;
+    }
+    Ok(s)
+}
+
+/// Runs `runs` simulations (seeds `seed`, `seed + 1`, …) in parallel and
+/// calibrates each with every method of `methods`; `progress` is called once
+/// per finished run. Results are indexed by run, so the same seed gives the
+/// same numbers whatever the thread count.
+pub fn monte_carlo(
+    scenario: &Scenario,
+    scenario_name: &str,
+    runs: u64,
+    seed: u64,
+    methods: &[PipelineSettings],
+    progress: impl Fn() + Sync,
+) -> Result<MonteCarlo, MonteCarloError> {
+    if runs == 0 || methods.is_empty() {
+        return Err(MonteCarloError::Empty);
+    }
+    let start = std::time::Instant::now();
+    let per_run: Vec<Run> = (0..runs)
+        .into_par_iter()
+        .map(|i| {
+            let r = run_one(scenario, seed + i, methods);
+            progress();
+            r
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let stats: Vec<(&'static str, MethodStats)> =
+        methods.iter().enumerate().map(|(j, m)| (method_name(&m.estimate.method), method_stats(&per_run, j))).collect();
+    let worst = |s: &MethodStats| s.rmse_over_crlb.iter().fold(0.0f64, |a, &b| a.max(b));
+    // The first method within 1e-6 of the smallest worst axis (RLS with λ = 1
+    // equals the batch to rounding).
+    let valid = || stats.iter().filter(|(_, s)| s.runs > 0 && worst(s).is_finite());
+    let min_worst = valid().map(|(_, s)| worst(s)).fold(f64::INFINITY, f64::min);
+    let best_method = valid().find(|(_, s)| worst(s) <= min_worst * (1.0 + 1e-6)).map(|(n, _)| n.to_string());
+    Ok(MonteCarlo {
+        runs,
+        seed,
+        scenario: scenario_name.to_string(),
+        wall_s,
+        threads: rayon::current_num_threads(),
+        best_method,
+        methods: stats,
+        per_run,
+    })
+}

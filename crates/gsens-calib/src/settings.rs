@@ -1,0 +1,150 @@
+//! The settings of the estimation stage: the receiver's loop, the estimator
+//! and the error model. Reported with every estimate.
+
+use crate::CalibError;
+use gsens_core::LoopModel;
+use gsens_core::observability::ObservabilityCriteria;
+use gsens_core::pll::LoopSpec;
+use gsens_core::regressor::LoggedPhase;
+use serde::{Deserialize, Serialize};
+
+/// Which estimator produces Γ̂.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "name", rename_all = "lowercase")]
+pub enum Method {
+    /// The paper's gradient observer with constant gain k.
+    Gradient {
+        /// Gain k [1/s per unit φ_a²].
+        gain_k: f64,
+    },
+    /// Recursive least squares (Kalman-type gain) with forgetting factor λ.
+    Rls {
+        /// Forgetting factor λ (1 = none).
+        lambda: f64,
+    },
+    /// Batch least squares over the whole log.
+    Batch,
+    /// Generalized least squares: the batch fit prewhitened by an AR model of
+    /// its residuals (see [`crate::gls`]); efficient under coloured noise.
+    Gls,
+}
+
+impl core::fmt::Display for Method {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Method::Gradient { gain_k } => write!(f, "gradient observer, gain k = {gain_k}"),
+            Method::Rls { lambda } => write!(f, "recursive least squares, forgetting factor λ = {lambda}"),
+            Method::Batch => write!(f, "batch least squares"),
+            Method::Gls => write!(f, "generalized least squares (AR noise model)"),
+        }
+    }
+}
+
+/// Robust estimation against outlying epochs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Robust {
+    /// Plain least squares.
+    #[default]
+    None,
+    /// Huber's M-estimate by iteratively reweighted least squares (batch method
+    /// only; see [`crate::huber_irls`]).
+    Huber,
+}
+
+/// Everything that decides an estimate from an epoch series; reported with it.
+///
+/// Build it from [`EstimateSettings::default`] (the paper's loop and the
+/// batch estimator) and set the fields that differ.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub struct EstimateSettings {
+    /// The receiver's carrier loop. A [`LoopModel::Kaplan`] loop without an
+    /// update interval is taken to run at the log interval.
+    pub receiver_loop: LoopModel,
+    /// What a log row holds when the loop runs faster than the log.
+    pub logged_phase: LoggedPhase,
+    /// The estimator.
+    pub method: Method,
+    /// Epochs in the first `warmup_s` seconds only drive the loop models.
+    pub warmup_s: f64,
+    /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off); see
+    /// [`gsens_core::filter`].
+    pub highpass_hz: f64,
+    /// Longest lag of the autocorrelation-robust covariance [s].
+    pub hac_lag_s: f64,
+    /// Carrier frequency [Hz] for ppb/g.
+    pub carrier_hz: f64,
+    /// 1σ of the IMU's scale-factor error per axis (fraction, e.g. 1e-3),
+    /// propagated into the uncertainty of Γ̂ (see [`crate::imu_systematic_sigma`]).
+    pub imu_scale_sigma: f64,
+    /// 1σ of the IMU's axis misalignment [rad], propagated likewise.
+    pub imu_misalignment_sigma_rad: f64,
+    /// Observability thresholds.
+    pub criteria: ObservabilityCriteria,
+    /// Robust estimation against outlying epochs (default none).
+    pub robust: Robust,
+}
+
+impl Default for EstimateSettings {
+    fn default() -> Self {
+        EstimateSettings {
+            receiver_loop: LoopModel::kaplan(LoopSpec::PAPER, None),
+            logged_phase: LoggedPhase::Last,
+            method: Method::Batch,
+            warmup_s: 2.0,
+            highpass_hz: 0.05,
+            hac_lag_s: 2.5,
+            carrier_hz: gsens_core::units::GPS_L1_HZ,
+            imu_scale_sigma: 0.0,
+            imu_misalignment_sigma_rad: 0.0,
+            criteria: ObservabilityCriteria::default(),
+            robust: Robust::None,
+        }
+    }
+}
+
+/// `x` finite and ≥ 0 (or > 0 with `strict`), else an error naming the setting.
+pub(crate) fn check_range(name: &'static str, x: f64, strict: bool) -> Result<(), CalibError> {
+    let ok = x.is_finite() && if strict { x > 0.0 } else { x >= 0.0 };
+    if ok {
+        Ok(())
+    } else {
+        Err(CalibError::Setting {
+            name, value: x, expected: if strict { "finite and > 0" } else { "finite and ≥ 0" }
+        })
+    }
+}
+
+impl EstimateSettings {
+    /// The loop the model runs for a log sampled every `log_interval_s`: the
+    /// receiver loop, updated at the log interval when no interval is stated.
+    pub fn loop_at(&self, log_interval_s: f64) -> LoopModel {
+        self.receiver_loop.with_default_interval(log_interval_s)
+    }
+
+    /// Checks every value against its range (the loop is checked when the
+    /// model is built, against the log interval).
+    pub fn validate(&self) -> Result<(), CalibError> {
+        match self.method {
+            Method::Rls { lambda } if !(lambda > 0.0 && lambda <= 1.0) => {
+                return Err(CalibError::Setting { name: "lambda", value: lambda, expected: "in (0, 1]" });
+            }
+            Method::Gradient { gain_k } => check_range("gain_k", gain_k, true)?,
+            _ => {}
+        }
+        check_range("warmup_s", self.warmup_s, false)?;
+        check_range("highpass_hz", self.highpass_hz, false)?;
+        check_range("hac_lag_s", self.hac_lag_s, false)?;
+        check_range("carrier_hz", self.carrier_hz, true)?;
+        check_range("imu_scale_sigma", self.imu_scale_sigma, false)?;
+        check_range("imu_misalignment_sigma_rad", self.imu_misalignment_sigma_rad, false)?;
+        if self.robust == Robust::Huber && self.method != Method::Batch {
+            // The recursive estimators have no second pass; GLS would need a
+            // robust AR fit and IRLS on the prewhitened series (an outlier
+            // spreads over the AR filter's length there).
+            return Err(CalibError::Unsupported("robust (Huber) estimation works with the batch method only"));
+        }
+        Ok(())
+    }
+}

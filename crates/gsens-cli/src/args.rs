@@ -1,0 +1,331 @@
+//! The command-line options shared by the commands, and the one place where
+//! they become library objects (`gsens_calib::PipelineSettings`,
+//! `gsens_gnss_sdr::ImportSettings`).
+
+use anyhow::{Result, bail};
+use clap::{Args, ValueEnum};
+use gsens_calib::{EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
+use gsens_core::LoopModel;
+use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
+use gsens_gnss_sdr::conf::{GnssSdrConf, TrackingConf};
+use gsens_gnss_sdr::{DumpLayout, ImportSettings};
+use gsens_io::session::{SelectionConfig, Weighting};
+use std::path::{Path, PathBuf};
+
+/// Estimator choice.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum MethodArg {
+    /// The paper's gradient observer (constant gain).
+    Gradient,
+    /// Recursive least squares (Kalman-type gain).
+    Rls,
+    /// Batch least squares over the whole log.
+    Batch,
+    /// Generalized least squares: batch prewhitened by an AR model of the residual noise.
+    Gls,
+}
+
+/// A switch.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum OnOff {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
+}
+
+/// The receiver's carrier loop.
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Receiver loop")]
+pub struct LoopArgs {
+    /// Loop order of the receiver's carrier PLL.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub order: u8,
+    /// One-sided noise bandwidth Bn of the receiver's PLL [Hz].
+    #[arg(long, default_value_t = 3.0)]
+    pub bn_hz: f64,
+    /// Damping ratio ζ (2nd-order loop).
+    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2)]
+    pub zeta: f64,
+    /// a3 of the 3rd-order loop (Kaplan: 1.1).
+    #[arg(long, default_value_t = KAPLAN_A3)]
+    pub a3: f64,
+    /// b3 of the 3rd-order loop (Kaplan: 2.4).
+    #[arg(long, default_value_t = KAPLAN_B3)]
+    pub b3: f64,
+    /// The receiver's loop update interval [s] (default: the log interval).
+    #[arg(long)]
+    pub loop_interval_s: Option<f64>,
+    /// What a log row holds when the loop runs faster than the log.
+    #[arg(long, value_enum, default_value_t = LoggedArg::Last)]
+    pub logged_phase: LoggedArg,
+}
+
+/// What a log row holds when the loop runs faster than the log.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum LoggedArg {
+    /// The latest discriminator output.
+    Last,
+    /// The mean of the discriminator outputs since the previous row.
+    Mean,
+}
+
+impl LoopArgs {
+    /// The loop as the library models it.
+    pub fn loop_model(&self) -> LoopModel {
+        let spec = match self.order {
+            3 => LoopSpec::ThirdOrder { bn_hz: self.bn_hz, a3: self.a3, b3: self.b3 },
+            _ => LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta },
+        };
+        LoopModel::kaplan(spec, self.loop_interval_s)
+    }
+}
+
+/// The estimator and the error model.
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Estimator")]
+pub struct EstimatorArgs {
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = MethodArg::Batch)]
+    pub method: MethodArg,
+    /// Gain k of the gradient observer.
+    #[arg(long, default_value_t = 0.5)]
+    pub gain_k: f64,
+    /// Forgetting factor λ of the RLS estimator (1 = none).
+    #[arg(long, default_value_t = 1.0)]
+    pub lambda: f64,
+    /// Seconds at the start that only drive the loop models (their start-up transient).
+    #[arg(long, default_value_t = 2.0)]
+    pub warmup_s: f64,
+    /// 1σ scale-factor error of the IMU [ppm] (from its datasheet), added to Γ̂'s uncertainty.
+    #[arg(long, default_value_t = 0.0)]
+    pub imu_scale_sigma_ppm: f64,
+    /// 1σ axis misalignment of the IMU [mrad], added to Γ̂'s uncertainty.
+    #[arg(long, default_value_t = 0.0)]
+    pub imu_misalignment_sigma_mrad: f64,
+    /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off).
+    #[arg(long, default_value_t = 0.05)]
+    pub highpass_hz: f64,
+    /// Robust estimation against outlying epochs: `huber` (IRLS; batch method only) or `none`.
+    #[arg(long, value_enum, default_value_t = RobustArg::None)]
+    pub robust: RobustArg,
+}
+
+/// Robust estimation.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum RobustArg {
+    /// Plain least squares.
+    None,
+    /// Huber's M-estimate (iteratively reweighted least squares).
+    Huber,
+}
+
+impl EstimatorArgs {
+    /// The method of `m` with this group's gain and forgetting factor.
+    pub fn method(&self, m: MethodArg) -> Method {
+        match m {
+            MethodArg::Batch => Method::Batch,
+            MethodArg::Gls => Method::Gls,
+            MethodArg::Rls => Method::Rls { lambda: self.lambda },
+            MethodArg::Gradient => Method::Gradient { gain_k: self.gain_k },
+        }
+    }
+
+    /// The estimation settings (checked by the library), the loop left at
+    /// its default for the caller to set.
+    pub fn settings(&self) -> EstimateSettings {
+        let mut s = EstimateSettings::default();
+        s.method = self.method(self.method);
+        s.warmup_s = self.warmup_s;
+        s.imu_scale_sigma = self.imu_scale_sigma_ppm * 1e-6;
+        s.imu_misalignment_sigma_rad = self.imu_misalignment_sigma_mrad * 1e-3;
+        s.highpass_hz = self.highpass_hz;
+        s.robust = match self.robust {
+            RobustArg::None => Robust::None,
+            RobustArg::Huber => Robust::Huber,
+        };
+        s
+    }
+}
+
+/// Which channels enter the average.
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Channels")]
+pub struct SelectionArgs {
+    /// Average the N channels with the highest mean C/N0 (0 = all that pass the masks).
+    #[arg(long, default_value_t = 4)]
+    pub channels: usize,
+    /// Drop rows below this C/N0 [dB-Hz].
+    #[arg(long)]
+    pub min_cn0_dbhz: Option<f64>,
+    /// Drop rows below this elevation [deg] (rows without elevation pass).
+    #[arg(long)]
+    pub elevation_mask_deg: Option<f64>,
+    /// Weights of the per-epoch channel average.
+    #[arg(long, value_enum, default_value_t = WeightsArg::Equal)]
+    pub weights: WeightsArg,
+    /// Per-channel screening before averaging: cycle slips, losses of lock, C/N0 drops, |φ| beyond the linear range.
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    pub screening: OnOff,
+    /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
+    #[arg(long, default_value_t = 6.0)]
+    pub cn0_drop_db: f64,
+    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default π/4).
+    #[arg(long, default_value_t = std::f64::consts::FRAC_PI_4)]
+    pub max_abs_phase_rad: f64,
+}
+
+/// Channel weighting.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum WeightsArg {
+    /// Equal weights (the paper).
+    Equal,
+    /// Weights proportional to C/N0 (inverse thermal phase variance).
+    Cn0,
+}
+
+impl SelectionArgs {
+    /// The selection settings.
+    pub fn selection(&self) -> SelectionConfig {
+        let mut s = SelectionConfig::default();
+        s.max_channels = (self.channels > 0).then_some(self.channels);
+        s.min_cn0_dbhz = self.min_cn0_dbhz;
+        s.elevation_mask_deg = self.elevation_mask_deg;
+        s.weighting = match self.weights {
+            WeightsArg::Equal => Weighting::Equal,
+            WeightsArg::Cn0 => Weighting::Cn0,
+        };
+        s.screening.enabled = self.screening == OnOff::On;
+        s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);
+        s.screening.max_abs_phase_rad = (self.max_abs_phase_rad > 0.0).then_some(self.max_abs_phase_rad);
+        s
+    }
+}
+
+/// How the IMU/tracking time offset is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OffsetArg {
+    /// Estimated jointly with Γ.
+    Auto,
+    /// Zero.
+    None,
+    /// This many seconds (IMU time stamp minus true time).
+    Seconds(f64),
+}
+
+fn parse_time_offset(s: &str) -> Result<OffsetArg, String> {
+    match s {
+        "auto" => Ok(OffsetArg::Auto),
+        "none" => Ok(OffsetArg::None),
+        _ => match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(OffsetArg::Seconds(v)),
+            _ => Err(format!("expected auto, none or a number of seconds, got `{s}`")),
+        },
+    }
+}
+
+/// Systematic errors estimated jointly with Γ.
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Systematic errors")]
+pub struct SystematicArgs {
+    /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
+    #[arg(long, default_value = "auto", value_parser = parse_time_offset, allow_hyphen_values = true)]
+    pub time_offset: OffsetArg,
+    /// Search range ± of `--time-offset auto` [s].
+    #[arg(long, default_value_t = 0.25)]
+    pub time_offset_max_s: f64,
+    /// Identify the loop's natural frequency jointly with Γ and use it when the data reject the assumed loop.
+    #[arg(long)]
+    pub identify_loop: bool,
+    /// With --identify-loop: identify the damping ζ too (weakly determined by near-sinusoidal shaking).
+    #[arg(long)]
+    pub identify_damping: bool,
+}
+
+/// The whole pipeline's settings from the option groups.
+pub fn pipeline_settings(
+    estimate: EstimateSettings,
+    selection: &SelectionArgs,
+    systematic: &SystematicArgs,
+) -> PipelineSettings {
+    let mut p = PipelineSettings::default();
+    p.estimate = estimate;
+    p.selection = selection.selection();
+    p.time_offset = match systematic.time_offset {
+        OffsetArg::Auto => TimeOffset::Auto { max_abs_s: systematic.time_offset_max_s },
+        OffsetArg::None => TimeOffset::Fixed { imu_time_offset_s: 0.0 },
+        OffsetArg::Seconds(v) => TimeOffset::Fixed { imu_time_offset_s: v },
+    };
+    p.loop_identification = match (systematic.identify_loop, systematic.identify_damping) {
+        (false, _) => LoopIdentificationMode::Off,
+        (true, false) => LoopIdentificationMode::NaturalFrequency,
+        (true, true) => LoopIdentificationMode::NaturalFrequencyAndDamping,
+    };
+    p
+}
+
+/// How GNSS-SDR dump records are selected.
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "GNSS-SDR dumps")]
+pub struct ConversionArgs {
+    /// Sampling rate of the tracking [Hz] when the configuration does not give it.
+    #[arg(long)]
+    pub gnss_sdr_fs_hz: Option<f64>,
+    /// Records below this C/N0 are dropped [dB-Hz].
+    #[arg(long, default_value_t = 25.0)]
+    pub gnss_sdr_min_cn0_dbhz: f64,
+    /// Records whose carrier lock test is below this are dropped.
+    #[arg(long, default_value_t = 0.85)]
+    pub gnss_sdr_min_lock_test: f64,
+    /// Seconds dropped after a channel switches to the narrow loop (default: five time
+    /// constants of the loop's slowest mode, at least 1 s).
+    #[arg(long)]
+    pub gnss_sdr_settle_s: Option<f64>,
+    /// Record layout `name:type,...` for dumps of versions the reader does not know.
+    #[arg(long)]
+    pub gnss_sdr_layout: Option<String>,
+}
+
+impl ConversionArgs {
+    /// The conversion settings for dumps made with the configuration `conf`
+    /// (GNSS-SDR's defaults when none is given).
+    pub fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
+        let tracking = match conf {
+            Some(p) => GnssSdrConf::read(p)?.tracking()?,
+            None => TrackingConf::defaults(),
+        };
+        let Some(fs_hz) = self.gnss_sdr_fs_hz.or(tracking.fs_hz) else {
+            bail!(
+                "the sampling rate is unknown: the configuration gives neither GNSS-SDR.internal_fs_sps nor \
+                 SignalSource.sampling_frequency; give --gnss-sdr-fs-hz"
+            )
+        };
+        if !(fs_hz.is_finite() && fs_hz > 0.0) {
+            bail!("the sampling rate must be positive, got {fs_hz}");
+        }
+        if let Some(v) = self.gnss_sdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
+            bail!("--gnss-sdr-settle-s must be ≥ 0, got {v}");
+        }
+        let mut s = ImportSettings::new(fs_hz, tracking);
+        s.min_cn0_dbhz = self.gnss_sdr_min_cn0_dbhz;
+        s.min_lock_test = self.gnss_sdr_min_lock_test;
+        s.settle_s = self.gnss_sdr_settle_s;
+        if let Some(spec) = &self.gnss_sdr_layout {
+            s.layout = Some(DumpLayout::parse_spec(spec).map_err(|e| anyhow::anyhow!("--gnss-sdr-layout: {e}"))?);
+        }
+        Ok(s)
+    }
+}
+
+/// Options of `gsens estimate` for GNSS-SDR tracking dumps.
+#[derive(Args, Debug, Clone)]
+pub struct GnssSdrArgs {
+    /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead of --tracking.
+    #[arg(long, requires = "gnss_sdr_conf")]
+    pub gnss_sdr: Option<PathBuf>,
+    /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
+    #[arg(long, requires = "gnss_sdr")]
+    pub gnss_sdr_conf: Option<PathBuf>,
+    #[command(flatten)]
+    pub conversion: ConversionArgs,
+}

@@ -1,0 +1,107 @@
+//! `gsens import`: another receiver's logs as gsens's `tracking.csv`.
+
+use crate::args::ConversionArgs;
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use gsens_gnss_sdr::import::{TrackSummary, write_imported_csv};
+use gsens_gnss_sdr::import_dir;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct ImportArgs {
+    #[command(subcommand)]
+    pub source: ImportSource,
+}
+
+/// The receivers `gsens import` reads.
+#[derive(Subcommand, Debug)]
+pub enum ImportSource {
+    /// GNSS-SDR tracking dumps (Tracking_1C.dump=true: trk_ch_N.dat) → tracking.csv.
+    GnssSdr(ImportGnssSdrArgs),
+}
+
+/// `gsens import gnss-sdr`.
+#[derive(Args, Debug)]
+pub struct ImportGnssSdrArgs {
+    /// Directory of the dumps.
+    pub dump_dir: PathBuf,
+    /// The GNSS-SDR configuration the dumps were made with (default: GNSS-SDR 0.0.17's defaults).
+    #[arg(long)]
+    pub conf: Option<PathBuf>,
+    /// Output tracking.csv.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Put all channels on the common grid t = j·T (T the narrow integration) by cubic
+    /// interpolation, as `gsens estimate --tracking` needs; default: each record at the
+    /// middle of its own integration.
+    #[arg(long)]
+    pub common_grid: bool,
+    /// Also write what became of each track (JSON).
+    #[arg(long)]
+    pub tracks_json: Option<PathBuf>,
+    #[command(flatten)]
+    pub conversion: ConversionArgs,
+}
+
+/// The tracks of an import as text.
+pub fn tracks_text(tracks: &[TrackSummary], interval_s: f64) -> String {
+    let mut s = String::new();
+    let used = tracks.iter().filter(|t| t.used).count();
+    let _ =
+        writeln!(s, "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept", tracks.len(), interval_s * 1e3);
+    for t in tracks {
+        let _ = writeln!(
+            s,
+            "  ch {:>3}  PRN {:>3}  {:>7.2}–{:>7.2} s  narrow from {}  C/N0 {:>5.1} dB-Hz  {:>6}/{:<6} good  {}",
+            t.channel,
+            t.prn,
+            t.start_s,
+            t.end_s,
+            t.switch_s.map(|v| format!("{v:>7.2} s")).unwrap_or_else(|| "      —  ".into()),
+            t.mean_cn0_dbhz,
+            t.good_records,
+            t.modelled_records,
+            t.reason
+        );
+    }
+    s
+}
+
+pub fn run(args: &ImportArgs) -> Result<()> {
+    let ImportSource::GnssSdr(a) = &args.source;
+    let settings = a.conversion.import_settings(a.conf.as_deref())?;
+    let imported = import_dir(&a.dump_dir, &settings)?;
+    print!("{}", tracks_text(&imported.tracks, imported.interval_s));
+    let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
+    let rows = if a.common_grid {
+        let grid = gsens_gnss_sdr::resample(&imported, imported.interval_s);
+        let mut w = gsens_io::TrackingWriter::new(file)?;
+        for row in &grid {
+            w.write_row(row)?;
+        }
+        w.finish()?;
+        grid.len()
+    } else {
+        write_imported_csv(file, &imported.rows)?;
+        imported.rows.len()
+    };
+    let stage = settings.stage();
+    println!(
+        "wrote {} rows → {}{}; estimate with the GNSS-SDR loop model: gsens estimate --gnss-sdr {} --gnss-sdr-conf \
+         <conf> (order {}, Bn {} Hz, {} ms)",
+        rows,
+        a.out.display(),
+        if a.common_grid { " (common grid)" } else { " (times at the middle of each integration)" },
+        a.dump_dir.display(),
+        stage.order,
+        stage.bw_hz,
+        stage.symbols
+    );
+    if let Some(p) = &a.tracks_json {
+        let conversion = gsens_calib::GnssSdrConversion { conversion: settings, tracks: imported.tracks };
+        std::fs::write(p, serde_json::to_string_pretty(&conversion)? + "\n")
+            .with_context(|| format!("{}: cannot write", p.display()))?;
+    }
+    Ok(())
+}

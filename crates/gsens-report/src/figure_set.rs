@@ -1,0 +1,255 @@
+//! The figure set of a calibration: the paper's Figs. 3–5, C/N0 per channel
+//! and the residual spectrum, each with its title and caption, computed once
+//! from an [`Outcome`] and drawn on demand.
+
+use crate::FigureBlock;
+use crate::figures::{
+    Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, RenderError, ResponseData, SpectrumData,
+    fig_cn0, fig_compensation, fig_estimation, fig_residual_spectrum, fig_response,
+};
+use gsens_calib::{CalibError, Calibration, Outcome, compensation_series};
+use gsens_io::TrackingLog;
+use gsens_io::session::PreparedSession;
+use std::path::Path;
+
+/// Why figures could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// A figure could not be drawn.
+    #[error("drawing {id}: {error}")]
+    Render {
+        /// The figure.
+        id: &'static str,
+        /// Why.
+        #[source]
+        error: RenderError,
+    },
+    /// A file or folder could not be written.
+    #[error("{path}: cannot write: {error}")]
+    Io {
+        /// The path.
+        path: String,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+}
+
+/// One figure: file stem, title, caption and its renderer.
+pub struct Figure<'a> {
+    /// Short identifier, also the file stem.
+    pub id: &'static str,
+    /// Heading.
+    pub title: String,
+    /// What the figure shows and how to read it.
+    pub caption: String,
+    render: Box<dyn Fn(Format) -> Result<Image, RenderError> + 'a>,
+}
+
+impl<'a> Figure<'a> {
+    /// A figure drawn by `render`.
+    pub fn new(
+        id: &'static str,
+        title: String,
+        caption: String,
+        render: impl Fn(Format) -> Result<Image, RenderError> + 'a,
+    ) -> Self {
+        Figure { id, title, caption, render: Box::new(render) }
+    }
+
+    /// Draws the figure.
+    pub fn render(&self, format: Format) -> Result<Image, RenderError> {
+        (self.render)(format)
+    }
+}
+
+/// The series the figures of a calibration need, computed once.
+pub struct FigureInputs<'a> {
+    session: &'a PreparedSession,
+    calibration: &'a Calibration,
+    tracking: Option<&'a TrackingLog>,
+    truth: Option<[f64; 3]>,
+    before: Vec<Option<f64>>,
+    after: Vec<Option<f64>>,
+    spectrum: (Vec<f64>, Vec<f64>),
+}
+
+impl<'a> FigureInputs<'a> {
+    /// The inputs of the figures of `outcome`; `tracking` (the log it came
+    /// from) adds the C/N0 figure, `truth` draws the true Γ.
+    pub fn new(
+        outcome: &'a Outcome,
+        tracking: Option<&'a TrackingLog>,
+        truth: Option<[f64; 3]>,
+    ) -> Result<Self, CalibError> {
+        let (session, calibration) = (&outcome.session, &outcome.calibration);
+        let series = outcome.series();
+        // φ and φ − φ_aᵀΓ̂ (the estimate of every axis, as the reported RMS
+        // after compensation), high-passed exactly as the estimator saw them.
+        let (before, after): (Vec<_>, Vec<_>) =
+            compensation_series(&series, &calibration.settings, &calibration.gamma_raw_hz_per_mps2)?
+                .into_iter()
+                .unzip();
+        // The spectrum over the longest gap-free run after the warm-up.
+        let skip = (calibration.settings.warmup_s / session.log_interval_s).ceil() as usize;
+        let (mut best, mut start) = (0..0, None);
+        for k in skip..=after.len() {
+            match (start, after.get(k).copied().flatten()) {
+                (None, Some(_)) => start = Some(k),
+                (Some(s), None) => {
+                    if k - s > best.len() {
+                        best = s..k;
+                    }
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        let spec_before: Vec<f64> = best.clone().filter_map(|k| before[k]).collect();
+        let resid: Vec<f64> = best.filter_map(|k| after[k]).collect();
+        Ok(FigureInputs { session, calibration, tracking, truth, before, after, spectrum: (spec_before, resid) })
+    }
+
+    /// The figures: Figs. 3–5 of the paper, C/N0, the residual spectrum.
+    pub fn figures(&self) -> Vec<Figure<'_>> {
+        let c = self.calibration;
+        let s = self.session;
+        let desc = c.loop_used.to_string();
+        let response = ResponseData::from_loop(&c.loop_used, 0.05, 20.0, 300, desc.clone()).ok();
+        let mut figs = Vec::new();
+        if let Some(r) = response {
+            let period = 1.0 / r.peak_hz;
+            figs.push(Figure {
+                id: "fig3_response",
+                title: "Fig. 3: the loop's frequency response".into(),
+                caption: format!(
+                    "|L(j2πf)| = |φ/Δf| and its phase for the receiver loop modelled ({desc}). A frequency bias \
+                     Δf = aᵀΓ leaves the largest phase error when the specific force varies near the peak, \
+                     {:.3} Hz: shake with a period of about {period:.2} s (shaded: the half-power band).",
+                    r.peak_hz
+                ),
+                render: Box::new(move |f| fig_response(&r, f, DEFAULT_SIZE)),
+            });
+        }
+        figs.push(Figure {
+            id: "fig4_estimation",
+            title: "Fig. 4: the estimation process".into(),
+            caption: format!(
+                "Specific force in the IMU frame (top) and the components of Γ̂ as the estimator runs (bottom), with \
+                 ±1σ bands assuming white residuals{}. An axis is estimated once it is shaken.",
+                if self.truth.is_some() { "; the truth dashed" } else { "" }
+            ),
+            render: Box::new(move |f| {
+                let d = EstimationData {
+                    t_s: &s.t_s,
+                    accel_mps2: &s.accel_mps2,
+                    history: &c.history,
+                    truth: self.truth,
+                    observable: c.observable,
+                };
+                fig_estimation(&d, f, (DEFAULT_SIZE.0, 720))
+            }),
+        });
+        figs.push(Figure {
+            id: "fig5_compensation",
+            title: "Fig. 5: phase error before and after compensation".into(),
+            caption: format!(
+                "The channel-averaged phase tracking error φ and φ − φ_aᵀΓ̂ over the whole log{} (legend RMS \
+                 over every plotted epoch; over the {} epochs used: {:.4} rad before, {:.4} rad after). At rest \
+                 the two coincide; while shaking, compensation brings the error back to its at-rest level.",
+                if c.settings.highpass_hz > 0.0 {
+                    format!(
+                        ", both high-passed at {} Hz as in the estimator (this removes the slow steady-state \
+                         error of the satellites' Doppler rate)",
+                        c.settings.highpass_hz
+                    )
+                } else {
+                    String::new()
+                },
+                c.epochs_used,
+                c.rms_before_rad,
+                c.rms_after_rad
+            ),
+            render: Box::new(move |f| {
+                let d = CompensationData { t_s: &s.t_s, before_rad: &self.before, after_rad: &self.after };
+                fig_compensation(&d, f, (DEFAULT_SIZE.0, 520))
+            }),
+        });
+        if let Some(log) = self.tracking {
+            let used: Vec<(u32, u32)> = s.channels.iter().filter(|ch| ch.used).map(|ch| (ch.channel, ch.prn)).collect();
+            figs.push(Figure {
+                id: "cn0",
+                title: "C/N0 per channel".into(),
+                caption: format!(
+                    "Carrier-to-noise density of every track in the log; the {} averaged into φ are drawn bold.",
+                    used.len()
+                ),
+                render: Box::new(move |f| {
+                    let tracks: Vec<Cn0Track> = log
+                        .tracks()
+                        .iter()
+                        .map(|t| Cn0Track {
+                            channel: t.channel,
+                            prn: t.prn,
+                            t_s: &t.t_s,
+                            cn0_dbhz: &t.cn0_dbhz,
+                            used: used.contains(&(t.channel, t.prn)),
+                        })
+                        .collect();
+                    fig_cn0(&tracks, f, (DEFAULT_SIZE.0, 520))
+                }),
+            });
+        }
+        if self.spectrum.1.len() >= 64 {
+            let fn_hz = c.loop_used.natural_frequency_hz();
+            figs.push(Figure {
+                id: "residual_spectrum",
+                title: "Residual spectrum".into(),
+                caption: format!(
+                    "Welch power spectral density of φ and of the residual φ − φ_aᵀΓ̂ over the longest gap-free \
+                     stretch after the warm-up ({:.0} s). What compensation removes is concentrated around the \
+                     loop's natural frequency; a residual peak there would mean a model mismatch.",
+                    self.spectrum.1.len() as f64 * s.log_interval_s
+                ),
+                render: Box::new(move |f| {
+                    let d = SpectrumData {
+                        interval_s: s.log_interval_s,
+                        residual_rad: &self.spectrum.1,
+                        before_rad: Some(&self.spectrum.0),
+                        marker_hz: fn_hz,
+                    };
+                    fig_residual_spectrum(&d, f, (DEFAULT_SIZE.0, 560))
+                }),
+            });
+        }
+        figs
+    }
+}
+
+/// Writes every figure as PNG and SVG into `dir` (`on_figure` is told each
+/// figure's id before it is drawn); returns the SVG blocks for the HTML.
+pub fn write_figures(
+    figs: &[Figure],
+    dir: &Path,
+    mut on_figure: impl FnMut(&str),
+) -> Result<Vec<FigureBlock>, WriteError> {
+    std::fs::create_dir_all(dir).map_err(|e| WriteError::Io { path: dir.display().to_string(), error: e })?;
+    let mut blocks = Vec::new();
+    for fig in figs {
+        on_figure(fig.id);
+        for format in [Format::Png, Format::Svg] {
+            let img = fig.render(format).map_err(|e| WriteError::Render { id: fig.id, error: e })?;
+            let path = dir.join(format!("{}.{}", fig.id, format.extension()));
+            img.write_to(&path).map_err(|e| WriteError::Io { path: path.display().to_string(), error: e })?;
+            if let Image::Svg(svg) = img {
+                blocks.push(FigureBlock {
+                    id: fig.id.to_string(),
+                    title: fig.title.clone(),
+                    caption: fig.caption.clone(),
+                    svg,
+                });
+            }
+        }
+    }
+    Ok(blocks)
+}

@@ -1,0 +1,65 @@
+//! A Monte Carlo ([`gsens_calib::montecarlo`]) as text.
+
+use crate::AXES;
+use gsens_calib::montecarlo::MonteCarlo;
+use std::fmt::Write as _;
+
+/// A Monte Carlo as a table: bias, RMSE, Cramér–Rao bound, their ratio, the
+/// 3σ coverage and the z RMS per method and axis, then the best method.
+pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
+    let stats = &mc.methods;
+    let mut s = String::new();
+    let s_ = &mut s;
+    let _ = writeln!(
+        s_,
+        "monte carlo: {} runs of the {} scenario (seeds {}…{}), {:.1} s wall on {} threads",
+        mc.runs,
+        mc.scenario,
+        mc.seed,
+        mc.seed + mc.runs - 1,
+        mc.wall_s,
+        mc.threads
+    );
+    let _ = writeln!(
+        s_,
+        "errors Γ̂ − Γ_imu (Γ through the IMU's scale and misalignment) [Hz/(m/s²)]; CRLB: RMS over runs of each run's bound\n"
+    );
+    let _ =
+        writeln!(s_, "method    axis      bias        RMSE        CRLB   RMSE/CRLB  |e|≤3σ   z RMS   RMSE vs body Γ");
+    for (name, st) in stats {
+        for i in 0..3 {
+            let _ = writeln!(
+                s_,
+                "{:<9} {:>3}  {:>+10.6}  {:>10.6}  {:>10.6}  {:>9.3}  {:>5.1} %  {:>6.2}   {:>10.6}",
+                if i == 0 { *name } else { "" },
+                AXES[i],
+                st.bias[i],
+                st.rmse[i],
+                st.crlb[i],
+                st.rmse_over_crlb[i],
+                100.0 * st.within_3sigma[i],
+                st.z_rms[i],
+                st.rmse_body[i]
+            );
+        }
+        if st.failures > 0 {
+            let _ =
+                writeln!(s_, "{:<9}      {} of {} runs failed or left an axis unobservable", "", st.failures, mc.runs);
+        }
+    }
+    if let Some(b) = &mc.best_method {
+        let st = &stats.iter().find(|(n, _)| n == b).expect("best is one of them").1;
+        let worst = st.rmse_over_crlb.iter().fold(0.0f64, |a, &x| a.max(x));
+        let _ = writeln!(s_, "\nbest: {b} (largest RMSE/CRLB over the axes {worst:.3})");
+    }
+    for (name, st) in stats {
+        if let Some(t) = st.time_offset_error_s {
+            let _ =
+                writeln!(s_, "{name}: IMU time offset error: bias {:+.3} ms, RMS {:.3} ms", 1e3 * t.mean, 1e3 * t.rms);
+        }
+        if let Some(f) = st.natural_frequency_error_hz {
+            let _ = writeln!(s_, "{name}: loop ωn/2π error: bias {:+.5} Hz, RMS {:.5} Hz", f.mean, f.rms);
+        }
+    }
+    s
+}

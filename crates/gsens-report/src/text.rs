@@ -1,0 +1,190 @@
+//! The calibration as text: what the CLI prints, rendered from the result document.
+
+use crate::AXES;
+use gsens_calib::ResultDocument;
+use gsens_core::regressor::LoggedPhase;
+use gsens_core::units::hz_per_mps2_to_ppb_per_g;
+use gsens_io::session::Weighting;
+use std::fmt::Write as _;
+
+/// The human-readable report of a calibration (what `gsens estimate` and
+/// `gsens demo` print): the warnings first, then the log, the loop, the
+/// channels, Γ̂ with its uncertainty (and the truth when known), the shaking
+/// verdicts and the compensation figures.
+pub fn render_text(doc: &ResultDocument) -> String {
+    let c = &doc.calibration;
+    let truth = doc.truth_gamma_hz_per_mps2;
+    let mut s = String::new();
+    let s_ = &mut s;
+    let dur = c.epochs_total as f64 * c.log_interval_s;
+    for w in &doc.warnings {
+        let _ = writeln!(s_, "warning [{}]: {}", w.code, w.message);
+    }
+    let _ = writeln!(
+        s_,
+        "log: {} epochs at {:.3} Hz ({dur:.1} s), {} used after a {} s warm-up",
+        c.epochs_total,
+        1.0 / c.log_interval_s,
+        c.epochs_used,
+        c.settings.warmup_s
+    );
+    let _ = writeln!(
+        s_,
+        "loop model: {} ({} per log epoch, logged: {})",
+        c.loop_used,
+        c.model_substeps,
+        match c.settings.logged_phase {
+            LoggedPhase::Last => "the last discriminator output",
+            LoggedPhase::Mean => "the mean of the discriminator outputs",
+        }
+    );
+    if let (Some(p), Some([lo, hi])) = (doc.loop_summary.peak_hz, doc.loop_summary.half_power_band_hz) {
+        let _ = writeln!(
+            s_,
+            "  |L| peaks at {p:.3} Hz: shake with a period of about {:.2} s (half-power band {lo:.2}–{hi:.2} Hz)",
+            1.0 / p
+        );
+    }
+    let used: Vec<_> = doc.channels.iter().filter(|ch| ch.used).collect();
+    let _ = writeln!(
+        s_,
+        "channels: {} used of {} ({}, {} weights)",
+        used.len(),
+        doc.channels.len(),
+        doc.selection.max_channels.map(|n| format!("top {n} by mean C/N0")).unwrap_or_else(|| "all".into()),
+        match doc.selection.weighting {
+            Weighting::Equal => "equal",
+            Weighting::Cn0 => "C/N0",
+        }
+    );
+    for ch in &doc.channels {
+        let _ = writeln!(
+            s_,
+            "  ch {:>3}  PRN {:>3}  C/N0 {:>5.1} dB-Hz  {:>7} epochs  {}{}",
+            ch.channel,
+            ch.prn,
+            ch.mean_cn0_dbhz,
+            ch.epochs,
+            ch.reason,
+            ch.screening.brief().map(|b| format!("; {b}")).unwrap_or_default()
+        );
+    }
+    let _ = writeln!(s_, "method: {}", c.settings.method);
+    if let Some(h) = &c.huber {
+        let _ = writeln!(
+            s_,
+            "robust: Huber, c = 1.345·σ̂ = {:.4} rad, {} of {} epochs down-weighted, {} iterations{}",
+            h.threshold_rad,
+            h.epochs_downweighted,
+            h.epochs,
+            h.iterations,
+            if h.converged { "" } else { " (not converged)" }
+        );
+    }
+    match c.imu_time_offset_sigma_s {
+        Some(sd) => {
+            let _ = writeln!(
+                s_,
+                "IMU time offset (IMU stamp − true time): {:+.4} s ± {:.4} s, estimated jointly with Γ and applied",
+                c.imu_time_offset_s, sd
+            );
+        }
+        None => {
+            let _ = writeln!(s_, "IMU time offset: {:+.4} s, assumed", c.imu_time_offset_s);
+        }
+    }
+    if let Some(id) = &c.loop_identification {
+        let _ = writeln!(
+            s_,
+            "loop identification: ωn/2π = {:.4} ± {:.4} Hz{} (assumed {:.4} Hz{}), likelihood ratio {:.1}: {}",
+            id.natural_frequency_hz,
+            id.sigma_natural_frequency_hz,
+            id.zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+            id.assumed_natural_frequency_hz,
+            id.assumed_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+            id.likelihood_ratio,
+            if id.assumed_loop_rejected {
+                "the data reject the assumed loop; the identified one is used"
+            } else {
+                "the data agree with the assumed loop; it is kept"
+            }
+        );
+        let s = id.gamma_sensitivity_per_percent_wn;
+        let _ = writeln!(
+            s_,
+            "  sensitivity of Γ̂ to the loop: {:+.2} %, {:+.2} %, {:+.2} % (x, y, z) per +1 % of ωn",
+            100.0 * s[0],
+            100.0 * s[1],
+            100.0 * s[2]
+        );
+    }
+    let head = if truth.is_some() { "      truth       error" } else { "" };
+    let _ = writeln!(s_, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
+    let advice = doc.loop_summary.peak_hz.map(|f| format!(" or closer to {f:.2} Hz")).unwrap_or_default();
+    for i in 0..3 {
+        match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i]) {
+            (Some(g), Some(sg)) => {
+                let ppb = hz_per_mps2_to_ppb_per_g(g, c.settings.carrier_hz);
+                let sppb = hz_per_mps2_to_ppb_per_g(sg, c.settings.carrier_hz);
+                let _ = write!(s_, "  {}  {g:+.5}  ±{sg:.5}     {ppb:+.4}  ±{sppb:.4}", AXES[i]);
+                if let Some(t) = truth {
+                    let _ = write!(s_, "     {:+.5}  {:+.5} ({:+.2}σ)", t[i], g - t[i], (g - t[i]) / sg);
+                }
+                let _ = writeln!(s_);
+            }
+            _ => {
+                let _ = write!(
+                    s_,
+                    "  {}  unobservable: too little excitation (RMS {:.3} rad per Hz/(m/s²)) — shake harder along {}{advice}",
+                    AXES[i], c.excitation_rms[i], AXES[i]
+                );
+                if let Some(t) = truth {
+                    let _ = write!(s_, "  [truth {:+.5}]", t[i]);
+                }
+                let _ = writeln!(s_);
+            }
+        }
+    }
+    if let Some(t) = truth {
+        let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+        let err: f64 = (0..3).filter_map(|i| c.gamma_hz_per_mps2[i].map(|g| (g - t[i]).powi(2))).sum::<f64>().sqrt();
+        let _ = writeln!(s_, "  |Γ̂ − Γ| = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|", 100.0 * err / norm);
+    }
+    let _ = writeln!(s_, "\nshaking:");
+    for v in &c.axes {
+        let _ = writeln!(s_, "  {}", v.text);
+    }
+    let peak = c.predicted_peak_phase_err_rad;
+    let lin = c.discriminator_linear_range_rad;
+    if peak > lin {
+        let _ = writeln!(
+            s_,
+            "  the predicted g-induced phase error reaches {peak:.2} rad, beyond the discriminator's linear range \
+             ({lin:.2} rad): see the warning above"
+        );
+    } else {
+        let _ = writeln!(
+            s_,
+            "  predicted g-induced phase error peaks at {peak:.3} rad, inside the discriminator's linear range ({lin:.2} rad)"
+        );
+    }
+    let _ = writeln!(
+        s_,
+        "\nphase error RMS: {:.4} rad before compensation, {:.4} rad after (g-induced part {:.4} rad)",
+        c.rms_before_rad, c.rms_after_rad, c.rms_g_induced_rad
+    );
+    let _ = writeln!(
+        s_,
+        "information matrix condition number: {}",
+        c.condition_number.map(|x| format!("{x:.1}")).unwrap_or_else(|| "∞ (singular)".into())
+    );
+    if c.crlb_hz_per_mps2.iter().any(Option::is_some) {
+        let b = c.crlb_hz_per_mps2.map(|v| v.map_or("—".to_owned(), |v| format!("{v:.5}")));
+        let _ = writeln!(
+            s_,
+            "Cramér–Rao bound [Hz/(m/s²)]: x {}, y {}, z {} (residual noise: AR({}) model)",
+            b[0], b[1], b[2], c.noise_ar_order
+        );
+    }
+    s
+}
