@@ -139,21 +139,43 @@ pub fn tool_version() -> String {
 impl ResultDocument {
     /// The document of `outcome`.
     pub fn new(outcome: &Outcome, inputs: &[(&str, &str)], truth_gamma_hz_per_mps2: Option<[f64; 3]>) -> Self {
-        let c = &outcome.calibration;
+        let pipeline = PipelineSummary {
+            time_offset: outcome.settings.time_offset,
+            loop_identification: outcome.settings.loop_identification,
+        };
+        let mut doc = Self::from_parts(
+            outcome.calibration.clone(),
+            outcome.session.channels.clone(),
+            outcome.session.selection.clone(),
+            pipeline,
+            inputs,
+            truth_gamma_hz_per_mps2,
+        );
+        doc.gnss_sdr = outcome.gnss_sdr.clone();
+        doc
+    }
+
+    /// The document of a calibration estimated from an epoch series the
+    /// caller prepared (`channels` and `selection` describe how).
+    pub fn from_parts(
+        calibration: Calibration,
+        channels: Vec<ChannelSummary>,
+        selection: SelectionConfig,
+        pipeline: PipelineSummary,
+        inputs: &[(&str, &str)],
+        truth_gamma_hz_per_mps2: Option<[f64; 3]>,
+    ) -> Self {
         ResultDocument {
             tool: tool_version(),
-            calibration: c.clone(),
-            loop_summary: LoopSummary::of(&c.loop_used),
-            warnings: warnings(c),
-            channels: outcome.session.channels.clone(),
-            selection: outcome.session.selection.clone(),
-            pipeline: PipelineSummary {
-                time_offset: outcome.settings.time_offset,
-                loop_identification: outcome.settings.loop_identification,
-            },
+            loop_summary: LoopSummary::of(&calibration.loop_used),
+            warnings: warnings(&calibration),
+            calibration,
+            channels,
+            selection,
+            pipeline,
             inputs: inputs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
             truth_gamma_hz_per_mps2,
-            gnss_sdr: outcome.gnss_sdr.clone(),
+            gnss_sdr: None,
             report: None,
         }
     }

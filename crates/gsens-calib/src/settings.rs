@@ -117,6 +117,24 @@ pub(crate) fn check_range(name: &'static str, x: f64, strict: bool) -> Result<()
 }
 
 impl EstimateSettings {
+    /// These settings with the receiver loop `receiver_loop`.
+    pub fn with_loop(mut self, receiver_loop: LoopModel) -> Self {
+        self.receiver_loop = receiver_loop;
+        self
+    }
+
+    /// These settings with the estimator `method`.
+    pub fn with_method(mut self, method: Method) -> Self {
+        self.method = method;
+        self
+    }
+
+    /// These settings with robust estimation `robust`.
+    pub fn with_robust(mut self, robust: Robust) -> Self {
+        self.robust = robust;
+        self
+    }
+
     /// The loop the model runs for a log sampled every `log_interval_s`: the
     /// receiver loop, updated at the log interval when no interval is stated.
     pub fn loop_at(&self, log_interval_s: f64) -> LoopModel {

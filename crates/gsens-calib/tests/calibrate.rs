@@ -1,6 +1,7 @@
 //! The calibration job on synthetic series: coloured noise, gaps, unobservable axes.
 
 use gsens_calib::{EpochSeries, EstimateSettings, Method, calibrate};
+use gsens_core::LoopModel;
 use gsens_core::pll::{DiscretePll, LoopSpec};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -82,7 +83,7 @@ fn every_method_recovers_gamma_and_compensation_removes_the_g_part() {
         imu_time_offset_s: 0.0,
     };
     for method in [Method::Batch, Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }] {
-        let settings = EstimateSettings { method, ..Default::default() };
+        let settings = EstimateSettings::default().with_method(method);
         let c = calibrate(&series, &settings).unwrap();
         for i in 0..3 {
             let g = c.gamma_hz_per_mps2[i].unwrap();
@@ -121,7 +122,7 @@ fn wrong_loop_interval_is_an_error_not_garbage() {
         accel_mps2: &accel,
         imu_time_offset_s: 0.0,
     };
-    let settings = EstimateSettings { loop_interval_s: Some(0.007), ..Default::default() };
+    let settings = EstimateSettings::default().with_loop(LoopModel::kaplan(LoopSpec::PAPER, Some(0.007)));
     let e = calibrate(&series, &settings).unwrap_err().to_string();
     assert!(e.contains("not an integer multiple"), "{e}");
 }

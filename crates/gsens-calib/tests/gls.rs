@@ -100,7 +100,7 @@ fn monte_carlo(excitation: &Excitation, noise: &[f64], rms: f64, method: Method,
             accel_mps2: &accel,
             imu_time_offset_s: 0.0,
         };
-        let c = calibrate(&series, &EstimateSettings { method, ..Default::default() }).unwrap();
+        let c = calibrate(&series, &EstimateSettings::default().with_method(method)).unwrap();
         for i in 0..3 {
             let e = c.gamma_hz_per_mps2[i].unwrap() - GAMMA[i];
             s[i] += e;

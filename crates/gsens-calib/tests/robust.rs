@@ -1,7 +1,7 @@
 //! Huber's M-estimate (`robust = huber`): against outliers it stays on the
 //! truth where least squares is pulled; without them it agrees with least squares.
 
-use gsens_calib::robust::huber_irls;
+use gsens_calib::huber_irls;
 use gsens_calib::{EpochSeries, EstimateSettings, Method, Robust, calibrate};
 use gsens_core::pll::{DiscretePll, LoopSpec};
 use gsens_core::robust::HuberWeights;
@@ -130,7 +130,7 @@ fn calibrate_with_huber() {
             accel_mps2: &accel,
             imu_time_offset_s: 0.0,
         };
-        calibrate(&series, &EstimateSettings { robust, ..EstimateSettings::default() }).unwrap()
+        calibrate(&series, &EstimateSettings::default().with_robust(robust)).unwrap()
     };
     let (ls, huber) = (run(true, Robust::None), run(true, Robust::Huber));
     let (ls_clean, huber_clean) = (run(false, Robust::None), run(false, Robust::Huber));
@@ -169,7 +169,7 @@ fn huber_needs_the_batch_method() {
         imu_time_offset_s: 0.0,
     };
     for method in [Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }, Method::Gls] {
-        let e = calibrate(&series, &EstimateSettings { robust: Robust::Huber, method, ..EstimateSettings::default() })
+        let e = calibrate(&series, &EstimateSettings::default().with_robust(Robust::Huber).with_method(method))
             .unwrap_err()
             .to_string();
         assert!(e.contains("batch method"), "{e}");

@@ -1,7 +1,7 @@
 //! Time offset and loop identification on synthetic sessions with known truth.
 
-use gsens_calib::search::{estimate_time_offset, identify_loop};
-use gsens_calib::{EpochSeries, EstimateSettings, calibrate};
+use gsens_calib::{EpochSeries, EstimateSettings, calibrate, estimate_time_offset, identify_loop};
+use gsens_core::LoopModel;
 use gsens_core::pll::{DiscretePll, LoopSpec};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -120,16 +120,13 @@ fn a_loop_assumed_10_percent_off_is_detected_and_corrected() {
     let series =
         EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
     for bn in [3.3, 2.7] {
-        let assumed = EstimateSettings {
-            loop_spec: LoopSpec::SecondOrder { bn_hz: bn, zeta: FRAC_1_SQRT_2 },
-            ..Default::default()
-        };
+        let assumed = EstimateSettings::default()
+            .with_loop(LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: bn, zeta: FRAC_1_SQRT_2 }, None));
         let wrong = calibrate(&series, &assumed).unwrap();
         let id = identify_loop(&series, &assumed, false, None).unwrap();
         assert!(id.assumed_loop_rejected, "Bn {bn}: {id:?}");
         assert!((id.natural_frequency_hz - 0.9003).abs() < 0.01, "Bn {bn}: {id:?}");
-        let fixed =
-            calibrate(&series, &EstimateSettings { loop_spec: id.spec(&assumed.loop_spec), ..assumed }).unwrap();
+        let fixed = calibrate(&series, &assumed.with_loop(id.identified(&assumed.receiver_loop))).unwrap();
         let err = |c: &gsens_calib::Calibration| {
             (0..3).map(|i| (c.gamma_hz_per_mps2[i].unwrap() / GAMMA[i] - 1.0).abs()).fold(0.0, f64::max)
         };
@@ -149,8 +146,8 @@ fn loop_and_time_offset_identified_together() {
     let (t_s, phase, imu) = session_swept(LoopSpec::PAPER, 0.030, 0.01, 4, 0.4);
     let series =
         EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
-    let assumed =
-        EstimateSettings { loop_spec: LoopSpec::SecondOrder { bn_hz: 3.3, zeta: FRAC_1_SQRT_2 }, ..Default::default() };
+    let assumed = EstimateSettings::default()
+        .with_loop(LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 3.3, zeta: FRAC_1_SQRT_2 }, None));
     let id = identify_loop(&series, &assumed, false, Some(0.2)).unwrap();
     eprintln!("{id:?}");
     assert!(id.assumed_loop_rejected, "{id:?}");

@@ -187,13 +187,15 @@ pub enum WeightsArg {
 impl SelectionArgs {
     /// The selection settings.
     pub fn selection(&self) -> SelectionConfig {
-        let mut s = SelectionConfig::default();
-        s.max_channels = (self.channels > 0).then_some(self.channels);
-        s.min_cn0_dbhz = self.min_cn0_dbhz;
-        s.elevation_mask_deg = self.elevation_mask_deg;
-        s.weighting = match self.weights {
-            WeightsArg::Equal => Weighting::Equal,
-            WeightsArg::Cn0 => Weighting::Cn0,
+        let mut s = SelectionConfig {
+            max_channels: (self.channels > 0).then_some(self.channels),
+            min_cn0_dbhz: self.min_cn0_dbhz,
+            elevation_mask_deg: self.elevation_mask_deg,
+            weighting: match self.weights {
+                WeightsArg::Equal => Weighting::Equal,
+                WeightsArg::Cn0 => Weighting::Cn0,
+            },
+            ..SelectionConfig::default()
         };
         s.screening.enabled = self.screening == OnOff::On;
         s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);

@@ -103,8 +103,13 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
             let t = truth["gamma_hz_per_mps2"][i].as_f64().unwrap();
             assert!(((g - t) / t).abs() < 0.02, "{order} axis {i}: {g} vs {t}");
         }
-        assert_eq!(v["settings"]["gnss_sdr_loop"]["pll_filter_order"], if order == "order2" { 2 } else { 3 });
-        assert_eq!(v["settings"]["gnss_sdr_loop"]["integration_ms"], 20);
+        // The loop the dumps were made with, modelled exactly, everywhere in the document.
+        let l = &v["settings"]["receiver_loop"];
+        assert_eq!(l["implementation"], "gnss_sdr");
+        assert_eq!(l["order"], if order == "order2" { 2 } else { 3 });
+        assert_eq!(l["symbols"], 20);
+        assert_eq!(v["loop_used"], *l);
+        assert!(v["loop"]["description"].as_str().unwrap().starts_with("GNSS-SDR"), "{}", v["loop"]);
         assert!(v["gnss_sdr"]["tracks"].as_array().unwrap().iter().all(|t| t["used"] == true));
     }
 }

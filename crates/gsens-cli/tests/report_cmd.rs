@@ -51,9 +51,12 @@ fn report_writes_html_json_header_and_figures() {
 
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert_eq!(html.matches("<svg ").count(), 5, "Figs. 3–5, C/N0, residual spectrum");
-    for needle in
-        ["id=\"verdict\"", "id=\"estimate-table\"", "id=\"rms-before\"", "<code>settings.loop_spec.bn_hz</code>"]
-    {
+    for needle in [
+        "id=\"verdict\"",
+        "id=\"estimate-table\"",
+        "id=\"rms-before\"",
+        "<code>settings.receiver_loop.spec.bn_hz</code>",
+    ] {
         assert!(html.contains(needle), "report.html lacks {needle}");
     }
     assert!(!html.contains("<script") && !html.contains("<img"), "the report must be self-contained");
@@ -65,6 +68,31 @@ fn report_writes_html_json_header_and_figures() {
     assert_eq!(v["report"]["figures"].as_array().unwrap().len(), 5);
     assert!(v["truth_gamma_hz_per_mps2"].is_array());
     let g0 = v["gamma_hz_per_mps2"][0].as_f64().unwrap();
+    // `estimate --json` writes the same result document: every key but the
+    // report's own block agrees, value for value.
+    let est_json = format!("{d}/estimate.json");
+    gsens(&[
+        "estimate",
+        "--imu",
+        &format!("{d}/sim/imu.csv"),
+        "--tracking",
+        &format!("{d}/sim/tracking.csv"),
+        "--loop-interval-s",
+        "0.001",
+        "--logged-phase",
+        "mean",
+        "--json",
+        &est_json,
+    ]);
+    let e: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&est_json).unwrap()).unwrap();
+    let (mut e, mut r) = (e.as_object().unwrap().clone(), v.as_object().unwrap().clone());
+    assert!(r.remove("report").is_some() && r.remove("truth_gamma_hz_per_mps2").is_some());
+    let (ei, ri) = (e.remove("inputs").unwrap(), r.remove("inputs").unwrap());
+    assert_eq!(ei["imu"], ri["imu"]);
+    assert_eq!(e.keys().collect::<Vec<_>>(), r.keys().collect::<Vec<_>>());
+    for (k, x) in &e {
+        assert_eq!(x, &r[k], "estimate --json and report.json differ in `{k}`");
+    }
 
     let h = std::fs::read_to_string(out.join("gsens_gamma.h")).unwrap();
     assert!(h.contains("#ifndef GSENS_GAMMA_H") && h.contains("GSENS_GAMMA_OBSERVABLE_MASK 7u"));

@@ -5,13 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use gsens_calib::{EpochSeries, EstimateSettings, calibrate};
+use gsens_core::LoopModel;
 use gsens_core::pll::gnss_sdr::{GnssSdrPll, GnssSdrStage};
 use gsens_core::pll::{LinearLoop, LoopSpec};
-use gsens_core::regressor::LoggedPhase;
 use gsens_gnss_sdr::conf::GnssSdrConf;
 use gsens_gnss_sdr::dump::{TrackingRecord, parse_dump, read_dump};
-use gsens_gnss_sdr::import::{ImportSettings, import_dir, resample, write_tracking_csv};
-use gsens_io::{SelectionConfig, prepare_session, read_imu_file, read_tracking};
+use gsens_gnss_sdr::import::{ImportSettings, import_dir, resample};
+use gsens_io::{SelectionConfig, prepare_session, read_imu_file};
 
 const FS_HZ: f64 = 2_048_000.0;
 
@@ -221,20 +221,16 @@ fn estimate(order: u8, exact: bool) -> [f64; 3] {
     let imported = import_dir(&dir, &settings).unwrap();
     assert!(imported.tracks.iter().all(|t| t.used), "{:?}", imported.tracks);
     let grid = resample(&imported, imported.interval_s);
-    let csv =
-        write_tracking_csv(Vec::new(), grid.iter().map(|g| (g.t_s, g.channel, g.prn, g.cn0_dbhz, g.phase_err_rad)))
-            .unwrap();
-    let log = read_tracking(csv.as_slice(), "grid").unwrap();
+    let log = gsens_io::TrackingLog::from_rows("grid", &grid).unwrap();
     let imu = read_imu_file(fixtures().join("imu.csv")).unwrap();
     let session = prepare_session(&log, &imu, "imu.csv", &SelectionConfig::default(), 0.0).unwrap();
     let stage = settings.stage();
-    let s = EstimateSettings {
-        loop_spec: if order == 3 { LoopSpec::third_order_kaplan(3.0) } else { LoopSpec::PAPER },
-        loop_interval_s: Some(0.02),
-        logged_phase: LoggedPhase::Last,
-        gnss_sdr_loop: exact.then_some(stage),
-        ..EstimateSettings::default()
-    };
+    let nominal = if order == 3 { LoopSpec::third_order_kaplan(3.0) } else { LoopSpec::PAPER };
+    let s = EstimateSettings::default().with_loop(if exact {
+        LoopModel::GnssSdr(stage)
+    } else {
+        LoopModel::kaplan(nominal, Some(0.02))
+    });
     let series = EpochSeries {
         log_interval_s: session.log_interval_s,
         t_s: &session.t_s,

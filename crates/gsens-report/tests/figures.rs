@@ -4,6 +4,7 @@
 mod common;
 
 use common::{TRUTH, check_svg, out_dir, png_facts, session};
+use gsens_core::LoopModel;
 use gsens_core::pll::LoopSpec;
 use gsens_report::figures::*;
 
@@ -33,8 +34,14 @@ fn check(
 
 #[test]
 fn fig3_response() {
-    let c = LoopSpec::PAPER.coeffs().unwrap();
-    let d = ResponseData::from_loop(&c, None, 0.05, 20.0, 200, "2nd order, Bn 3 Hz, ζ 0.707");
+    let d = ResponseData::from_loop(
+        &LoopModel::kaplan(LoopSpec::PAPER, None),
+        0.05,
+        20.0,
+        200,
+        "2nd order, Bn 3 Hz, ζ 0.707",
+    )
+    .unwrap();
     // The paper's loop: the peak at ωn/2π ≈ 0.900 Hz, |L| = π/(ζωn) ≈ 0.785 rad/Hz.
     assert!((d.peak_hz - 0.9003).abs() < 1e-3, "{}", d.peak_hz);
     // π/(ζωn) with ζωn = ωn/√2 and ωn = 2π·0.9003 Hz.
@@ -49,7 +56,8 @@ fn fig3_response() {
         |f, s| fig_response(&d, f, s),
     );
     // A discrete loop stops below its Nyquist frequency, and small figures work too.
-    let dd = ResponseData::from_loop(&c, Some(0.025), 0.05, 100.0, 50, "discrete");
+    let dd =
+        ResponseData::from_loop(&LoopModel::kaplan(LoopSpec::PAPER, Some(0.025)), 0.05, 100.0, 50, "discrete").unwrap();
     assert!(*dd.frequency_hz.last().unwrap() < 20.0);
     check("fig3_response_small", (480, 320), &["|L| [rad/Hz]"], |f, s| fig_response(&dd, f, s));
 }
@@ -157,8 +165,7 @@ fn allan() {
 
 #[test]
 fn bad_input_is_an_error_not_a_panic() {
-    let c = LoopSpec::PAPER.coeffs().unwrap();
-    let d = ResponseData::from_loop(&c, None, 0.05, 20.0, 50, "x");
+    let d = ResponseData::from_loop(&LoopModel::kaplan(LoopSpec::PAPER, None), 0.05, 20.0, 50, "x").unwrap();
     assert!(matches!(fig_response(&d, Format::Png, (10, 10)), Err(RenderError::Size(10, 10))));
     let empty = ResponseData { frequency_hz: vec![], magnitude_rad_per_hz: vec![], phase_deg: vec![], ..d };
     assert!(matches!(fig_response(&empty, Format::Svg, (800, 600)), Err(RenderError::NoData(_))));

@@ -3,12 +3,15 @@
 mod common;
 
 use common::{TRUTH, out_dir, session};
+use gsens_calib::{LoopIdentificationMode, PipelineSummary, ResultDocument, TimeOffset};
+use gsens_core::LoopModel;
 use gsens_core::pll::LoopSpec;
+use gsens_io::session::{ChannelSummary, SelectionConfig};
 use gsens_report::cheader::render_c_header;
 use gsens_report::figures::*;
 use gsens_report::html::render_html;
 use gsens_report::json::report_json;
-use gsens_report::{ChannelRow, FigureBlock, ReportData, ReportMeta};
+use gsens_report::{FigureBlock, ReportData, ReportMeta};
 
 fn meta() -> ReportMeta {
     ReportMeta {
@@ -18,9 +21,9 @@ fn meta() -> ReportMeta {
     }
 }
 
-fn channels() -> Vec<ChannelRow> {
+fn channels() -> Vec<ChannelSummary> {
     (0..5)
-        .map(|k| ChannelRow {
+        .map(|k| ChannelSummary {
             channel: k,
             prn: 3 + k,
             mean_cn0_dbhz: 40.0 + k as f64,
@@ -28,13 +31,25 @@ fn channels() -> Vec<ChannelRow> {
             used: k > 0,
             reason: if k > 0 { "used".into() } else { "not among the 4 strongest".into() },
             phase_offset_rad: (k > 0).then_some(0.01 * k as f64),
+            screening: Default::default(),
         })
         .collect()
 }
 
+/// The result document of the synthetic session, as the pipeline would write it.
+fn document(c: &gsens_calib::Calibration, truth: Option<[f64; 3]>) -> ResultDocument {
+    let pipeline = PipelineSummary {
+        time_offset: TimeOffset::Fixed { imu_time_offset_s: 0.0 },
+        loop_identification: LoopIdentificationMode::Off,
+    };
+    let inputs = [("imu", "logs/imu <1>.csv"), ("tracking", "logs/tracking.csv")];
+    ResultDocument::from_parts(c.clone(), channels(), SelectionConfig::default(), pipeline, &inputs, truth)
+}
+
 fn figures(s: &common::Session) -> Vec<FigureBlock> {
     let c = &s.calibration;
-    let resp = ResponseData::from_loop(&LoopSpec::PAPER.coeffs().unwrap(), None, 0.05, 20.0, 100, "paper loop");
+    let resp =
+        ResponseData::from_loop(&LoopModel::kaplan(LoopSpec::PAPER, None), 0.05, 20.0, 100, "paper loop").unwrap();
     let est = EstimationData {
         t_s: &s.t_s,
         accel_mps2: &s.accel_mps2,
@@ -64,12 +79,10 @@ fn html_report_is_self_contained_and_complete() {
     let s = session([true; 3]);
     let c = &s.calibration;
     let header = render_c_header(c, &meta());
+    let doc = document(c, Some(TRUTH));
     let data = ReportData {
         title: "g-sensitivity calibration".into(),
-        calibration: c,
-        truth: Some(TRUTH),
-        channels: channels(),
-        selection: serde_json::json!({"max_channels": 4, "weighting": "equal"}),
+        document: &doc,
         meta: meta(),
         figures: figures(&s),
         c_header: Some(header),
@@ -92,7 +105,7 @@ fn html_report_is_self_contained_and_complete() {
     // Every setting.
     for key in [
         "settings.method.name",
-        "settings.loop_spec.bn_hz",
+        "settings.receiver_loop.spec.bn_hz",
         "settings.warmup_s",
         "settings.carrier_hz",
         "selection.max_channels",
@@ -118,16 +131,8 @@ fn unobservable_axis_is_reported_not_invented() {
     let s = session([true, true, false]);
     let c = &s.calibration;
     assert_eq!(c.observable, [true, true, false]);
-    let data = ReportData {
-        title: "t".into(),
-        calibration: c,
-        truth: None,
-        channels: channels(),
-        selection: serde_json::json!({}),
-        meta: meta(),
-        figures: vec![],
-        c_header: None,
-    };
+    let doc = document(c, None);
+    let data = ReportData { title: "t".into(), document: &doc, meta: meta(), figures: vec![], c_header: None };
     let html = render_html(&data);
     assert!(html.contains("Not observable along z"));
     assert_eq!(html.matches("<span class=\"tag bad\">unobservable</span>").count(), 1);
@@ -144,16 +149,8 @@ fn unobservable_axis_is_reported_not_invented() {
 fn json_has_the_estimate_shape() {
     let s = session([true; 3]);
     let c = &s.calibration;
-    let data = ReportData {
-        title: "t".into(),
-        calibration: c,
-        truth: Some(TRUTH),
-        channels: channels(),
-        selection: serde_json::json!({"max_channels": 4}),
-        meta: meta(),
-        figures: figures(&s),
-        c_header: None,
-    };
+    let doc = document(c, Some(TRUTH));
+    let data = ReportData { title: "t".into(), document: &doc, meta: meta(), figures: figures(&s), c_header: None };
     let v = report_json(&data).unwrap();
     for key in [
         "gamma_hz_per_mps2",
