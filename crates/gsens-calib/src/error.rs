@@ -46,13 +46,13 @@ pub enum CalibError {
     TooFewEpochs {
         /// Usable epochs.
         epochs: u64,
-        /// The warm-up [s].
+        /// The warm-up \[s\].
         warmup_s: f64,
     },
     /// The log is too short for the time-offset search.
     #[error("the log is too short to search a time offset of ±{max_abs_s} s ({epochs} usable epochs)")]
     TooShortForOffsetSearch {
-        /// The search range [s].
+        /// The search range \[s\].
         max_abs_s: f64,
         /// Usable epochs.
         epochs: usize,

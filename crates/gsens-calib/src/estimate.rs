@@ -13,25 +13,25 @@ use gsens_core::regressor::RegressorModel;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
 use gsens_core::{Calibrator, GammaEstimator, compensate::compensated_phase_rad};
 
-/// Interval between two [`HistoryPoint`]s [s].
+/// Interval between two [`HistoryPoint`]s \[s\].
 pub const HISTORY_INTERVAL_S: f64 = 0.25;
 
 /// The per-epoch series a calibration needs (owned by the caller).
 #[derive(Debug, Clone, Copy)]
 pub struct EpochSeries<'a> {
-    /// Uniform log interval [s].
+    /// Uniform log interval \[s\].
     pub log_interval_s: f64,
-    /// Epoch times [s].
+    /// Epoch times \[s\].
     pub t_s: &'a [f64],
-    /// Averaged phase error per epoch [rad]; `None` where no channel was present.
+    /// Averaged phase error per epoch \[rad\]; `None` where no channel was present.
     pub phase_err_rad: &'a [Option<f64>],
-    /// Specific force per epoch [m/s²] (IMU interpolated onto the epochs).
+    /// Specific force per epoch \[m/s²\] (IMU interpolated onto the epochs).
     pub accel_mps2: &'a [[f64; 3]],
-    /// IMU time offset that was applied when interpolating [s].
+    /// IMU time offset that was applied when interpolating \[s\].
     pub imu_time_offset_s: f64,
 }
 
-/// 1σ of Γ̂ per axis caused by IMU calibration errors [Hz/(m/s²)].
+/// 1σ of Γ̂ per axis caused by IMU calibration errors \[Hz/(m/s²)\].
 ///
 /// The IMU measures f_m = (I + E)·f with E = diag(s) + N (scale factors s,
 /// misalignment N, zero diagonal), so the estimate is in the IMU's frame:
@@ -51,7 +51,7 @@ pub fn regressors(series: &EpochSeries, settings: &EstimateSettings) -> Result<V
     Ok(accel.iter().map(|a| model.epoch(a)).collect())
 }
 
-/// One epoch of [`compensation_series`]: (φ, φ − φ_aᵀΓ̂) [rad], `None` where no
+/// One epoch of [`compensation_series`]: (φ, φ − φ_aᵀΓ̂) \[rad\], `None` where no
 /// phase was measured.
 pub type CompensatedEpoch = (Option<f64>, Option<f64>);
 

@@ -51,7 +51,7 @@ use serde::Serialize;
 /// Default highest AR order tried by the order selection.
 pub const DEFAULT_MAX_AR_ORDER: usize = 200;
 
-/// The longest memory of the AR noise model the calibration tries [s]: the
+/// The longest memory of the AR noise model the calibration tries \[s\]: the
 /// highest order is this span in epochs (200 at 40 Hz). The residual spectrum
 /// has features as narrow as the loop's bandwidth (|1 − H|² rising through ωn,
 /// the oscillator's loop-shaped band), which an AR model resolves only with a
@@ -158,7 +158,7 @@ impl ArModel {
     }
 
     /// One-sided power spectral density at `f_hz` for samples `interval_s`
-    /// apart: 2·σ²·T/|A(e^{j2πfT})|² [unit²/Hz].
+    /// apart: 2·σ²·T/|A(e^{j2πfT})|² \[unit²/Hz\].
     pub fn psd_one_sided(&self, f_hz: f64, interval_s: f64) -> f64 {
         let w = core::f64::consts::TAU * f_hz * interval_s;
         let (mut re, mut im) = (1.0, 0.0);
@@ -311,7 +311,7 @@ pub struct GlsFit {
 }
 
 impl GlsFit {
-    /// Cramér–Rao bound on each component, √(J⁻¹)_ii [Hz/(m/s²)] (+∞ when unobservable).
+    /// Cramér–Rao bound on each component, √(J⁻¹)_ii \[Hz/(m/s²)\] (+∞ when unobservable).
     pub fn crlb_hz_per_mps2(&self) -> [f64; 3] {
         self.estimate.sigma_hz_per_mps2()
     }

@@ -29,15 +29,15 @@ use serde::Serialize;
 /// One method's result in one run.
 #[derive(Debug, Clone, Serialize)]
 pub struct MethodRun {
-    /// Γ̂ [Hz/(m/s²)] (null: unobservable).
+    /// Γ̂ \[Hz/(m/s²)\] (null: unobservable).
     pub gamma_hz_per_mps2: [Option<f64>; 3],
-    /// The method's statistical 1σ [Hz/(m/s²)].
+    /// The method's statistical 1σ \[Hz/(m/s²)\].
     pub sigma_statistical_hz_per_mps2: [Option<f64>; 3],
-    /// The Cramér–Rao bound of the run [Hz/(m/s²)].
+    /// The Cramér–Rao bound of the run \[Hz/(m/s²)\].
     pub crlb_hz_per_mps2: [Option<f64>; 3],
-    /// Estimated minus true IMU time offset [s] (when estimated).
+    /// Estimated minus true IMU time offset \[s\] (when estimated).
     pub time_offset_error_s: Option<f64>,
-    /// Identified minus true natural frequency ωn/2π [Hz] (when identified).
+    /// Identified minus true natural frequency ωn/2π \[Hz\] (when identified).
     pub natural_frequency_error_hz: Option<f64>,
     /// Order of the AR noise model.
     pub noise_ar_order: usize,
@@ -48,9 +48,9 @@ pub struct MethodRun {
 pub struct Run {
     /// Seed of the simulation.
     pub seed: u64,
-    /// Γ in the body frame [Hz/(m/s²)].
+    /// Γ in the body frame \[Hz/(m/s²)\].
     pub gamma_hz_per_mps2: [f64; 3],
-    /// Γ as seen through the IMU, M⁻ᵀΓ [Hz/(m/s²)].
+    /// Γ as seen through the IMU, M⁻ᵀΓ \[Hz/(m/s²)\].
     pub gamma_imu_axes_hz_per_mps2: [f64; 3],
     /// Per method, in the order given.
     pub methods: Vec<MethodOutcome>,
@@ -93,11 +93,11 @@ pub struct MethodStats {
     pub runs: usize,
     /// Runs where it failed or left an axis unobservable.
     pub failures: usize,
-    /// Mean of Γ̂ − Γ_imu [Hz/(m/s²)].
+    /// Mean of Γ̂ − Γ_imu \[Hz/(m/s²)\].
     pub bias: [f64; 3],
-    /// RMS of Γ̂ − Γ_imu [Hz/(m/s²)].
+    /// RMS of Γ̂ − Γ_imu \[Hz/(m/s²)\].
     pub rmse: [f64; 3],
-    /// RMS over the runs of the per-run Cramér–Rao bound [Hz/(m/s²)].
+    /// RMS over the runs of the per-run Cramér–Rao bound \[Hz/(m/s²)\].
     pub crlb: [f64; 3],
     /// rmse / crlb.
     pub rmse_over_crlb: [f64; 3],
@@ -105,13 +105,13 @@ pub struct MethodStats {
     pub within_3sigma: [f64; 3],
     /// RMS of (Γ̂ − Γ_imu)/σ: 1 when the reported σ is honest.
     pub z_rms: [f64; 3],
-    /// Mean of Γ̂ − Γ (body frame) [Hz/(m/s²)].
+    /// Mean of Γ̂ − Γ (body frame) \[Hz/(m/s²)\].
     pub bias_body: [f64; 3],
-    /// RMS of Γ̂ − Γ (body frame) [Hz/(m/s²)].
+    /// RMS of Γ̂ − Γ (body frame) \[Hz/(m/s²)\].
     pub rmse_body: [f64; 3],
-    /// Estimated minus true IMU time offset [s] (when estimated).
+    /// Estimated minus true IMU time offset \[s\] (when estimated).
     pub time_offset_error_s: Option<MeanRms>,
-    /// Identified minus true ωn/2π [Hz] (when identified).
+    /// Identified minus true ωn/2π \[Hz\] (when identified).
     pub natural_frequency_error_hz: Option<MeanRms>,
 }
 
@@ -235,7 +235,7 @@ pub struct MonteCarlo {
     pub seed: u64,
     /// Scenario file, or "default".
     pub scenario: String,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub wall_s: f64,
     /// Worker threads.
     pub threads: usize,

@@ -9,24 +9,24 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct Calibration {
-    /// Γ̂ [Hz/(m/s²)]; `null` for an unobservable axis.
+    /// Γ̂ \[Hz/(m/s²)\]; `null` for an unobservable axis.
     pub gamma_hz_per_mps2: [Option<f64>; 3],
-    /// Total 1σ [Hz/(m/s²)]: the statistical part (autocorrelation-robust) and
+    /// Total 1σ \[Hz/(m/s²)\]: the statistical part (autocorrelation-robust) and
     /// the IMU-calibration part combined; `null` for an unobservable axis.
     pub sigma_hz_per_mps2: [Option<f64>; 3],
-    /// Statistical 1σ alone [Hz/(m/s²)].
+    /// Statistical 1σ alone \[Hz/(m/s²)\].
     pub sigma_statistical_hz_per_mps2: [Option<f64>; 3],
-    /// 1σ from the assumed IMU scale-factor and misalignment errors [Hz/(m/s²)].
+    /// 1σ from the assumed IMU scale-factor and misalignment errors \[Hz/(m/s²)\].
     pub sigma_imu_hz_per_mps2: [Option<f64>; 3],
-    /// Γ̂ [ppb/g] at the carrier.
+    /// Γ̂ \[ppb/g\] at the carrier.
     pub gamma_ppb_per_g: [Option<f64>; 3],
-    /// 1σ [ppb/g].
+    /// 1σ \[ppb/g\].
     pub sigma_ppb_per_g: [Option<f64>; 3],
     /// Whether the data observe each axis.
     pub observable: [bool; 3],
-    /// Unexplained excitation RMS per axis [rad per Hz/(m/s²)].
+    /// Unexplained excitation RMS per axis \[rad per Hz/(m/s²)\].
     pub excitation_rms: [f64; 3],
-    /// Covariance of Γ̂ [(Hz/(m/s²))²]: the statistical part (each axis's
+    /// Covariance of Γ̂ \[(Hz/(m/s²))²\]: the statistical part (each axis's
     /// autocorrelation-robust inflation applied as √(r_i·r_j) to entry ij) plus
     /// the IMU-calibration part on the diagonal; `null` in the rows and columns
     /// of unobservable axes.
@@ -37,18 +37,18 @@ pub struct Calibration {
     pub gamma_raw_hz_per_mps2: [f64; 3],
     /// 1σ assuming white residuals (for comparison with the robust one).
     pub sigma_white_hz_per_mps2: [f64; 3],
-    /// Cramér–Rao bound on each component [Hz/(m/s²)]: √(J⁻¹)_ii, J the Fisher
+    /// Cramér–Rao bound on each component \[Hz/(m/s²)\]: √(J⁻¹)_ii, J the Fisher
     /// information of the data under the noise spectrum fitted to the residuals
     /// (an AR model, see [`crate::gls`]). The same for every method; `null` for an
     /// unobservable axis.
     pub crlb_hz_per_mps2: [Option<f64>; 3],
     /// Order of the AR model of the residual noise behind `crlb_hz_per_mps2`.
     pub noise_ar_order: usize,
-    /// IMU time stamp minus true time applied to the IMU [s].
+    /// IMU time stamp minus true time applied to the IMU \[s\].
     pub imu_time_offset_s: f64,
     /// Whether `imu_time_offset_s` was estimated (false: assumed by the user).
     pub imu_time_offset_estimated: bool,
-    /// 1σ of the estimated time offset [s] (when estimated).
+    /// 1σ of the estimated time offset \[s\] (when estimated).
     pub imu_time_offset_sigma_s: Option<f64>,
     /// The loop identification, when asked for.
     pub loop_identification: Option<LoopIdentification>,
@@ -56,23 +56,23 @@ pub struct Calibration {
     pub huber: Option<HuberFit>,
     /// The verdict per axis (shaking frequency, sensitivity reached, advice).
     pub axes: [AxisVerdict; 3],
-    /// Largest predicted g-induced phase error |φ_aᵀΓ̂| over the log [rad].
+    /// Largest predicted g-induced phase error |φ_aᵀΓ̂| over the log \[rad\].
     pub predicted_peak_phase_err_rad: f64,
-    /// The discriminator's linear range assumed for the check [rad] (π/4).
+    /// The discriminator's linear range assumed for the check \[rad\] (π/4).
     pub discriminator_linear_range_rad: f64,
-    /// RMS of the averaged phase error over the used epochs [rad].
+    /// RMS of the averaged phase error over the used epochs \[rad\].
     pub rms_before_rad: f64,
-    /// RMS of φ − φ_aᵀΓ̂ over the same epochs [rad].
+    /// RMS of φ − φ_aᵀΓ̂ over the same epochs \[rad\].
     pub rms_after_rad: f64,
-    /// RMS of the g-induced part φ_aᵀΓ̂ [rad].
+    /// RMS of the g-induced part φ_aᵀΓ̂ \[rad\].
     pub rms_g_induced_rad: f64,
-    /// Residual standard deviation [rad].
+    /// Residual standard deviation \[rad\].
     pub residual_sigma_rad: f64,
     /// Epochs used by the estimator.
     pub epochs_used: u64,
     /// Epochs in the series (including gaps and warm-up).
     pub epochs_total: usize,
-    /// Log interval [s].
+    /// Log interval \[s\].
     pub log_interval_s: f64,
     /// The estimate as it evolved (every [`crate::HISTORY_INTERVAL_S`] after the warm-up).
     #[serde(skip)]
@@ -88,10 +88,10 @@ pub struct Calibration {
 /// The estimate at one epoch of the run (the paper's Fig. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HistoryPoint {
-    /// Epoch time [s].
+    /// Epoch time \[s\].
     pub t_s: f64,
-    /// Γ̂ so far [Hz/(m/s²)].
+    /// Γ̂ so far \[Hz/(m/s²)\].
     pub gamma_hz_per_mps2: [f64; 3],
-    /// Its 1σ so far, assuming white residuals [Hz/(m/s²)] (+∞ while unexcited).
+    /// Its 1σ so far, assuming white residuals \[Hz/(m/s²)\] (+∞ while unexcited).
     pub sigma_hz_per_mps2: [f64; 3],
 }

@@ -50,7 +50,7 @@ pub struct HuberFit {
     pub epochs: usize,
     /// IRLS iterations run.
     pub iterations: u32,
-    /// Whether Γ̂ converged before [`MAX_ITERATIONS`].
+    /// Whether Γ̂ converged within the iteration limit (50).
     pub converged: bool,
 }
 

@@ -63,7 +63,7 @@ fn catmull_rom(y: &[[f64; 3]], x: f64) -> [f64; 3] {
     })
 }
 
-/// Golden-section minimization of `f` on [a, b].
+/// Golden-section minimization of `f` on \[a, b\].
 fn golden(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
     let r = (5f64.sqrt() - 1.0) / 2.0;
     let mut x1 = b - r * (b - a);
@@ -87,7 +87,7 @@ fn golden(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f6
     0.5 * (a + b)
 }
 
-/// Grid search then golden-section refinement of `f` on [lo, hi]; returns the
+/// Grid search then golden-section refinement of `f` on \[lo, hi\]; returns the
 /// minimizer and the curvature f'' there (central differences at step `h`).
 fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, h: f64, mut f: impl FnMut(f64) -> f64) -> (f64, f64) {
     let step = (hi - lo) / grid as f64;
@@ -108,12 +108,12 @@ fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, h: f64, mut f: impl FnMu
 /// The estimated IMU time offset.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TimeOffsetEstimate {
-    /// IMU time stamp minus true time [s], in total (the assumed offset of the
+    /// IMU time stamp minus true time \[s\], in total (the assumed offset of the
     /// series plus the correction found).
     pub imu_time_offset_s: f64,
-    /// 1σ [s] from the curvature of the RSS.
+    /// 1σ \[s\] from the curvature of the RSS.
     pub sigma_s: f64,
-    /// Search range ± [s].
+    /// Search range ± \[s\].
     pub max_abs_s: f64,
     /// RSS at the assumed offset over RSS at the estimate (≥ 1).
     pub rss_ratio: f64,
@@ -178,17 +178,17 @@ pub fn estimate_time_offset(
 /// The result of identifying the receiver loop from the data.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LoopIdentification {
-    /// Natural frequency of the assumed loop, ωn/2π [Hz].
+    /// Natural frequency of the assumed loop, ωn/2π \[Hz\].
     pub assumed_natural_frequency_hz: f64,
     /// Damping of the assumed loop (2nd order).
     pub assumed_zeta: Option<f64>,
-    /// Identified natural frequency [Hz].
+    /// Identified natural frequency \[Hz\].
     pub natural_frequency_hz: f64,
-    /// Its 1σ [Hz].
+    /// Its 1σ \[Hz\].
     pub sigma_natural_frequency_hz: f64,
     /// Identified damping (2nd order; 3rd-order loops keep their a3, b3).
     pub zeta: Option<f64>,
-    /// Identified noise bandwidth Bn [Hz].
+    /// Identified noise bandwidth Bn \[Hz\].
     pub bn_hz: f64,
     /// RSS with the assumed loop over RSS with the identified one.
     pub rss_ratio: f64,
@@ -201,7 +201,7 @@ pub struct LoopIdentification {
     /// Relative change of each Γ̂ component per +1 % of ωn, at the identified loop
     /// (at a fixed time offset).
     pub gamma_sensitivity_per_percent_wn: [f64; 3],
-    /// The IMU time offset found jointly with the identified loop [s] (total).
+    /// The IMU time offset found jointly with the identified loop \[s\] (total).
     pub imu_time_offset_s: Option<f64>,
 }
 

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 pub enum Method {
     /// The paper's gradient observer with constant gain k.
     Gradient {
-        /// Gain k [1/s per unit φ_a²].
+        /// Gain k \[1/s per unit φ_a²\].
         gain_k: f64,
     },
     /// Recursive least squares (Kalman-type gain) with forgetting factor λ.
@@ -68,17 +68,17 @@ pub struct EstimateSettings {
     pub method: Method,
     /// Epochs in the first `warmup_s` seconds only drive the loop models.
     pub warmup_s: f64,
-    /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off); see
+    /// Corner of the identical high-pass on φ and φ_a \[Hz\] (0 = off); see
     /// [`gsens_core::filter`].
     pub highpass_hz: f64,
-    /// Longest lag of the autocorrelation-robust covariance [s].
+    /// Longest lag of the autocorrelation-robust covariance \[s\].
     pub hac_lag_s: f64,
-    /// Carrier frequency [Hz] for ppb/g.
+    /// Carrier frequency \[Hz\] for ppb/g.
     pub carrier_hz: f64,
     /// 1σ of the IMU's scale-factor error per axis (fraction, e.g. 1e-3),
     /// propagated into the uncertainty of Γ̂ (see [`crate::imu_systematic_sigma`]).
     pub imu_scale_sigma: f64,
-    /// 1σ of the IMU's axis misalignment [rad], propagated likewise.
+    /// 1σ of the IMU's axis misalignment \[rad\], propagated likewise.
     pub imu_misalignment_sigma_rad: f64,
     /// Observability thresholds.
     pub criteria: ObservabilityCriteria,

@@ -11,7 +11,7 @@ use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
-/// The linear range assumed for the discriminator [rad]: π/4.
+/// The linear range assumed for the discriminator \[rad\]: π/4.
 pub const DISCRIMINATOR_LINEAR_RANGE_RAD: f64 = core::f64::consts::FRAC_PI_4;
 
 /// What the data say about one axis.
@@ -21,9 +21,9 @@ pub struct AxisVerdict {
     pub axis: String,
     /// Whether Γ along this axis is observable.
     pub observable: bool,
-    /// Dominant frequency of the specific force along the axis [Hz] (None if it never moved).
+    /// Dominant frequency of the specific force along the axis \[Hz\] (None if it never moved).
     pub shaking_frequency_hz: Option<f64>,
-    /// RMS of the specific force's variation along the axis [m/s²].
+    /// RMS of the specific force's variation along the axis \[m/s²\].
     pub shaking_rms_mps2: f64,
     /// |L(f_shake)| / max |L|: the fraction of the loop's peak sensitivity reached.
     pub fraction_of_peak_sensitivity: Option<f64>,

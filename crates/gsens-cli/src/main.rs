@@ -1,6 +1,8 @@
 //! `gsens`: calibrate a GNSS receiver oscillator's g-sensitivity from its PLL
 //! phase errors and its IMU. A thin shell over the library crates: argument
 //! parsing, files, printing.
+// clap turns the options' doc comments into `--help`, where a unit reads `[Hz]`, not a link.
+#![allow(rustdoc::broken_intra_doc_links)]
 
 mod args;
 mod demo;

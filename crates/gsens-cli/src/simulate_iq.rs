@@ -16,7 +16,7 @@ use crate::simulate::{IqFormatArg, SimulateArgs};
 
 /// Writes `iq` and, in `--out`: imu.csv, truth.json, delta_f.csv (t_s,delta_f_hz,g_induced_hz
 /// per 1 ms block), gnss-sdr.conf and, with `--iq-carrier-truth`, carrier.csv
-/// (t_s,prn<N>_hz,…: each satellite's baseband carrier per 1 ms block).
+/// (t_s,`prn<N>_hz`,…: each satellite's baseband carrier per 1 ms block).
 pub fn run(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
     let (seed, fs_hz, out) = (args.seed, args.fs_hz, args.out.as_path());
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;

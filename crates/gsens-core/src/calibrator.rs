@@ -28,9 +28,9 @@ pub fn average_phase_rad(phase_err_rad: &[f64], weights: &[f64]) -> Option<f64> 
 /// What the calibrator made of one epoch.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FedEpoch {
-    /// φ_a after the high-pass [rad per Hz/(m/s²)].
+    /// φ_a after the high-pass \[rad per Hz/(m/s²)\].
     pub phi_a: [f64; 3],
-    /// φ after the high-pass [rad] (None when no channel was present).
+    /// φ after the high-pass \[rad\] (None when no channel was present).
     pub phase_err_rad: Option<f64>,
     /// Whether the estimator used the epoch (not in the warm-up, not settling after a gap).
     pub used: bool,

@@ -6,7 +6,7 @@
 
 use crate::math::dot3;
 
-/// φ − φ_aᵀΓ̂ [rad]: the phase error with the g-induced part removed.
+/// φ − φ_aᵀΓ̂ \[rad\]: the phase error with the g-induced part removed.
 #[inline]
 pub fn compensated_phase_rad(phase_err_rad: f64, phi_a: &[f64; 3], gamma_hz_per_mps2: &[f64; 3]) -> f64 {
     phase_err_rad - dot3(phi_a, gamma_hz_per_mps2)
@@ -15,12 +15,12 @@ pub fn compensated_phase_rad(phase_err_rad: f64, phi_a: &[f64; 3], gamma_hz_per_
 /// A real-time compensator for receiver firmware.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Compensator {
-    /// Γ̂ [Hz/(m/s²)] at the tracked carrier.
+    /// Γ̂ \[Hz/(m/s²)\] at the tracked carrier.
     pub gamma_hz_per_mps2: [f64; 3],
 }
 
 impl Compensator {
-    /// NCO frequency correction [Hz] for specific force `accel_mps2`: −aᵀΓ̂.
+    /// NCO frequency correction \[Hz\] for specific force `accel_mps2`: −aᵀΓ̂.
     /// Add it to every carrier NCO's command; scale by f_other/f_carrier for
     /// another carrier.
     #[inline]

@@ -21,18 +21,18 @@ use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 /// An estimate of Γ with its covariance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GammaEstimate {
-    /// Γ̂ [Hz/(m/s²)]. Components along unobservable directions are 0.
+    /// Γ̂ \[Hz/(m/s²)\]. Components along unobservable directions are 0.
     pub gamma_hz_per_mps2: [f64; 3],
-    /// Covariance of Γ̂ [(Hz/(m/s²))²]; +∞ on the diagonal of unobservable axes.
+    /// Covariance of Γ̂ \[(Hz/(m/s²))²\]; +∞ on the diagonal of unobservable axes.
     pub covariance: [[f64; 3]; 3],
-    /// Residual variance σ̂² of φ − φ_aᵀΓ̂ [rad²] used in the covariance.
+    /// Residual variance σ̂² of φ − φ_aᵀΓ̂ \[rad²\] used in the covariance.
     pub residual_variance_rad2: f64,
     /// Epochs used.
     pub epochs: u64,
 }
 
 impl GammaEstimate {
-    /// 1σ of each component [Hz/(m/s²)].
+    /// 1σ of each component \[Hz/(m/s²)\].
     pub fn sigma_hz_per_mps2(&self) -> [f64; 3] {
         [0, 1, 2].map(|i| sqrt(self.covariance[i][i].max(0.0)))
     }
@@ -40,12 +40,12 @@ impl GammaEstimate {
 
 /// One interface for feeding epochs to every estimator.
 pub trait GammaEstimator {
-    /// Feeds one epoch: measured (channel-averaged) phase error [rad] and the
+    /// Feeds one epoch: measured (channel-averaged) phase error \[rad\] and the
     /// regressor φ_a = L\[a\] at the same epoch.
     fn update(&mut self, phase_err_rad: f64, phi_a: &[f64; 3]);
     /// The current estimate.
     fn estimate(&self) -> GammaEstimate;
-    /// The current Γ̂ alone [Hz/(m/s²)] (cheaper where the estimator can).
+    /// The current Γ̂ alone \[Hz/(m/s²)\] (cheaper where the estimator can).
     fn gamma_hz_per_mps2(&self) -> [f64; 3] {
         self.estimate().gamma_hz_per_mps2
     }
@@ -271,7 +271,7 @@ pub struct RecursiveLeastSquares {
 }
 
 impl RecursiveLeastSquares {
-    /// Default diffuse prior variance of each component [(Hz/(m/s²))²].
+    /// Default diffuse prior variance of each component \[(Hz/(m/s²))²\].
     pub const DEFAULT_P0: f64 = 1e8;
 
     /// RLS with forgetting factor `lambda` (1 = none) and prior variance `p0`.

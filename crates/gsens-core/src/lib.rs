@@ -7,8 +7,8 @@
 //! bit for bit with and without `std`).
 //!
 //! The method (see `shared/conventions.md`): the oscillator adds a frequency
-//! bias Δf = aᵀΓ [Hz] to every carrier NCO, `a` the specific force [m/s²] in
-//! the IMU body frame and Γ the g-sensitivity vector [Hz/(m/s²)]. The carrier
+//! bias Δf = aᵀΓ \[Hz\] to every carrier NCO, `a` the specific force \[m/s²\] in
+//! the IMU body frame and Γ the g-sensitivity vector \[Hz/(m/s²)\]. The carrier
 //! loop turns it into a phase tracking error φ = L\[Δf\]. A triad of software
 //! loop models gives φ_a = L\[a\], so φ = φ_aᵀΓ + noise, which the estimators in
 //! [`estimator`] solve for Γ.

@@ -2,7 +2,7 @@
 //!
 //! From the information matrix AᵀA = Σ φ_aφ_aᵀ: the excitation of axis i that
 //! the other two axes cannot explain is the Schur complement
-//! S_i = 1/[(AᵀA)⁻¹]_ii; its RMS per epoch, √(S_i/n) [rad per Hz/(m/s²)], is
+//! S_i = 1/\[(AᵀA)⁻¹\]_ii; its RMS per epoch, √(S_i/n) \[rad per Hz/(m/s²)\], is
 //! the phase error a unit Γ_i leaves that no other axis can mimic. An axis is
 //! observable when that excitation is above a floor and its 1σ is below a
 //! ceiling; both thresholds are settings, reported with the verdict.
@@ -15,10 +15,10 @@ use nalgebra::SymmetricEigen;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ObservabilityCriteria {
-    /// Minimum unexplained excitation RMS √(S_i/n) [rad/(Hz/(m/s²))].
+    /// Minimum unexplained excitation RMS √(S_i/n) \[rad/(Hz/(m/s²))\].
     /// Default 0.05: a 0.06 m/s² oscillation at the loop's peak sensitivity.
     pub min_excitation_rms: f64,
-    /// Maximum 1σ of Γ̂_i [Hz/(m/s²)]. Default 0.01 (≈ 0.06 ppb/g at L1).
+    /// Maximum 1σ of Γ̂_i \[Hz/(m/s²)\]. Default 0.01 (≈ 0.06 ppb/g at L1).
     pub max_sigma_hz_per_mps2: f64,
 }
 
@@ -31,7 +31,7 @@ impl Default for ObservabilityCriteria {
 /// The observability of each axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observability {
-    /// Unexplained excitation RMS per axis √(S_i/n) [rad/(Hz/(m/s²))].
+    /// Unexplained excitation RMS per axis √(S_i/n) \[rad/(Hz/(m/s²))\].
     pub excitation_rms: [f64; 3],
     /// Condition number λ_max/λ_min of AᵀA (+∞ when singular).
     pub condition_number: f64,

@@ -3,7 +3,7 @@
 //!
 //! # Signs and the operator L
 //!
-//! φ = θ_signal − θ_replica [rad]; the oscillator adds Δf [Hz] to the NCO's
+//! φ = θ_signal − θ_replica \[rad\]; the oscillator adds Δf \[Hz\] to the NCO's
 //! commanded frequency. For a loop filter
 //! F(s) = c0 + c1/s + c2/s² (rad/s of NCO command per rad of phase error) the
 //! continuous loop gives
@@ -19,7 +19,7 @@
 //! # The discrete loop (what receivers run)
 //!
 //! The loop is updated once per coherent integration of length T. Integration
-//! k covers [kT, (k+1)T]; during it the NCO runs at the constant commanded
+//! k covers \[kT, (k+1)T\]; during it the NCO runs at the constant commanded
 //! frequency f_k plus the oscillator bias Δf_k (its mean over the interval).
 //! With e_k the phase error at the start of the interval:
 //!
@@ -52,15 +52,15 @@ pub mod gnss_sdr;
 const FRAC_1_TAU: f64 = 1.0 / TAU;
 pub use nalgebra::Complex;
 
-/// Loop-filter coefficients of F(s) = c0 + c1/s + c2/s² [rad/s per rad].
+/// Loop-filter coefficients of F(s) = c0 + c1/s + c2/s² \[rad/s per rad\].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LoopFilterCoeffs {
-    /// Proportional gain c0 [1/s].
+    /// Proportional gain c0 \[1/s\].
     pub c0_per_s: f64,
-    /// First-integrator gain c1 [1/s²].
+    /// First-integrator gain c1 \[1/s²\].
     pub c1_per_s2: f64,
-    /// Second-integrator gain c2 [1/s³] (0 for a 2nd-order loop).
+    /// Second-integrator gain c2 \[1/s³\] (0 for a 2nd-order loop).
     pub c2_per_s3: f64,
 }
 
@@ -76,14 +76,14 @@ pub const KAPLAN_B3: f64 = 2.4;
 pub enum LoopSpec {
     /// 2nd-order loop from its one-sided noise bandwidth and damping.
     SecondOrder {
-        /// Noise bandwidth Bn [Hz].
+        /// Noise bandwidth Bn \[Hz\].
         bn_hz: f64,
         /// Damping ratio ζ.
         zeta: f64,
     },
     /// 3rd-order loop F(s) = b3·ωn + a3·ωn²/s + ωn³/s² from its noise bandwidth.
     ThirdOrder {
-        /// Noise bandwidth Bn [Hz].
+        /// Noise bandwidth Bn \[Hz\].
         bn_hz: f64,
         /// a3 (Kaplan: 1.1).
         a3: f64,
@@ -123,12 +123,12 @@ fn positive(x: f64, name: &'static str) -> Result<f64, LoopError> {
     if x.is_finite() && x > 0.0 { Ok(x) } else { Err(LoopError::NonPositiveParameter(name)) }
 }
 
-/// 2nd-order loop: Bn = (ωn/2)·(ζ + 1/(4ζ)) (Kaplan & Hegarty Table 5.6) → ωn [rad/s].
+/// 2nd-order loop: Bn = (ωn/2)·(ζ + 1/(4ζ)) (Kaplan & Hegarty Table 5.6) → ωn \[rad/s\].
 pub fn second_order_wn_from_bn(bn_hz: f64, zeta: f64) -> f64 {
     2.0 * bn_hz / (zeta + 1.0 / (4.0 * zeta))
 }
 
-/// 2nd-order loop: ωn [rad/s] → Bn [Hz], Bn = (ωn/2)·(ζ + 1/(4ζ)).
+/// 2nd-order loop: ωn \[rad/s\] → Bn \[Hz\], Bn = (ωn/2)·(ζ + 1/(4ζ)).
 pub fn second_order_bn_from_wn(wn_rad_per_s: f64, zeta: f64) -> f64 {
     0.5 * wn_rad_per_s * (zeta + 1.0 / (4.0 * zeta))
 }
@@ -150,7 +150,7 @@ impl LoopSpec {
         LoopSpec::ThirdOrder { bn_hz, a3: KAPLAN_A3, b3: KAPLAN_B3 }
     }
 
-    /// Natural frequency ωn [rad/s] (None for raw coefficients of a 3rd-order
+    /// Natural frequency ωn \[rad/s\] (None for raw coefficients of a 3rd-order
     /// filter, where ωn = c2^(1/3)).
     pub fn wn_rad_per_s(&self) -> Option<f64> {
         match *self {
@@ -215,7 +215,7 @@ impl LoopSpec {
 }
 
 impl LoopFilterCoeffs {
-    /// Continuous response L(j2πf) = −2π/(s + F(s)) at s = j2πf [rad/Hz].
+    /// Continuous response L(j2πf) = −2π/(s + F(s)) at s = j2πf \[rad/Hz\].
     pub fn response_continuous(&self, f_hz: f64) -> Complex<f64> {
         let s = Complex::new(0.0, TAU * f_hz);
         if f_hz == 0.0 {
@@ -319,9 +319,9 @@ impl LoopFilterCoeffs {
 pub struct LoopFilter {
     coeffs: LoopFilterCoeffs,
     t_s: f64,
-    /// First integrator a1 [rad/s]: the steady-state NCO frequency (×2π).
+    /// First integrator a1 \[rad/s\]: the steady-state NCO frequency (×2π).
     acc1_rad_per_s: f64,
-    /// Second integrator a2 [rad/s²]: the steady-state frequency rate (×2π).
+    /// Second integrator a2 \[rad/s²\]: the steady-state frequency rate (×2π).
     acc2_rad_per_s2: f64,
 }
 
@@ -331,7 +331,7 @@ impl LoopFilter {
         LoopFilter { coeffs, t_s, acc1_rad_per_s: 0.0, acc2_rad_per_s2: 0.0 }
     }
 
-    /// Update interval T [s].
+    /// Update interval T \[s\].
     pub fn interval_s(&self) -> f64 {
         self.t_s
     }
@@ -341,7 +341,7 @@ impl LoopFilter {
         self.coeffs
     }
 
-    /// Preloads the integrators with a frequency [Hz] and frequency rate [Hz/s]
+    /// Preloads the integrators with a frequency \[Hz\] and frequency rate \[Hz/s\]
     /// (from acquisition or aiding), as a receiver does when it starts tracking.
     pub fn preload(&mut self, freq_hz: f64, freq_rate_hz_per_s: f64) {
         self.acc1_rad_per_s = TAU * freq_hz;
@@ -349,7 +349,7 @@ impl LoopFilter {
     }
 
     /// One update with discriminator output `phase_err_rad`; returns the NCO
-    /// frequency command [Hz] for the next integration:
+    /// frequency command \[Hz\] for the next integration:
     /// a2 += c2·T·φ; a1 += T·(c1·φ + a2); f = (c0·φ + a1)/2π.
     #[inline]
     pub fn update(&mut self, phase_err_rad: f64) -> f64 {
@@ -367,7 +367,7 @@ impl LoopFilter {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CarrierLoop {
     filter: LoopFilter,
-    /// NCO commanded frequency for the current integration [Hz].
+    /// NCO commanded frequency for the current integration \[Hz\].
     nco_freq_hz: f64,
 }
 
@@ -383,19 +383,19 @@ impl CarrierLoop {
         self.nco_freq_hz = freq_hz;
     }
 
-    /// The NCO's commanded frequency during the current integration [Hz].
+    /// The NCO's commanded frequency during the current integration \[Hz\].
     #[inline]
     pub fn nco_freq_hz(&self) -> f64 {
         self.nco_freq_hz
     }
 
-    /// Update interval T [s].
+    /// Update interval T \[s\].
     #[inline]
     pub fn interval_s(&self) -> f64 {
         self.filter.interval_s()
     }
 
-    /// Phase advance of the replica over one integration [rad] when the NCO
+    /// Phase advance of the replica over one integration \[rad\] when the NCO
     /// runs at its command plus the oscillator bias `bias_hz`: 2π·T·(f + Δf).
     #[inline]
     pub fn replica_advance_rad(&self, bias_hz: f64) -> f64 {
@@ -416,7 +416,7 @@ impl CarrierLoop {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DiscretePll {
     carrier: CarrierLoop,
-    /// Phase error at the start of the current integration [rad].
+    /// Phase error at the start of the current integration \[rad\].
     err_start_rad: f64,
 }
 
@@ -427,7 +427,7 @@ impl DiscretePll {
     }
 
     /// One integration with mean NCO frequency bias `delta_f_hz` over it;
-    /// returns the discriminator output φ_k [rad].
+    /// returns the discriminator output φ_k \[rad\].
     #[inline]
     pub fn step(&mut self, delta_f_hz: f64) -> f64 {
         let advance = self.carrier.replica_advance_rad(delta_f_hz);

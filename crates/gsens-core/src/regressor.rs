@@ -44,9 +44,9 @@ pub enum LoggedPhase {
 pub enum RegressorError {
     /// The log interval is not an integer multiple of the loop interval.
     NotAMultiple {
-        /// Log interval [s].
+        /// Log interval \[s\].
         log_interval_s: f64,
-        /// Loop interval [s].
+        /// Loop interval \[s\].
         loop_interval_s: f64,
     },
     /// An interval is not finite and positive.
@@ -130,7 +130,7 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
     }
 
     /// Advances the triad to the next log epoch, whose specific force is
-    /// `accel_mps2`, and returns φ_a there [rad per Hz/(m/s²)·(m/s²)], i.e. the
+    /// `accel_mps2`, and returns φ_a there \[rad per Hz/(m/s²)·(m/s²)\], i.e. the
     /// phase error each axis would cause with a unit sensitivity.
     #[inline]
     pub fn epoch(&mut self, accel_mps2: &[f64; 3]) -> [f64; 3] {

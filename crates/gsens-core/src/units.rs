@@ -1,15 +1,15 @@
 //! Unit conversions used across gsens.
 
-/// Standard gravity [m/s²] (CGPM 1901), used for ppb/g.
+/// Standard gravity \[m/s²\] (CGPM 1901), used for ppb/g.
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
 
-/// GPS L1 carrier frequency [Hz] (IS-GPS-200).
+/// GPS L1 carrier frequency \[Hz\] (IS-GPS-200).
 pub const GPS_L1_HZ: f64 = 1_575.42e6;
 
-/// Speed of light in vacuum [m/s].
+/// Speed of light in vacuum \[m/s\].
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 
-/// Γ [Hz/(m/s²)] at the carrier → normalized sensitivity [ppb/g]:
+/// Γ \[Hz/(m/s²)\] at the carrier → normalized sensitivity \[ppb/g\]:
 /// ppb/g = Γ · g₀ / f_carrier · 1e9 (conventions.md, "Units and signs").
 pub fn hz_per_mps2_to_ppb_per_g(gamma_hz_per_mps2: f64, carrier_hz: f64) -> f64 {
     gamma_hz_per_mps2 * STANDARD_GRAVITY_MPS2 / carrier_hz * 1e9
@@ -20,7 +20,7 @@ pub fn ppb_per_g_to_hz_per_mps2(ppb_per_g: f64, carrier_hz: f64) -> f64 {
     ppb_per_g * carrier_hz / STANDARD_GRAVITY_MPS2 / 1e9
 }
 
-/// C/N0 in dB-Hz → ratio [Hz].
+/// C/N0 in dB-Hz → ratio \[Hz\].
 pub fn cn0_dbhz_to_ratio_hz(cn0_dbhz: f64) -> f64 {
     crate::math::pow10(cn0_dbhz / 10.0)
 }

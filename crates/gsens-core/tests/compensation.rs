@@ -23,7 +23,7 @@
 //! Expected numbers come from linearity alone. The loop is linear in
 //! (f_sig, c + Δf, initial state), and the correction is −aᵀΓ̂, so the NCO
 //! sees the bias aᵀ(Γ − Γ̂). Writing φ_ref for the run with f_sig only and
-//! L[·] for the loop's response to a bias (started in the matching steady
+//! L\[·\] for the loop's response to a bias (started in the matching steady
 //! state), the g-induced part of a run compensated with Γ̂ = s·Γ is
 //!
 //! ```text
@@ -32,7 +32,7 @@
 //!
 //! so its RMS relative to the uncompensated one is |1 − s|: 0 for s = 1
 //! (the true Γ), 2 for s = −1 (the correction's sign flipped), 0.1 for s = 0.9.
-//! And since L[aᵀΓ] = Σ_i Γ_i·L[a_i] = φ_aᵀΓ with φ_a from a triad of loops
+//! And since L\[aᵀΓ\] = Σ_i Γ_i·L\[a_i\] = φ_aᵀΓ with φ_a from a triad of loops
 //! fed the three axes, post-processing φ_uncomp − φ_aᵀΓ̂ must equal the closed
 //! loop compensated in real time with the same Γ̂.
 
@@ -40,17 +40,17 @@ use gsens_core::compensate::{Compensator, compensated_phase_rad};
 use gsens_core::pll::{DiscretePll, LoopFilterCoeffs, LoopSpec};
 use std::f64::consts::{PI, TAU};
 
-/// Γ [Hz/(m/s²)]: ~1e-9/g at L1, different on every axis.
+/// Γ \[Hz/(m/s²)\]: ~1e-9/g at L1, different on every axis.
 const GAMMA: [f64; 3] = [0.08, -0.05, 0.15];
-/// Gravity in the body frame [m/s²] (constant: absorbed by the settled loop).
+/// Gravity in the body frame \[m/s²\] (constant: absorbed by the settled loop).
 const GRAVITY: [f64; 3] = [0.4, -0.3, 9.79];
-/// Vibration near the paper loop's |L| peak: amplitude [m/s²], frequency [Hz], phase [rad].
+/// Vibration near the paper loop's |L| peak: amplitude \[m/s²\], frequency \[Hz\], phase \[rad\].
 /// The y axis is not vibrated, so Γ_y only enters through gravity.
 const VIBRATION: [(f64, f64, f64); 3] = [(2.0, 0.9, 0.3), (0.0, 0.9, 0.0), (1.5, 0.9, 1.9)];
-/// Simulated time [s].
+/// Simulated time \[s\].
 const DURATION_S: f64 = 30.0;
 
-/// Mean specific force over integration k, [kT, (k+1)T] (exact for the sinusoid).
+/// Mean specific force over integration k, \[kT, (k+1)T\] (exact for the sinusoid).
 fn accel_mean(k: usize, t_s: f64) -> [f64; 3] {
     let (t0, t1) = (k as f64 * t_s, (k + 1) as f64 * t_s);
     [0, 1, 2].map(|i| {
@@ -60,7 +60,7 @@ fn accel_mean(k: usize, t_s: f64) -> [f64; 3] {
     })
 }
 
-/// The signal's own Doppler over integration k [Hz]: a constant plus a slow
+/// The signal's own Doppler over integration k \[Hz\]: a constant plus a slow
 /// line-of-sight oscillation, the same in every run.
 fn signal_doppler_hz(k: usize, t_s: f64) -> f64 {
     let t = (k as f64 + 0.5) * t_s;
@@ -75,12 +75,12 @@ fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 struct Loop {
     c: LoopFilterCoeffs,
     t_s: f64,
-    /// Phase error at the start of the current integration [rad].
+    /// Phase error at the start of the current integration \[rad\].
     e: f64,
-    /// First and second integrators [rad/s], [rad/s²].
+    /// First and second integrators \[rad/s\], \[rad/s²\].
     a1: f64,
     a2: f64,
-    /// NCO command for the current integration (loop filter output) [Hz].
+    /// NCO command for the current integration (loop filter output) \[Hz\].
     f: f64,
 }
 
@@ -141,7 +141,7 @@ fn closed_loop(c: LoopFilterCoeffs, t_s: f64, corr: Correction) -> Vec<f64> {
     (0..n).map(|k| lp.step(signal_doppler_hz(k, t_s), nco_extra_hz(&accel_mean(k, t_s), corr))).collect()
 }
 
-/// φ_a = L[a] from a triad of `DiscretePll`s, each settled on its axis' gravity.
+/// φ_a = L\[a\] from a triad of `DiscretePll`s, each settled on its axis' gravity.
 fn regressor_triad(c: LoopFilterCoeffs, t_s: f64) -> Vec<[f64; 3]> {
     let n = (DURATION_S / t_s) as usize;
     let mut triad = [DiscretePll::new(c, t_s); 3];

@@ -5,8 +5,8 @@
 //! | macro | meaning |
 //! | --- | --- |
 //! | `GSENS_GAMMA_A_OBSERVABLE` | 1 when the data observe the axis, else 0 |
-//! | `GSENS_GAMMA_A_HZ_PER_MPS2` | Γ̂ at the carrier [Hz/(m/s²)]; `0.0` (no compensation) when unobservable |
-//! | `GSENS_GAMMA_A_PPB_PER_G` | the same normalized [ppb/g]; `0.0` when unobservable |
+//! | `GSENS_GAMMA_A_HZ_PER_MPS2` | Γ̂ at the carrier \[Hz/(m/s²)\]; `0.0` (no compensation) when unobservable |
+//! | `GSENS_GAMMA_A_PPB_PER_G` | the same normalized \[ppb/g\]; `0.0` when unobservable |
 //! | `GSENS_GAMMA_A_SIGMA_HZ_PER_MPS2`, `..._SIGMA_PPB_PER_G` | 1σ, defined only for observable axes |
 //!
 //! plus `GSENS_GAMMA_HZ_PER_MPS2_INIT` / `GSENS_GAMMA_PPB_PER_G_INIT` (array

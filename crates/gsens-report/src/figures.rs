@@ -122,11 +122,11 @@ pub enum RenderError {
     Png(String),
 }
 
-/// Smallest figure size accepted (width, height) [px].
+/// Smallest figure size accepted (width, height) \[px\].
 pub const MIN_SIZE: (u32, u32) = (240, 180);
-/// Largest figure size accepted (width, height) [px].
+/// Largest figure size accepted (width, height) \[px\].
 pub const MAX_SIZE: (u32, u32) = (8000, 8000);
-/// The size used by the report and the CLI (width, height) [px].
+/// The size used by the report and the CLI (width, height) \[px\].
 pub const DEFAULT_SIZE: (u32, u32) = (1000, 640);
 
 type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
@@ -278,7 +278,7 @@ fn trim_zeros(s: String) -> String {
     if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
 }
 
-/// [lo, hi] of the finite values, padded by `pad` of the span (a flat series gets a unit-scaled span).
+/// \[lo, hi\] of the finite values, padded by `pad` of the span (a flat series gets a unit-scaled span).
 fn padded_range(values: impl Iterator<Item = f64>, pad: f64) -> Option<Range<f64>> {
     let (lo, hi) =
         values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
@@ -523,7 +523,7 @@ struct Frame<'s> {
     top: f64,
     /// Height of the x label area (before scaling).
     x_area: f64,
-    /// Width of the y label area [px].
+    /// Width of the y label area \[px\].
     y_area: i32,
     /// The x axis description, if drawn.
     x_desc: Option<&'s str>,
@@ -652,17 +652,17 @@ where
 /// The loop response to plot (the paper's Fig. 3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResponseData {
-    /// Frequencies [Hz], increasing, positive.
+    /// Frequencies \[Hz\], increasing, positive.
     pub frequency_hz: Vec<f64>,
-    /// |L(j2πf)| [rad/Hz].
+    /// |L(j2πf)| \[rad/Hz\].
     pub magnitude_rad_per_hz: Vec<f64>,
-    /// Phase of L [deg], unwrapped along frequency.
+    /// Phase of L \[deg\], unwrapped along frequency.
     pub phase_deg: Vec<f64>,
-    /// Frequency of the peak of |L| [Hz].
+    /// Frequency of the peak of |L| \[Hz\].
     pub peak_hz: f64,
-    /// |L| at the peak [rad/Hz].
+    /// |L| at the peak \[rad/Hz\].
     pub peak_rad_per_hz: f64,
-    /// Where |L| is above peak/√2 [Hz], if known.
+    /// Where |L| is above peak/√2 \[Hz\], if known.
     pub half_power_band_hz: Option<[f64; 2]>,
     /// The loop in words (drawn in the title), e.g. [`LoopModel`]'s `Display`.
     pub description: String,
@@ -830,13 +830,13 @@ pub fn fig_response(data: &ResponseData, format: Format, size: (u32, u32)) -> Re
 /// The estimation process to plot (the paper's Fig. 4).
 #[derive(Debug, Clone, Copy)]
 pub struct EstimationData<'a> {
-    /// Epoch times [s].
+    /// Epoch times \[s\].
     pub t_s: &'a [f64],
-    /// Specific force per epoch [m/s²] (IMU body frame).
+    /// Specific force per epoch \[m/s²\] (IMU body frame).
     pub accel_mps2: &'a [[f64; 3]],
     /// Γ̂ and its 1σ as they evolved ([`gsens_calib::Calibration::history`]).
     pub history: &'a [HistoryPoint],
-    /// The true Γ [Hz/(m/s²)] when known (simulation): drawn dashed.
+    /// The true Γ \[Hz/(m/s²)\] when known (simulation): drawn dashed.
     pub truth: Option<[f64; 3]>,
     /// Which axes the data observe; an unobservable component is drawn faint.
     pub observable: [bool; 3],
@@ -989,11 +989,11 @@ pub fn fig_estimation(data: &EstimationData, format: Format, size: (u32, u32)) -
 /// Phase error before and after compensation (the paper's Fig. 5).
 #[derive(Debug, Clone, Copy)]
 pub struct CompensationData<'a> {
-    /// Epoch times [s].
+    /// Epoch times \[s\].
     pub t_s: &'a [f64],
-    /// Averaged phase error φ [rad]; `None` in gaps.
+    /// Averaged phase error φ \[rad\]; `None` in gaps.
     pub before_rad: &'a [Option<f64>],
-    /// φ − φ_aᵀΓ̂ [rad]; `None` in gaps.
+    /// φ − φ_aᵀΓ̂ \[rad\]; `None` in gaps.
     pub after_rad: &'a [Option<f64>],
 }
 
@@ -1053,9 +1053,9 @@ pub struct Cn0Track<'a> {
     pub channel: u32,
     /// Satellite PRN.
     pub prn: u32,
-    /// Time stamps [s].
+    /// Time stamps \[s\].
     pub t_s: &'a [f64],
-    /// C/N0 [dB-Hz].
+    /// C/N0 \[dB-Hz\].
     pub cn0_dbhz: &'a [f64],
     /// Whether the channel enters the average.
     pub used: bool,
@@ -1122,13 +1122,13 @@ pub fn fig_cn0(tracks: &[Cn0Track], format: Format, size: (u32, u32)) -> Result<
 /// Phase-error series whose spectra to compare.
 #[derive(Debug, Clone, Copy)]
 pub struct SpectrumData<'a> {
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub interval_s: f64,
-    /// φ − φ_aᵀΓ̂ over contiguous epochs [rad].
+    /// φ − φ_aᵀΓ̂ over contiguous epochs \[rad\].
     pub residual_rad: &'a [f64],
-    /// φ over the same epochs [rad], if wanted for comparison.
+    /// φ over the same epochs \[rad\], if wanted for comparison.
     pub before_rad: Option<&'a [f64]>,
-    /// A frequency to mark [Hz] (the loop's natural frequency, where the
+    /// A frequency to mark \[Hz\] (the loop's natural frequency, where the
     /// g-induced error concentrates).
     pub marker_hz: Option<f64>,
 }
@@ -1211,7 +1211,7 @@ pub fn fig_residual_spectrum(data: &SpectrumData, format: Format, size: (u32, u3
 /// Allan deviation of a simulated oscillator and of its model.
 #[derive(Debug, Clone, Copy)]
 pub struct AllanData<'a> {
-    /// Averaging times τ [s].
+    /// Averaging times τ \[s\].
     pub taus_s: &'a [f64],
     /// σ_y(τ) measured on the simulated fractional frequency (NaN where undefined).
     pub simulated: &'a [f64],

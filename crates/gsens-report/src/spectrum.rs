@@ -6,9 +6,9 @@ use rustfft::num_complex::Complex;
 /// A one-sided power spectral density.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Psd {
-    /// Frequencies [Hz], from 0 to the Nyquist frequency.
+    /// Frequencies \[Hz\], from 0 to the Nyquist frequency.
     pub frequency_hz: Vec<f64>,
-    /// Density [unit²/Hz] at each frequency.
+    /// Density \[unit²/Hz\] at each frequency.
     pub density: Vec<f64>,
     /// Segments averaged.
     pub segments: usize,

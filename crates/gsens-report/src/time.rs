@@ -16,13 +16,13 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
     (yoe + era * 400 + i64::from(m <= 2), m, d)
 }
 
-/// `YYYY-MM-DD` of a Unix time [s].
+/// `YYYY-MM-DD` of a Unix time \[s\].
 pub fn utc_date_string(unix_s: i64) -> String {
     let (y, m, d) = civil_from_days(unix_s.div_euclid(86_400));
     format!("{y:04}-{m:02}-{d:02}")
 }
 
-/// `YYYY-MM-DD hh:mm:ss UTC` of a Unix time [s].
+/// `YYYY-MM-DD hh:mm:ss UTC` of a Unix time \[s\].
 pub fn utc_timestamp_string(unix_s: i64) -> String {
     let secs = unix_s.rem_euclid(86_400);
     format!("{} {:02}:{:02}:{:02} UTC", utc_date_string(unix_s), secs / 3600, secs / 60 % 60, secs % 60)

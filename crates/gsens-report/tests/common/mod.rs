@@ -3,7 +3,7 @@
 
 use gsens_calib::{Calibration, EpochSeries, EstimateSettings, calibrate, regressors};
 
-/// The true Γ of the synthetic session [Hz/(m/s²)] (the paper's values).
+/// The true Γ of the synthetic session \[Hz/(m/s²)\] (the paper's values).
 pub const TRUTH: [f64; 3] = [0.09, 0.08, -0.08];
 
 /// A 40 Hz, 60 s session: rest, then shaking along x, y, z in turn near the
