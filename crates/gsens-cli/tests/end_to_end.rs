@@ -2,22 +2,11 @@
 //! files, as a user would: the truth within the estimate's own 3σ and within
 //! 2 % of |Γ|; the same seed gives the same bytes.
 
-use std::path::Path;
+mod common;
+
+use common::{gsens, json, vec3};
+
 use std::process::Command;
-
-fn gsens(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
-    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn vec3(v: &serde_json::Value) -> [f64; 3] {
-    [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
-}
 
 #[test]
 fn simulate_then_estimate_recovers_the_truth() {

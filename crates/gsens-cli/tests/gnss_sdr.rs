@@ -2,18 +2,11 @@
 //! `gsens-gnss-sdr`): `gsens import gnss-sdr`, `gsens estimate --gnss-sdr`,
 //! errors on bad dumps, and `gsens simulate --iq`.
 
+mod common;
+
+use common::{gsens, run, s};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap()
-}
-
-fn gsens(args: &[&str]) -> String {
-    let out = run(args);
-    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../gsens-gnss-sdr/tests/fixtures")
@@ -25,9 +18,6 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-fn s(p: &Path) -> String {
-    p.display().to_string()
-}
 
 #[test]
 fn import_writes_tracking_csv() {

@@ -2,28 +2,10 @@
 //! bound on a shortened paper session, reproducibility, and the in-memory
 //! pipeline against the file pipeline.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn gsens(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
-    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
+use common::{gsens, json, temp_dir, vec3};
 
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn vec3(v: &serde_json::Value) -> [f64; 3] {
-    [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("gsens-mc-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// The paper's session cut to 80 s: 20 s of shaking per axis, 5 s rests.
 const SHORT: &str = r#"

@@ -1,14 +1,12 @@
 //! `gsens report` on a simulated session, `gsens response --plot` and
 //! `gsens demo --figures`: the files they promise, well formed.
 
+mod common;
+
+use common::{gsens};
+
 use std::path::Path;
 use std::process::Command;
-
-fn gsens(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
-    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
 
 fn assert_png(path: &Path) {
     let b = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

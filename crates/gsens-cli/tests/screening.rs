@@ -6,8 +6,10 @@
 //! with the screening (the default) the estimate is within its 3σ and 2 % of
 //! the truth in the IMU's frame.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
+
+use common::{gsens, json, vec3};
+
 
 const SCENARIO: &str = "\
 [log]
@@ -17,20 +19,6 @@ zenith_cn0_dbhz = 54.0
 horizon_cn0_dbhz = 14.0
 elevation_exponent = 1.0
 ";
-
-fn gsens(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
-    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn vec3(v: &serde_json::Value) -> [f64; 3] {
-    [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
-}
 
 #[test]
 fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {

@@ -1,0 +1,39 @@
+//! What every CLI test needs: run `gsens`, read its JSON, a scratch folder.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `gsens` with `args`.
+pub fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap()
+}
+
+/// Runs `gsens` with `args`, asserts success and returns its standard output.
+pub fn gsens(args: &[&str]) -> String {
+    let out = run(args);
+    assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// The JSON file at `path`.
+pub fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A JSON array of three numbers (null → NaN).
+pub fn vec3(v: &serde_json::Value) -> [f64; 3] {
+    [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
+}
+
+/// A fresh scratch folder for test `name` of this process.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("gsens-test-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A path as a string argument.
+pub fn s(p: &Path) -> String {
+    p.display().to_string()
+}
