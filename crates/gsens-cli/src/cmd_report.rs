@@ -237,7 +237,7 @@ pub fn allan_figure(cfg: &gsens_sim::oscillator::OscillatorConfig, label: &str, 
     use gsens_sim::oscillator::{Oscillator, allan_deviation_theory_with_pm, allan_deviations};
     let dt = 0.025;
     let n = 48_000; // 20 minutes
-    let mut osc = Oscillator::try_new(cfg, dt, gsens_sim::rng::seeded(seed)).map_err(anyhow::Error::msg)?;
+    let mut osc = Oscillator::try_new(cfg, dt, gsens_sim::rng::seeded(seed))?;
     let mut y = vec![0.0; n];
     osc.fill(&mut y);
     let taus: Vec<f64> = (0..16).map(|k| dt * 2f64.powi(k)).filter(|t| *t <= n as f64 * dt / 4.0).collect();

@@ -76,7 +76,7 @@ impl ConversionArgs {
         }
         s.settle_s = self.gnss_sdr_settle_s;
         if let Some(spec) = &self.gnss_sdr_layout {
-            s.layout = Some(DumpLayout::parse_spec(spec).map_err(|e| anyhow::anyhow!("--gnss-sdr-layout: {e}"))?);
+            s.layout = Some(DumpLayout::parse_spec(spec).context("--gnss-sdr-layout")?);
         }
         Ok(s)
     }
