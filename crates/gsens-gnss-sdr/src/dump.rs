@@ -43,7 +43,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::GnssSdrError;
+use crate::error::{GnssSdrError, LayoutSpecError};
 
 /// The binary type of a dump field (little-endian).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -154,17 +154,18 @@ impl DumpLayout {
     /// A layout from a spec `name:type,name:type,…` (types f32, f64, u32, u64,
     /// i32), for dumps of versions or blocks the reader does not know. It must
     /// contain the [`REQUIRED_FIELDS`].
-    pub fn parse_spec(spec: &str) -> Result<Self, String> {
+    pub fn parse_spec(spec: &str) -> Result<Self, LayoutSpecError> {
         let mut fields = Vec::new();
         for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let (n, t) = item.split_once(':').ok_or_else(|| format!("`{item}`: expected name:type"))?;
+            let (n, t) =
+                item.split_once(':').ok_or_else(|| LayoutSpecError::ExpectedNameType { item: item.to_owned() })?;
             let t = FieldType::parse(t.trim())
-                .ok_or_else(|| format!("`{item}`: unknown type `{}` (f32, f64, u32, u64, i32)", t.trim()))?;
+                .ok_or_else(|| LayoutSpecError::UnknownType { item: item.to_owned(), ty: t.trim().to_owned() })?;
             fields.push((n.trim().to_owned(), t));
         }
-        for r in REQUIRED_FIELDS {
-            if !fields.iter().any(|(n, _)| n == r) {
-                return Err(format!("the layout lacks the field `{r}` (required: {})", REQUIRED_FIELDS.join(", ")));
+        for field in REQUIRED_FIELDS {
+            if !fields.iter().any(|(n, _)| n == field) {
+                return Err(LayoutSpecError::MissingField { field });
             }
         }
         Ok(DumpLayout { name: "custom".into(), description: format!("custom layout `{spec}`"), fields })
@@ -532,8 +533,20 @@ mod tests {
         let d = parse_dump(&b, "x7.dat", Some(&l)).unwrap();
         assert_eq!(d.records[0].prn, 12);
         assert!(d.records[0].abs_e.is_nan());
-        assert!(DumpLayout::parse_spec("PRN:u32").unwrap_err().contains("lacks the field"));
-        assert!(DumpLayout::parse_spec("a:f16").unwrap_err().contains("unknown type"));
+        assert_eq!(
+            DumpLayout::parse_spec("PRN:u32"),
+            Err(LayoutSpecError::MissingField { field: "PRN_start_sample_count" })
+        );
+        assert_eq!(
+            DumpLayout::parse_spec(" a : f16 ").unwrap_err().to_string(),
+            "`a : f16`: unknown type `f16` (f32, f64, u32, u64, i32)"
+        );
+        assert_eq!(DumpLayout::parse_spec("abs_P f32").unwrap_err().to_string(), "`abs_P f32`: expected name:type");
+        assert_eq!(
+            DumpLayout::parse_spec("").unwrap_err().to_string(),
+            "the layout lacks the field `PRN_start_sample_count` (required: PRN_start_sample_count, carr_error_hz, \
+             carrier_doppler_hz, CN0_SNV_dB_Hz, carrier_lock_test, PRN)"
+        );
     }
 
     #[test]

@@ -1,5 +1,8 @@
-//! The error type of the crate: every message names the file, and for a
-//! record of a dump its index and byte offset.
+//! The error types of the crate: [`GnssSdrError`] for the files (every
+//! message names the file, and for a record of a dump its index and byte
+//! offset), [`LayoutSpecError`] for a record layout given as text.
+
+use crate::dump::REQUIRED_FIELDS;
 
 /// What can go wrong reading GNSS-SDR's files or converting them.
 #[derive(Debug, thiserror::Error)]
@@ -81,5 +84,32 @@ pub enum GnssSdrError {
         dir: String,
         /// Why each dump was dropped.
         reason: String,
+    },
+}
+
+/// A record layout spec (`name:type,name:type,…`, see
+/// [`DumpLayout::parse_spec`](crate::dump::DumpLayout::parse_spec)) that does not parse.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LayoutSpecError {
+    /// An item without the `:` between name and type.
+    #[error("`{item}`: expected name:type")]
+    ExpectedNameType {
+        /// The item, trimmed.
+        item: String,
+    },
+    /// A type other than f32, f64, u32, u64, i32.
+    #[error("`{item}`: unknown type `{ty}` (f32, f64, u32, u64, i32)")]
+    UnknownType {
+        /// The item, trimmed.
+        item: String,
+        /// The type given, trimmed.
+        ty: String,
+    },
+    /// One of the [`REQUIRED_FIELDS`] is missing.
+    #[error("the layout lacks the field `{field}` (required: {})", REQUIRED_FIELDS.join(", "))]
+    MissingField {
+        /// The first required field missing.
+        field: &'static str,
     },
 }

@@ -21,5 +21,5 @@ pub mod import;
 
 pub use conf::{GnssSdrConf, TrackingConf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
-pub use error::GnssSdrError;
+pub use error::{GnssSdrError, LayoutSpecError};
 pub use import::{ImportSettings, Imported, import_dir, resample};

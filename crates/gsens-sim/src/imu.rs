@@ -33,6 +33,7 @@ use serde::{Deserialize, Serialize};
 use gsens_core::units::STANDARD_GRAVITY_MPS2;
 use rand::Rng;
 
+use crate::error::ConfigError;
 use crate::motion::{Mat3, MotionState, mat_vec};
 use crate::rng::{normal, standard_normal};
 
@@ -186,12 +187,12 @@ impl ImuConfig {
     }
 
     /// Checks ranges; the error names the offending key.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
         if !(self.rate_hz.is_finite() && self.rate_hz >= 1.0 && self.rate_hz <= 10_000.0) {
-            return Err(format!("imu.rate_hz must be within [1, 10000] Hz (got {})", self.rate_hz));
+            return Err(ConfigError::out_of_range("imu.rate_hz", self.rate_hz, "within [1, 10000] Hz"));
         }
         if !(self.time_offset_s.is_finite() && self.time_offset_s.abs() <= 10.0) {
-            return Err(format!("imu.time_offset_s must be within ±10 s (got {})", self.time_offset_s));
+            return Err(ConfigError::out_of_range("imu.time_offset_s", self.time_offset_s, "within ±10 s"));
         }
         let checks = [
             ("vrw_mps2_per_rthz", self.vrw_mps2_per_rthz, 1.0),
@@ -202,7 +203,7 @@ impl ImuConfig {
         ];
         for (key, v, max) in checks {
             if !(v.is_finite() && (0.0..=max).contains(&v)) {
-                return Err(format!("imu.{key} must be within [0, {max}] (got {v})"));
+                return Err(ConfigError::out_of_range(format!("imu.{key}"), v, format!("within [0, {max}]")));
             }
         }
         Ok(())
@@ -399,6 +400,6 @@ mod tests {
         assert_eq!(c.bias_sigma_mps2, 0.0);
         assert!(toml::from_str::<ImuConfig>("rate = 100.0").is_err());
         let bad = ImuConfig { rate_hz: 0.0, ..ImuConfig::ideal() };
-        assert!(bad.validate().unwrap_err().contains("rate_hz"));
+        assert!(bad.validate().unwrap_err().to_string().contains("rate_hz"));
     }
 }

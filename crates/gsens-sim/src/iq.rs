@@ -93,6 +93,32 @@ const STREAM_IQ_PHASES: u64 = 0x1B_0000_0002;
 /// log2 of the carrier lookup table size (1024 entries: phase steps of 0.35°).
 const LUT_BITS: u32 = 10;
 
+/// Why the generator cannot make a file: its settings ([`IqConfig`]) or the
+/// sky at the start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum IqError {
+    /// [`IqConfig::fs_hz`] outside \[1.1, 100\] MHz.
+    #[error("IQ sampling rate must be within [1.1, 100] MHz (got {fs_hz} Hz)")]
+    SamplingRate {
+        /// The rate given \[Hz\].
+        fs_hz: f64,
+    },
+    /// [`IqConfig::noise_sigma`] not finite and positive.
+    #[error("IQ noise sigma must be > 0 (got {noise_sigma})")]
+    NoiseSigma {
+        /// The σ given.
+        noise_sigma: f64,
+    },
+    /// [`IqConfig::max_satellites`] is 0.
+    #[error("IQ generator needs at least one satellite")]
+    NoSatellites,
+    /// No satellite with a C/A code is above the scenario's elevation mask at
+    /// the start.
+    #[error("no GPS satellite above the elevation mask at the start")]
+    NoneInView,
+}
+
 /// Sample format of the output file, as GNSS-SDR's `File_Signal_Source` names it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -171,16 +197,15 @@ impl IqConfig {
         }
     }
 
-    fn validate(&self) -> Result<(), SimError> {
-        let bad = |m: String| Err(SimError::Model(m));
+    fn validate(&self) -> Result<(), IqError> {
         if !(self.fs_hz.is_finite() && (1.1e6..=100e6).contains(&self.fs_hz)) {
-            return bad(format!("IQ sampling rate must be within [1.1, 100] MHz (got {} Hz)", self.fs_hz));
+            return Err(IqError::SamplingRate { fs_hz: self.fs_hz });
         }
         if !(self.noise_sigma.is_finite() && self.noise_sigma > 0.0) {
-            return bad(format!("IQ noise sigma must be > 0 (got {})", self.noise_sigma));
+            return Err(IqError::NoiseSigma { noise_sigma: self.noise_sigma });
         }
         if self.max_satellites == 0 {
-            return bad("IQ generator needs at least one satellite".into());
+            return Err(IqError::NoSatellites);
         }
         Ok(())
     }
@@ -521,9 +546,8 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
     let n_blocks = (duration_s / BLOCK_S + 1e-6).floor() as u64;
     let blocks_per_geo = (GEOMETRY_STEP_S / BLOCK_S).round() as u64;
 
-    let mut osc = Oscillator::try_new(&sc.oscillator.config(), BLOCK_S, substream(seed, stream::OSCILLATOR))
-        .map_err(SimError::Model)?;
-    let motion = Motion::try_new(&sc.motion, &mut substream(seed, stream::MOTION)).map_err(SimError::Model)?;
+    let mut osc = Oscillator::try_new(&sc.oscillator.config(), BLOCK_S, substream(seed, stream::OSCILLATOR))?;
+    let motion = Motion::try_new(&sc.motion, &mut substream(seed, stream::MOTION))?;
     let imu = ImuErrors::draw(&sc.imu.config(), &mut substream(seed, stream::IMU_ERRORS));
     let mut imu_rng = substream(seed, stream::IMU_NOISE);
     let cn0 = sc.satellites.cn0.draw_offsets(&mut substream(seed, stream::CN0_OFFSETS));
@@ -540,7 +564,7 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
         .take(cfg.max_satellites as usize)
         .collect();
     if visible.is_empty() {
-        return Err(SimError::Model("no GPS satellite above the elevation mask at the start".into()));
+        return Err(IqError::NoneInView.into());
     }
     // Milliseconds of GPS time at the start, split exactly.
     let start_ms_f = start_gps_s * 1000.0;

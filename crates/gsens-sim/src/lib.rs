@@ -14,10 +14,13 @@
 //!   core's loop filter and NCO ([`gsens_core::pll::CarrierLoop`]);
 //! - [`session`]: the whole session, streamed through a [`session::SessionSink`];
 //! - [`iq`]: complex baseband GPS L1 C/A samples of the same scenario, for
-//!   software receivers (GNSS-SDR).
+//!   software receivers (GNSS-SDR);
+//! - [`error`]: the typed errors of the configuration ([`ConfigError`],
+//!   [`UtcError`], [`AlmanacError`]).
 #![deny(missing_docs)]
 
 pub mod channel;
+pub mod error;
 pub mod imu;
 pub mod iq;
 pub mod motion;
@@ -26,3 +29,8 @@ pub mod rng;
 pub mod satellites;
 pub mod scenario;
 pub mod session;
+
+pub use error::{AlmanacError, ConfigError, UtcError};
+pub use iq::IqError;
+pub use scenario::ScenarioError;
+pub use session::SimError;

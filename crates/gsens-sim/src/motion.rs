@@ -53,6 +53,7 @@ use std::f64::consts::PI;
 
 use rand::Rng;
 
+use crate::error::ConfigError;
 use crate::rng::standard_normal;
 
 /// A 3×3 matrix, row-major (`m[row][col]`).
@@ -91,8 +92,10 @@ impl Axis {
     /// Body z.
     pub const Z: Axis = Axis::Named(AxisName::Z);
 
-    /// The unit vector, or an error for a zero or non-finite vector.
-    pub fn unit(&self) -> Result<[f64; 3], String> {
+    /// The unit vector, or an error for a zero or non-finite vector (its key
+    /// path is `axis`; a caller that knows where the axis is puts its prefix
+    /// before it with [`ConfigError::under`]).
+    pub fn unit(&self) -> Result<[f64; 3], ConfigError> {
         match *self {
             Axis::Named(AxisName::X) => Ok([1.0, 0.0, 0.0]),
             Axis::Named(AxisName::Y) => Ok([0.0, 1.0, 0.0]),
@@ -102,7 +105,7 @@ impl Axis {
                 if n.is_finite() && n > 1e-9 {
                     Ok([v[0] / n, v[1] / n, v[2] / n])
                 } else {
-                    Err(format!("axis vector {v:?} must be finite and non-zero"))
+                    Err(ConfigError::InvalidAxis { key: "axis".into(), vector: v })
                 }
             }
         }
@@ -245,67 +248,57 @@ impl Segment {
         }
     }
 
-    fn validate(&self, i: usize) -> Result<(), String> {
+    fn validate(&self, i: usize) -> Result<(), ConfigError> {
         let key = |k: &str| format!("motion.segments[{i}].{k}");
+        let bad = |k: &str, value: f64, allowed: &str| Err(ConfigError::out_of_range(key(k), value, allowed));
+        let axis = |a: &Axis| a.unit().map(|_| ()).map_err(|e| e.under(&format!("motion.segments[{i}]")));
         let d = self.duration_s();
         let min_d = if matches!(self, Segment::Rest(_)) { 0.0 } else { f64::MIN_POSITIVE };
         if !(d.is_finite() && d >= min_d && d <= 1e6) {
-            return Err(format!(
-                "{} must be {} and <= 1e6 s (got {d})",
-                key("duration_s"),
-                if min_d > 0.0 { "> 0" } else { ">= 0" }
-            ));
+            return bad("duration_s", d, if min_d > 0.0 { "> 0 and <= 1e6 s" } else { ">= 0 and <= 1e6 s" });
         }
-        let ramp_check = |ramp: Option<f64>| -> Result<(), String> {
+        let ramp_check = |ramp: Option<f64>| -> Result<(), ConfigError> {
             if let Some(r) = ramp
                 && !(r.is_finite() && r > 0.0 && r <= 0.5 * d)
             {
-                return Err(format!("{} must be > 0 and <= duration_s/2 (got {r})", key("ramp_s")));
+                return bad("ramp_s", r, "> 0 and <= duration_s/2");
             }
             Ok(())
         };
         match self {
             Segment::Rest(_) => {}
             Segment::Shake(s) => {
-                s.axis.unit().map_err(|e| format!("{}: {e}", key("axis")))?;
+                axis(&s.axis)?;
                 if !(s.period_s.is_finite() && s.period_s >= 0.02 && s.period_s <= 100.0) {
-                    return Err(format!("{} must be within [0.02, 100] s (got {})", key("period_s"), s.period_s));
+                    return bad("period_s", s.period_s, "within [0.02, 100] s");
                 }
                 if !(s.amplitude_mps2.is_finite() && (0.0..=100.0).contains(&s.amplitude_mps2)) {
-                    return Err(format!(
-                        "{} must be within [0, 100] m/s² (got {})",
-                        key("amplitude_mps2"),
-                        s.amplitude_mps2
-                    ));
+                    return bad("amplitude_mps2", s.amplitude_mps2, "within [0, 100] m/s²");
                 }
                 let j = &s.jitter;
                 for (k, v) in [("jitter.period_rel", j.period_rel), ("jitter.amplitude_rel", j.amplitude_rel)] {
                     if !(v.is_finite() && (0.0..0.5).contains(&v)) {
-                        return Err(format!("{} must be within [0, 0.5) (got {v})", key(k)));
+                        return bad(k, v, "within [0, 0.5)");
                     }
                 }
                 if !(j.correlation_s.is_finite() && j.correlation_s > 0.0) {
-                    return Err(format!("{} must be > 0 (got {})", key("jitter.correlation_s"), j.correlation_s));
+                    return bad("jitter.correlation_s", j.correlation_s, "> 0");
                 }
                 ramp_check(s.ramp_s)?;
             }
             Segment::Rotate(s) => {
-                s.axis.unit().map_err(|e| format!("{}: {e}", key("axis")))?;
+                axis(&s.axis)?;
                 if !(s.angle_deg.is_finite() && s.angle_deg.abs() <= 3600.0) {
-                    return Err(format!("{} must be within ±3600° (got {})", key("angle_deg"), s.angle_deg));
+                    return bad("angle_deg", s.angle_deg, "within ±3600°");
                 }
             }
             Segment::Wobble(s) => {
-                s.axis.unit().map_err(|e| format!("{}: {e}", key("axis")))?;
+                axis(&s.axis)?;
                 if !(s.amplitude_deg.is_finite() && s.amplitude_deg.abs() < 90.0) {
-                    return Err(format!(
-                        "{} must be within (-90°, 90°) (got {})",
-                        key("amplitude_deg"),
-                        s.amplitude_deg
-                    ));
+                    return bad("amplitude_deg", s.amplitude_deg, "within (-90°, 90°)");
                 }
                 if !(s.period_s.is_finite() && s.period_s >= 0.02 && s.period_s <= 100.0) {
-                    return Err(format!("{} must be within [0.02, 100] s (got {})", key("period_s"), s.period_s));
+                    return bad("period_s", s.period_s, "within [0.02, 100] s");
                 }
                 ramp_check(s.ramp_s)?;
             }
@@ -357,7 +350,7 @@ impl MotionConfig {
 
     /// Checks ranges; the error names the offending key
     /// (`motion.segments[i].key`).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
         for (i, s) in self.segments.iter().enumerate() {
             s.validate(i)?;
         }
@@ -536,7 +529,7 @@ impl Motion {
     }
 
     /// As [`Motion::new`], returning configuration errors.
-    pub fn try_new<R: Rng + ?Sized>(cfg: &MotionConfig, rng: &mut R) -> Result<Self, String> {
+    pub fn try_new<R: Rng + ?Sized>(cfg: &MotionConfig, rng: &mut R) -> Result<Self, ConfigError> {
         cfg.validate()?;
         let mut pieces = Vec::with_capacity(cfg.segments.len());
         let mut t = 0.0;
@@ -892,6 +885,8 @@ mod tests {
         if let Segment::Shake(s) = &mut bad.segments[3] {
             s.period_s = 0.0;
         }
-        assert!(bad.validate().unwrap_err().contains("segments[3].period_s"));
+        let e = bad.validate().unwrap_err();
+        assert_eq!(e.key(), Some("motion.segments[3].period_s"));
+        assert!(e.to_string().contains("segments[3].period_s"), "{e}");
     }
 }

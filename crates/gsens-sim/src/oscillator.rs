@@ -57,6 +57,7 @@
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{LN_2, PI};
 
+use crate::error::ConfigError;
 use crate::rng::{Xoshiro256PlusPlus, standard_normal};
 
 /// Flicker filter sections per decade of frequency (the ripple of |H|²·f is
@@ -207,11 +208,14 @@ impl OscillatorConfig {
     }
 
     /// Checks ranges; the error names the offending key.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let bad = |key: &str, value: f64, allowed: &str| {
+            Err(ConfigError::out_of_range(format!("oscillator.{key}"), value, allowed))
+        };
         let nonneg = [("h0", self.h0), ("h_neg1", self.h_neg1), ("h_neg2", self.h_neg2), ("h2", self.h2)];
         for (key, v) in nonneg {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("oscillator.{key} must be finite and >= 0 (got {v})"));
+                return bad(key, v, "finite and >= 0");
             }
         }
         let finite = [
@@ -222,17 +226,17 @@ impl OscillatorConfig {
         ];
         for (key, v) in finite {
             if !v.is_finite() {
-                return Err(format!("oscillator.{key} must be finite (got {v})"));
+                return bad(key, v, "finite");
             }
         }
         if self.offset_frac.abs() > 1e-3 {
-            return Err(format!("oscillator.offset_frac must be within ±1e-3 (got {})", self.offset_frac));
+            return bad("offset_frac", self.offset_frac, "within ±1e-3");
         }
         if !(self.temp_cycle_period_s.is_finite() && self.temp_cycle_period_s > 0.0) {
-            return Err(format!("oscillator.temp_cycle_period_s must be > 0 (got {})", self.temp_cycle_period_s));
+            return bad("temp_cycle_period_s", self.temp_cycle_period_s, "> 0");
         }
         if !(self.flicker_low_cutoff_hz.is_finite() && self.flicker_low_cutoff_hz > 0.0) {
-            return Err(format!("oscillator.flicker_low_cutoff_hz must be > 0 (got {})", self.flicker_low_cutoff_hz));
+            return bad("flicker_low_cutoff_hz", self.flicker_low_cutoff_hz, "> 0");
         }
         Ok(())
     }
@@ -431,10 +435,18 @@ impl Oscillator {
     }
 
     /// As [`Oscillator::new`], returning configuration errors.
-    pub fn try_new(cfg: &OscillatorConfig, sample_interval_s: f64, rng: Xoshiro256PlusPlus) -> Result<Self, String> {
+    pub fn try_new(
+        cfg: &OscillatorConfig,
+        sample_interval_s: f64,
+        rng: Xoshiro256PlusPlus,
+    ) -> Result<Self, ConfigError> {
         cfg.validate()?;
         if !(sample_interval_s.is_finite() && sample_interval_s > 0.0) {
-            return Err(format!("oscillator sample interval must be > 0 s (got {sample_interval_s})"));
+            return Err(ConfigError::InvalidArgument {
+                name: "oscillator sample interval".into(),
+                value: sample_interval_s,
+                allowed: "> 0 s".into(),
+            });
         }
         let dt = sample_interval_s;
         let diffusion = 2.0 * PI * PI * cfg.h_neg2;
@@ -649,10 +661,10 @@ mod tests {
         assert!(OscillatorConfig::ocxo().validate().is_ok());
         let mut c = OscillatorConfig::tcxo();
         c.h_neg1 = -1.0;
-        assert!(c.validate().unwrap_err().contains("h_neg1"));
+        assert!(c.validate().unwrap_err().to_string().contains("h_neg1"));
         let mut c = OscillatorConfig::tcxo();
         c.temp_cycle_period_s = 0.0;
-        assert!(c.validate().unwrap_err().contains("temp_cycle_period_s"));
+        assert!(c.validate().unwrap_err().to_string().contains("temp_cycle_period_s"));
         let c: OscillatorConfig = toml::from_str("h0 = 2e-21\nh_neg2 = 2e-20\n").unwrap();
         assert_eq!(c.h_neg1, 0.0);
         assert_eq!(c.flicker_low_cutoff_hz, 1e-5);

@@ -47,6 +47,7 @@ use std::f64::consts::PI;
 use gsens_core::units::{GPS_L1_HZ, SPEED_OF_LIGHT_MPS};
 use rand::Rng;
 
+use crate::error::{AlmanacError, ConfigError};
 use crate::rng::normal;
 
 /// Earth's gravitational constant for GPS orbits μ [m³/s²] (IS-GPS-200, 20.3.3.4.3).
@@ -145,16 +146,17 @@ impl Geodetic {
         Self { lat_deg, lon_deg, height_m }
     }
 
-    /// Checks ranges; the error names the offending key.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks ranges; the error names the offending key (`lat_deg`,
+    /// `lon_deg`, `height_m`: a scenario reports them under `antenna.`).
+    pub fn validate(&self) -> Result<(), ConfigError> {
         if !(self.lat_deg.is_finite() && self.lat_deg.abs() <= 90.0) {
-            return Err(format!("lat_deg must be within [-90, 90] (got {})", self.lat_deg));
+            return Err(ConfigError::out_of_range("lat_deg", self.lat_deg, "within [-90, 90]"));
         }
         if !(self.lon_deg.is_finite() && self.lon_deg.abs() <= 360.0) {
-            return Err(format!("lon_deg must be within [-360, 360] (got {})", self.lon_deg));
+            return Err(ConfigError::out_of_range("lon_deg", self.lon_deg, "within [-360, 360]"));
         }
         if !(self.height_m.is_finite() && self.height_m > -1.0e4 && self.height_m < 1.0e5) {
-            return Err(format!("height_m must be within (-10 km, 100 km) (got {})", self.height_m));
+            return Err(ConfigError::out_of_range("height_m", self.height_m, "within (-10 km, 100 km)"));
         }
         Ok(())
     }
@@ -439,64 +441,69 @@ impl Constellation {
     /// NAVCEN: records of `Key: value` lines opened by a `****` header; lines
     /// starting with `#` and text after ` #` are ignored). The 10-bit YUMA week
     /// is resolved to the full week nearest `full_week_near`.
-    pub fn from_yuma(text: &str, full_week_near: u32) -> Result<Self, String> {
+    pub fn from_yuma(text: &str, full_week_near: u32) -> Result<Self, AlmanacError> {
         let mut sats = Vec::new();
+        // The current record's fields and the line of its first one.
         let mut cur: Vec<(String, f64)> = Vec::new();
-        let finish = |cur: &mut Vec<(String, f64)>, sats: &mut Vec<AlmanacEntry>| -> Result<(), String> {
-            if cur.is_empty() {
-                return Ok(());
-            }
-            let get = |prefix: &str| -> Result<f64, String> {
-                cur.iter()
-                    .find(|(k, _)| k.starts_with(prefix))
-                    .map(|(_, v)| *v)
-                    .ok_or_else(|| format!("YUMA record lacks '{prefix}'"))
+        let mut cur_line = 0;
+        let finish =
+            |cur: &mut Vec<(String, f64)>, line: usize, sats: &mut Vec<AlmanacEntry>| -> Result<(), AlmanacError> {
+                if cur.is_empty() {
+                    return Ok(());
+                }
+                let get = |field: &'static str| {
+                    cur.iter()
+                        .find(|(k, _)| k.starts_with(field))
+                        .map(|(_, v)| *v)
+                        .ok_or(AlmanacError::MissingField { line, field })
+                };
+                let prn = get("id")?;
+                let week10 = get("week")? as i64;
+                let near = i64::from(full_week_near);
+                let mut full = near - (near - week10).rem_euclid(1024);
+                if near - full > 512 {
+                    full += 1024;
+                }
+                sats.push(AlmanacEntry {
+                    prn: prn as u32,
+                    health: get("health")? as u32,
+                    eccentricity: get("eccentricity")?,
+                    toa_s: get("time of applicability")?,
+                    inclination_rad: get("orbital inclination")?,
+                    raan_rate_radps: get("rate of right ascen")?,
+                    sqrt_a_sqrtm: get("sqrt(a)")?,
+                    raan0_rad: get("right ascen at week")?,
+                    arg_perigee_rad: get("argument of perigee")?,
+                    mean_anomaly_rad: get("mean anom")?,
+                    af0_s: get("af0")?,
+                    af1_sps: get("af1")?,
+                    week: full.max(0) as u32,
+                });
+                cur.clear();
+                Ok(())
             };
-            let prn = get("id")?;
-            let week10 = get("week")? as i64;
-            let near = i64::from(full_week_near);
-            let mut full = near - (near - week10).rem_euclid(1024);
-            if near - full > 512 {
-                full += 1024;
-            }
-            sats.push(AlmanacEntry {
-                prn: prn as u32,
-                health: get("health")? as u32,
-                eccentricity: get("eccentricity")?,
-                toa_s: get("time of applicability")?,
-                inclination_rad: get("orbital inclination")?,
-                raan_rate_radps: get("rate of right ascen")?,
-                sqrt_a_sqrtm: get("sqrt(a)")?,
-                raan0_rad: get("right ascen at week")?,
-                arg_perigee_rad: get("argument of perigee")?,
-                mean_anomaly_rad: get("mean anom")?,
-                af0_s: get("af0")?,
-                af1_sps: get("af1")?,
-                week: full.max(0) as u32,
-            });
-            cur.clear();
-            Ok(())
-        };
         for (lineno, raw) in text.lines().enumerate() {
-            let line = raw.split(" #").next().unwrap_or("").trim();
-            if line.is_empty() || line.starts_with('#') {
+            let line = lineno + 1;
+            let content = raw.split(" #").next().unwrap_or("").trim();
+            if content.is_empty() || content.starts_with('#') {
                 continue;
             }
-            if line.starts_with('*') {
-                finish(&mut cur, &mut sats)?;
+            if content.starts_with('*') {
+                finish(&mut cur, cur_line, &mut sats)?;
                 continue;
             }
-            let (key, value) =
-                line.split_once(':').ok_or_else(|| format!("YUMA line {}: expected 'key: value'", lineno + 1))?;
-            let v: f64 = value
-                .trim()
-                .parse()
-                .map_err(|e| format!("YUMA line {}: bad number '{}': {e}", lineno + 1, value.trim()))?;
+            let (key, value) = content.split_once(':').ok_or(AlmanacError::ExpectedKeyValue { line })?;
+            let value = value.trim();
+            let v: f64 =
+                value.parse().map_err(|error| AlmanacError::BadNumber { line, text: value.to_owned(), error })?;
+            if cur.is_empty() {
+                cur_line = line;
+            }
             cur.push((key.trim().to_ascii_lowercase(), v));
         }
-        finish(&mut cur, &mut sats)?;
+        finish(&mut cur, cur_line, &mut sats)?;
         if sats.is_empty() {
-            return Err("YUMA almanac holds no satellite".into());
+            return Err(AlmanacError::Empty);
         }
         Ok(Self::from_entries(sats))
     }
@@ -607,19 +614,20 @@ impl Default for Cn0Model {
 }
 
 impl Cn0Model {
-    /// Checks ranges; the error names the offending key.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks ranges; the error names the offending key (`cn0.…`: a
+    /// scenario reports them under `satellites.`).
+    pub fn validate(&self) -> Result<(), ConfigError> {
         for (key, v) in [("zenith_cn0_dbhz", self.zenith_cn0_dbhz), ("horizon_cn0_dbhz", self.horizon_cn0_dbhz)] {
             if !(v.is_finite() && (0.0..=70.0).contains(&v)) {
-                return Err(format!("cn0.{key} must be within [0, 70] dB-Hz (got {v})"));
+                return Err(ConfigError::out_of_range(format!("cn0.{key}"), v, "within [0, 70] dB-Hz"));
             }
         }
         if !(self.elevation_exponent.is_finite() && self.elevation_exponent > 0.0) {
-            return Err(format!("cn0.elevation_exponent must be > 0 (got {})", self.elevation_exponent));
+            return Err(ConfigError::out_of_range("cn0.elevation_exponent", self.elevation_exponent, "> 0"));
         }
         let s = self.per_satellite_offset_sigma_db;
         if !(s.is_finite() && (0.0..=10.0).contains(&s)) {
-            return Err(format!("cn0.per_satellite_offset_sigma_db must be within [0, 10] dB (got {s})"));
+            return Err(ConfigError::out_of_range("cn0.per_satellite_offset_sigma_db", s, "within [0, 10] dB"));
         }
         Ok(())
     }
@@ -826,7 +834,7 @@ mod tests {
         assert!(offs.iter().any(|o| o.abs() > 0.1) && offs.iter().all(|o| o.abs() < 5.0));
         assert!((a.cn0_dbhz(5, 90.0) - 47.0 - a.offset_db(5)).abs() < 1e-12);
         let bad = Cn0Model { elevation_exponent: 0.0, ..Cn0Model::default() };
-        assert!(bad.validate().unwrap_err().contains("elevation_exponent"));
+        assert_eq!(bad.validate().unwrap_err().key(), Some("cn0.elevation_exponent"));
         let parsed: Cn0Model = toml::from_str("zenith_cn0_dbhz = 45.0").unwrap();
         assert_eq!(parsed.horizon_cn0_dbhz, 35.0);
         assert!(toml::from_str::<Cn0Model>("zenith = 45.0").is_err());
@@ -838,8 +846,15 @@ mod tests {
         assert!(c.satellites().iter().all(|s| s.week == 2300));
         let c = Constellation::from_yuma(BUILTIN_YUMA, 2300 + 500).unwrap();
         assert!(c.satellites().iter().all(|s| s.week == 2300));
-        assert!(Constellation::from_yuma("ID: x1\n", 2300).is_err());
-        assert!(Constellation::from_yuma("", 2300).is_err());
+        assert!(matches!(
+            Constellation::from_yuma("ID: x1\n", 2300),
+            Err(AlmanacError::BadNumber { line: 1, ref text, .. }) if text == "x1"
+        ));
+        assert_eq!(Constellation::from_yuma("", 2300), Err(AlmanacError::Empty));
+        assert_eq!(
+            Constellation::from_yuma("# header\n****\nID: 1\nHealth: 0\n", 2300),
+            Err(AlmanacError::MissingField { line: 3, field: "week" })
+        );
         assert!(Constellation::builtin().get(20).is_none());
         let c = Constellation::builtin();
         let a = c.line_of_sight(1, &moscow(), t0()).unwrap();

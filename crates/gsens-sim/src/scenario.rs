@@ -12,7 +12,8 @@
 //! Unknown keys are errors (`deny_unknown_fields` everywhere; toml's message
 //! names the key and its line), and so are out-of-range values
 //! ([`Scenario::validate`]: the message names the key path, e.g.
-//! `loop.bn_hz must be > 0 (got -1)`).
+//! `loop.bn_hz must be > 0 (got -1)`, and the error, a [`ConfigError`],
+//! carries the key, the value and the allowed range).
 
 use core::f64::consts::FRAC_1_SQRT_2;
 
@@ -22,6 +23,7 @@ use gsens_core::units::GPS_L1_HZ;
 use serde::{Deserialize, Serialize};
 
 use crate::channel::{DATA_BIT_S, Discriminator};
+use crate::error::{ConfigError, UtcError};
 use crate::imu::{ImuConfig, ImuPreset};
 use crate::motion::MotionConfig;
 use crate::oscillator::OscillatorConfig;
@@ -32,14 +34,23 @@ const DEFAULT_TOML: &str = include_str!("default_scenario.toml");
 
 /// Errors reading or checking a scenario.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ScenarioError {
     /// The TOML does not parse or has an unknown key / a value of the wrong
-    /// type (toml's message, which names the key and the line).
+    /// type (toml's message, which names the key and the line; its
+    /// [`span`](toml::de::Error::span) locates it in the text).
+    #[error("invalid scenario: {}", .0.to_string().trim_end())]
+    Parse(toml::de::Error),
+    /// A value out of range or inconsistent with another; the error names
+    /// the key path ([`ConfigError::key`]).
     #[error("invalid scenario: {0}")]
-    Parse(String),
-    /// A value out of range; the message names the key path.
-    #[error("invalid scenario: {0}")]
-    Invalid(String),
+    Invalid(ConfigError),
+}
+
+impl From<ConfigError> for ScenarioError {
+    fn from(e: ConfigError) -> Self {
+        ScenarioError::Invalid(e)
+    }
 }
 
 /// A complete scenario (see the module docs and `default_scenario.toml`).
@@ -280,7 +291,7 @@ impl LoopSection {
 
     /// The loop-filter coefficients (after validation they exist).
     pub fn coeffs(&self) -> Result<LoopFilterCoeffs, ScenarioError> {
-        self.spec().coeffs().map_err(|e| ScenarioError::Invalid(format!("loop: {e}")))
+        Ok(self.spec().coeffs().map_err(ConfigError::Loop)?)
     }
 }
 
@@ -418,36 +429,45 @@ impl Default for SatellitesSection {
     }
 }
 
-/// Parses `YYYY-MM-DDTHH:MM:SS[.fff][Z]` (UTC) into GPS seconds.
-pub fn parse_utc_to_gps_s(s: &str) -> Result<f64, String> {
-    let bad = || format!("session.start_utc must look like 2024-02-08T12:00:00Z (got {s:?})");
+/// Parses `YYYY-MM-DDTHH:MM:SS[.fff][Z]` (UTC; a space may replace the `T`)
+/// into GPS seconds.
+pub fn parse_utc_to_gps_s(s: &str) -> Result<f64, UtcError> {
+    let malformed = || UtcError::Malformed { input: s.to_owned() };
     let t = s.trim().trim_end_matches('Z');
-    let (date, time) = t.split_once(['T', ' ']).ok_or_else(bad)?;
+    let (date, time) = t.split_once(['T', ' ']).ok_or_else(malformed)?;
     let d: Vec<&str> = date.split('-').collect();
     let h: Vec<&str> = time.split(':').collect();
     if d.len() != 3 || h.len() != 3 {
-        return Err(bad());
+        return Err(malformed());
     }
-    let year: i32 = d[0].parse().map_err(|_| bad())?;
-    let month: u32 = d[1].parse().map_err(|_| bad())?;
-    let day: u32 = d[2].parse().map_err(|_| bad())?;
-    let hour: u32 = h[0].parse().map_err(|_| bad())?;
-    let minute: u32 = h[1].parse().map_err(|_| bad())?;
-    let second: f64 = h[2].parse().map_err(|_| bad())?;
-    let ok = (1980..=2200).contains(&year)
-        && (1..=12).contains(&month)
-        && (1..=31).contains(&day)
-        && hour < 24
-        && minute < 60
-        && (0.0..61.0).contains(&second);
-    if !ok {
-        return Err(bad());
+    let year: i32 = d[0].parse().map_err(|_| malformed())?;
+    let month: u32 = d[1].parse().map_err(|_| malformed())?;
+    let day: u32 = d[2].parse().map_err(|_| malformed())?;
+    let hour: u32 = h[0].parse().map_err(|_| malformed())?;
+    let minute: u32 = h[1].parse().map_err(|_| malformed())?;
+    let second: f64 = h[2].parse().map_err(|_| malformed())?;
+    let fields = [
+        ("year", (1980..=2200).contains(&year)),
+        ("month", (1..=12).contains(&month)),
+        ("day", (1..=31).contains(&day)),
+        ("hour", hour < 24),
+        ("minute", minute < 60),
+        ("second", (0.0..61.0).contains(&second)),
+    ];
+    if let Some(&(field, _)) = fields.iter().find(|(_, ok)| !ok) {
+        return Err(UtcError::OutOfRange { input: s.to_owned(), field });
     }
     Ok(gps_seconds_from_utc(year, month, day, hour, minute, second))
 }
 
-fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), ScenarioError> {
-    if ok { Ok(()) } else { Err(ScenarioError::Invalid(msg())) }
+/// `Ok` if `ok`, else the error `err` makes.
+fn check(ok: bool, err: impl FnOnce() -> ConfigError) -> Result<(), ConfigError> {
+    if ok { Ok(()) } else { Err(err()) }
+}
+
+/// `Ok` if `ok`, else [`ConfigError::OutOfRange`] of `key`.
+fn range(ok: bool, key: &str, value: f64, allowed: &str) -> Result<(), ConfigError> {
+    check(ok, || ConfigError::out_of_range(key, value, allowed))
 }
 
 impl Scenario {
@@ -459,7 +479,7 @@ impl Scenario {
 
     /// Parses and validates a scenario.
     pub fn from_toml_str(s: &str) -> Result<Scenario, ScenarioError> {
-        let sc: Scenario = toml::from_str(s).map_err(|e| ScenarioError::Parse(e.to_string().trim_end().to_string()))?;
+        let sc: Scenario = toml::from_str(s).map_err(ScenarioError::Parse)?;
         sc.validate()?;
         Ok(sc)
     }
@@ -471,7 +491,12 @@ impl Scenario {
 
     /// GPS seconds at t = 0.
     pub fn start_gps_s(&self) -> Result<f64, ScenarioError> {
-        parse_utc_to_gps_s(&self.session.start_utc).map_err(ScenarioError::Invalid)
+        Ok(self.start_gps_s_checked()?)
+    }
+
+    fn start_gps_s_checked(&self) -> Result<f64, ConfigError> {
+        parse_utc_to_gps_s(&self.session.start_utc)
+            .map_err(|error| ConfigError::Time { key: "session.start_utc".into(), error })
     }
 
     /// The session's duration \[s\]: `session.duration_s` or the motion's.
@@ -486,84 +511,76 @@ impl Scenario {
 
     /// Checks every value; the error names the key path.
     pub fn validate(&self) -> Result<(), ScenarioError> {
-        let inv = ScenarioError::Invalid;
+        Ok(self.validate_values()?)
+    }
+
+    fn validate_values(&self) -> Result<(), ConfigError> {
         // [session]
-        self.start_gps_s()?;
+        self.start_gps_s_checked()?;
         if let Some(d) = self.session.duration_s {
-            check(d.is_finite() && d > 0.0 && d <= 1e6, || {
-                format!("session.duration_s must be in (0, 1e6] s (got {d})")
-            })?;
+            range(d.is_finite() && d > 0.0 && d <= 1e6, "session.duration_s", d, "in (0, 1e6] s")?;
         }
-        check(self.duration_s() > 0.0, || "the session is empty: give motion.segments or session.duration_s".into())?;
+        check(self.duration_s() > 0.0, || ConfigError::EmptySession)?;
         // [antenna]
-        self.antenna.validate().map_err(|e| inv(format!("antenna.{e}")))?;
+        self.antenna.validate().map_err(|e| e.under("antenna"))?;
         // [oscillator]
         let o = &self.oscillator;
-        self.oscillator.config().validate().map_err(inv)?;
+        self.oscillator.config().validate()?;
         for (i, g) in o.gamma_hz_per_mps2.iter().enumerate() {
-            check(g.is_finite() && g.abs() <= 100.0, || {
-                format!("oscillator.gamma_hz_per_mps2[{i}] must be finite and within ±100 Hz/(m/s²) (got {g})")
-            })?;
+            range(
+                g.is_finite() && g.abs() <= 100.0,
+                &format!("oscillator.gamma_hz_per_mps2[{i}]"),
+                *g,
+                "finite and within ±100 Hz/(m/s²)",
+            )?;
         }
-        check(o.carrier_hz.is_finite() && (1e8..=1e11).contains(&o.carrier_hz), || {
-            format!("oscillator.carrier_hz must be within [1e8, 1e11] Hz (got {})", o.carrier_hz)
-        })?;
+        let c = o.carrier_hz;
+        range(c.is_finite() && (1e8..=1e11).contains(&c), "oscillator.carrier_hz", c, "within [1e8, 1e11] Hz")?;
         // [loop]
         let l = &self.tracking_loop;
-        check(l.order == 2 || l.order == 3, || format!("loop.order must be 2 or 3 (got {})", l.order))?;
-        check(l.bn_hz.is_finite() && l.bn_hz > 0.0, || format!("loop.bn_hz must be > 0 (got {})", l.bn_hz))?;
+        range(l.order == 2 || l.order == 3, "loop.order", f64::from(l.order), "2 or 3")?;
+        range(l.bn_hz.is_finite() && l.bn_hz > 0.0, "loop.bn_hz", l.bn_hz, "> 0")?;
         if l.order == 2 {
-            check(l.zeta.is_finite() && l.zeta > 0.0, || format!("loop.zeta must be > 0 (got {})", l.zeta))?;
+            range(l.zeta.is_finite() && l.zeta > 0.0, "loop.zeta", l.zeta, "> 0")?;
         } else {
-            check(l.a3.is_finite() && l.a3 > 0.0, || format!("loop.a3 must be > 0 (got {})", l.a3))?;
-            check(l.b3.is_finite() && l.b3 > 0.0, || format!("loop.b3 must be > 0 (got {})", l.b3))?;
-            check(l.a3 * l.b3 > 1.0, || {
-                format!("loop.a3 * loop.b3 must be > 1 for a stable loop (got {})", l.a3 * l.b3)
-            })?;
+            range(l.a3.is_finite() && l.a3 > 0.0, "loop.a3", l.a3, "> 0")?;
+            range(l.b3.is_finite() && l.b3 > 0.0, "loop.b3", l.b3, "> 0")?;
+            check(l.a3 * l.b3 > 1.0, || ConfigError::ThirdOrderUnstable { a3: l.a3, b3: l.b3 })?;
         }
         let t = l.interval_s;
-        check(t.is_finite() && t > 0.0 && t <= DATA_BIT_S + 1e-12, || {
-            format!("loop.interval_s must be in (0, 0.02] s (got {t})")
-        })?;
+        range(t.is_finite() && t > 0.0 && t <= DATA_BIT_S + 1e-12, "loop.interval_s", t, "in (0, 0.02] s")?;
         let per_bit = DATA_BIT_S / t;
-        check((per_bit - per_bit.round()).abs() < 1e-6 * per_bit, || {
-            format!("loop.interval_s must divide the 20 ms data bit (1, 2, 4, 5, 10 or 20 ms, …) (got {t})")
+        check((per_bit - per_bit.round()).abs() < 1e-6 * per_bit, || ConfigError::LoopIntervalNotInDataBit {
+            interval_s: t,
         })?;
-        let coeffs = l.coeffs()?;
+        let coeffs = l.spec().coeffs().map_err(ConfigError::Loop)?;
         // coeffs() checked the continuous loop (Routh–Hurwitz); the discrete
         // loop at this interval is checked by its poles.
-        check(coeffs.is_stable_at(t), || {
-            format!("loop.bn_hz = {} is too wide for loop.interval_s = {t}: the discrete loop is unstable", l.bn_hz)
-        })?;
-        check(l.initial_freq_err_hz.is_finite() && l.initial_freq_err_hz >= 0.0, || {
-            format!("loop.initial_freq_err_hz must be >= 0 (got {})", l.initial_freq_err_hz)
-        })?;
-        check(l.lock_threshold > 0.0 && l.lock_threshold < 1.0, || {
-            format!("loop.lock_threshold must be in (0, 1) (got {})", l.lock_threshold)
-        })?;
-        check(l.lock_tau_s.is_finite() && l.lock_tau_s > 0.0, || {
-            format!("loop.lock_tau_s must be > 0 (got {})", l.lock_tau_s)
-        })?;
+        check(coeffs.is_stable_at(t), || ConfigError::DiscreteLoopUnstable { bn_hz: l.bn_hz, interval_s: t })?;
+        let f = l.initial_freq_err_hz;
+        range(f.is_finite() && f >= 0.0, "loop.initial_freq_err_hz", f, ">= 0")?;
+        let th = l.lock_threshold;
+        range(th > 0.0 && th < 1.0, "loop.lock_threshold", th, "in (0, 1)")?;
+        range(l.lock_tau_s.is_finite() && l.lock_tau_s > 0.0, "loop.lock_tau_s", l.lock_tau_s, "> 0")?;
         // [log]
         let li = self.log.interval_s;
-        check(li.is_finite() && li > 0.0 && li <= 10.0, || format!("log.interval_s must be in (0, 10] s (got {li})"))?;
+        range(li.is_finite() && li > 0.0 && li <= 10.0, "log.interval_s", li, "in (0, 10] s")?;
         let r = li / t;
-        check(r.round() >= 1.0 && (r - r.round()).abs() < 1e-6 * r, || {
-            format!("log.interval_s must be a whole multiple of loop.interval_s = {t} (got {li})")
+        check(r.round() >= 1.0 && (r - r.round()).abs() < 1e-6 * r, || ConfigError::LogIntervalNotMultiple {
+            log_interval_s: li,
+            loop_interval_s: t,
         })?;
         // [imu]
-        self.imu.config().validate().map_err(inv)?;
+        self.imu.config().validate()?;
         // [motion]
-        self.motion.validate().map_err(inv)?;
+        self.motion.validate()?;
         // [satellites]
         let s = &self.satellites;
-        check(s.elevation_mask_deg.is_finite() && (-5.0..=80.0).contains(&s.elevation_mask_deg), || {
-            format!("satellites.elevation_mask_deg must be within [-5, 80] (got {})", s.elevation_mask_deg)
-        })?;
-        check((1..=64).contains(&s.max_channels), || {
-            format!("satellites.max_channels must be within [1, 64] (got {})", s.max_channels)
-        })?;
-        s.cn0.validate().map_err(|e| inv(format!("satellites.{e}")))?;
+        let m = s.elevation_mask_deg;
+        range(m.is_finite() && (-5.0..=80.0).contains(&m), "satellites.elevation_mask_deg", m, "within [-5, 80]")?;
+        let n = s.max_channels;
+        range((1..=64).contains(&n), "satellites.max_channels", f64::from(n), "within [1, 64]")?;
+        s.cn0.validate().map_err(|e| e.under("satellites"))?;
         Ok(())
     }
 }

@@ -153,13 +153,17 @@ impl SessionSink for NullSink {
 
 /// Errors of a simulation.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SimError {
     /// The scenario is invalid.
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
     /// A model refused its configuration.
-    #[error("{0}")]
-    Model(String),
+    #[error(transparent)]
+    Model(#[from] crate::error::ConfigError),
+    /// The IQ generator's settings, or no satellite in view for it.
+    #[error(transparent)]
+    Iq(#[from] crate::iq::IqError),
     /// The sink failed.
     #[error("writing the logs: {0}")]
     Sink(SinkError),
