@@ -165,8 +165,21 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         resid.push(r);
     }
     let m = used.len().max(1) as f64;
-    let max_lag = (settings.hac_lag_s / series.log_interval_s).round() as usize;
-    let hac = hac_covariance(&used_phi_a, &resid, max_lag);
+    // The least-squares covariance under the residuals' own noise: the
+    // sandwich with the AR model fitted for the bound (exact in the model),
+    // or Newey–West where no model could be fitted.
+    let robust_ls = match &noise_fit {
+        Some(g) => {
+            let segments = gls::segments_of(fed.iter().map(|e| e.used));
+            let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
+            let middle = gls::covariance_middle(&g.noise, &phi_a, &segments);
+            sandwich(&batch.normal_equations().pseudo_inverse(gsens_core::estimator::RANK_TOL).0, &middle)
+        }
+        None => {
+            let max_lag = (settings.hac_lag_s / series.log_interval_s).round() as usize;
+            hac_covariance(&used_phi_a, &resid, max_lag)
+        }
+    };
     // The robust/white variance ratio of the batch solution scales the chosen
     // estimator's own covariance (the same residual colour affects them all).
     let white_batch = batch.estimate();
@@ -187,7 +200,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
             }
             // GLS: what colour its AR model missed, from its own prewhitened residuals.
             (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance.map_or(own, |c| c[i][i]) / own).max(1.0),
-            _ if white_batch.covariance[i][i] > 0.0 => (hac[i][i] / white_batch.covariance[i][i]).max(1.0),
+            _ if white_batch.covariance[i][i] > 0.0 => (robust_ls[i][i] / white_batch.covariance[i][i]).max(1.0),
             _ => 1.0,
         };
         ratios[i] = ratio;
@@ -229,7 +242,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         covariance_hz_per_mps2_sq: covariance,
         condition_number: obs.condition_number.is_finite().then_some(obs.condition_number),
         gamma_raw_hz_per_mps2: gamma,
-        sigma_white_hz_per_mps2: sigma_white,
+        sigma_white_hz_per_mps2: sigma_white.map(|s| s.is_finite().then_some(s)),
         crlb_hz_per_mps2: [0, 1, 2].map(|i| {
             let c = noise_fit.as_ref().map(|g| g.crlb_hz_per_mps2()[i]);
             c.filter(|c| c.is_finite() && obs.observable[i])
@@ -255,6 +268,13 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         loop_used,
         settings: *settings,
     })
+}
+
+/// P·M·P for a symmetric 3×3 P (nalgebra's) and M.
+fn sandwich(p: &nalgebra::Matrix3<f64>, m: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let m = nalgebra::Matrix3::from_fn(|i, j| m[i][j]);
+    let c = p * m * p;
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| c[(i, j)]))
 }
 
 /// Huber IRLS over the used epochs, from the batch estimate (with `robust = huber`).

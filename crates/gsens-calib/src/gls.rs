@@ -317,6 +317,61 @@ impl GlsFit {
     }
 }
 
+/// Σ_k Σ_l a_k·a_lᵀ·γ(k − l) over each segment of `phi_a`: the middle of the
+/// least-squares sandwich (AᵀA)⁻¹·AᵀΣA·(AᵀA)⁻¹ when the noise has the
+/// autocovariance γ of `model`, exactly (no lag truncation or kernel weights).
+///
+/// In the frequency domain per segment of m samples, zero-padded to N ≥ 2m so
+/// that circular correlation is linear: AᵀΣA = (1/N)·Σ_f S(f)·X(f)·X(f)ᴴ with
+/// X the DFT of the regressors and S(f) = σ²/|A(e^{−j2πf/N})|² the model's
+/// two-sided spectrum per sample (aliasing of γ beyond N samples neglected).
+/// O(N log N) per segment.
+pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<usize>]) -> [[f64; 3]; 3] {
+    use rustfft::FftPlanner;
+    use rustfft::num_complex::Complex;
+    let mut planner = FftPlanner::<f64>::new();
+    let mut m = [[0.0; 3]; 3];
+    for seg in segments {
+        let len = seg.len();
+        if len == 0 {
+            continue;
+        }
+        let n = (2 * len).next_power_of_two().max(2 * (model.order() + 1));
+        let fft = planner.plan_fft_forward(n);
+        let mut x: Vec<Vec<Complex<f64>>> = (0..3)
+            .map(|i| {
+                let mut v = vec![Complex::new(0.0, 0.0); n];
+                for (k, a) in phi_a[seg.clone()].iter().enumerate() {
+                    v[k].re = a[i];
+                }
+                fft.process(&mut v);
+                v
+            })
+            .collect();
+        let mut a = vec![Complex::new(0.0, 0.0); n];
+        a[0].re = 1.0;
+        for (j, c) in model.coeffs.iter().enumerate() {
+            a[j + 1].re = *c;
+        }
+        fft.process(&mut a);
+        for f in 0..n {
+            let s = model.innovation_variance / a[f].norm_sqr();
+            for i in 0..3 {
+                for j in i..3 {
+                    m[i][j] += s * (x[i][f] * x[j][f].conj()).re / n as f64;
+                }
+            }
+        }
+        x.clear();
+    }
+    for i in 0..3 {
+        for j in 0..i {
+            m[i][j] = m[j][i];
+        }
+    }
+    m
+}
+
 /// The contiguous runs of `true` in `used`, as index ranges.
 pub fn segments_of(used: impl IntoIterator<Item = bool>) -> Vec<Range<usize>> {
     let mut out = Vec::new();

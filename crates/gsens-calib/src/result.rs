@@ -35,8 +35,9 @@ pub struct Calibration {
     pub condition_number: Option<f64>,
     /// The estimate of every axis even when unobservable (for experts).
     pub gamma_raw_hz_per_mps2: [f64; 3],
-    /// 1σ assuming white residuals (for comparison with the robust one).
-    pub sigma_white_hz_per_mps2: [f64; 3],
+    /// 1σ assuming white residuals (for comparison with the robust one);
+    /// `null` where the data hold no information on the axis.
+    pub sigma_white_hz_per_mps2: [Option<f64>; 3],
     /// Cramér–Rao bound on each component \[Hz/(m/s²)\]: √(J⁻¹)_ii, J the Fisher
     /// information of the data under the noise spectrum fitted to the residuals
     /// (an AR model, see [`crate::gls`]). The same for every method; `null` for an

@@ -18,7 +18,6 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-
 #[test]
 fn import_writes_tracking_csv() {
     let f = fixtures();

@@ -6,7 +6,6 @@ mod common;
 
 use common::{gsens, json, temp_dir, vec3};
 
-
 /// The paper's session cut to 80 s: 20 s of shaking per axis, 5 s rests.
 const SHORT: &str = r#"
 [[motion.segments]]

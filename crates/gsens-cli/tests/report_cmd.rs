@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{gsens};
+use common::gsens;
 
 use std::path::Path;
 use std::process::Command;

@@ -10,7 +10,6 @@ mod common;
 
 use common::{gsens, json, vec3};
 
-
 const SCENARIO: &str = "\
 [log]
 drop_unlocked = false

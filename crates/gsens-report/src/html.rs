@@ -208,7 +208,11 @@ pub fn render_html(d: &ReportData) -> String {
         "<p class=\"sub\">1σ are autocorrelation-robust (the residuals of a carrier loop are coloured); \
          assuming white residuals they would be {} Hz/(m/s²). Condition number of the information matrix: {}. \
          ppb/g = Γ·9.80665/f<sub>carrier</sub>·10⁹ at f<sub>carrier</sub> = {} Hz.</p>",
-        c.sigma_white_hz_per_mps2.iter().map(|s| format!("{s:.5}")).collect::<Vec<_>>().join(" / "),
+        c.sigma_white_hz_per_mps2
+            .iter()
+            .map(|s| s.map_or("∞".into(), |s| format!("{s:.5}")))
+            .collect::<Vec<_>>()
+            .join(" / "),
         c.condition_number.map(|x| format!("{x:.1}")).unwrap_or_else(|| "∞ (singular)".into()),
         c.settings.carrier_hz
     );
