@@ -99,7 +99,11 @@ impl LoopModel {
                 GnssSdrPll::new(*stage)?;
                 let c = if stage.order == 3 {
                     let wn = stage.bw_hz / BN_OVER_WN_ORDER3;
-                    LoopFilterCoeffs { c0_per_s: B3 * wn, c1_per_s2: 0.5 * A3 * wn * wn, c2_per_s3: 0.25 * wn * wn * wn }
+                    LoopFilterCoeffs {
+                        c0_per_s: B3 * wn,
+                        c1_per_s2: 0.5 * A3 * wn * wn,
+                        c2_per_s3: 0.25 * wn * wn * wn,
+                    }
                 } else {
                     let wn = stage.bw_hz / BN_OVER_WN_ORDER2;
                     LoopFilterCoeffs { c0_per_s: A2 * wn, c1_per_s2: wn * wn, c2_per_s3: 0.0 }
@@ -128,9 +132,10 @@ impl LoopModel {
     /// The nominal noise bandwidth Bn \[Hz\] where the loop is specified by it.
     pub fn bn_hz(&self) -> Option<f64> {
         match self {
-            LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz, .. } | LoopSpec::ThirdOrder { bn_hz, .. }, .. } => {
-                Some(*bn_hz)
-            }
+            LoopModel::Kaplan {
+                spec: LoopSpec::SecondOrder { bn_hz, .. } | LoopSpec::ThirdOrder { bn_hz, .. },
+                ..
+            } => Some(*bn_hz),
             LoopModel::Kaplan { .. } => None,
             LoopModel::GnssSdr(stage) => Some(stage.bw_hz),
         }
@@ -263,9 +268,7 @@ impl core::fmt::Display for LoopModel {
             LoopModel::Kaplan { spec, interval_s } => {
                 match *spec {
                     LoopSpec::SecondOrder { bn_hz, zeta } => write!(f, "2nd order, Bn {bn_hz} Hz, ζ {zeta:.3}")?,
-                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
-                        write!(f, "3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}")?
-                    }
+                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => write!(f, "3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}")?,
                     LoopSpec::Coefficients(c) => {
                         write!(f, "filter c0 {} /s, c1 {} /s², c2 {} /s³", c.c0_per_s, c.c1_per_s2, c.c2_per_s3)?
                     }
