@@ -7,12 +7,12 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use gsens_calib::{Calibration, EpochSeries, compensation_series};
 use gsens_io::TrackingLog;
-use gsens_io::session::PreparedSession;
 use gsens_report::figures::{
     AllanData, Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, ResponseData, SpectrumData,
     fig_allan, fig_cn0, fig_compensation, fig_estimation, fig_residual_spectrum, fig_response,
 };
 use gsens_report::{ChannelRow, FigureBlock, ReportData, ReportMeta, loop_description};
+use gsens_session::PreparedSession;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Duration;

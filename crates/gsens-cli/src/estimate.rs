@@ -6,9 +6,8 @@ use gsens_calib::search::{estimate_time_offset, identify_loop};
 use gsens_calib::{Calibration, EpochSeries, EstimateSettings, Method, Robust, calibrate};
 use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
 use gsens_core::regressor::LoggedPhase;
-use gsens_io::screening::ScreeningConfig;
-use gsens_io::session::{PreparedSession, SelectionConfig, Weighting, prepare_session, reinterpolate_imu};
 use gsens_io::{ImuSeries, TrackingLog, read_imu_file, read_tracking_file};
+use gsens_session::{PreparedSession, ScreeningConfig, SelectionConfig, Weighting, prepare_session, reinterpolate_imu};
 use std::path::{Path, PathBuf};
 
 /// Estimator choice on the command line.

@@ -203,7 +203,7 @@ pub fn run_one(
     scenario: &Scenario,
     seed: u64,
     methods: &[(MethodArg, gsens_calib::EstimateSettings)],
-    selection: &gsens_io::SelectionConfig,
+    selection: &gsens_session::SelectionConfig,
     systematic: &SystematicArgs,
 ) -> Result<Run> {
     let mut sink = MemorySink::default();

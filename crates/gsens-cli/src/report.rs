@@ -4,7 +4,7 @@ use anyhow::Result;
 use gsens_calib::Calibration;
 use gsens_core::pll::LoopSpec;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
-use gsens_io::session::PreparedSession;
+use gsens_session::PreparedSession;
 use std::fmt::Write as _;
 use std::path::Path;
 

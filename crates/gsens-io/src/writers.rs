@@ -54,7 +54,7 @@ impl<W: Write> ImuWriter<W> {
         Ok(ImuWriter { out, rows: 0 })
     }
 
-    /// Writes one sample: time stamp [s] and specific force [m/s²].
+    /// Writes one sample: time stamp \[s\] and specific force \[m/s²\].
     /// Errors: I/O errors; `InvalidInput` for a non-finite value.
     pub fn write_sample(&mut self, t_s: f64, accel_mps2: &[f64; 3]) -> io::Result<()> {
         let row = self.rows + 1;

@@ -70,7 +70,7 @@ pub fn loop_description(l: &gsens_core::pll::LoopSpec) -> String {
 }
 
 /// One track of the tracking log and what became of it (the fields of
-/// `gsens_io::session::ChannelSummary`, which the CLI converts).
+/// `gsens_session::ChannelSummary`, which the CLI converts).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ChannelRow {
     /// Receiver channel number.
