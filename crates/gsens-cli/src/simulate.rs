@@ -59,7 +59,7 @@ impl SessionSink for FileSink {
     fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), SinkError> {
         Ok(self.imu.write_sample(t_s, &f_mps2)?)
     }
-    fn tracking(&mut self, row: &gsens_sim::session::TrackingRow) -> Result<(), SinkError> {
+    fn tracking(&mut self, row: &gsens_sim::session::SimulatedRow) -> Result<(), SinkError> {
         Ok(self.tracking.write_row(&TrackingRow {
             t_s: row.t_s,
             channel: row.channel,
