@@ -68,8 +68,10 @@ impl Default for SelectionConfig {
 }
 
 /// What became of one track (one channel, one PRN) of the tracking log.
+///
+/// Exhaustive (no `#[non_exhaustive]`): callers outside the crate build it
+/// with struct literals (e.g. the report's test fixtures).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-#[non_exhaustive]
 pub struct ChannelSummary {
     /// Receiver channel number.
     pub channel: u32,
