@@ -7,7 +7,7 @@ use crate::{Calibration, DISCRIMINATOR_LINEAR_RANGE_RAD};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::import::TrackSummary;
-use gsens_io::session::{ChannelSummary, SelectionConfig};
+use gsens_session::{ChannelSummary, SelectionConfig};
 use serde::Serialize;
 use std::collections::BTreeMap;
 

@@ -9,7 +9,7 @@
 //! [`Outcome::document`] is the [`ResultDocument`] every output serializes.
 //! The stages, each usable on its own:
 //!
-//! - **session preparation** (`gsens_io::session`): the epoch grid, channel
+//! - **session preparation** (`gsens_session`): the epoch grid, channel
 //!   screening and the offset-free channel average;
 //! - **estimation** ([`calibrate`]): a uniform epoch series of
 //!   channel-averaged phase error φ \[rad\] and specific force a \[m/s²\] in,

@@ -20,9 +20,8 @@ use crate::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_l
 use gsens_core::LoopModel;
 use gsens_core::pll::LoopSpec;
 use gsens_core::regressor::LoggedPhase;
-use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
-use gsens_sim::session::{MemorySink, Truth, simulate};
+use gsens_sim::{LogsError, simulate_logs};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -168,25 +167,8 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
 /// Simulates run `seed` into memory and calibrates it with each of `methods`
 /// (pipeline settings, one per method), as `gsens estimate` would the files.
 pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> Result<Run, MonteCarloError> {
-    let mut sink = MemorySink::default();
-    let truth: Truth = simulate(scenario, seed, &mut sink, |_| {})
-        .map_err(|e| MonteCarloError::Simulation { seed, message: e.to_string() })?;
-    let rows: Vec<gsens_io::TrackingRow> = sink
-        .tracking
-        .iter()
-        .map(|r| gsens_io::TrackingRow {
-            t_s: r.t_s,
-            channel: r.channel,
-            prn: r.prn,
-            cn0_dbhz: r.cn0_dbhz,
-            elev_deg: Some(r.elev_deg),
-            phase_err_rad: r.phase_err_rad,
-        })
-        .collect();
-    let tracking = TrackingLog::from_rows(&format!("simulated tracking (seed {seed})"), &rows)?;
-    let imu =
-        ImuSeries { t_s: sink.imu.iter().map(|s| s.0).collect(), accel_mps2: sink.imu.iter().map(|s| s.1).collect() };
-    drop(sink);
+    let logs = simulate_logs(scenario, seed).map_err(|source| MonteCarloError::Simulation { seed, source })?;
+    let (tracking, imu, truth) = (&logs.tracking, &logs.imu, &logs.truth);
     let imu_name = format!("simulated imu (seed {seed})");
     let true_fn_hz = scenario
         .tracking_loop
@@ -198,7 +180,7 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
         .iter()
         .map(|settings| {
             let method = method_name(&settings.estimate.method);
-            let c: Calibration = match calibrate_logs(&tracking, &imu, &imu_name, settings) {
+            let c: Calibration = match calibrate_logs(tracking, imu, &imu_name, settings) {
                 Ok(o) => o.calibration,
                 Err(e) => return MethodOutcome { method, result: None, error: Some(e.to_string()) },
             };
@@ -264,17 +246,14 @@ pub enum MonteCarloError {
     /// No run or no method asked for.
     #[error("a Monte Carlo needs at least one run and one method")]
     Empty,
-    /// A run's simulation failed.
-    #[error("simulating seed {seed}: {message}")]
+    /// A run could not be simulated.
+    #[error("simulating seed {seed}: {source}")]
     Simulation {
         /// Its seed.
         seed: u64,
         /// Why.
-        message: String,
+        source: LogsError,
     },
-    /// A simulated log did not pass the readers' checks.
-    #[error(transparent)]
-    Format(#[from] FormatError),
 }
 
 /// The estimation settings for a simulated scenario: the receiver loop the

@@ -6,8 +6,8 @@ use crate::document::{GnssSdrConversion, ResultDocument};
 use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, calibrate, estimate_time_offset, identify_loop};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
-use gsens_io::session::{PreparedSession, SelectionConfig, prepare_session, reinterpolate_imu};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
+use gsens_session::{PreparedSession, SelectionConfig, prepare_session, reinterpolate_imu};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -70,6 +70,9 @@ pub enum PipelineError {
     /// A log could not be read or does not hold the format.
     #[error(transparent)]
     Format(#[from] FormatError),
+    /// The session could not be prepared from the logs.
+    #[error(transparent)]
+    Session(#[from] gsens_session::SessionError),
     /// GNSS-SDR's dumps or configuration could not be read.
     #[error(transparent)]
     GnssSdr(#[from] GnssSdrError),

@@ -9,7 +9,7 @@ use gsens_core::LoopModel;
 use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
 use gsens_gnss_sdr::conf::{GnssSdrConf, TrackingConf};
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
-use gsens_io::session::{SelectionConfig, Weighting};
+use gsens_session::{SelectionConfig, Weighting};
 use std::path::{Path, PathBuf};
 
 /// Estimator choice.

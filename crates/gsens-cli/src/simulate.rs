@@ -1,12 +1,10 @@
 //! `gsens simulate`: a calibration session written as receiver logs.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gsens_io::{ImuWriter, TrackingRow, TrackingWriter};
 use gsens_sim::scenario::Scenario;
-use gsens_sim::session::{SessionSink, SinkError, Truth, simulate};
+use gsens_sim::session::Truth;
 use indicatif::{ProgressBar, ProgressStyle};
-use std::fs::File;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -49,62 +47,25 @@ pub enum IqFormatArg {
     GrComplex,
 }
 
-/// Streams the simulator's output into the two CSV files.
-struct FileSink {
-    imu: ImuWriter<File>,
-    tracking: TrackingWriter<File>,
-}
-
-impl SessionSink for FileSink {
-    fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), SinkError> {
-        Ok(self.imu.write_sample(t_s, &f_mps2)?)
-    }
-    fn tracking(&mut self, row: &gsens_sim::session::TrackingRow) -> Result<(), SinkError> {
-        Ok(self.tracking.write_row(&TrackingRow {
-            t_s: row.t_s,
-            channel: row.channel,
-            prn: row.prn,
-            cn0_dbhz: row.cn0_dbhz,
-            elev_deg: Some(row.elev_deg),
-            phase_err_rad: row.phase_err_rad,
-        })?)
-    }
+/// A progress bar on stderr (drawn only on a terminal) for work counted in thousandths.
+pub fn progress_bar(verb: &str) -> ProgressBar {
+    let bar = ProgressBar::new(1000);
+    let template = format!("{verb} {{bar:40}} {{percent:>3}}% {{elapsed_precise}} (eta {{eta}})");
+    bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
+    bar
 }
 
 /// Reads a scenario file, or the embedded default.
 pub fn load_scenario(path: Option<&Path>) -> Result<Scenario> {
-    match path {
-        None => Ok(Scenario::from_toml_str(Scenario::default_toml())?),
-        Some(p) => {
-            let text = std::fs::read_to_string(p).with_context(|| format!("{}: cannot read", p.display()))?;
-            Scenario::from_toml_str(&text).with_context(|| format!("{}", p.display()))
-        }
-    }
+    Ok(gsens_sim::load_scenario(path)?)
 }
 
 /// Simulates `scenario` into `dir` (imu.csv, tracking.csv, truth.json) with a
 /// progress bar on a terminal.
 pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Truth> {
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    let create = |name: &str| {
-        let p = dir.join(name);
-        File::create(&p).with_context(|| format!("{}: cannot create", p.display()))
-    };
-    let mut sink =
-        FileSink { imu: ImuWriter::new(create("imu.csv")?)?, tracking: TrackingWriter::new(create("tracking.csv")?)? };
-    // indicatif draws nothing when stderr is not a terminal.
-    let bar = ProgressBar::new(1000);
-    bar.set_style(
-        ProgressStyle::with_template("simulating {bar:40} {percent:>3}% {elapsed_precise} (eta {eta})")
-            .expect("valid template"),
-    );
-    let truth = simulate(scenario, seed, &mut sink, |f| bar.set_position((f * 1000.0) as u64))?;
+    let bar = progress_bar("simulating");
+    let truth = gsens_sim::simulate_to_dir(scenario, seed, dir, |f| bar.set_position((f * 1000.0) as u64))?;
     bar.finish_and_clear();
-    sink.imu.finish()?;
-    sink.tracking.finish()?;
-    let truth_path = dir.join("truth.json");
-    std::fs::write(&truth_path, serde_json::to_string_pretty(&truth)? + "\n")
-        .with_context(|| format!("{}: cannot write", truth_path.display()))?;
     Ok(truth)
 }
 
@@ -115,22 +76,22 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     let truth = simulate_to_dir(&scenario, args.seed, &args.out)?;
     let slips: u64 = truth.channels.iter().map(|c| c.stats.cycle_slips).sum();
-    println!(
-        "simulated {:.1} s, {} channel passes ({} cycle slips), seed {} → {}",
+    crate::out(&format!(
+        "simulated {:.1} s, {} channel passes ({} cycle slips), seed {} → {}\n\
+         truth Γ = [{:+.4}, {:+.4}, {:+.4}] Hz/(m/s²); loop interval {} s, log interval {} s, logged phase {}\n",
         truth.duration_s,
         truth.channels.len(),
         slips,
         args.seed,
-        args.out.display()
-    );
-    println!(
-        "truth Γ = [{:+.4}, {:+.4}, {:+.4}] Hz/(m/s²); loop interval {} s, log interval {} s, logged phase {:?}",
+        args.out.display(),
         truth.gamma_hz_per_mps2[0],
         truth.gamma_hz_per_mps2[1],
         truth.gamma_hz_per_mps2[2],
         truth.loop_interval_s,
         truth.log_interval_s,
-        truth.logged_phase
-    );
-    Ok(())
+        match truth.logged_phase {
+            gsens_sim::scenario::LoggedPhaseMode::Last => "last",
+            gsens_sim::scenario::LoggedPhaseMode::Mean => "mean",
+        }
+    ))
 }

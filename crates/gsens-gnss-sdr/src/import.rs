@@ -136,6 +136,20 @@ pub struct ImportedRow {
     pub track: usize,
 }
 
+impl ImportedRow {
+    /// The record as a row of `tracking.csv` (elevation unknown).
+    pub fn tracking_row(&self) -> gsens_io::TrackingRow {
+        gsens_io::TrackingRow {
+            t_s: self.t_s,
+            channel: self.channel,
+            prn: self.prn,
+            cn0_dbhz: self.cn0_dbhz,
+            elev_deg: None,
+            phase_err_rad: self.phase_err_rad,
+        }
+    }
+}
+
 /// What became of one track.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrackSummary {
@@ -389,19 +403,20 @@ fn cubic(p0: f64, p1: f64, p2: f64, p3: f64, u: f64) -> f64 {
 
 /// Writes converted records as `tracking.csv` with a seventh column,
 /// `carrier_lock_test` (readers of the schema ignore extra columns); the
-/// elevation is empty. Numbers as `gsens_io`'s writers print them (shortest
-/// round-trip form).
+/// elevation is empty. Written by [`gsens_io::TrackingWriter`]: numbers in
+/// the shortest round-trip form, and a non-finite value is refused
+/// (`InvalidInput`).
 pub fn write_imported_csv<W: std::io::Write>(w: W, rows: &[ImportedRow]) -> std::io::Result<W> {
-    use std::io::Write as _;
-    let mut out = std::io::BufWriter::new(w);
-    writeln!(out, "{},carrier_lock_test", gsens_io::TRACKING_COLUMNS.join(","))?;
+    let mut out = gsens_io::TrackingWriter::with_extra_columns(w, &["carrier_lock_test"])?;
     for r in rows {
-        writeln!(out, "{},{},{},{},,{},{}", r.t_s, r.channel, r.prn, r.cn0_dbhz, r.phase_err_rad, r.lock_test)?;
+        out.write_row_with(&r.tracking_row(), &[r.lock_test])?;
     }
-    out.into_inner().map_err(|e| e.into_error())
+    out.finish()
 }
 
-/// Writes rows in the `tracking.csv` schema (elevation empty).
+/// Writes rows `(t_s, channel, prn, cn0_dbhz, phase_err_rad)` in the
+/// `tracking.csv` schema (elevation empty) with [`gsens_io::TrackingWriter`]
+/// (a non-finite value is refused).
 pub fn write_tracking_csv<W: std::io::Write>(
     w: W,
     rows: impl IntoIterator<Item = (f64, u32, u32, f64, f64)>,
@@ -542,5 +557,35 @@ mod tests {
         // Grid points 0.40 and 0.42 fall in the gap left by the record at 0.407: none.
         assert!(g.iter().all(|r| (r.t_s - 0.40).abs() > 1e-9));
         assert_eq!(g.len(), 27);
+    }
+
+    #[test]
+    fn csv_writers_go_through_the_tracking_writer() {
+        let row = |t_s: f64, lock_test: f64| ImportedRow {
+            t_s,
+            channel: 1,
+            prn: 31,
+            cn0_dbhz: 52.60313415527344,
+            phase_err_rad: -0.10144092814183144,
+            lock_test,
+            symbols: 20,
+            track: 0,
+        };
+        let rows = [row(7.39735791015625, 0.9902583956718445), row(7.41735791015625, 1.0)];
+        let text = String::from_utf8(write_imported_csv(Vec::new(), &rows).unwrap()).unwrap();
+        // The bytes the former hand-written writer produced.
+        let mut want = String::from("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,carrier_lock_test\n");
+        for r in &rows {
+            want += &format!("{},{},{},{},,{},{}\n", r.t_s, r.channel, r.prn, r.cn0_dbhz, r.phase_err_rad, r.lock_test);
+        }
+        assert_eq!(text, want);
+        // Every number is checked finite, the extra column too.
+        let e = write_imported_csv(Vec::new(), &[row(7.4, f64::NAN)]).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("carrier_lock_test"), "{e}");
+        let e = write_tracking_csv(Vec::new(), [(0.02, 0, 1, f64::INFINITY, 0.0)]).unwrap_err();
+        assert!(e.to_string().contains("cn0_dbhz"), "{e}");
+        let text = write_tracking_csv(Vec::new(), [(0.02, 0, 1, 40.5, -0.25)]).unwrap();
+        assert_eq!(text, b"t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n0.02,0,1,40.5,,-0.25\n");
     }
 }

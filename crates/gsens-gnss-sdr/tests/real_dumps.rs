@@ -11,7 +11,8 @@ use gsens_core::pll::{LinearLoop, LoopSpec};
 use gsens_gnss_sdr::conf::GnssSdrConf;
 use gsens_gnss_sdr::dump::{TrackingRecord, parse_dump, read_dump};
 use gsens_gnss_sdr::import::{ImportSettings, import_dir, resample};
-use gsens_io::{SelectionConfig, prepare_session, read_imu_file};
+use gsens_io::read_imu_file;
+use gsens_session::{SelectionConfig, prepare_session};
 
 const FS_HZ: f64 = 2_048_000.0;
 

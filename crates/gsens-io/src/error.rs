@@ -19,8 +19,8 @@ impl fmt::Display for Column {
     }
 }
 
-/// Everything that can be wrong with a log file or with the data assembled from
-/// the log files.
+/// Everything that can be wrong with a log file, or with a log held in memory
+/// (an [`ImuSeries`](crate::ImuSeries) that breaks the readers' invariants).
 ///
 /// The `Display` form always starts with the source (the file name, or the
 /// display name given to a reader) and, where it applies, names the 1-based
@@ -178,116 +178,12 @@ pub enum FormatError {
         /// The line that has the same channel at the same time.
         previous_line: u64,
     },
-    /// Fewer than two distinct time stamps: the log interval cannot be found.
-    #[error("{file}: only {epochs} distinct time stamp(s): at least 2 are needed to find the log interval")]
-    TooFewEpochs {
-        /// Source name.
-        file: String,
-        /// Number of distinct time stamps.
-        epochs: usize,
-    },
-    /// A time stamp is farther than 10% of the log interval from the uniform epoch grid.
-    #[error(
-        "{file}: line {line}, {column}: time stamp {t_s} s is {offset_s} s off the epoch grid t0 + k*T \
-         (t0 = {t0_s} s, T = {log_interval_s} s, nearest grid time {grid_t_s} s; tolerance 10% of T)"
-    )]
-    OffGrid {
-        /// Source name.
-        file: String,
-        /// 1-based line number (first row with that time stamp).
-        line: u64,
-        /// The time column.
-        column: Column,
-        /// The time stamp \[s\].
-        t_s: f64,
-        /// Its distance from the grid \[s\] (signed).
-        offset_s: f64,
-        /// Grid origin \[s\].
-        t0_s: f64,
-        /// Detected log interval \[s\].
-        log_interval_s: f64,
-        /// Nearest grid time \[s\].
-        grid_t_s: f64,
-    },
-    /// Two distinct time stamps fall on the same grid epoch.
-    #[error(
-        "{file}: line {line}, {column}: time stamp {t_s} s falls on the same epoch of the grid (T = {log_interval_s} s) \
-         as {previous_t_s} s on line {previous_line}"
-    )]
-    GridCollision {
-        /// Source name.
-        file: String,
-        /// 1-based line number.
-        line: u64,
-        /// The time column.
-        column: Column,
-        /// The time stamp \[s\].
-        t_s: f64,
-        /// The other time stamp on the same epoch \[s\].
-        previous_t_s: f64,
-        /// Its line.
-        previous_line: u64,
-        /// Detected log interval \[s\].
-        log_interval_s: f64,
-    },
-    /// The epoch grid (gaps included) would be unreasonably long.
-    #[error(
-        "{file}: the usable span holds {epochs} epochs of {log_interval_s} s (gaps included): more than the limit of {limit}"
-    )]
-    GridTooLarge {
-        /// Source name.
-        file: String,
-        /// Number of epochs the grid would have.
-        epochs: u64,
-        /// Detected log interval \[s\].
-        log_interval_s: f64,
-        /// The limit.
-        limit: u64,
-    },
     /// An in-memory IMU series is inconsistent (lengths, order, non-finite values).
     #[error("{file}: invalid IMU series: {reason}")]
     InvalidImuSeries {
         /// Source name.
         file: String,
         /// What is wrong.
-        reason: String,
-    },
-    /// The IMU and tracking logs do not overlap in time.
-    #[error(
-        "{imu_file} and {tracking_file} do not overlap in time: the IMU covers [{imu_start_s}, {imu_end_s}] s \
-         (time stamps minus imu_time_offset_s = {imu_time_offset_s} s), the tracking epochs cover \
-         [{tracking_start_s}, {tracking_end_s}] s"
-    )]
-    NoOverlap {
-        /// IMU source name.
-        imu_file: String,
-        /// Tracking source name.
-        tracking_file: String,
-        /// Start of the IMU span in true time \[s\].
-        imu_start_s: f64,
-        /// End of the IMU span in true time \[s\].
-        imu_end_s: f64,
-        /// The IMU time offset applied \[s\].
-        imu_time_offset_s: f64,
-        /// First tracking epoch \[s\].
-        tracking_start_s: f64,
-        /// Last tracking epoch \[s\].
-        tracking_end_s: f64,
-    },
-    /// The selection settings are invalid (e.g. a NaN threshold).
-    #[error("{file}: invalid selection settings: {reason}")]
-    InvalidSelection {
-        /// Tracking source name.
-        file: String,
-        /// What is wrong.
-        reason: String,
-    },
-    /// No tracking channel passes the selection.
-    #[error("{file}: no channel passes the selection: {reason}")]
-    NoChannelSelected {
-        /// Tracking source name.
-        file: String,
-        /// Which criterion excluded the channels, channel by channel.
         reason: String,
     },
 }

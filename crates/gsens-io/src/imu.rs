@@ -17,7 +17,7 @@ pub const IMU_COLUMNS: [&str; 4] = ["t_s", "fx_mps2", "fy_mps2", "fz_mps2"];
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ImuSeries {
     /// Sample time stamps \[s\], strictly increasing (IMU clock: see `imu_time_offset_s`
-    /// in [`crate::session::prepare_session`]).
+    /// in `gsens_session::prepare_session`).
     pub t_s: Vec<f64>,
     /// Specific force `[fx, fy, fz]` [m/s²] at each time stamp, IMU body frame
     /// (at rest, level, z up: ≈ `[0, 0, +9.81]`).

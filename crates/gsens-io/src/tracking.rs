@@ -106,13 +106,14 @@ impl TrackingLog {
         self.rows
     }
 
-    /// The 1-based line of the first row of each distinct time stamp.
-    pub(crate) fn epoch_line(&self) -> &[u64] {
+    /// The 1-based line of the first row of each distinct time stamp (one per
+    /// [`epoch_t_s`](Self::epoch_t_s)), for error messages about the time stamps.
+    pub fn epoch_line(&self) -> &[u64] {
         &self.epoch_line
     }
 
-    /// The `t_s` column of the file.
-    pub(crate) fn t_column(&self) -> &Column {
+    /// The `t_s` column of the file (its position and name), for error messages.
+    pub fn t_column(&self) -> &Column {
         &self.t_column
     }
 }

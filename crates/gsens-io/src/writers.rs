@@ -54,7 +54,7 @@ impl<W: Write> ImuWriter<W> {
         Ok(ImuWriter { out, rows: 0 })
     }
 
-    /// Writes one sample: time stamp [s] and specific force [m/s²].
+    /// Writes one sample: time stamp \[s\] and specific force \[m/s²\].
     /// Errors: I/O errors; `InvalidInput` for a non-finite value.
     pub fn write_sample(&mut self, t_s: f64, accel_mps2: &[f64; 3]) -> io::Result<()> {
         let row = self.rows + 1;
@@ -96,39 +96,92 @@ pub struct TrackingRow {
 /// [`TrackingWriter::new`]. Rows must be written in the order the reader
 /// requires (non-decreasing `t_s`, each channel at most once per time stamp);
 /// the writer does not check it.
+///
+/// A log may carry extra numeric columns after the six of the format (the
+/// readers ignore them): declare them with
+/// [`TrackingWriter::with_extra_columns`] and give their values with
+/// [`TrackingWriter::write_row_with`]. They are checked finite like the rest.
 #[derive(Debug)]
 pub struct TrackingWriter<W: Write> {
     out: BufWriter<W>,
     rows: u64,
+    extra_columns: Vec<String>,
 }
 
 impl<W: Write> TrackingWriter<W> {
     /// Starts a `tracking.csv` on `w` (buffered internally) by writing the header.
     pub fn new(w: W) -> io::Result<Self> {
-        let mut out = BufWriter::new(w);
-        writeln!(out, "{}", TRACKING_COLUMNS.join(","))?;
-        Ok(TrackingWriter { out, rows: 0 })
+        Self::with_extra_columns(w, &[])
     }
 
-    /// Writes one row. Errors: I/O errors; `InvalidInput` for a non-finite value.
+    /// Starts a `tracking.csv` on `w` whose header has the columns `extra` after
+    /// the six of the format, e.g. `…,phase_err_rad,carrier_lock_test`.
+    /// Errors: I/O errors; `InvalidInput` for a name that is empty, holds a
+    /// comma, a quote or a line break, or repeats a column of the header.
+    pub fn with_extra_columns(w: W, extra: &[&str]) -> io::Result<Self> {
+        for (i, name) in extra.iter().enumerate() {
+            let bad_chars = name.is_empty() || name.contains([',', '"', '\n', '\r']);
+            if bad_chars || TRACKING_COLUMNS.contains(name) || extra[..i].contains(name) {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!("cannot write an extra tracking.csv column named {name:?}"),
+                ));
+            }
+        }
+        let mut out = BufWriter::new(w);
+        write!(out, "{}", TRACKING_COLUMNS.join(","))?;
+        for name in extra {
+            write!(out, ",{name}")?;
+        }
+        writeln!(out)?;
+        Ok(TrackingWriter { out, rows: 0, extra_columns: extra.iter().map(|s| (*s).to_owned()).collect() })
+    }
+
+    /// Writes one row (of a writer without extra columns).
+    /// Errors: I/O errors; `InvalidInput` for a non-finite value, or when the
+    /// writer has extra columns (use [`TrackingWriter::write_row_with`]).
     pub fn write_row(&mut self, row: &TrackingRow) -> io::Result<()> {
+        self.write_row_with(row, &[])
+    }
+
+    /// Writes one row and the values of the extra columns, in the order they
+    /// were declared. Errors: I/O errors; `InvalidInput` for a non-finite
+    /// value or when `extra` does not hold one value per extra column.
+    pub fn write_row_with(&mut self, row: &TrackingRow, extra: &[f64]) -> io::Result<()> {
         let n = self.rows + 1;
+        if extra.len() != self.extra_columns.len() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "data row {n}: {} extra value(s) for the {} extra column(s) of the header",
+                    extra.len(),
+                    self.extra_columns.len()
+                ),
+            ));
+        }
         check("t_s", row.t_s, n)?;
         check("cn0_dbhz", row.cn0_dbhz, n)?;
         check("phase_err_rad", row.phase_err_rad, n)?;
+        if let Some(e) = row.elev_deg {
+            check("elev_deg", e, n)?;
+        }
+        for (name, v) in self.extra_columns.iter().zip(extra) {
+            check(name, *v, n)?;
+        }
         match row.elev_deg {
-            Some(e) => {
-                check("elev_deg", e, n)?;
-                writeln!(
-                    self.out,
-                    "{},{},{},{},{},{}",
-                    row.t_s, row.channel, row.prn, row.cn0_dbhz, e, row.phase_err_rad
-                )?;
-            }
+            Some(e) => write!(
+                self.out,
+                "{},{},{},{},{},{}",
+                row.t_s, row.channel, row.prn, row.cn0_dbhz, e, row.phase_err_rad
+            )?,
             None => {
-                writeln!(self.out, "{},{},{},{},,{}", row.t_s, row.channel, row.prn, row.cn0_dbhz, row.phase_err_rad)?;
+                write!(self.out, "{},{},{},{},,{}", row.t_s, row.channel, row.prn, row.cn0_dbhz, row.phase_err_rad)?
             }
         }
+        for v in extra {
+            write!(self.out, ",{v}")?;
+        }
+        writeln!(self.out)?;
         self.rows = n;
         Ok(())
     }
@@ -247,5 +300,30 @@ mod tests {
         };
         let e = w.write_row(&row).unwrap_err();
         assert!(e.to_string().contains("elev_deg"), "{e}");
+    }
+
+    #[test]
+    fn extra_columns_are_written_after_the_format_and_checked() {
+        let mut w = TrackingWriter::with_extra_columns(Vec::new(), &["carrier_lock_test"]).unwrap();
+        let row = TrackingRow { t_s: 0.5, channel: 3, prn: 12, cn0_dbhz: 44.25, elev_deg: None, phase_err_rad: -0.125 };
+        w.write_row_with(&row, &[0.9902583956718445]).unwrap();
+        w.write_row_with(&TrackingRow { t_s: 0.525, elev_deg: Some(12.5), ..row }, &[1.0]).unwrap();
+        // Refused: a missing extra value, a non-finite one.
+        assert_eq!(w.write_row(&row).unwrap_err().kind(), io::ErrorKind::InvalidInput);
+        let e = w.write_row_with(&row, &[f64::NAN]).unwrap_err();
+        assert!(e.to_string().contains("carrier_lock_test") && e.to_string().contains("data row 3"), "{e}");
+        assert_eq!(w.rows(), 2);
+        let text = String::from_utf8(w.finish().unwrap()).unwrap();
+        assert_eq!(
+            text,
+            "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,carrier_lock_test\n\
+             0.5,3,12,44.25,,-0.125,0.9902583956718445\n0.525,3,12,44.25,12.5,-0.125,1\n"
+        );
+        let log = read_tracking(text.as_bytes(), "mem").unwrap();
+        assert_eq!(log.rows(), 2);
+        for bad in ["", "a,b", "phase_err_rad", "x\ny"] {
+            assert!(TrackingWriter::with_extra_columns(Vec::new(), &[bad]).is_err(), "{bad:?}");
+        }
+        assert!(TrackingWriter::with_extra_columns(Vec::new(), &["x", "x"]).is_err());
     }
 }

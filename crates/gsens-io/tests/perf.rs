@@ -2,10 +2,11 @@
 //!
 //! Ignored by default (it allocates a few hundred MB); run it optimized:
 //! `cargo test -p gsens-io --release --test perf -- --ignored --nocapture`.
+//! (`prepare_session` on the same log: `gsens-session`'s `tests/perf.rs`.)
 
 use std::time::Instant;
 
-use gsens_io::{ImuSeries, SelectionConfig, TrackingRow, TrackingWriter, prepare_session, read_imu, read_tracking};
+use gsens_io::{ImuSeries, TrackingRow, TrackingWriter, read_imu, read_tracking};
 
 const EPOCHS: usize = 3600 * 40;
 
@@ -70,7 +71,7 @@ fn time_tracking(label: &str, text: &[u8]) -> gsens_io::TrackingLog {
 #[ignore = "timing test: run with --release -- --ignored"]
 fn one_hour_twelve_channels_40hz() {
     let full = tracking_text(|v, _| v);
-    let log = time_tracking("full f64 precision", &full);
+    time_tracking("full f64 precision", &full);
     drop(full);
     let short = tracking_text(|v, scale| (v * scale).round() / scale);
     time_tracking("receiver-like decimals", &short);
@@ -87,22 +88,5 @@ fn one_hour_twelve_channels_40hz() {
     let imu_s = t.elapsed().as_secs_f64();
     assert_eq!(imu_back, imu);
 
-    let t = Instant::now();
-    let cfg = SelectionConfig { max_channels: None, ..SelectionConfig::default() };
-    let s = prepare_session(&log, &imu_back, "imu.csv", &cfg, 0.0).unwrap();
-    let prep_s = t.elapsed().as_secs_f64();
-    assert_eq!(s.len(), EPOCHS);
-    eprintln!("imu: {} rows in {imu_s:.3} s; prepare_session (12 channels, offsets): {prep_s:.3} s", imu_back.len());
-    for (label, screening) in
-        [("screening off", gsens_io::ScreeningConfig::off()), ("screening on", Default::default())]
-    {
-        for max_channels in [Some(4), None] {
-            let cfg = SelectionConfig { max_channels, screening: screening.clone(), ..SelectionConfig::default() };
-            let t = Instant::now();
-            let s = prepare_session(&log, &imu_back, "imu.csv", &cfg, 0.0).unwrap();
-            let prep_s = t.elapsed().as_secs_f64();
-            assert_eq!(s.len(), EPOCHS);
-            eprintln!("prepare_session, {label}, max_channels {max_channels:?}: {prep_s:.3} s");
-        }
-    }
+    eprintln!("imu: {} rows in {imu_s:.3} s", imu_back.len());
 }

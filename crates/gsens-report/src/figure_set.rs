@@ -9,7 +9,7 @@ use crate::figures::{
 };
 use gsens_calib::{CalibError, Calibration, Outcome, compensation_series};
 use gsens_io::TrackingLog;
-use gsens_io::session::PreparedSession;
+use gsens_session::PreparedSession;
 use std::path::Path;
 
 /// Why figures could not be written.

@@ -4,7 +4,7 @@ use crate::AXES;
 use gsens_calib::ResultDocument;
 use gsens_core::regressor::LoggedPhase;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
-use gsens_io::session::Weighting;
+use gsens_session::Weighting;
 use std::fmt::Write as _;
 
 /// The human-readable report of a calibration (what `gsens estimate` and

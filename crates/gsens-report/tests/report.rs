@@ -6,12 +6,12 @@ use common::{TRUTH, out_dir, session};
 use gsens_calib::{LoopIdentificationMode, PipelineSummary, ResultDocument, TimeOffset};
 use gsens_core::LoopModel;
 use gsens_core::pll::LoopSpec;
-use gsens_io::session::{ChannelSummary, SelectionConfig};
 use gsens_report::cheader::render_c_header;
 use gsens_report::figures::*;
 use gsens_report::html::render_html;
 use gsens_report::json::report_json;
 use gsens_report::{FigureBlock, ReportData, ReportMeta};
+use gsens_session::{ChannelSummary, SelectionConfig};
 
 fn meta() -> ReportMeta {
     ReportMeta {

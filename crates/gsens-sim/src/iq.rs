@@ -750,7 +750,7 @@ impl<F: FnMut(f64, [f64; 3]) -> Result<(), crate::session::SinkError>> SessionSi
     fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), crate::session::SinkError> {
         (self.0)(t_s, f_mps2)
     }
-    fn tracking(&mut self, _row: &crate::session::TrackingRow) -> Result<(), crate::session::SinkError> {
+    fn tracking(&mut self, _row: &crate::session::SimulatedRow) -> Result<(), crate::session::SinkError> {
         Ok(())
     }
 }

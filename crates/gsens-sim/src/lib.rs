@@ -23,6 +23,7 @@ pub mod channel;
 pub mod error;
 pub mod imu;
 pub mod iq;
+mod logs;
 pub mod motion;
 pub mod oscillator;
 pub mod rng;
@@ -32,5 +33,6 @@ pub mod session;
 
 pub use error::{AlmanacError, ConfigError, UtcError};
 pub use iq::IqError;
+pub use logs::{LoadError, LogsError, SimulatedLogs, load_scenario, simulate_logs, simulate_to_dir};
 pub use scenario::ScenarioError;
 pub use session::SimError;

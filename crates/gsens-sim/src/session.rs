@@ -80,9 +80,12 @@ const GEOMETRY_STEP_S: f64 = 1.0;
 /// Grid of the exact specific-force evaluations \[s\] (interpolated in between).
 const FORCE_GRID_S: f64 = 0.005;
 
-/// One tracking-log row (a channel at a log epoch).
+/// One simulated tracking-log row (a channel at a log epoch): what a receiver
+/// logs (the columns of `tracking.csv`, [`SimulatedRow::tracking_row`]) and
+/// the simulation's truth and lock state beside it, which `tracking.csv` does
+/// not hold.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct TrackingRow {
+pub struct SimulatedRow {
     /// Time stamp \[s\]: the centre of the latest integration.
     pub t_s: f64,
     /// Receiver channel number (0-based; reused after a satellite sets).
@@ -106,6 +109,20 @@ pub struct TrackingRow {
     pub true_cn0_dbhz: f64,
 }
 
+impl SimulatedRow {
+    /// The row as logged, for `tracking.csv` (the elevation is always known).
+    pub fn tracking_row(&self) -> gsens_io::TrackingRow {
+        gsens_io::TrackingRow {
+            t_s: self.t_s,
+            channel: self.channel,
+            prn: self.prn,
+            cn0_dbhz: self.cn0_dbhz,
+            elev_deg: Some(self.elev_deg),
+            phase_err_rad: self.phase_err_rad,
+        }
+    }
+}
+
 /// Error of a sink (e.g. an I/O error of the CLI's file writers).
 pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
 
@@ -115,7 +132,7 @@ pub trait SessionSink {
     /// One IMU sample: time stamp \[s\] and measured specific force, body axes \[m/s²\].
     fn imu(&mut self, t_s: f64, f_mps2: [f64; 3]) -> Result<(), SinkError>;
     /// One tracking row.
-    fn tracking(&mut self, row: &TrackingRow) -> Result<(), SinkError>;
+    fn tracking(&mut self, row: &SimulatedRow) -> Result<(), SinkError>;
 }
 
 /// A sink that keeps everything in memory.
@@ -124,7 +141,7 @@ pub struct MemorySink {
     /// IMU samples (time stamp \[s\], specific force \[m/s²\]).
     pub imu: Vec<(f64, [f64; 3])>,
     /// Tracking rows.
-    pub tracking: Vec<TrackingRow>,
+    pub tracking: Vec<SimulatedRow>,
 }
 
 impl SessionSink for MemorySink {
@@ -132,7 +149,7 @@ impl SessionSink for MemorySink {
         self.imu.push((t_s, f_mps2));
         Ok(())
     }
-    fn tracking(&mut self, row: &TrackingRow) -> Result<(), SinkError> {
+    fn tracking(&mut self, row: &SimulatedRow) -> Result<(), SinkError> {
         self.tracking.push(*row);
         Ok(())
     }
@@ -146,7 +163,7 @@ impl SessionSink for NullSink {
     fn imu(&mut self, _t_s: f64, _f_mps2: [f64; 3]) -> Result<(), SinkError> {
         Ok(())
     }
-    fn tracking(&mut self, _row: &TrackingRow) -> Result<(), SinkError> {
+    fn tracking(&mut self, _row: &SimulatedRow) -> Result<(), SinkError> {
         Ok(())
     }
 }
@@ -428,7 +445,7 @@ pub fn simulate<S: SessionSink + ?Sized>(
                     LoggedPhaseMode::Last => (snap.last_rad, snap.true_last_rad),
                     LoggedPhaseMode::Mean => (snap.mean_rad, snap.true_mean_rad),
                 };
-                let row = TrackingRow {
+                let row = SimulatedRow {
                     t_s: t,
                     channel: tr.channel,
                     prn: tr.prn,

@@ -49,6 +49,19 @@ fn same_seed_same_bytes_other_seed_other_bytes() {
 }
 
 #[test]
+fn simulated_rows_are_valid_tracking_rows() {
+    let mut s = MemorySink::default();
+    simulate(&short(), 5, &mut s, |_| {}).unwrap();
+    let rows: Vec<gsens_io::TrackingRow> = s.tracking.iter().map(|r| r.tracking_row()).collect();
+    for (r, t) in s.tracking.iter().zip(&rows) {
+        assert_eq!((t.t_s, t.channel, t.prn, t.cn0_dbhz), (r.t_s, r.channel, r.prn, r.cn0_dbhz));
+        assert_eq!((t.elev_deg, t.phase_err_rad), (Some(r.elev_deg), r.phase_err_rad));
+    }
+    let log = gsens_io::TrackingLog::from_rows("simulated", &rows).unwrap();
+    assert_eq!(log.rows(), s.tracking.len());
+}
+
+#[test]
 fn rows_are_stamped_at_40_hz_in_step_with_the_imu_and_progress_is_reported() {
     let sc = short();
     let mut s = MemorySink::default();

@@ -1,107 +1,11 @@
-//! Per-track screening of the tracking rows before averaging: cycle slips,
-//! losses of lock, C/N0 drops and rows outside the discriminator's linear range
-//! are detected track by track and the affected stretches left out of the
-//! average ([`ScreeningConfig`], on by default; the result per track in
-//! [`TrackScreening`]).
-//!
-//! # The deviation from the other channels
-//!
-//! The oscillator's part of the phase error (and so the g-induced part) is
-//! common to all channels; what a slip, a loss of lock or a fade does to one
-//! channel is not. At each epoch, every track's phase is compared with the
-//! median of the other tracks present (all the tracks that pass the masks, not
-//! only those averaged, each less its constant offset; rows in a C/N0 drop do
-//! not enter the median):
-//!
-//! `d_i(k) = (φ_i(k) − c_i) − median_{j≠i}(φ_j(k) − c_j)`,
-//!
-//! where the common signal cancels. The offsets `c_i` are the median of each
-//! track's departure from the mean of the tracks present (exact, up to a
-//! common constant, while the set of tracks does not change), refined by the
-//! median of its `d_i` (which a slip or a step does not move). An epoch with
-//! fewer than two other tracks gives no deviation, and the cross-channel tests
-//! (1–4 below) skip it. Each track's scale σ_i is the robust σ of its
-//! deviation about its local level: 1.4826 × the median of `|d_i − the median
-//! of d_i over its window|` in windows of [`ScreeningConfig::noisy_window_s`]
-//! (at least [`ScreeningConfig::min_sigma_rad`]), which a step does not
-//! inflate as it would the global MAD.
-//!
-//! It runs in two rounds: the first finds each track's slips and levels
-//! (steps) against the others as they are; when it found any, the second
-//! compares every track again with the others less their levels and without
-//! their slips (so that one track's step or slip does not disturb the others'
-//! reference), and its result is the one kept.
-//!
-//! # The tests
-//!
-//! 1. **Slips and excursions.** A track's deviation is followed around a slowly
-//!    adapting level ℓ (exponential mean of the in-bound rows, time constant
-//!    [`ScreeningConfig::level_tau_s`], so slow per-channel trends such as the
-//!    Doppler-rate steady-state error do not trigger). A row with
-//!    `|d − ℓ| > k·σ_i` ([`ScreeningConfig::deviation_k`]) starts an event, which
-//!    lasts until the deviation has stayed within bounds for
-//!    [`ScreeningConfig::settle_s`]. A Costas loop slipping by π, or a pilot
-//!    loop by 2π, logs such a fast excursion: its discriminator wraps, the loop
-//!    pulls in to the next stable point, and its filter state needs a loop time
-//!    constant to recover. The event and [`ScreeningConfig::guard_s`] on each
-//!    side are excluded. An event that settles, after at least
-//!    [`ScreeningConfig::step_min_s`], on a new quiet level (a persistent step,
-//!    as a log of unwrapped phase shows after a slip) is a *step*: the track is
-//!    split there into two segments, each with its own constant offset in the
-//!    averaging, and only the transition (plus the guard) is excluded.
-//! 2. **Noisy stretches (loss of lock).** In windows of
-//!    [`ScreeningConfig::noisy_window_s`], the RMS of `d − ℓ` over the rows not
-//!    already excluded; a window above [`ScreeningConfig::noisy_rms_k`]·σ_i is
-//!    excluded (with the guard).
-//! 3. **Low gain (loss of lock at low C/N0).** A channel that has lost lock, or
-//!    whose discriminator has lost gain at a low signal-to-noise ratio, logs a
-//!    phase that follows the common signal only partly or not at all; its
-//!    deviation can look like plain noise, yet averaging it scales the common
-//!    signal down and biases Γ̂ towards zero. In windows of
-//!    [`ScreeningConfig::gain_window_s`] each track's phase is regressed on the
-//!    median of the others (slope and standard error, inflated for the
-//!    residuals' lag-one correlation). The reference's own noise attenuates
-//!    every track's slope alike, so the slopes are compared with their median
-//!    over the tracks (at least three), and only in windows where that median
-//!    is at least 0.8 (the common signal, shaking or oscillator noise,
-//!    dominates the reference's noise). A window whose relative gain is below
-//!    [`ScreeningConfig::min_gain`] by more than two standard errors is
-//!    excluded; a track whose gain pooled over all its tested windows is below
-//!    [`ScreeningConfig::min_track_gain`] by more than two standard errors is
-//!    excluded entirely. Too large a gain is not tested.
-//! 4. **Linear range.** Rows with `|φ|` above
-//!    [`ScreeningConfig::max_abs_phase_rad`] (default π/4, the rule of thumb's
-//!    3σ < 45° for keeping a Costas loop locked) while the common level at that
-//!    epoch (`φ − d`, the others' median plus the track's offset) is within
-//!    half of it are excluded with the guard: the channel is on an excursion
-//!    of its own (slipping, losing lock), beyond the range where the
-//!    discriminator is linear and φ = L\[Δf\]. An excursion of the common
-//!    level is the oscillator's own phase error: it is kept (excluding every
-//!    channel at once, or each one as its noise crosses the limit, would
-//!    fragment the log wherever a noisy oscillator wanders near the limit),
-//!    and reported by the calibration's peak-phase check instead. A log of a
-//!    single track has no common level: its rows beyond the limit are excluded.
-//! 5. **C/N0 drops.** Rows whose C/N0 is more than
-//!    [`ScreeningConfig::cn0_drop_db`] below the track's median are excluded
-//!    with the guard.
-//!
-//! A track of which the cross-channel tests (1–3) flag more than
-//! [`ScreeningConfig::max_excluded_fraction`] of the rows is excluded
-//! entirely: what is left of it is not to be trusted. (Rows beyond the linear
-//! range or in C/N0 drops do not count there: a noisy oscillator takes every
-//! channel out of the range at once.) The tracks are ranked for the selection
-//! by their mean C/N0 over the rows they keep, so an excluded track makes room
-//! for the next one.
-//!
-//! The cost is linear in the number of rows: a few passes over them, and at
-//! each epoch a rank sort of the dozen tracks present (once, twice when the
-//! first round found slips); the medians that set offsets and scales run over
-//! regular subsamples. About 70–90 ms for 12 tracks over an hour at 40 Hz
-//! (1.7 M rows) on the project's 2-core build machine.
+//! Per-track screening of the tracking rows before averaging (documented at
+//! the crate root, section "Screening").
 
 use serde::{Deserialize, Serialize};
 
-/// The settings of the per-track screening (see the module documentation).
+use crate::error::ScreeningConfigError;
+
+/// The settings of the per-track screening (see the [crate documentation](crate#screening)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ScreeningConfig {
@@ -173,7 +77,7 @@ impl ScreeningConfig {
     }
 
     /// Checks the values; the error names the offending key.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ScreeningConfigError> {
         let positive = [
             ("deviation_k", self.deviation_k),
             ("settle_s", self.settle_s),
@@ -183,27 +87,30 @@ impl ScreeningConfig {
             ("noisy_rms_k", self.noisy_rms_k),
             ("gain_window_s", self.gain_window_s),
         ];
-        for (key, v) in positive {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("screening.{key} = {v} must be positive"));
+        for (key, value) in positive {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(ScreeningConfigError::MustBePositive { key, value });
             }
         }
-        let non_negative =
-            [("guard_s", self.guard_s), ("min_gain", self.min_gain), ("min_sigma_rad", self.min_sigma_rad)];
-        let non_negative = [non_negative[0], non_negative[1], non_negative[2], ("min_track_gain", self.min_track_gain)];
-        for (key, v) in non_negative {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(format!("screening.{key} = {v} must be ≥ 0"));
+        let non_negative = [
+            ("guard_s", self.guard_s),
+            ("min_gain", self.min_gain),
+            ("min_sigma_rad", self.min_sigma_rad),
+            ("min_track_gain", self.min_track_gain),
+        ];
+        for (key, value) in non_negative {
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err(ScreeningConfigError::MustBeNonNegative { key, value });
             }
         }
-        if let Some(v) = self.max_abs_phase_rad.filter(|v| !(*v > 0.0 && v.is_finite())) {
-            return Err(format!("screening.max_abs_phase_rad = {v} must be positive"));
+        if let Some(value) = self.max_abs_phase_rad.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(ScreeningConfigError::MustBePositive { key: "max_abs_phase_rad", value });
         }
-        if let Some(v) = self.cn0_drop_db.filter(|v| !(*v > 0.0 && v.is_finite())) {
-            return Err(format!("screening.cn0_drop_db = {v} must be positive"));
+        if let Some(value) = self.cn0_drop_db.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(ScreeningConfigError::MustBePositive { key: "cn0_drop_db", value });
         }
         if !(self.max_excluded_fraction >= 0.0 && self.max_excluded_fraction <= 1.0) {
-            return Err(format!("screening.max_excluded_fraction = {} must be in [0, 1]", self.max_excluded_fraction));
+            return Err(ScreeningConfigError::MustBeFraction { value: self.max_excluded_fraction });
         }
         Ok(())
     }
@@ -211,6 +118,7 @@ impl ScreeningConfig {
 
 /// A stretch of a track excluded by the screening.
 #[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct ExcludedSpan {
     /// Time of the first excluded row \[s\].
     pub start_s: f64,
@@ -227,6 +135,7 @@ pub const MAX_SPANS: usize = 100;
 
 /// What the screening did to one track.
 #[derive(Debug, Clone, PartialEq, Default, Serialize)]
+#[non_exhaustive]
 pub struct TrackScreening {
     /// Rows (passing the masks) excluded.
     pub rows_excluded: usize,
@@ -587,7 +496,7 @@ fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64
     median_of(scratch)
 }
 
-/// Screens the rows (see the module documentation). `n_epochs`: the epoch
+/// Screens the rows (see the crate documentation, section "Screening"). `n_epochs`: the epoch
 /// indices are below it; `log_interval_s`: the epoch spacing.
 pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &ScreeningConfig) -> Screened {
     let n_tracks = rows.tracks();

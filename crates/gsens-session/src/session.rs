@@ -1,74 +1,16 @@
-//! Assembly of what the estimator needs from a tracking log and an IMU log:
-//! the epoch grid, the channel selection, the per-epoch averaged phase error and
-//! the specific force interpolated onto the epochs.
-//!
-//! # Epoch grid
-//!
-//! The tracking time stamps define the epochs. The median spacing of the
-//! distinct time stamps gives the log interval, with which each spacing is
-//! rounded to a whole number of intervals: that numbers the epochs `k` (a
-//! spacing rounding to zero is an error). A least-squares line through the
-//! pairs (k, time stamp) then defines the uniform grid `t0 + k·T` (so that
-//! jitter in the time stamps or a log interval slightly off its nominal value
-//! does not accumulate over a long log); every time stamp must lie within 10%
-//! of `T` of its grid time, or it is an error naming the file, line and column.
-//! Grid points without any tracking row (gaps) are epochs too, with no phase,
-//! so that the estimator's loop models run through the gaps. The epoch time
-//! `t_s[k]` is the logged time stamp where the log has one (so an IMU logged at
-//! the same instants is used exactly), the grid time `t0 + k·T` in the gaps.
-//!
-//! # Selection
-//!
-//! Rows outside the usable span (see below), below the elevation mask (rows of
-//! unknown elevation pass) or below the C/N0 threshold are dropped; then the
-//! `max_channels` tracks (a track: one channel, one PRN) with the highest mean
-//! C/N0 over their remaining rows are used.
-//!
-//! Before the ranking, the rows that pass the masks are screened track by track
-//! ([`SelectionConfig::screening`], on by default; see [`crate::screening`]):
-//! cycle slips, losses of lock, C/N0 drops and rows beyond the discriminator's
-//! linear range are excluded, a track split where it settled on a new level
-//! after a slip, and the ranking uses the mean C/N0 over the rows kept.
-//!
-//! # Averaging
-//!
-//! At each epoch, the phase errors of the selected tracks present at that epoch
-//! are averaged with weights renormalized over the present ones, so a missing
-//! channel does not scale the average. Because the average over a changing set
-//! of channels would still jump by the channels' constant offsets (a Costas
-//! discriminator bias, multipath, ...) whenever a channel comes or goes,
-//! [`SelectionConfig::remove_channel_offsets`] (on by default) first estimates
-//! a constant offset per track by least squares on the additive model
-//! `φ_i(k) = s(k) + c_i` (the common part `s` free at every epoch, the offsets
-//! summing to zero over the tracks that share epochs) and averages `φ_i − c_i`.
-//! When all selected tracks are present at every epoch, this changes nothing
-//! with equal weights.
-//!
-//! Weights: [`Weighting::Equal`], as in the paper, or [`Weighting::Cn0`], the
-//! inverse of the thermal phase variance of a Costas loop,
-//! `σ_φ² = Bn/(C/N0)·(1 + 1/(2·T·C/N0))`, neglecting the squaring loss (the
-//! second term, small above ~30 dB-Hz): `w ∝ C/N0 = 10^(cn0_dbhz/10)` (the ratio
-//! in Hz), evaluated with each row's own C/N0.
-//!
-//! # IMU
-//!
-//! The specific force is interpolated linearly onto the epochs. The IMU sample
-//! stamped `t_imu` was taken at true time `t_imu − imu_time_offset_s`, so the
-//! epoch at time `t` reads the IMU at stamp `t + imu_time_offset_s`; when that
-//! is one of the IMU's stamps the sample is used exactly. Epochs outside the
-//! IMU's span are dropped from the ends: the usable span is the overlap of the
-//! two logs.
+//! Session preparation: the epoch grid, the selection, the averaging and the
+//! IMU interpolation (documented at the crate root).
 
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::FormatError;
-use crate::imu::{ImuSeries, read_imu_file};
-use crate::parse::path_name;
+use gsens_core::average_phase_rad;
+use gsens_io::{ImuSeries, TrackingLog, read_imu_file, read_tracking_file};
+
+use crate::error::SessionError;
 use crate::screening::{self, ExcludedSpan, Rows, Screened, ScreeningConfig, TrackScreening};
-use crate::tracking::{TrackingLog, read_tracking_file};
 
 /// The most epochs (gaps included) a prepared session may hold.
 pub const MAX_EPOCHS: u64 = 1 << 25;
@@ -104,11 +46,11 @@ pub struct SelectionConfig {
     pub weighting: Weighting,
     /// Estimate and remove a constant phase offset per track before averaging,
     /// so that channels coming and going do not step the average (see the
-    /// module documentation). Default `true`.
+    /// [crate documentation](crate#averaging)). Default `true`.
     pub remove_channel_offsets: bool,
     /// Per-track screening for cycle slips, losses of lock, C/N0 drops and
     /// rows beyond the discriminator's linear range, before the ranking and
-    /// the averaging (see [`crate::screening`]). Default on.
+    /// the averaging (see the [crate documentation](crate#screening)). Default on.
     pub screening: ScreeningConfig,
 }
 
@@ -126,6 +68,9 @@ impl Default for SelectionConfig {
 }
 
 /// What became of one track (one channel, one PRN) of the tracking log.
+///
+/// Exhaustive (no `#[non_exhaustive]`): callers outside the crate build it
+/// with struct literals (e.g. the report's test fixtures).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ChannelSummary {
     /// Receiver channel number.
@@ -153,6 +98,7 @@ pub struct ChannelSummary {
 
 /// The inputs of the estimator, on a uniform epoch grid.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct PreparedSession {
     /// The log interval `T` \[s\]: the slope of the epoch grid (for a log without
     /// jitter, the spacing of the tracking time stamps).
@@ -227,13 +173,13 @@ impl Grid {
     /// median does not accumulate); a least-squares line through (index, time
     /// stamp) then gives the grid `t0 + k·T`, around which every time stamp must
     /// lie within [`GRID_TOLERANCE`]·T.
-    fn new(log: &TrackingLog) -> Result<Self, FormatError> {
+    fn new(log: &TrackingLog) -> Result<Self, SessionError> {
         let stamps = log.epoch_t_s();
         let lines = log.epoch_line();
         let file = log.source_name();
         let n = stamps.len();
         if n < 2 {
-            return Err(FormatError::TooFewEpochs { file: file.to_owned(), epochs: n });
+            return Err(SessionError::TooFewEpochs { file: file.to_owned(), epochs: n });
         }
         let mut d: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
         let m = d.len() / 2;
@@ -251,7 +197,7 @@ impl Grid {
         for i in 1..n {
             let steps = ((stamps[i] - stamps[i - 1]) / median_s).round();
             if steps < 1.0 {
-                return Err(FormatError::GridCollision {
+                return Err(SessionError::GridCollision {
                     file: file.to_owned(),
                     line: lines[i],
                     column: log.t_column().clone(),
@@ -281,7 +227,7 @@ impl Grid {
             let grid_t_s = t0_s + grid.k_of_stamp[i] as f64 * log_interval_s;
             let offset_s = t - grid_t_s;
             if offset_s.abs() > GRID_TOLERANCE * log_interval_s {
-                return Err(FormatError::OffGrid {
+                return Err(SessionError::OffGrid {
                     file: file.to_owned(),
                     line: lines[i],
                     column: log.t_column().clone(),
@@ -313,14 +259,14 @@ pub fn prepare_session_files(
     imu_path: impl AsRef<Path>,
     selection: &SelectionConfig,
     imu_time_offset_s: f64,
-) -> Result<PreparedSession, FormatError> {
+) -> Result<PreparedSession, SessionError> {
     let tracking = read_tracking_file(tracking_path)?;
     let imu = read_imu_file(imu_path.as_ref())?;
-    prepare_session(&tracking, &imu, &path_name(imu_path.as_ref()), selection, imu_time_offset_s)
+    prepare_session(&tracking, &imu, &imu_path.as_ref().display().to_string(), selection, imu_time_offset_s)
 }
 
 /// Builds the estimator's inputs from a tracking log and an IMU series (see the
-/// module documentation for the epoch grid, the selection, the averaging and
+/// [crate documentation](crate) for the epoch grid, the selection, the averaging and
 /// the interpolation).
 ///
 /// `imu_name` names the IMU source in errors; `imu_time_offset_s` is the IMU
@@ -335,7 +281,7 @@ pub fn prepare_session(
     imu_name: &str,
     selection: &SelectionConfig,
     imu_time_offset_s: f64,
-) -> Result<PreparedSession, FormatError> {
+) -> Result<PreparedSession, SessionError> {
     let file = tracking.source_name();
     check_settings(file, selection, imu_time_offset_s)?;
     imu.validate(imu_name)?;
@@ -350,7 +296,7 @@ pub fn prepare_session(
     let k_first = partition_point(0, k_last + 1, |k| read_time(k) < imu_first);
     let k_end = partition_point(0, k_last + 1, |k| read_time(k) <= imu_last); // one past the last
     if k_first >= k_end {
-        return Err(FormatError::NoOverlap {
+        return Err(SessionError::NoOverlap {
             imu_file: imu_name.to_owned(),
             tracking_file: file.to_owned(),
             imu_start_s: imu_first - imu_time_offset_s,
@@ -362,7 +308,7 @@ pub fn prepare_session(
     }
     let n_epochs = k_end - k_first;
     if n_epochs > MAX_EPOCHS {
-        return Err(FormatError::GridTooLarge {
+        return Err(SessionError::GridTooLarge {
             file: file.to_owned(),
             epochs: n_epochs,
             log_interval_s: grid.log_interval_s,
@@ -496,7 +442,7 @@ pub fn prepare_session(
             .iter()
             .map(|&i| format!("channel {} (PRN {}): {}", tracks[i].channel, tracks[i].prn, reasons[i]))
             .collect();
-        return Err(FormatError::NoChannelSelected { file: file.to_owned(), reason: detail.join("; ") });
+        return Err(SessionError::NoChannelSelected { file: file.to_owned(), reason: detail.join("; ") });
     }
 
     // Gather the kept rows of the used tracks by epoch (compressed rows: slot,
@@ -551,6 +497,7 @@ pub fn prepare_session(
     let mut accel_mps2 = Vec::with_capacity(n_epochs);
     let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first);
     let mut cursor = 0usize;
+    let (mut phases, mut weights) = (Vec::new(), Vec::new());
     for e in 0..n_epochs {
         let k = k_first + e as u64;
         let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
@@ -561,13 +508,13 @@ pub fn prepare_session(
         };
         t_s.push(t);
         let rows = &entries[start[e]..start[e + 1]];
-        phase_err_rad.push(if rows.is_empty() {
-            None
-        } else {
-            let (sw, swp) =
-                rows.iter().fold((0.0, 0.0), |(sw, swp), &(slot, w, p)| (sw + w, swp + w * (p - offsets_rad[slot])));
-            Some(swp / sw)
-        });
+        phases.clear();
+        weights.clear();
+        for &(slot, w, p) in rows {
+            phases.push(p - offsets_rad[slot]);
+            weights.push(w);
+        }
+        phase_err_rad.push(average_phase_rad(&phases, &weights));
         accel_mps2.push(interpolate(imu, t + imu_time_offset_s, &mut cursor));
     }
 
@@ -622,7 +569,7 @@ pub fn prepare_session(
 }
 
 /// Re-interpolates the IMU onto the session's epochs for another IMU time
-/// offset (IMU time stamp minus true time) [s], keeping the selection and the
+/// offset (IMU time stamp minus true time) \[s\], keeping the selection and the
 /// averaged phases: the average does not depend on the offset, so a search
 /// over offsets needs the logs prepared once. Epochs whose IMU read time falls
 /// outside the IMU's span get no phase (the specific force is held at the
@@ -640,8 +587,8 @@ pub fn reinterpolate_imu(session: &mut PreparedSession, imu: &ImuSeries, imu_tim
     session.imu_time_offset_s = imu_time_offset_s;
 }
 
-fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f64) -> Result<(), FormatError> {
-    let fail = |reason: String| Err(FormatError::InvalidSelection { file: file.to_owned(), reason });
+fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f64) -> Result<(), SessionError> {
+    let fail = |reason: String| Err(SessionError::InvalidSelection { file: file.to_owned(), reason });
     if selection.max_channels == Some(0) {
         return fail("max_channels is 0".to_owned());
     }
@@ -654,8 +601,8 @@ fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f6
     if !imu_time_offset_s.is_finite() {
         return fail(format!("imu_time_offset_s = {imu_time_offset_s} is not finite"));
     }
-    if let Err(reason) = selection.screening.validate() {
-        return fail(reason);
+    if let Err(error) = selection.screening.validate() {
+        return Err(SessionError::InvalidScreening { file: file.to_owned(), error });
     }
     Ok(())
 }
@@ -711,13 +658,17 @@ pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64,
         }
         i
     }
+    let (mut phases, mut weights) = (Vec::new(), Vec::new());
     for e in 0..start.len() - 1 {
         let rows = &entries[start[e]..start[e + 1]];
-        if rows.is_empty() {
+        phases.clear();
+        weights.clear();
+        phases.extend(rows.iter().map(|&(_, _, p)| p));
+        weights.extend(rows.iter().map(|&(_, w, _)| w));
+        let Some(mean) = average_phase_rad(&phases, &weights) else {
             continue;
-        }
-        let (sw, swp) = rows.iter().fold((0.0, 0.0), |(sw, swp), &(_, w, p)| (sw + w, swp + w * p));
-        let mean = swp / sw;
+        };
+        let sw = weights.iter().fold(0.0, |sw, w| sw + w);
         for (r, &(i, wi, pi)) in rows.iter().enumerate() {
             b[i] += wi * (pi - mean);
             m[(i, i)] += wi - wi * wi / sw;

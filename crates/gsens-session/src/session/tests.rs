@@ -1,6 +1,5 @@
 use super::*;
-use crate::tracking::read_tracking;
-use crate::writers::{TrackingRow, TrackingWriter};
+use gsens_io::{TrackingRow, TrackingWriter, read_tracking};
 
 const T: f64 = 0.025;
 
@@ -47,7 +46,7 @@ fn wide_imu() -> ImuSeries {
     imu_lin(0.0, 1000.0, 0.05, 0.0)
 }
 
-fn prep(log: &TrackingLog, imu: &ImuSeries, cfg: &SelectionConfig) -> Result<PreparedSession, FormatError> {
+fn prep(log: &TrackingLog, imu: &ImuSeries, cfg: &SelectionConfig) -> Result<PreparedSession, SessionError> {
     prepare_session(log, imu, "imu.csv", cfg, 0.0)
 }
 
@@ -57,7 +56,7 @@ fn base() -> SelectionConfig {
     SelectionConfig { screening: crate::screening::ScreeningConfig::off(), ..SelectionConfig::default() }
 }
 
-fn msg(e: FormatError) -> String {
+fn msg(e: SessionError) -> String {
     e.to_string()
 }
 
@@ -438,8 +437,21 @@ fn invalid_settings() {
     let m = msg(prepare_session(&log, &wide_imu(), "imu.csv", &base(), f64::NAN).unwrap_err());
     assert!(m.contains("imu_time_offset_s"), "{m}");
     let bad = ImuSeries { t_s: vec![1.0, 0.0], accel_mps2: vec![[0.0; 3]; 2] };
-    let m = msg(prep(&log, &bad, &base()).unwrap_err());
+    let e = prep(&log, &bad, &base()).unwrap_err();
+    assert!(matches!(e, SessionError::Format(gsens_io::FormatError::InvalidImuSeries { .. })), "{e:?}");
+    let m = msg(e);
     assert!(m.starts_with("imu.csv: invalid IMU series"), "{m}");
+}
+
+#[test]
+fn reading_errors_pass_through_unchanged() {
+    let dir = std::env::temp_dir().join(format!("gsens-session-missing-{}", std::process::id()));
+    let (trk, imu) = (dir.join("tracking.csv"), dir.join("imu.csv"));
+    let e = prepare_session_files(&trk, &imu, &base(), 0.0).unwrap_err();
+    let direct = gsens_io::read_tracking_file(&trk).unwrap_err();
+    assert!(matches!(e, SessionError::Format(gsens_io::FormatError::Io { .. })), "{e:?}");
+    assert_eq!(e.to_string(), direct.to_string());
+    assert!(e.to_string().starts_with(&format!("{}: cannot read", trk.display())), "{e}");
 }
 
 #[test]
@@ -477,7 +489,7 @@ fn reinterpolating_the_imu_matches_a_fresh_preparation_inside_the_span() {
     for k in 0..400 {
         text.push_str(&format!("{},1,5,45,,{}\n", k as f64 * 0.025, (k as f64 * 0.3).sin() * 0.01));
     }
-    let log = crate::tracking::read_tracking(text.as_bytes(), "t.csv").unwrap();
+    let log = read_tracking(text.as_bytes(), "t.csv").unwrap();
     let sel = SelectionConfig::default();
     let mut moved = prepare_session(&log, &imu, "imu.csv", &sel, 0.0).unwrap();
     reinterpolate_imu(&mut moved, &imu, 0.037);

@@ -23,7 +23,7 @@ fn synthetic_rows(tracks: usize, epochs: usize) -> Rows {
 }
 
 #[test]
-#[ignore = "timing: cargo test -p gsens-io --release --lib screening::tests::timing -- --ignored --nocapture"]
+#[ignore = "timing: cargo test -p gsens-session --release --lib screening::tests::timing -- --ignored --nocapture"]
 fn timing() {
     let rows = synthetic_rows(12, 144_000);
     let mut best = f64::INFINITY;
@@ -41,11 +41,9 @@ fn timing() {
 // ---------------------------------------------------------------------------
 // The screening through `prepare_session`, on synthetic logs with known faults.
 
-use crate::imu::ImuSeries;
 use crate::session::{PreparedSession, SelectionConfig, prepare_session};
-use crate::tracking::{TrackingLog, read_tracking};
-use crate::writers::{TrackingRow, TrackingWriter};
 use core::f64::consts::{FRAC_PI_2, PI, TAU};
+use gsens_io::{ImuSeries, TrackingLog, TrackingRow, TrackingWriter, read_tracking};
 
 const T: f64 = 0.025;
 const EPOCHS: usize = 4800; // 120 s
@@ -322,6 +320,24 @@ fn screening_settings_are_checked() {
         let e = prepare_session(&log, &imu(), "imu.csv", &sel, 0.0).unwrap_err().to_string();
         assert!(e.contains("invalid selection settings") && e.contains(key), "{e}");
     }
+    // The typed errors, and the messages they display (unchanged from the former strings).
+    use crate::error::{ScreeningConfigError, SessionError};
+    let cfg = ScreeningConfig { guard_s: -1.0, ..ScreeningConfig::default() };
+    assert_eq!(cfg.validate(), Err(ScreeningConfigError::MustBeNonNegative { key: "guard_s", value: -1.0 }));
+    assert_eq!(cfg.validate().unwrap_err().to_string(), "screening.guard_s = -1 must be ≥ 0");
+    let cfg = ScreeningConfig { max_abs_phase_rad: Some(0.0), ..ScreeningConfig::default() };
+    assert_eq!(cfg.validate().unwrap_err().to_string(), "screening.max_abs_phase_rad = 0 must be positive");
+    let cfg = ScreeningConfig { max_excluded_fraction: 1.5, ..ScreeningConfig::default() };
+    assert_eq!(cfg.validate().unwrap_err().to_string(), "screening.max_excluded_fraction = 1.5 must be in [0, 1]");
+    let sel = SelectionConfig { screening: cfg, ..SelectionConfig::default() };
+    let e = prepare_session(&log, &imu(), "imu.csv", &sel, 0.0).unwrap_err();
+    assert!(matches!(e, SessionError::InvalidScreening { error: ScreeningConfigError::MustBeFraction { .. }, .. }));
+    assert_eq!(
+        e.to_string(),
+        "tracking.csv: invalid selection settings: screening.max_excluded_fraction = 1.5 must be in [0, 1]"
+    );
+    assert!(std::error::Error::source(&e).is_none(), "the reason is in the message, not repeated as a source");
+    assert!(ScreeningConfig::default().validate().is_ok() && ScreeningConfig::off().validate().is_ok());
 }
 
 #[test]
