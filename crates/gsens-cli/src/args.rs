@@ -7,7 +7,6 @@ use clap::{Args, ValueEnum};
 use gsens_calib::{EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
 use gsens_core::LoopModel;
 use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
-use gsens_gnss_sdr::conf::{GnssSdrConf, TrackingConf};
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
 use gsens_session::{SelectionConfig, Weighting};
 use std::path::{Path, PathBuf};
@@ -32,6 +31,29 @@ pub enum OnOff {
     On,
     /// Disabled.
     Off,
+}
+
+/// The simulated scenario and its seed (`demo`, `simulate`, `montecarlo`).
+#[derive(Args, Debug, Clone)]
+pub struct ScenarioArgs {
+    /// Scenario TOML (default: the embedded paper experiment; see `gsens scenario`).
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Seed of every random draw (same seed, same bytes; Monte Carlo run i uses seed + i).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl ScenarioArgs {
+    /// The scenario: the file's, or the embedded default.
+    pub fn load(&self) -> Result<gsens_sim::scenario::Scenario> {
+        Ok(gsens_sim::load_scenario(self.scenario.as_deref())?)
+    }
+
+    /// The scenario's name in reports: its file, or `default`.
+    pub fn name(&self) -> String {
+        self.scenario.as_ref().map_or("default".into(), |p| p.display().to_string())
+    }
 }
 
 /// The receiver's carrier loop.
@@ -292,23 +314,13 @@ impl ConversionArgs {
     /// The conversion settings for dumps made with the configuration `conf`
     /// (GNSS-SDR's defaults when none is given).
     pub fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
-        let tracking = match conf {
-            Some(p) => GnssSdrConf::read(p)?.tracking()?,
-            None => TrackingConf::defaults(),
-        };
-        let Some(fs_hz) = self.gnss_sdr_fs_hz.or(tracking.fs_hz) else {
-            bail!(
-                "the sampling rate is unknown: the configuration gives neither GNSS-SDR.internal_fs_sps nor \
-                 SignalSource.sampling_frequency; give --gnss-sdr-fs-hz"
-            )
-        };
-        if !(fs_hz.is_finite() && fs_hz > 0.0) {
-            bail!("the sampling rate must be positive, got {fs_hz}");
-        }
+        let mut s = ImportSettings::from_conf(conf, self.gnss_sdr_fs_hz).map_err(|e| match e {
+            gsens_gnss_sdr::GnssSdrError::UnknownSamplingRate => anyhow::anyhow!("{e}; give --gnss-sdr-fs-hz"),
+            e => e.into(),
+        })?;
         if let Some(v) = self.gnss_sdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
             bail!("--gnss-sdr-settle-s must be ≥ 0, got {v}");
         }
-        let mut s = ImportSettings::new(fs_hz, tracking);
         s.min_cn0_dbhz = self.gnss_sdr_min_cn0_dbhz;
         s.min_lock_test = self.gnss_sdr_min_lock_test;
         s.settle_s = self.gnss_sdr_settle_s;

@@ -76,9 +76,9 @@ pub fn calibrate(
             let import = gnss_sdr.conversion.import_settings(conf)?;
             let outcome = calibrate_gnss_sdr(dir, &import, imu, settings)?;
             if let Some(g) = &outcome.gnss_sdr {
-                print!("{}", crate::import::tracks_text(&g.tracks, outcome.session.log_interval_s));
+                crate::out(&gsens_report::render_gnss_sdr_tracks(&g.tracks, outcome.session.log_interval_s))?;
             }
-            println!("GNSS-SDR loop: {}, modelled exactly", outcome.calibration.loop_used);
+            crate::out(&format!("GNSS-SDR loop: {}, modelled exactly\n", outcome.calibration.loop_used))?;
             inputs.push(("gnss_sdr_dumps", dir.display().to_string()));
             inputs.push(("gnss_sdr_conf", conf.map(|p| p.display().to_string()).unwrap_or_default()));
             outcome
@@ -101,7 +101,7 @@ pub fn run(args: &EstimateArgs) -> Result<()> {
     let settings = args.calibration.settings();
     let (outcome, inputs) = calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?;
     let doc = outcome.document(&input_refs(&inputs), None);
-    print!("{}", gsens_report::render_text(&doc));
+    crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
         write_json(path, &doc)?;
     }

@@ -3,9 +3,8 @@
 use crate::args::ConversionArgs;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use gsens_gnss_sdr::import::{TrackSummary, write_imported_csv};
+use gsens_gnss_sdr::import::write_imported_csv;
 use gsens_gnss_sdr::import_dir;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -44,35 +43,11 @@ pub struct ImportGnssSdrArgs {
     pub conversion: ConversionArgs,
 }
 
-/// The tracks of an import as text.
-pub fn tracks_text(tracks: &[TrackSummary], interval_s: f64) -> String {
-    let mut s = String::new();
-    let used = tracks.iter().filter(|t| t.used).count();
-    let _ =
-        writeln!(s, "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept", tracks.len(), interval_s * 1e3);
-    for t in tracks {
-        let _ = writeln!(
-            s,
-            "  ch {:>3}  PRN {:>3}  {:>7.2}–{:>7.2} s  narrow from {}  C/N0 {:>5.1} dB-Hz  {:>6}/{:<6} good  {}",
-            t.channel,
-            t.prn,
-            t.start_s,
-            t.end_s,
-            t.switch_s.map(|v| format!("{v:>7.2} s")).unwrap_or_else(|| "      —  ".into()),
-            t.mean_cn0_dbhz,
-            t.good_records,
-            t.modelled_records,
-            t.reason
-        );
-    }
-    s
-}
-
 pub fn run(args: &ImportArgs) -> Result<()> {
     let ImportSource::GnssSdr(a) = &args.source;
     let settings = a.conversion.import_settings(a.conf.as_deref())?;
     let imported = import_dir(&a.dump_dir, &settings)?;
-    print!("{}", tracks_text(&imported.tracks, imported.interval_s));
+    crate::out(&gsens_report::render_gnss_sdr_tracks(&imported.tracks, imported.interval_s))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     let rows = if a.common_grid {
         let grid = gsens_gnss_sdr::resample(&imported, imported.interval_s);

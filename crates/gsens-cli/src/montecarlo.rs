@@ -3,7 +3,6 @@
 //! (`gsens_calib::montecarlo`).
 
 use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs, pipeline_settings};
-use crate::simulate::load_scenario;
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::montecarlo::{monte_carlo, scenario_settings};
@@ -12,15 +11,11 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct MonteCarloArgs {
-    /// Scenario TOML (default: the embedded paper experiment).
-    #[arg(long)]
-    pub scenario: Option<PathBuf>,
+    #[command(flatten)]
+    pub scenario: crate::args::ScenarioArgs,
     /// Number of runs.
     #[arg(long, default_value_t = 200)]
     pub runs: u64,
-    /// Seed of run 0; run i uses seed + i.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
     /// Methods to compare (comma separated).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "batch,rls,gradient,gls")]
     pub methods: Vec<MethodArg>,
@@ -36,7 +31,7 @@ pub struct MonteCarloArgs {
 }
 
 pub fn run(args: &MonteCarloArgs) -> Result<()> {
-    let scenario = load_scenario(args.scenario.as_deref())?;
+    let scenario = args.scenario.load()?;
     let base = args.estimator.settings();
     let methods = args
         .methods
@@ -52,8 +47,8 @@ pub fn run(args: &MonteCarloArgs) -> Result<()> {
         ProgressStyle::with_template("monte carlo {bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta})")
             .expect("valid template"),
     );
-    let name = args.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
-    let mc = monte_carlo(&scenario, &name, args.runs, args.seed, &methods, || bar.inc(1))?;
+    let (name, seed) = (args.scenario.name(), args.scenario.seed);
+    let mc = monte_carlo(&scenario, &name, args.runs, seed, &methods, || bar.inc(1))?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_montecarlo_text(&mc))?;
     if let Some(path) = &args.json {

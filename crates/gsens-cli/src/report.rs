@@ -3,11 +3,11 @@
 //! figures as PNG and SVG.
 
 use crate::estimate::{CalibrationArgs, calibrate, input_refs};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::tool_version;
 use gsens_report::{FigureInputs, ReportData, ReportMeta, write_figures};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
@@ -30,20 +30,9 @@ pub struct ReportArgs {
     pub calibration: CalibrationArgs,
 }
 
-/// The true Γ from a simulator's truth.json (`gamma_hz_per_mps2`).
-pub fn read_truth(path: &Path) -> Result<[f64; 3]> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
-    let g = v.get("gamma_hz_per_mps2").and_then(|g| g.as_array());
-    match g.map(|a| a.iter().filter_map(|x| x.as_f64()).collect::<Vec<_>>()) {
-        Some(a) if a.len() == 3 => Ok([a[0], a[1], a[2]]),
-        _ => bail!("{}: no `gamma_hz_per_mps2` with 3 numbers", path.display()),
-    }
-}
-
 pub fn run(args: &ReportArgs) -> Result<()> {
     let settings = args.calibration.settings();
-    let truth = args.truth.as_deref().map(read_truth).transpose()?;
+    let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let bar = crate::spinner();
     bar.set_message("reading the logs and estimating Γ");
     let (outcome, mut inputs) = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;

@@ -32,18 +32,15 @@ pub struct ResponseArgs {
     pub plot: Option<PathBuf>,
 }
 
+/// `--json`: the table, its peak and band, and the loop.
 #[derive(Serialize)]
 struct ResponseJson<'a> {
     loop_interval_s: Option<f64>,
-    peak_hz: f64,
-    peak_rad_per_hz: f64,
     recommended_period_s: f64,
-    half_power_band_hz: [f64; 2],
     #[serde(rename = "loop")]
     summary: LoopSummary,
-    frequency_hz: &'a [f64],
-    magnitude_rad_per_hz: &'a [f64],
-    phase_deg: &'a [f64],
+    #[serde(flatten)]
+    table: &'a ResponseData,
 }
 
 pub fn run(args: &ResponseArgs) -> Result<()> {
@@ -77,14 +74,9 @@ pub fn run(args: &ResponseArgs) -> Result<()> {
     if let Some(path) = &args.json {
         let json = ResponseJson {
             loop_interval_s: model.interval_s(),
-            peak_hz: table.peak_hz,
-            peak_rad_per_hz: table.peak_rad_per_hz,
             recommended_period_s: 1.0 / table.peak_hz,
-            half_power_band_hz: band,
             summary: LoopSummary::of(&model),
-            frequency_hz: &table.frequency_hz,
-            magnitude_rad_per_hz: &table.magnitude_rad_per_hz,
-            phase_deg: &table.phase_deg,
+            table: &table,
         };
         std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")
             .with_context(|| format!("{}: cannot write", path.display()))?;

@@ -9,15 +9,11 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Scenario TOML (default: the embedded paper experiment; see `gsens scenario`).
-    #[arg(long)]
-    pub scenario: Option<PathBuf>,
+    #[command(flatten)]
+    pub scenario: crate::args::ScenarioArgs,
     /// Output directory for imu.csv, tracking.csv and truth.json.
     #[arg(long)]
     pub out: PathBuf,
-    /// Seed of every random draw (same seed, same bytes).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
     /// Write complex baseband GPS L1 C/A IF samples of the scenario's satellites to
     /// this file instead of tracking logs (with imu.csv, truth.json, delta_f.csv
     /// and gnss-sdr.conf in --out; the scenario's [loop] order and bn_hz become
@@ -55,11 +51,6 @@ pub fn progress_bar(verb: &str) -> ProgressBar {
     bar
 }
 
-/// Reads a scenario file, or the embedded default.
-pub fn load_scenario(path: Option<&Path>) -> Result<Scenario> {
-    Ok(gsens_sim::load_scenario(path)?)
-}
-
 /// Simulates `scenario` into `dir` (imu.csv, tracking.csv, truth.json) with a
 /// progress bar on a terminal.
 pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Truth> {
@@ -70,11 +61,11 @@ pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Tru
 }
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
-    let scenario = load_scenario(args.scenario.as_deref())?;
+    let scenario = args.scenario.load()?;
     if let Some(iq) = &args.iq {
         return crate::simulate_iq::run(&scenario, args, iq);
     }
-    let truth = simulate_to_dir(&scenario, args.seed, &args.out)?;
+    let truth = simulate_to_dir(&scenario, args.scenario.seed, &args.out)?;
     let slips: u64 = truth.channels.iter().map(|c| c.stats.cycle_slips).sum();
     crate::out(&format!(
         "simulated {:.1} s, {} channel passes ({} cycle slips), seed {} → {}\n\
@@ -82,7 +73,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         truth.duration_s,
         truth.channels.len(),
         slips,
-        args.seed,
+        args.scenario.seed,
         args.out.display(),
         truth.gamma_hz_per_mps2[0],
         truth.gamma_hz_per_mps2[1],

@@ -16,6 +16,22 @@ pub enum GnssSdrError {
         #[source]
         error: std::io::Error,
     },
+    /// Neither the configuration nor the caller gives the sampling rate.
+    #[error(
+        "the sampling rate is unknown: the configuration gives neither GNSS-SDR.internal_fs_sps nor \
+         SignalSource.sampling_frequency"
+    )]
+    UnknownSamplingRate,
+    /// A conversion setting outside its range.
+    #[error("{name} must be {expected}, got {value}")]
+    Setting {
+        /// The setting.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// Its range.
+        expected: &'static str,
+    },
     /// A configuration file is malformed or asks for something not modelled.
     #[error("{file}: line {line}: {reason}")]
     Conf {

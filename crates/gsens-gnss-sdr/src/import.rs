@@ -91,6 +91,21 @@ impl ImportSettings {
         }
     }
 
+    /// The default thresholds for dumps made with the configuration file
+    /// `conf` (GNSS-SDR's defaults when `None`), at the sampling rate
+    /// `fs_hz` or, when `None`, the configuration's.
+    pub fn from_conf(conf: Option<&Path>, fs_hz: Option<f64>) -> Result<Self, GnssSdrError> {
+        let tracking = match conf {
+            Some(p) => crate::GnssSdrConf::read(p)?.tracking()?,
+            None => TrackingConf::defaults(),
+        };
+        let fs_hz = fs_hz.or(tracking.fs_hz).ok_or(GnssSdrError::UnknownSamplingRate)?;
+        if !(fs_hz.is_finite() && fs_hz > 0.0) {
+            return Err(GnssSdrError::Setting { name: "the sampling rate", value: fs_hz, expected: "positive" });
+        }
+        Ok(ImportSettings::new(fs_hz, tracking))
+    }
+
     /// The integration time of the modelled stage \[s\].
     pub fn interval_s(&self) -> f64 {
         self.tracking.narrow_interval_s()

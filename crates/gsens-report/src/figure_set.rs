@@ -4,8 +4,8 @@
 
 use crate::FigureBlock;
 use crate::figures::{
-    Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, RenderError, ResponseData, SpectrumData,
-    fig_cn0, fig_compensation, fig_estimation, fig_residual_spectrum, fig_response,
+    AllanData, Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, RenderError, ResponseData,
+    SpectrumData, fig_allan, fig_cn0, fig_compensation, fig_estimation, fig_residual_spectrum, fig_response,
 };
 use gsens_calib::{CalibError, Calibration, Outcome, compensation_series};
 use gsens_io::TrackingLog;
@@ -55,6 +55,22 @@ impl<'a> Figure<'a> {
         render: impl Fn(Format) -> Result<Image, RenderError> + 'a,
     ) -> Self {
         Figure { id, title, caption, render: Box::new(render) }
+    }
+
+    /// The Allan deviation of a simulated oscillator (`simulated`, over a
+    /// record of `duration_s`) against its power-law model (`theory`) at the
+    /// averaging times `taus_s`.
+    pub fn allan(taus_s: Vec<f64>, simulated: Vec<f64>, theory: Vec<f64>, duration_s: f64, label: String) -> Self {
+        let caption = format!(
+            "Overlapping Allan deviation of {:.0} minutes of the simulator's fractional frequency ({label}) against \
+             the power-law model of its preset; deterministic terms (offset, drift, temperature cycle) are in the \
+             simulation but not in the model.",
+            duration_s / 60.0
+        );
+        Figure::new("allan", "Allan deviation of the simulated oscillator".into(), caption, move |f| {
+            let d = AllanData { taus_s: &taus_s, simulated: &simulated, theory: &theory, label: &label };
+            fig_allan(&d, f, (900, 600))
+        })
     }
 
     /// Draws the figure.

@@ -650,7 +650,7 @@ where
 // ---------------------------------------------------------------- Fig. 3
 
 /// The loop response to plot (the paper's Fig. 3).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ResponseData {
     /// Frequencies \[Hz\], increasing, positive.
     pub frequency_hz: Vec<f64>,

@@ -4,6 +4,7 @@ use crate::AXES;
 use gsens_calib::ResultDocument;
 use gsens_core::regressor::LoggedPhase;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
+use gsens_gnss_sdr::import::TrackSummary;
 use gsens_session::Weighting;
 use std::fmt::Write as _;
 
@@ -184,6 +185,30 @@ pub fn render_text(doc: &ResultDocument) -> String {
             s_,
             "Cramér–Rao bound [Hz/(m/s²)]: x {}, y {}, z {} (residual noise: AR({}) model)",
             b[0], b[1], b[2], c.noise_ar_order
+        );
+    }
+    s
+}
+
+/// What became of each track of a GNSS-SDR import, as text.
+pub fn render_gnss_sdr_tracks(tracks: &[TrackSummary], interval_s: f64) -> String {
+    let mut s = String::new();
+    let used = tracks.iter().filter(|t| t.used).count();
+    let _ =
+        writeln!(s, "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept", tracks.len(), interval_s * 1e3);
+    for t in tracks {
+        let _ = writeln!(
+            s,
+            "  ch {:>3}  PRN {:>3}  {:>7.2}–{:>7.2} s  narrow from {}  C/N0 {:>5.1} dB-Hz  {:>6}/{:<6} good  {}",
+            t.channel,
+            t.prn,
+            t.start_s,
+            t.end_s,
+            t.switch_s.map(|v| format!("{v:>7.2} s")).unwrap_or_else(|| "      —  ".into()),
+            t.mean_cn0_dbhz,
+            t.good_records,
+            t.modelled_records,
+            t.reason
         );
     }
     s

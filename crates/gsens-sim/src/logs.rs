@@ -42,6 +42,20 @@ pub fn load_scenario(path: Option<&Path>) -> Result<Scenario, LoadError> {
     }
 }
 
+/// The true Γ \[Hz/(m/s²)\] from a simulator's `truth.json` (either layout:
+/// a session's or an IF file's).
+pub fn read_truth_gamma(path: &Path) -> Result<[f64; 3], LoadError> {
+    #[derive(serde::Deserialize)]
+    struct Gamma {
+        gamma_hz_per_mps2: [f64; 3],
+    }
+    let text =
+        std::fs::read_to_string(path).map_err(|error| LoadError::Io { path: path.display().to_string(), error })?;
+    let g: Gamma = serde_json::from_str(&text)
+        .map_err(|e| LoadError::Truth { path: path.display().to_string(), reason: e.to_string() })?;
+    Ok(g.gamma_hz_per_mps2)
+}
+
 /// Why a scenario could not be loaded.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -62,6 +76,14 @@ pub enum LoadError {
         path: String,
         /// Why.
         error: crate::ScenarioError,
+    },
+    /// A truth file without `gamma_hz_per_mps2` as 3 numbers.
+    #[error("{path}: no `gamma_hz_per_mps2` with 3 numbers: {reason}")]
+    Truth {
+        /// The file.
+        path: String,
+        /// What the JSON reader said.
+        reason: String,
     },
     /// The embedded default does not parse (a bug).
     #[error(transparent)]
@@ -136,4 +158,87 @@ pub fn simulate_logs(scenario: &Scenario, seed: u64) -> Result<SimulatedLogs, Lo
     let imu =
         ImuSeries { t_s: sink.imu.iter().map(|s| s.0).collect(), accel_mps2: sink.imu.iter().map(|s| s.1).collect() };
     Ok(SimulatedLogs { tracking, imu, truth })
+}
+
+/// What [`simulate_iq_to_dir`] wrote and how fast.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct IqSession {
+    /// The truth (also in `truth.json`).
+    pub truth: crate::iq::IqTruth,
+    /// Wall time of the generation \[s\].
+    pub wall_s: f64,
+}
+
+/// Generates the IF samples of `scenario` into `iq_path` and, in `dir`:
+/// `imu.csv`, `truth.json`, `delta_f.csv` (`t_s,delta_f_hz,g_induced_hz` per
+/// 1 ms block) and, with `carrier_truth`, `carrier.csv` (`t_s,prn<N>_hz,…`:
+/// each satellite's baseband carrier per 1 ms block).
+pub fn simulate_iq_to_dir(
+    scenario: &Scenario,
+    seed: u64,
+    cfg: &crate::iq::IqConfig,
+    iq_path: &Path,
+    dir: &Path,
+    carrier_truth: bool,
+    progress: impl FnMut(f64),
+) -> Result<IqSession, LogsError> {
+    use crate::iq::{BLOCK_S, ImuOnlySink, generate_iq};
+    use std::io::{BufWriter, Write};
+    let io = |path: &Path| {
+        let path = path.display().to_string();
+        move |error| LogsError::Io { path, error }
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let create = |p: &Path| File::create(p).map_err(io(p));
+    let iq_file = BufWriter::with_capacity(1 << 20, create(iq_path)?);
+    let imu_path = dir.join("imu.csv");
+    let mut imu = ImuWriter::new(create(&imu_path)?).map_err(io(&imu_path))?;
+    let df_path = dir.join("delta_f.csv");
+    let mut df = BufWriter::new(create(&df_path)?);
+    writeln!(df, "t_s,delta_f_hz,g_induced_hz").map_err(io(&df_path))?;
+    let carrier_path = dir.join("carrier.csv");
+    let mut carrier = if carrier_truth { Some(BufWriter::new(create(&carrier_path)?)) } else { None };
+    let mut block_err: Option<LogsError> = None;
+    let started = std::time::Instant::now();
+    let truth = {
+        let mut sink = ImuOnlySink(|t: f64, f: [f64; 3]| imu.write_sample(t, &f).map_err(Into::into));
+        let on_block = |b: &crate::iq::IqBlock<'_>| {
+            if block_err.is_some() {
+                return;
+            }
+            if let Err(e) = writeln!(df, "{},{},{}", b.t_mid_s, b.delta_f_hz, b.g_induced_hz) {
+                block_err = Some(io(&df_path)(e));
+                return;
+            }
+            if let Some(c) = carrier.as_mut() {
+                let mut line = String::new();
+                if b.t_mid_s < BLOCK_S {
+                    line.push_str("t_s");
+                    b.prns.iter().for_each(|p| line.push_str(&format!(",prn{p}_hz")));
+                    line.push('\n');
+                }
+                line.push_str(&b.t_mid_s.to_string());
+                b.carrier_hz.iter().for_each(|f| line.push_str(&format!(",{f}")));
+                line.push('\n');
+                if let Err(e) = c.write_all(line.as_bytes()) {
+                    block_err = Some(io(&carrier_path)(e));
+                }
+            }
+        };
+        generate_iq(scenario, seed, cfg, iq_file, &mut sink, on_block, progress)?
+    };
+    let wall_s = started.elapsed().as_secs_f64();
+    if let Some(e) = block_err {
+        return Err(e);
+    }
+    df.flush().map_err(io(&df_path))?;
+    if let Some(mut c) = carrier {
+        c.flush().map_err(io(&carrier_path))?;
+    }
+    imu.finish().map_err(io(&imu_path))?;
+    let truth_path = dir.join("truth.json");
+    let text = serde_json::to_string_pretty(&truth).expect("the truth serializes") + "\n";
+    std::fs::write(&truth_path, text).map_err(io(&truth_path))?;
+    Ok(IqSession { truth, wall_s })
 }

@@ -674,3 +674,36 @@ mod tests {
         assert_eq!(p.config(), OscillatorConfig::tcxo_low_quality());
     }
 }
+
+/// The Allan deviation of an oscillator simulated at `sample_interval_s` for
+/// `samples` samples next to its power-law model, at τ = T·2^k up to a
+/// quarter of the record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AllanComparison {
+    /// Averaging times τ \[s\].
+    pub taus_s: Vec<f64>,
+    /// Overlapping Allan deviation of the simulated fractional frequency.
+    pub simulated: Vec<f64>,
+    /// The model's Allan deviation ([`allan_deviation_theory_with_pm`]).
+    pub theory: Vec<f64>,
+    /// Length of the record \[s\].
+    pub duration_s: f64,
+}
+
+/// Simulates `cfg` with `seed` and compares its Allan deviation with the model.
+pub fn allan_comparison(
+    cfg: &OscillatorConfig,
+    sample_interval_s: f64,
+    samples: usize,
+    seed: u64,
+) -> Result<AllanComparison, crate::ConfigError> {
+    let dt = sample_interval_s;
+    let mut osc = Oscillator::try_new(cfg, dt, crate::rng::seeded(seed))?;
+    let mut y = vec![0.0; samples];
+    osc.fill(&mut y);
+    let duration_s = samples as f64 * dt;
+    let taus_s: Vec<f64> = (0..16).map(|k| dt * 2f64.powi(k)).filter(|t| *t <= duration_s / 4.0).collect();
+    let simulated = allan_deviations(&y, dt, &taus_s);
+    let theory = taus_s.iter().map(|&t| allan_deviation_theory_with_pm(cfg, t, dt)).collect();
+    Ok(AllanComparison { taus_s, simulated, theory, duration_s })
+}

@@ -137,6 +137,18 @@ pub enum OscillatorKind {
     Ideal,
 }
 
+impl OscillatorKind {
+    /// The preset in words, e.g. `OCXO preset`.
+    pub fn description(&self) -> &'static str {
+        match self {
+            OscillatorKind::Ocxo => "OCXO preset",
+            OscillatorKind::Tcxo => "TCXO preset",
+            OscillatorKind::TcxoLowQuality => "low-quality TCXO preset",
+            OscillatorKind::Ideal => "ideal preset with noise overrides",
+        }
+    }
+}
+
 /// `[oscillator]`: a noise preset, optional overrides of its parameters, the
 /// g-sensitivity and the carrier.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
