@@ -123,6 +123,9 @@ pub struct Outcome {
     pub settings: PipelineSettings,
     /// What the GNSS-SDR conversion did, for sessions from GNSS-SDR dumps.
     pub gnss_sdr: Option<GnssSdrConversion>,
+    /// The inputs as role → path (`imu`, `tracking`, `gnss_sdr_dumps`, …);
+    /// empty for logs given in memory. Callers may add their own (`truth`).
+    pub inputs: Vec<(String, String)>,
 }
 
 impl Outcome {
@@ -131,10 +134,10 @@ impl Outcome {
         series_of(&self.session)
     }
 
-    /// The result document of this calibration, naming its inputs as
-    /// (role, path) pairs.
-    pub fn document(&self, inputs: &[(&str, &str)], truth_gamma_hz_per_mps2: Option<[f64; 3]>) -> ResultDocument {
-        ResultDocument::new(self, inputs, truth_gamma_hz_per_mps2)
+    /// The result document of this calibration (with the true Γ when known).
+    pub fn document(&self, truth_gamma_hz_per_mps2: Option<[f64; 3]>) -> ResultDocument {
+        let inputs: Vec<(&str, &str)> = self.inputs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+        ResultDocument::new(self, &inputs, truth_gamma_hz_per_mps2)
     }
 }
 
@@ -196,14 +199,20 @@ pub fn calibrate_logs(
     calibration.imu_time_offset_estimated = offset_sigma.is_some();
     calibration.imu_time_offset_sigma_s = offset_sigma;
     calibration.loop_identification = identification;
-    Ok(Outcome { session, calibration, settings: settings.clone(), gnss_sdr: None })
+    Ok(Outcome { session, calibration, settings: settings.clone(), gnss_sdr: None, inputs: Vec::new() })
 }
 
 /// [`calibrate_logs`] on files: `imu.csv` and `tracking.csv`.
 pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings) -> Result<Outcome, PipelineError> {
     let tracking_log = gsens_io::read_tracking_file(tracking)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
-    calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), settings)
+    let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), settings)?;
+    outcome.inputs = vec![input("imu", imu), input("tracking", tracking)];
+    Ok(outcome)
+}
+
+fn input(role: &str, path: &Path) -> (String, String) {
+    (role.to_string(), path.display().to_string())
 }
 
 /// The tracking log of GNSS-SDR dumps on their common grid (every track
@@ -232,6 +241,7 @@ pub fn calibrate_gnss_sdr(
     settings.estimate.logged_phase = gsens_core::regressor::LoggedPhase::Last;
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
+    outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];
     Ok(outcome)
 }
 

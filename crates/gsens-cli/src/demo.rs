@@ -60,8 +60,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
          --loop-interval-s {} --logged-phase {logged})\n\n",
         l.order, l.bn_hz, l.interval_s
     ))?;
-    let inputs = [("imu", i.to_string()), ("tracking", t.to_string())];
-    let doc = outcome.document(&crate::estimate::input_refs(&inputs), Some(truth.gamma_hz_per_mps2));
+    let doc = outcome.document(Some(truth.gamma_hz_per_mps2));
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
         crate::estimate::write_json(path, &doc)?;

@@ -61,46 +61,34 @@ pub fn write_json(path: &Path, doc: &ResultDocument) -> Result<()> {
 }
 
 /// Runs the calibration the options describe: from tracking.csv, or from
-/// GNSS-SDR dumps (printing what became of each track); returns the outcome
-/// and the inputs by role.
+/// GNSS-SDR dumps (printing what became of each track).
 pub fn calibrate(
     imu: &Path,
     tracking: Option<&Path>,
     gnss_sdr: Option<&GnssSdrArgs>,
     settings: &PipelineSettings,
-) -> Result<(Outcome, Vec<(&'static str, String)>)> {
-    let mut inputs = vec![("imu", imu.display().to_string())];
-    let outcome = match (gnss_sdr.and_then(|g| g.gnss_sdr.as_ref().map(|d| (g, d))), tracking) {
+) -> Result<Outcome> {
+    match (gnss_sdr.and_then(|g| g.gnss_sdr.as_ref().map(|d| (g, d))), tracking) {
         (Some((gnss_sdr, dir)), _) => {
             let conf = gnss_sdr.gnss_sdr_conf.as_deref();
-            let import = gnss_sdr.conversion.import_settings(conf)?;
-            let outcome = calibrate_gnss_sdr(dir, &import, imu, settings)?;
+            let mut outcome = calibrate_gnss_sdr(dir, &gnss_sdr.conversion.import_settings(conf)?, imu, settings)?;
             if let Some(g) = &outcome.gnss_sdr {
                 crate::out(&gsens_report::render_gnss_sdr_tracks(&g.tracks, outcome.session.log_interval_s))?;
             }
             crate::out(&format!("GNSS-SDR loop: {}, modelled exactly\n", outcome.calibration.loop_used))?;
-            inputs.push(("gnss_sdr_dumps", dir.display().to_string()));
-            inputs.push(("gnss_sdr_conf", conf.map(|p| p.display().to_string()).unwrap_or_default()));
-            outcome
+            let conf = conf.map(|p| p.display().to_string()).unwrap_or_default();
+            outcome.inputs.push(("gnss_sdr_conf".into(), conf));
+            Ok(outcome)
         }
-        (None, Some(t)) => {
-            inputs.push(("tracking", t.display().to_string()));
-            calibrate_files(t, imu, settings)?
-        }
+        (None, Some(t)) => Ok(calibrate_files(t, imu, settings)?),
         (None, None) => anyhow::bail!("--tracking is required (or --gnss-sdr)"),
-    };
-    Ok((outcome, inputs))
-}
-
-/// The inputs as the document names them.
-pub fn input_refs<'a>(inputs: &'a [(&'static str, String)]) -> Vec<(&'a str, &'a str)> {
-    inputs.iter().map(|(k, v)| (*k, v.as_str())).collect()
+    }
 }
 
 pub fn run(args: &EstimateArgs) -> Result<()> {
     let settings = args.calibration.settings();
-    let (outcome, inputs) = calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?;
-    let doc = outcome.document(&input_refs(&inputs), None);
+    let outcome = calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?;
+    let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
         write_json(path, &doc)?;

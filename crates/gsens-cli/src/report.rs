@@ -2,7 +2,7 @@
 //! result document as JSON, the compensation parameters as a C header, and the
 //! figures as PNG and SVG.
 
-use crate::estimate::{CalibrationArgs, calibrate, input_refs};
+use crate::estimate::{CalibrationArgs, calibrate};
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::tool_version;
@@ -35,14 +35,15 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let bar = crate::spinner();
     bar.set_message("reading the logs and estimating Γ");
-    let (outcome, mut inputs) = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;
+    let mut outcome = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;
     if let Some(t) = &args.truth {
-        inputs.push(("truth", t.display().to_string()));
+        outcome.inputs.push(("truth".into(), t.display().to_string()));
     }
-    let doc = outcome.document(&input_refs(&inputs), truth);
+    let doc = outcome.document(truth);
     bar.set_message("reading the tracking log for C/N0");
     let tracking = gsens_io::read_tracking_file(&args.tracking)?;
-    let meta = ReportMeta::now(tool_version(), &input_refs(&inputs));
+    let inputs: Vec<(&str, &str)> = doc.inputs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+    let meta = ReportMeta::now(tool_version(), &inputs);
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     let figure_inputs = FigureInputs::new(&outcome, Some(&tracking), truth)?;
