@@ -1,7 +1,7 @@
 //! Why a calibration could not run.
 
-use gsens_core::pll::LoopError;
-use gsens_core::regressor::RegressorError;
+use gsens_core::LoopError;
+use gsens_core::RegressorError;
 
 /// Why a calibration (or one of its searches) could not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -3,15 +3,13 @@
 use crate::result::{Calibration, HistoryPoint};
 use crate::settings::{EstimateSettings, Method, Robust};
 use crate::{CalibError, gls, robust, search, verdict};
-use gsens_core::calibrator::FedEpoch;
-use gsens_core::estimator::{
-    BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance,
-};
-use gsens_core::observability::assess;
-use gsens_core::pll::LoopError;
-use gsens_core::regressor::RegressorModel;
+use gsens_core::FedEpoch;
+use gsens_core::LoopError;
+use gsens_core::RegressorModel;
+use gsens_core::assess;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
-use gsens_core::{Calibrator, GammaEstimator, compensate::compensated_phase_rad};
+use gsens_core::{BatchLeastSquares, GammaEstimate, GradientObserver, RecursiveLeastSquares, hac_covariance};
+use gsens_core::{Calibrator, GammaEstimator, compensated_phase_rad};
 
 /// Interval between two [`HistoryPoint`]s \[s\].
 pub const HISTORY_INTERVAL_S: f64 = 0.25;
@@ -72,7 +70,7 @@ pub fn compensation_series(
 
 /// What the loop models are fed: the specific force compensated for the
 /// model's linear interpolation between epochs
-/// ([`gsens_core::regressor::compensate_interpolation`]; without it Γ̂ is too
+/// ([`gsens_core::compensate_interpolation`]; without it Γ̂ is too
 /// large by (ωh)²/12, 0.17 % at 0.9 Hz and 40 Hz), or the series as it is when
 /// the loop runs at the log rate.
 pub(crate) fn model_input<'a>(accel: &'a [[f64; 3]], model: &RegressorModel) -> std::borrow::Cow<'a, [[f64; 3]]> {
@@ -81,7 +79,7 @@ pub(crate) fn model_input<'a>(accel: &'a [[f64; 3]], model: &RegressorModel) -> 
         return std::borrow::Cow::Borrowed(accel);
     }
     let mut a = accel.to_vec();
-    gsens_core::regressor::compensate_interpolation(&mut a, c);
+    gsens_core::compensate_interpolation(&mut a, c);
     std::borrow::Cow::Owned(a)
 }
 
@@ -173,7 +171,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
             let segments = gls::segments_of(fed.iter().map(|e| e.used));
             let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
             let middle = gls::covariance_middle(&g.noise, &phi_a, &segments);
-            sandwich(&batch.normal_equations().pseudo_inverse(gsens_core::estimator::RANK_TOL).0, &middle)
+            sandwich(&batch.normal_equations().pseudo_inverse(gsens_core::RANK_TOL).0, &middle)
         }
         None => {
             let max_lag = (settings.hac_lag_s / series.log_interval_s).round() as usize;
@@ -290,7 +288,7 @@ fn huber_pass(
     let (phase, phi_a): (Vec<f64>, Vec<[f64; 3]>) =
         fed.iter().filter(|e| e.used).map(|e| (e.phase_err_rad.unwrap_or(0.0), e.phi_a)).unzip();
     let max_lag = (settings.hac_lag_s / log_interval_s).round() as usize;
-    Ok(robust::huber_irls(&phase, &phi_a, estimate.gamma_hz_per_mps2, gsens_core::robust::HuberWeights::K_95, max_lag))
+    Ok(robust::huber_irls(&phase, &phi_a, estimate.gamma_hz_per_mps2, gsens_core::HuberWeights::K_95, max_lag))
 }
 
 /// GLS over the used epochs of a pass (their contiguous runs are the segments).

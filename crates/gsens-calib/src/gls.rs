@@ -45,7 +45,7 @@
 //! the GLS estimate reaches it when the AR model captures the noise.
 
 use core::ops::Range;
-use gsens_core::estimator::{GammaEstimate, NormalEquations, hac_covariance};
+use gsens_core::{GammaEstimate, NormalEquations, hac_covariance};
 use serde::Serialize;
 
 /// Default highest AR order tried by the order selection.

@@ -16,7 +16,7 @@
 //!   Γ̂ with its covariance, the Cramér–Rao bound, the observability verdict
 //!   per axis and what compensation removes out ([`Calibration`]). The
 //!   residuals of a carrier loop are coloured, so the uncertainty is
-//!   autocorrelation-robust ([`gsens_core::estimator::hac_covariance`]) or
+//!   autocorrelation-robust ([`gsens_core::hac_covariance`]) or
 //!   from an AR noise model ([`gls`]);
 //! - **systematic errors** ([`estimate_time_offset`], [`identify_loop`]): the
 //!   IMU time offset and the loop's natural frequency, jointly with Γ.
@@ -25,8 +25,8 @@
 //!
 //! ```
 //! use gsens_calib::{EpochSeries, EstimateSettings, calibrate};
-//! use gsens_core::regressor::RegressorModel;
-//! use gsens_core::{LoopModel, pll::LoopSpec};
+//! use gsens_core::RegressorModel;
+//! use gsens_core::{LoopModel, LoopSpec};
 //!
 //! // A synthetic session: x shaken at 0.9 Hz, φ = L[aᵀΓ] through the paper's loop.
 //! let t = 0.025;
@@ -35,7 +35,7 @@
 //!     (0..4000).map(|k| [2.0 * (std::f64::consts::TAU * 0.9 * k as f64 * t).sin(), 0.0, 9.81]).collect();
 //! let mut triad = RegressorModel::with_loop(
 //!     LoopModel::kaplan(LoopSpec::PAPER, Some(t)).runnable()?, t, t,
-//!     gsens_core::regressor::LoggedPhase::Last)?;
+//!     gsens_core::LoggedPhase::Last)?;
 //! let phase: Vec<Option<f64>> =
 //!     accel.iter().map(|a| { let p = triad.epoch(a); Some(p[0] * gamma[0]) }).collect();
 //! let t_s: Vec<f64> = (0..accel.len()).map(|k| k as f64 * t).collect();

@@ -17,9 +17,9 @@
 //! over that σ.
 
 use crate::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
+use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
-use gsens_core::pll::LoopSpec;
-use gsens_core::regressor::LoggedPhase;
+use gsens_core::LoopSpec;
 use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
 use gsens_sim::{LogsError, simulate_logs};
 use rayon::prelude::*;
@@ -174,7 +174,7 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
         .tracking_loop
         .coeffs()
         .ok()
-        .and_then(|c| gsens_core::pll::LoopSpec::Coefficients(c).wn_rad_per_s())
+        .and_then(|c| gsens_core::LoopSpec::Coefficients(c).wn_rad_per_s())
         .map(|wn| wn / std::f64::consts::TAU);
     let results = methods
         .iter()

@@ -238,7 +238,7 @@ pub fn calibrate_gnss_sdr(
     let imu_series = gsens_io::read_imu_file(imu)?;
     let mut settings = settings.clone();
     settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
-    settings.estimate.logged_phase = gsens_core::regressor::LoggedPhase::Last;
+    settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
     outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];

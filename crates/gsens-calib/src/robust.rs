@@ -14,7 +14,7 @@
 //!    [`MAX_ITERATIONS`]).
 //!
 //! The covariance is the M-estimator's sandwich `B⁻¹·S·B⁻¹`
-//! ([`gsens_core::robust::sandwich_covariance`]), with the scores ψ(r_k)·φ_a,k
+//! ([`gsens_core::sandwich_covariance`]), with the scores ψ(r_k)·φ_a,k
 //! autocorrelation-robust as for least squares (the residuals of a carrier
 //! loop are coloured).
 //!
@@ -22,8 +22,8 @@
 //! squares; an epoch with a wild phase error counts with weight c/|r| instead
 //! of pulling the fit quadratically.
 
-use gsens_core::estimator::NormalEquations;
-use gsens_core::robust::{HuberWeights, sandwich_covariance};
+use gsens_core::NormalEquations;
+use gsens_core::{HuberWeights, sandwich_covariance};
 use serde::{Deserialize, Serialize};
 
 /// Most IRLS iterations.

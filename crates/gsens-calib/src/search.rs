@@ -19,10 +19,10 @@
 use crate::estimate::{build_model, model_input};
 use crate::{CalibError, EpochSeries, EstimateSettings};
 use gsens_core::Calibrator;
+use gsens_core::FedEpoch;
 use gsens_core::LoopModel;
-use gsens_core::calibrator::FedEpoch;
-use gsens_core::estimator::{BatchLeastSquares, NormalEquations};
-use gsens_core::pll::LoopSpec;
+use gsens_core::LoopSpec;
+use gsens_core::{BatchLeastSquares, NormalEquations};
 use serde::{Deserialize, Serialize};
 
 /// Runs the batch estimator over the series; returns every epoch as fed
@@ -42,7 +42,7 @@ pub(crate) fn batch_pass(
 /// RSS of the least-squares fit from normal equations: φᵀφ − bᵀ(AᵀA)⁺b.
 fn rss(normal: &NormalEquations) -> f64 {
     normal.rss(&{
-        let (pinv, _) = normal.pseudo_inverse(gsens_core::estimator::RANK_TOL);
+        let (pinv, _) = normal.pseudo_inverse(gsens_core::RANK_TOL);
         pinv * normal.atb
     })
 }
@@ -211,7 +211,7 @@ fn scaled_loop(model: &LoopModel, scale: f64, zeta: Option<f64>) -> LoopModel {
     match *model {
         LoopModel::Kaplan { spec, interval_s } => LoopModel::kaplan(scaled_spec(&spec, scale, zeta), interval_s),
         LoopModel::GnssSdr(stage) => {
-            LoopModel::GnssSdr(gsens_core::pll::gnss_sdr::GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage })
+            LoopModel::GnssSdr(gsens_core::gnss_sdr::GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage })
         }
         other => other,
     }
@@ -221,11 +221,11 @@ fn scaled_spec(spec: &LoopSpec, scale: f64, zeta: Option<f64>) -> LoopSpec {
     match *spec {
         LoopSpec::SecondOrder { bn_hz, zeta: z0 } => {
             let z = zeta.unwrap_or(z0);
-            let wn = gsens_core::pll::second_order_wn_from_bn(bn_hz, z0) * scale;
-            LoopSpec::SecondOrder { bn_hz: gsens_core::pll::second_order_bn_from_wn(wn, z), zeta: z }
+            let wn = gsens_core::second_order_wn_from_bn(bn_hz, z0) * scale;
+            LoopSpec::SecondOrder { bn_hz: gsens_core::second_order_bn_from_wn(wn, z), zeta: z }
         }
         LoopSpec::ThirdOrder { bn_hz, a3, b3 } => LoopSpec::ThirdOrder { bn_hz: bn_hz * scale, a3, b3 },
-        LoopSpec::Coefficients(c) => LoopSpec::Coefficients(gsens_core::pll::LoopFilterCoeffs {
+        LoopSpec::Coefficients(c) => LoopSpec::Coefficients(gsens_core::LoopFilterCoeffs {
             c0_per_s: c.c0_per_s * scale,
             c1_per_s2: c.c1_per_s2 * scale * scale,
             c2_per_s3: c.c2_per_s3 * scale * scale * scale,

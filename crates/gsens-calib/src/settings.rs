@@ -2,10 +2,10 @@
 //! and the error model. Reported with every estimate.
 
 use crate::CalibError;
+use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
-use gsens_core::observability::ObservabilityCriteria;
-use gsens_core::pll::LoopSpec;
-use gsens_core::regressor::LoggedPhase;
+use gsens_core::LoopSpec;
+use gsens_core::ObservabilityCriteria;
 use serde::{Deserialize, Serialize};
 
 /// Which estimator produces Γ̂.
@@ -69,7 +69,7 @@ pub struct EstimateSettings {
     /// Epochs in the first `warmup_s` seconds only drive the loop models.
     pub warmup_s: f64,
     /// Corner of the identical high-pass on φ and φ_a \[Hz\] (0 = off); see
-    /// [`gsens_core::filter`].
+    /// [`gsens_core::HighPass`].
     pub highpass_hz: f64,
     /// Longest lag of the autocorrelation-robust covariance \[s\].
     pub hac_lag_s: f64,

@@ -121,7 +121,7 @@ mod tests {
                 [2.0 * (core::f64::consts::TAU * 0.9 * tt).sin(), 1.5 * (core::f64::consts::TAU * 0.2 * tt).sin(), 9.8]
             })
             .collect();
-        let l = LoopModel::kaplan(gsens_core::pll::LoopSpec::PAPER, Some(t));
+        let l = LoopModel::kaplan(gsens_core::LoopSpec::PAPER, Some(t));
         let v = axis_verdicts(&a, t, &l, [true, true, false], [1.0, 0.1, 0.0]);
         assert!((v[0].shaking_frequency_hz.unwrap() - 0.9).abs() < 0.02, "{:?}", v[0]);
         assert!(v[0].fraction_of_peak_sensitivity.unwrap() > 0.95);

@@ -4,7 +4,7 @@
 
 use gsens_calib::gls::{ArModel, GlsSettings, gls};
 use gsens_calib::{EpochSeries, EstimateSettings, Method, calibrate};
-use gsens_core::pll::{DiscretePll, LoopSpec};
+use gsens_core::{DiscretePll, LoopSpec};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;

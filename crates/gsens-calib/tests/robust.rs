@@ -3,8 +3,8 @@
 
 use gsens_calib::huber_irls;
 use gsens_calib::{EpochSeries, EstimateSettings, Method, Robust, calibrate};
-use gsens_core::pll::{DiscretePll, LoopSpec};
-use gsens_core::robust::HuberWeights;
+use gsens_core::HuberWeights;
+use gsens_core::{DiscretePll, LoopSpec};
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -37,7 +37,7 @@ fn direct(seed: u64, noise_rad: f64, outliers: bool) -> (Vec<f64>, Vec<[f64; 3]>
 }
 
 fn least_squares(phase: &[f64], phi_a: &[[f64; 3]]) -> [f64; 3] {
-    let mut ne = gsens_core::estimator::NormalEquations::default();
+    let mut ne = gsens_core::NormalEquations::default();
     for (p, a) in phase.iter().zip(phi_a) {
         ne.add(*p, a);
     }

@@ -2,7 +2,7 @@
 
 use gsens_calib::{EpochSeries, EstimateSettings, calibrate, estimate_time_offset, identify_loop};
 use gsens_core::LoopModel;
-use gsens_core::pll::{DiscretePll, LoopSpec};
+use gsens_core::{DiscretePll, LoopSpec};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rand_xoshiro::Xoshiro256PlusPlus;

@@ -7,7 +7,7 @@
 //! shaken along x, y, z in turn. Enough realism for timing, not for accuracy
 //! studies (use `gsens simulate` for those).
 
-use gsens_core::pll::{DiscretePll, LoopSpec};
+use gsens_core::{DiscretePll, LoopSpec};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rand_xoshiro::Xoshiro256PlusPlus;

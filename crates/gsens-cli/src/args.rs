@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use gsens_calib::{EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
 use gsens_core::LoopModel;
-use gsens_core::pll::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
+use gsens_core::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
 use gsens_session::{SelectionConfig, Weighting};
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@ use crate::args::{EstimatorArgs, GnssSdrArgs, LoggedArg, LoopArgs, SelectionArgs
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::{Outcome, PipelineSettings, ResultDocument, calibrate_files, calibrate_gnss_sdr};
-use gsens_core::regressor::LoggedPhase;
+use gsens_core::LoggedPhase;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]

@@ -114,7 +114,7 @@ fn response_reports_the_paper_loop_peak() {
     let out = dir.join("r.json");
     gsens(&["response", "--json", out.to_str().unwrap()]);
     let r = json(&out);
-    // conventions.md: peak at ωn/2π = 0.900 Hz with π/(ζωn) = 0.785 rad/Hz.
+    // docs/conventions.md: peak at ωn/2π = 0.900 Hz with π/(ζωn) = 0.785 rad/Hz.
     assert!((r["peak_hz"].as_f64().unwrap() - 0.9003).abs() < 1e-3);
     let wn = 2.0 * 3.0 / (std::f64::consts::FRAC_1_SQRT_2 + 1.0 / (4.0 * std::f64::consts::FRAC_1_SQRT_2));
     let expected = std::f64::consts::PI / (std::f64::consts::FRAC_1_SQRT_2 * wn);

@@ -2,10 +2,10 @@
 //! the estimator (the path a receiver runs at its log rate).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use gsens_core::estimator::{BatchLeastSquares, GradientObserver, RecursiveLeastSquares};
-use gsens_core::pll::LoopSpec;
-use gsens_core::regressor::{LoggedPhase, RegressorModel};
+use gsens_core::LoopSpec;
+use gsens_core::{BatchLeastSquares, GradientObserver, RecursiveLeastSquares};
 use gsens_core::{Calibrator, GammaEstimator};
+use gsens_core::{LoggedPhase, RegressorModel};
 use std::hint::black_box;
 
 fn bench_epoch<E: GammaEstimator>(c: &mut Criterion, name: &str, estimator: E, loop_interval_s: f64) {

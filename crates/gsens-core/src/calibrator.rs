@@ -1,7 +1,3 @@
-//! The per-epoch path of a receiver-side calibration: average the selected
-//! channels' phase errors, advance the triad, update the estimator. No
-//! allocation.
-
 use crate::estimator::{GammaEstimate, GammaEstimator};
 use crate::filter::HighPass;
 use crate::math::dot3;
@@ -42,6 +38,10 @@ pub struct FedEpoch {
 /// plus the change of the model's prediction φ_aᵀΓ̂ since then, and the epochs of the
 /// gap and the filter's settling after it (up to 3 time constants, at most 4×
 /// the gap) are left out of the estimate.
+///
+/// The per-epoch path of a receiver-side calibration: average the selected
+/// channels' phase errors, advance the triad, update the estimator. No
+/// allocation.
 #[derive(Debug, Clone)]
 pub struct Calibrator<E, L = ModelLoop> {
     model: RegressorModel<L>,

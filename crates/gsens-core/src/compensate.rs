@@ -1,9 +1,3 @@
-//! Compensation with an estimated Γ̂.
-//!
-//! Post-processing: φ_comp = φ − φ_aᵀΓ̂ (the paper's Fig. 5). In a receiver:
-//! the NCO command gets −aᵀΓ̂ added, cancelling the oscillator's Δf = aᵀΓ
-//! before it reaches the loop.
-
 use crate::math::dot3;
 
 /// φ − φ_aᵀΓ̂ \[rad\]: the phase error with the g-induced part removed.
@@ -13,6 +7,12 @@ pub fn compensated_phase_rad(phase_err_rad: f64, phi_a: &[f64; 3], gamma_hz_per_
 }
 
 /// A real-time compensator for receiver firmware.
+///
+/// Compensation with an estimated Γ̂.
+///
+/// Post-processing: φ_comp = φ − φ_aᵀΓ̂ (the paper's Fig. 5). In a receiver:
+/// the NCO command gets −aᵀΓ̂ added, cancelling the oscillator's Δf = aᵀΓ
+/// before it reaches the loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Compensator {
     /// Γ̂ \[Hz/(m/s²)\] at the tracked carrier.

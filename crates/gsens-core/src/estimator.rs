@@ -1,20 +1,3 @@
-//! Estimators of Γ from the measured phase error φ and the regressor φ_a.
-//!
-//! All share [`GammaEstimator`]: feed (φ_k, φ_a,k) epoch by epoch, ask for
-//! the estimate at any time. The model is φ_k = φ_a,kᵀΓ + n_k.
-//!
-//! - [`GradientObserver`]: the paper's observer dΓ̂/dt = k·φ_a·(φ − φ_aᵀΓ̂),
-//!   discretized by forward Euler at the log interval T:
-//!   Γ̂ ← Γ̂ + k·T·φ_a·(φ − φ_aᵀΓ̂). The error obeys
-//!   Γ̃ ← (I − k·T·φ_aφ_aᵀ)·Γ̃, whose eigenvalues are 1 (orthogonal to φ_a)
-//!   and 1 − k·T·|φ_a|²: it is stable iff 0 < k·T·|φ_a,k|² < 2 at every epoch
-//!   (monotone, no overshoot, for k·T·|φ_a|² ≤ 1).
-//! - [`RecursiveLeastSquares`]: the Kalman-type gain
-//!   K = Pφ_a/(λ + φ_aᵀPφ_a), Γ̂ ← Γ̂ + K·e, P ← (P − Kφ_aᵀP)/λ with an
-//!   optional forgetting factor λ ≤ 1.
-//! - [`BatchLeastSquares`]: normal equations accumulated epoch by epoch,
-//!   solved on request: Γ̂ = (AᵀA)⁻¹Aᵀφ, Cov = σ̂²(AᵀA)⁻¹.
-
 use crate::math::{dot3, sqrt};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
@@ -39,6 +22,23 @@ impl GammaEstimate {
 }
 
 /// One interface for feeding epochs to every estimator.
+///
+/// Estimators of Γ from the measured phase error φ and the regressor φ_a.
+///
+/// All share [`GammaEstimator`]: feed (φ_k, φ_a,k) epoch by epoch, ask for
+/// the estimate at any time. The model is φ_k = φ_a,kᵀΓ + n_k.
+///
+/// - [`GradientObserver`]: the paper's observer dΓ̂/dt = k·φ_a·(φ − φ_aᵀΓ̂),
+///   discretized by forward Euler at the log interval T:
+///   Γ̂ ← Γ̂ + k·T·φ_a·(φ − φ_aᵀΓ̂). The error obeys
+///   Γ̃ ← (I − k·T·φ_aφ_aᵀ)·Γ̃, whose eigenvalues are 1 (orthogonal to φ_a)
+///   and 1 − k·T·|φ_a|²: it is stable iff 0 < k·T·|φ_a,k|² < 2 at every epoch
+///   (monotone, no overshoot, for k·T·|φ_a|² ≤ 1).
+/// - [`RecursiveLeastSquares`]: the Kalman-type gain
+///   K = Pφ_a/(λ + φ_aᵀPφ_a), Γ̂ ← Γ̂ + K·e, P ← (P − Kφ_aᵀP)/λ with an
+///   optional forgetting factor λ ≤ 1.
+/// - [`BatchLeastSquares`]: normal equations accumulated epoch by epoch,
+///   solved on request: Γ̂ = (AᵀA)⁻¹Aᵀφ, Cov = σ̂²(AᵀA)⁻¹.
 pub trait GammaEstimator {
     /// Feeds one epoch: measured (channel-averaged) phase error \[rad\] and the
     /// regressor φ_a = L\[a\] at the same epoch.

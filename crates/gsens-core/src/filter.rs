@@ -1,17 +1,17 @@
-//! The identical high-pass applied to φ and φ_a before estimation.
-//!
-//! The averaged phase error carries slow content the regressors do not model:
-//! the steady-state error of the satellite's Doppler rate (−2π·ḟ/ωn² for a
-//! 2nd-order loop, ~0.1 rad for 0.5 Hz/s at Bn = 3 Hz), oscillator wander,
-//! multipath. A linear filter H applied to both sides keeps the model exact,
-//! H\[φ\] = H\[φ_a\]ᵀΓ + H\[n\], so Γ̂ stays unbiased while the slow content goes.
-
 use crate::math::{TAU, exp};
 
 /// First-order high-pass y_k = α·(y_{k−1} + x_k − x_{k−1}), α = e^{−2π·f_c·T}
 /// (the "DC blocker"; H(z) = α(1 − z⁻¹)/(1 − αz⁻¹), gain ≈ 0.994 at 0.9 Hz
 /// for f_c = 0.05 Hz at 40 Hz).
 /// Primed with the first sample, so a constant input gives 0 from the start.
+///
+/// The identical high-pass applied to φ and φ_a before estimation.
+///
+/// The averaged phase error carries slow content the regressors do not model:
+/// the steady-state error of the satellite's Doppler rate (−2π·ḟ/ωn² for a
+/// 2nd-order loop, ~0.1 rad for 0.5 Hz/s at Bn = 3 Hz), oscillator wander,
+/// multipath. A linear filter H applied to both sides keeps the model exact,
+/// H\[φ\] = H\[φ_a\]ᵀΓ + H\[n\], so Γ̂ stays unbiased while the slow content goes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HighPass {
     alpha: f64,

@@ -6,29 +6,42 @@
 //! (all transcendental functions come from `libm`, so results are the same
 //! bit for bit with and without `std`).
 //!
-//! The method (see `shared/conventions.md`): the oscillator adds a frequency
+//! The method (see `docs/conventions.md`): the oscillator adds a frequency
 //! bias Δf = aᵀΓ \[Hz\] to every carrier NCO, `a` the specific force \[m/s²\] in
 //! the IMU body frame and Γ the g-sensitivity vector \[Hz/(m/s²)\]. The carrier
 //! loop turns it into a phase tracking error φ = L\[Δf\]. A triad of software
 //! loop models gives φ_a = L\[a\], so φ = φ_aᵀΓ + noise, which the estimators in
-//! [`estimator`] solve for Γ.
+//! [`GammaEstimator`]s solve for Γ. The loop models and their signs are on
+//! [`DiscretePll`] and [`LoopModel`]; everything in `docs/conventions.md`.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 
-pub mod calibrator;
-pub mod compensate;
-pub mod estimator;
-pub mod filter;
+mod calibrator;
+mod compensate;
+mod estimator;
+mod filter;
 mod loop_model;
-pub mod math;
-pub mod observability;
-pub mod pll;
-pub mod regressor;
-pub mod robust;
+mod math;
+mod observability;
+mod pll;
+mod regressor;
+mod robust;
 pub mod units;
 
-pub use calibrator::{Calibrator, average_phase_rad};
-pub use estimator::{BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, RecursiveLeastSquares};
+pub use pll::gnss_sdr;
+
+pub use calibrator::{Calibrator, FedEpoch, average_phase_rad};
+pub use compensate::{Compensator, compensated_phase_rad};
+pub use estimator::{
+    BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, NormalEquations, RANK_TOL,
+    RecursiveLeastSquares, hac_covariance,
+};
+pub use filter::HighPass;
 pub use loop_model::{LoopModel, LoopPeak};
-pub use pll::{CarrierLoop, DiscretePll, LoopFilter, LoopFilterCoeffs, LoopSpec};
-pub use regressor::{LoggedPhase, RegressorModel};
+pub use observability::{Observability, ObservabilityCriteria, assess};
+pub use pll::{
+    CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopError, LoopFilter, LoopFilterCoeffs,
+    LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,
+};
+pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation};
+pub use robust::{HuberWeights, sandwich_covariance};

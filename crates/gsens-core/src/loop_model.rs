@@ -27,7 +27,7 @@ const BAND_LO_HZ: f64 = 1e-4;
 #[cfg_attr(feature = "serde", serde(tag = "implementation", rename_all = "snake_case"))]
 #[non_exhaustive]
 pub enum LoopModel {
-    /// The loop of [`crate::pll`]'s docs (Kaplan & Hegarty's filter,
+    /// The loop of [`DiscretePll`]'s docs (Kaplan & Hegarty's filter,
     /// integrators clocked once per update) with the filter of `spec`,
     /// updated every `interval_s` seconds (`None`: the continuous-time limit).
     Kaplan {
@@ -196,7 +196,7 @@ impl LoopModel {
 
     /// |L| \[rad/Hz\].
     pub fn magnitude(&self, f_hz: f64) -> f64 {
-        self.response(f_hz).norm()
+        sqrt(self.response(f_hz).norm_sqr())
     }
 
     /// Highest frequency the response is searched to: 1 kHz or just below Nyquist.

@@ -1,12 +1,3 @@
-//! Which axes of Γ the data can observe.
-//!
-//! From the information matrix AᵀA = Σ φ_aφ_aᵀ: the excitation of axis i that
-//! the other two axes cannot explain is the Schur complement
-//! S_i = 1/\[(AᵀA)⁻¹\]_ii; its RMS per epoch, √(S_i/n) \[rad per Hz/(m/s²)\], is
-//! the phase error a unit Γ_i leaves that no other axis can mimic. An axis is
-//! observable when that excitation is above a floor and its 1σ is below a
-//! ceiling; both thresholds are settings, reported with the verdict.
-
 use crate::estimator::{GammaEstimate, NormalEquations, RANK_TOL};
 use crate::math::sqrt;
 use nalgebra::SymmetricEigen;
@@ -40,6 +31,15 @@ pub struct Observability {
 }
 
 /// Judges each axis from the normal equations and the estimate's covariance.
+///
+/// Which axes of Γ the data can observe.
+///
+/// From the information matrix AᵀA = Σ φ_aφ_aᵀ: the excitation of axis i that
+/// the other two axes cannot explain is the Schur complement
+/// S_i = 1/\[(AᵀA)⁻¹\]_ii; its RMS per epoch, √(S_i/n) \[rad per Hz/(m/s²)\], is
+/// the phase error a unit Γ_i leaves that no other axis can mimic. An axis is
+/// observable when that excitation is above a floor and its 1σ is below a
+/// ceiling; both thresholds are settings, reported with the verdict.
 pub fn assess(normal: &NormalEquations, estimate: &GammaEstimate, criteria: &ObservabilityCriteria) -> Observability {
     let n = normal.n.max(1) as f64;
     let (pinv, rank) = normal.pseudo_inverse(RANK_TOL);

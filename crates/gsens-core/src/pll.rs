@@ -1,49 +1,3 @@
-//! Carrier-loop models: loop filter, NCO, the discrete loop as receivers run
-//! it, and its frequency response.
-//!
-//! # Signs and the operator L
-//!
-//! φ = θ_signal − θ_replica \[rad\]; the oscillator adds Δf \[Hz\] to the NCO's
-//! commanded frequency. For a loop filter
-//! F(s) = c0 + c1/s + c2/s² (rad/s of NCO command per rad of phase error) the
-//! continuous loop gives
-//!
-//! ```text
-//! L(s) = φ(s)/Δf(s) = −2π / (s + F(s)) = −2π·s² / (s³ + c0·s² + c1·s + c2)   [rad/Hz]
-//! ```
-//!
-//! which is conventions.md's 2nd-order form with c0 = 2ζωn, c1 = ωn², c2 = 0
-//! and Kaplan & Hegarty's 3rd-order form with c0 = b3·ωn, c1 = a3·ωn²,
-//! c2 = ωn³ (Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.3, Table 5.6).
-//!
-//! # The discrete loop (what receivers run)
-//!
-//! The loop is updated once per coherent integration of length T. Integration
-//! k covers \[kT, (k+1)T\]; during it the NCO runs at the constant commanded
-//! frequency f_k plus the oscillator bias Δf_k (its mean over the interval).
-//! With e_k the phase error at the start of the interval:
-//!
-//! ```text
-//! φ_k      = e_k − π·T·(f_k + Δf_k)          discriminator: mean phase error over the interval
-//! e_{k+1}  = e_k − 2π·T·(f_k + Δf_k)         NCO phase accumulates the frequency it ran at
-//! a2_k     = a2_{k−1} + c2·T·φ_k             integrators updated once per T (rectangular rule)
-//! a1_k     = a1_{k−1} + T·(c1·φ_k + a2_k)
-//! f_{k+1}  = (c0·φ_k + a1_k) / 2π            applied to the next integration (one update of latency)
-//! ```
-//!
-//! This is the structure of the digital loop filter of Kaplan & Hegarty
-//! (Fig. 5.17 and 5.18: accumulators clocked once per predetection integration,
-//! the NCO as a phase accumulator) with the filter output applied to the next
-//! integration, as it must be since the correlation of interval k ends at
-//! (k+1)T. In z, with G(z) = π·T·(z+1)/(z−1) and
-//! F_d(z) = c0 + c1·T/(1−z⁻¹) + c2·T²/(1−z⁻¹)²:
-//!
-//! ```text
-//! L_d(z) = −G(z) / (1 + G(z)·z⁻¹·F_d(z)/2π)
-//! ```
-//!
-//! which tends to L(s) as T → 0 (z = e^{sT}).
-
 use crate::math::{PI, TAU, cos, sin, sqrt};
 
 pub mod gnss_sdr;
@@ -413,6 +367,52 @@ impl CarrierLoop {
 /// The linear discrete loop: one Δf sample in, one phase error out (the
 /// difference equations of the module docs). This is the operator L in
 /// discrete time, with an ideal (linear, mean-phase) discriminator.
+///
+/// Carrier-loop models: loop filter, NCO, the discrete loop as receivers run
+/// it, and its frequency response.
+///
+/// # Signs and the operator L
+///
+/// φ = θ_signal − θ_replica \[rad\]; the oscillator adds Δf \[Hz\] to the NCO's
+/// commanded frequency. For a loop filter
+/// F(s) = c0 + c1/s + c2/s² (rad/s of NCO command per rad of phase error) the
+/// continuous loop gives
+///
+/// ```text
+/// L(s) = φ(s)/Δf(s) = −2π / (s + F(s)) = −2π·s² / (s³ + c0·s² + c1·s + c2)   [rad/Hz]
+/// ```
+///
+/// which is docs/conventions.md's 2nd-order form with c0 = 2ζωn, c1 = ωn², c2 = 0
+/// and Kaplan & Hegarty's 3rd-order form with c0 = b3·ωn, c1 = a3·ωn²,
+/// c2 = ωn³ (Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.3, Table 5.6).
+///
+/// # The discrete loop (what receivers run)
+///
+/// The loop is updated once per coherent integration of length T. Integration
+/// k covers \[kT, (k+1)T\]; during it the NCO runs at the constant commanded
+/// frequency f_k plus the oscillator bias Δf_k (its mean over the interval).
+/// With e_k the phase error at the start of the interval:
+///
+/// ```text
+/// φ_k      = e_k − π·T·(f_k + Δf_k)          discriminator: mean phase error over the interval
+/// e_{k+1}  = e_k − 2π·T·(f_k + Δf_k)         NCO phase accumulates the frequency it ran at
+/// a2_k     = a2_{k−1} + c2·T·φ_k             integrators updated once per T (rectangular rule)
+/// a1_k     = a1_{k−1} + T·(c1·φ_k + a2_k)
+/// f_{k+1}  = (c0·φ_k + a1_k) / 2π            applied to the next integration (one update of latency)
+/// ```
+///
+/// This is the structure of the digital loop filter of Kaplan & Hegarty
+/// (Fig. 5.17 and 5.18: accumulators clocked once per predetection integration,
+/// the NCO as a phase accumulator) with the filter output applied to the next
+/// integration, as it must be since the correlation of interval k ends at
+/// (k+1)T. In z, with G(z) = π·T·(z+1)/(z−1) and
+/// F_d(z) = c0 + c1·T/(1−z⁻¹) + c2·T²/(1−z⁻¹)²:
+///
+/// ```text
+/// L_d(z) = −G(z) / (1 + G(z)·z⁻¹·F_d(z)/2π)
+/// ```
+///
+/// which tends to L(s) as T → 0 (z = e^{sT}).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DiscretePll {
     carrier: CarrierLoop,

@@ -1,31 +1,3 @@
-//! The triad of software loop models fed by a_x, a_y, a_z: φ_a = L\[a\].
-//!
-//! The model loop runs at the receiver's loop update interval T_loop, which
-//! may be shorter than the log interval T_log = n·T_loop. Between two log
-//! epochs the specific force is interpolated linearly (the loop is far slower
-//! than the log rate, so the interpolation error is second order in the log
-//! interval). What a log row holds depends on the receiver:
-//!
-//! - [`LoggedPhase::Last`]: the discriminator output of the integration
-//!   centred on the row's time stamp (the last one before the row is written);
-//! - [`LoggedPhase::Mean`]: the mean of the n discriminator outputs since the
-//!   previous row, time-stamped like `Last` at the centre of the latest one.
-//!
-//! With n = 1 the two are the same.
-//!
-//! # Interpolation and its compensation
-//!
-//! Linear interpolation of the samples a_k onto the n loop updates between two
-//! epochs is a triangular upsampling kernel: a sinusoid of angular frequency ω
-//! comes out scaled by ≈ 1 − (1 − 1/n²)·(ωh)²/12 (h the log interval), −0.17 %
-//! at 0.9 Hz and 40 Hz. φ_a would be too small by as much and Γ̂ too large
-//! (the bias is of the order of the Cramér–Rao bound of a paper-like session).
-//! A batch caller can remove it with [`compensate_interpolation`], the
-//! three-tap filter a_k + c·(2a_k − a_{k−1} − a_{k+1}), c =
-//! [`RegressorModel::interpolation_compensation`], whose gain 1 + 2c·(1 − cos ωh)
-//! cancels the kernel's to O((ωh)⁴); it needs the next sample, so the
-//! per-epoch path does without it.
-
 use crate::pll::{DiscretePll, LinearLoop, LoopFilterCoeffs, ModelLoop};
 
 /// What a tracking-log row reports when the loop runs faster than the log.
@@ -70,6 +42,34 @@ impl core::error::Error for RegressorError {}
 /// φ_a = L\[a\] epoch by epoch: three identical loop models, one per axis
 /// ([`DiscretePll`]s from [`RegressorModel::new`], any [`LinearLoop`] from
 /// [`RegressorModel::with_loop`]).
+///
+/// The triad of software loop models fed by a_x, a_y, a_z: φ_a = L\[a\].
+///
+/// The model loop runs at the receiver's loop update interval T_loop, which
+/// may be shorter than the log interval T_log = n·T_loop. Between two log
+/// epochs the specific force is interpolated linearly (the loop is far slower
+/// than the log rate, so the interpolation error is second order in the log
+/// interval). What a log row holds depends on the receiver:
+///
+/// - [`LoggedPhase::Last`]: the discriminator output of the integration
+///   centred on the row's time stamp (the last one before the row is written);
+/// - [`LoggedPhase::Mean`]: the mean of the n discriminator outputs since the
+///   previous row, time-stamped like `Last` at the centre of the latest one.
+///
+/// With n = 1 the two are the same.
+///
+/// # Interpolation and its compensation
+///
+/// Linear interpolation of the samples a_k onto the n loop updates between two
+/// epochs is a triangular upsampling kernel: a sinusoid of angular frequency ω
+/// comes out scaled by ≈ 1 − (1 − 1/n²)·(ωh)²/12 (h the log interval), −0.17 %
+/// at 0.9 Hz and 40 Hz. φ_a would be too small by as much and Γ̂ too large
+/// (the bias is of the order of the Cramér–Rao bound of a paper-like session).
+/// A batch caller can remove it with [`compensate_interpolation`], the
+/// three-tap filter a_k + c·(2a_k − a_{k−1} − a_{k+1}), c =
+/// [`RegressorModel::interpolation_compensation`], whose gain 1 + 2c·(1 − cos ωh)
+/// cancels the kernel's to O((ωh)⁴); it needs the next sample, so the
+/// per-epoch path does without it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegressorModel<L = ModelLoop> {
     triad: [L; 3],

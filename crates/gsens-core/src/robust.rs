@@ -1,23 +1,23 @@
-//! Huber's M-estimator pieces for a batch fit of φ = φ_aᵀΓ + n robust to
-//! outliers: the weights of iteratively reweighted least squares and the
-//! sandwich covariance (autocorrelation-robust, as
-//! [`crate::estimator::hac_covariance`]).
-//!
-//! Huber's estimator minimizes Σ ρ(r_k) with ρ(r) = r²/2 for |r| ≤ c and
-//! c·|r| − c²/2 beyond: quadratic (least squares) for the bulk of the
-//! residuals, linear for the outliers, so a few wild epochs pull Γ̂ by a
-//! bounded amount. With c = 1.345·σ (σ the residuals' scale) it keeps 95 % of
-//! the efficiency of least squares under Gaussian noise (Huber, *Robust
-//! Statistics*, 1981). Its influence function ψ = ρ′ = clip(r, ±c) gives the
-//! IRLS weights w = ψ(r)/r = min(1, c/|r|) and the sandwich covariance
-//! `B⁻¹·S·B⁻¹`, `B = Σ ψ′(r_k)·φ_a,k φ_a,kᵀ`, `S` the (Bartlett-weighted)
-//! autocovariance sum of the scores `ψ(r_k)·φ_a,k`.
-
 use crate::estimator::{NormalEquations, RANK_TOL, mark_unobservable, pseudo_inverse_sym};
 use crate::math::abs;
 use nalgebra::{Matrix3, Vector3};
 
 /// Huber's ψ with threshold `c = k·scale`.
+///
+/// Huber's M-estimator pieces for a batch fit of φ = φ_aᵀΓ + n robust to
+/// outliers: the weights of iteratively reweighted least squares and the
+/// sandwich covariance (autocorrelation-robust, as
+/// [`crate::estimator::hac_covariance`]).
+///
+/// Huber's estimator minimizes Σ ρ(r_k) with ρ(r) = r²/2 for |r| ≤ c and
+/// c·|r| − c²/2 beyond: quadratic (least squares) for the bulk of the
+/// residuals, linear for the outliers, so a few wild epochs pull Γ̂ by a
+/// bounded amount. With c = 1.345·σ (σ the residuals' scale) it keeps 95 % of
+/// the efficiency of least squares under Gaussian noise (Huber, *Robust
+/// Statistics*, 1981). Its influence function ψ = ρ′ = clip(r, ±c) gives the
+/// IRLS weights w = ψ(r)/r = min(1, c/|r|) and the sandwich covariance
+/// `B⁻¹·S·B⁻¹`, `B = Σ ψ′(r_k)·φ_a,k φ_a,kᵀ`, `S` the (Bartlett-weighted)
+/// autocovariance sum of the scores `ψ(r_k)·φ_a,k`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HuberWeights {
     /// The threshold c in the residuals' unit (rad): residuals beyond it count linearly.

@@ -10,7 +10,7 @@ pub const GPS_L1_HZ: f64 = 1_575.42e6;
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 
 /// Γ \[Hz/(m/s²)\] at the carrier → normalized sensitivity \[ppb/g\]:
-/// ppb/g = Γ · g₀ / f_carrier · 1e9 (conventions.md, "Units and signs").
+/// ppb/g = Γ · g₀ / f_carrier · 1e9 (docs/conventions.md, "Units and signs").
 pub fn hz_per_mps2_to_ppb_per_g(gamma_hz_per_mps2: f64, carrier_hz: f64) -> f64 {
     gamma_hz_per_mps2 * STANDARD_GRAVITY_MPS2 / carrier_hz * 1e9
 }
@@ -30,7 +30,7 @@ mod tests {
     use super::*;
     #[test]
     fn ppb_round_trip_and_paper_value() {
-        // conventions.md: 0.09 Hz/(m/s²) at L1 ≈ 0.56 ppb/g.
+        // docs/conventions.md: 0.09 Hz/(m/s²) at L1 ≈ 0.56 ppb/g.
         let ppb = hz_per_mps2_to_ppb_per_g(0.09, GPS_L1_HZ);
         assert!((ppb - 0.56).abs() < 0.005, "{ppb}");
         assert!((ppb_per_g_to_hz_per_mps2(ppb, GPS_L1_HZ) - 0.09).abs() < 1e-15);

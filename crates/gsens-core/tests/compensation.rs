@@ -36,8 +36,8 @@
 //! fed the three axes, post-processing φ_uncomp − φ_aᵀΓ̂ must equal the closed
 //! loop compensated in real time with the same Γ̂.
 
-use gsens_core::compensate::{Compensator, compensated_phase_rad};
-use gsens_core::pll::{DiscretePll, LoopFilterCoeffs, LoopSpec};
+use gsens_core::{Compensator, compensated_phase_rad};
+use gsens_core::{DiscretePll, LoopFilterCoeffs, LoopSpec};
 use std::f64::consts::{PI, TAU};
 
 /// Γ \[Hz/(m/s²)\]: ~1e-9/g at L1, different on every axis.

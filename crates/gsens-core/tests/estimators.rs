@@ -1,9 +1,9 @@
 //! Estimators against synthetic data generated through the same discrete loop.
 
-use gsens_core::estimator::*;
-use gsens_core::observability::{ObservabilityCriteria, assess};
-use gsens_core::pll::{DiscretePll, LoopSpec};
-use gsens_core::regressor::{LoggedPhase, RegressorModel};
+use gsens_core::*;
+use gsens_core::{DiscretePll, LoopSpec};
+use gsens_core::{LoggedPhase, RegressorModel};
+use gsens_core::{ObservabilityCriteria, assess};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rand_xoshiro::Xoshiro256PlusPlus;

@@ -1,7 +1,7 @@
 //! The regressor's linear interpolation between log epochs and its compensation.
 
-use gsens_core::pll::{DiscretePll, LoopSpec};
-use gsens_core::regressor::{LoggedPhase, RegressorModel, compensate_interpolation};
+use gsens_core::{DiscretePll, LoopSpec};
+use gsens_core::{LoggedPhase, RegressorModel, compensate_interpolation};
 use std::f64::consts::TAU;
 
 /// φ_a from the exact specific force at every 1 ms loop update (what the

@@ -1,7 +1,7 @@
-//! Known answers for the loop models (conventions.md, "PLL parametrization").
+//! Known answers for the loop models (docs/conventions.md, "PLL parametrization").
 
 use gsens_core::LoopModel;
-use gsens_core::pll::*;
+use gsens_core::*;
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
 fn paper() -> LoopFilterCoeffs {
@@ -206,7 +206,7 @@ fn loop_model_refuses_an_unstable_loop_and_tends_to_the_continuous_one() {
 
 #[test]
 fn gnss_sdr_loop_equivalent_coefficients_match_its_exact_response_at_low_rate() {
-    use gsens_core::pll::gnss_sdr::GnssSdrStage;
+    use gsens_core::gnss_sdr::GnssSdrStage;
     // At 1 ms integrations the exact GNSS-SDR loop is close to its continuous equivalent.
     for order in [2, 3] {
         let m = LoopModel::GnssSdr(GnssSdrStage { order, bw_hz: 3.0, symbols: 1 });

@@ -53,7 +53,7 @@ pub const DEFAULT_PLL_BW_HZ: f64 = 35.0;
 pub const DEFAULT_PLL_BW_NARROW_HZ: f64 = 5.0;
 /// `pull_in_time_s` assumed when absent \[s\] (conservative; not measured).
 pub const ASSUMED_PULL_IN_TIME_S: f64 = 10.0;
-/// The tracking implementation whose loop [`gsens_core::pll::gnss_sdr`] models.
+/// The tracking implementation whose loop [`gsens_core::gnss_sdr`] models.
 pub const SUPPORTED_TRACKING: &str = "GPS_L1_CA_DLL_PLL_Tracking";
 
 /// The carrier-loop settings of GNSS-SDR's GPS L1 C/A tracking (`Tracking_1C.*`).

@@ -1,5 +1,5 @@
 //! GNSS-SDR tracking dumps → gsens's tracking schema
-//! (`t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`, conventions.md).
+//! (`t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`, docs/conventions.md).
 //!
 //! # Records, tracks and stages
 //!
@@ -16,7 +16,7 @@
 //!   counter at its end (`PRN_start_sample_count`) and Δn its length, in the
 //!   receiver's sample time (sample 0 of the file at t = 0);
 //! - `phase_err_rad` = 2π·`carr_error_hz` (the discriminator output in cycles;
-//!   its sign is θ_signal − θ_replica, conventions.md's);
+//!   its sign is θ_signal − θ_replica, docs/conventions.md's);
 //! - `cn0_dbhz` = `CN0_SNV_dB_Hz`; the elevation is unknown (empty);
 //! - `carrier_lock_test`, an extra column ([`write_imported_csv`]).
 //!
@@ -47,7 +47,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use gsens_core::pll::gnss_sdr::{GnssSdrPll, GnssSdrStage};
+use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};
 use gsens_io::TrackingRow;
 
 use crate::conf::TrackingConf;

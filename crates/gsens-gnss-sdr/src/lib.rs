@@ -11,7 +11,7 @@
 //! - [`import`]: dumps → the `tracking.csv` schema (φ in rad, time at the
 //!   middle of each integration), false tracks dropped with a reason;
 //! - the exact models of its carrier loops live in
-//!   [`gsens_core::pll::gnss_sdr`] (no_std, shared with the estimator).
+//!   [`gsens_core::gnss_sdr`] (no_std, shared with the estimator).
 #![deny(missing_docs)]
 
 pub mod conf;

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use gsens_calib::{EpochSeries, EstimateSettings, calibrate};
 use gsens_core::LoopModel;
-use gsens_core::pll::gnss_sdr::{GnssSdrPll, GnssSdrStage};
-use gsens_core::pll::{LinearLoop, LoopSpec};
+use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};
+use gsens_core::{LinearLoop, LoopSpec};
 use gsens_gnss_sdr::conf::GnssSdrConf;
 use gsens_gnss_sdr::dump::{TrackingRecord, parse_dump, read_dump};
 use gsens_gnss_sdr::import::{ImportSettings, import_dir, resample};
@@ -97,7 +97,7 @@ fn filter_replay(order: u8, r: &[TrackingRecord]) -> (f64, f64) {
     let k = switch_index(r);
     let stage_of = |i: usize| if i < k { (35.0, 0.001) } else { (3.0, 0.02) };
     let run = |w0: f64, x0: f64, zero_input: bool| -> Vec<f64> {
-        let mut f = gsens_core::pll::gnss_sdr::GnssSdrFilter::new(order, 35.0, 0.001);
+        let mut f = gsens_core::gnss_sdr::GnssSdrFilter::new(order, 35.0, 0.001);
         f.set_state(w0, x0);
         (0..r.len())
             .map(|i| {

@@ -18,7 +18,7 @@
 use crate::spectrum::welch_psd;
 use gsens_calib::HistoryPoint;
 use gsens_core::LoopModel;
-use gsens_core::pll::{Complex, LoopError};
+use gsens_core::{Complex, LoopError};
 use plotters::coord::Shift;
 use plotters::coord::combinators::{LogCoord, WithKeyPoints};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};

@@ -2,7 +2,7 @@
 
 use crate::AXES;
 use gsens_calib::ResultDocument;
-use gsens_core::regressor::LoggedPhase;
+use gsens_core::LoggedPhase;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
 use gsens_gnss_sdr::import::TrackSummary;
 use gsens_session::Weighting;

@@ -5,7 +5,7 @@ mod common;
 
 use common::{TRUTH, check_svg, out_dir, png_facts, session};
 use gsens_core::LoopModel;
-use gsens_core::pll::LoopSpec;
+use gsens_core::LoopSpec;
 use gsens_report::figures::*;
 
 /// Renders both formats, checks them and leaves them in the test output folder.

@@ -5,7 +5,7 @@ mod common;
 use common::{TRUTH, out_dir, session};
 use gsens_calib::{LoopIdentificationMode, PipelineSummary, ResultDocument, TimeOffset};
 use gsens_core::LoopModel;
-use gsens_core::pll::LoopSpec;
+use gsens_core::LoopSpec;
 use gsens_report::cheader::render_c_header;
 use gsens_report::figures::*;
 use gsens_report::html::render_html;

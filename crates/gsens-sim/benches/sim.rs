@@ -12,7 +12,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use gsens_core::pll::LoopSpec;
+use gsens_core::LoopSpec;
 use gsens_sim::channel::{Channel, ChannelConfig, ChannelStart, Discriminator};
 use gsens_sim::rng::substream;
 use gsens_sim::scenario::Scenario;

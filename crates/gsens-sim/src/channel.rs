@@ -3,7 +3,7 @@
 //! # What is simulated
 //!
 //! The channel keeps the *true* carrier phase error e = θ_signal − θ_replica
-//! \[rad\] (conventions.md sign: positive when the incoming carrier leads the
+//! \[rad\] (docs/conventions.md sign: positive when the incoming carrier leads the
 //! replica), unwrapped, so that cycle slips stay visible. The replica is
 //! driven by the core's [`CarrierLoop`] (loop filter + NCO, the very code the
 //! estimator's loop models run: shared, not copied). Integration k lasts T
@@ -13,7 +13,7 @@
 //!   the integration's centre — the mean over the interval for a linearly
 //!   varying Doppler);
 //! - the replica runs at the NCO command plus `nco_bias_hz`, the oscillator
-//!   bias Δf = f_carrier·y + aᵀΓ (conventions.md: the bias is *added* to the
+//!   bias Δf = f_carrier·y + aᵀΓ (docs/conventions.md: the bias is *added* to the
 //!   commanded frequency) plus any Doppler aiding.
 //!
 //! The phase error is then a linear ramp over the interval,
@@ -40,7 +40,7 @@
 //! Hz). At high SNR the atan discriminator's noise then has variance
 //! σ² = 1/(2·(C/N0)·T) per update, and a loop of noise bandwidth Bn turns it
 //! into the phase jitter Bn/(C/N0) — the first term of the Costas formula of
-//! conventions.md (Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.6.2).
+//! docs/conventions.md (Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.6.2).
 //!
 //! # Discriminators
 //!
@@ -50,9 +50,9 @@
 //!   every 2π.
 //!
 //! The discriminator output is the mean-phase estimate φ_k of
-//! `gsens_core::pll`'s difference equations; the channel then calls
+//! the difference equations of `gsens_core::DiscretePll`; the channel then calls
 //! [`CarrierLoop::close`], so without noise and within ±π/2 it reproduces
-//! [`gsens_core::pll::DiscretePll`] exactly.
+//! [`gsens_core::DiscretePll`] exactly.
 //!
 //! # Lock indicator, slips, C/N0 estimate
 //!
@@ -77,7 +77,7 @@
 
 use core::f64::consts::{FRAC_PI_2, PI, TAU};
 
-use gsens_core::pll::{CarrierLoop, LoopFilterCoeffs};
+use gsens_core::{CarrierLoop, LoopFilterCoeffs};
 use rand::{Rng, RngExt};
 use rand_distr::StandardNormal;
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -600,7 +600,7 @@ impl Channel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gsens_core::pll::{DiscretePll, LoopSpec};
+    use gsens_core::{DiscretePll, LoopSpec};
 
     fn cfg() -> ChannelConfig {
         ChannelConfig::new(LoopSpec::PAPER.coeffs().unwrap(), 0.001, Discriminator::Costas)

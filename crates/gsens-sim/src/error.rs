@@ -20,7 +20,7 @@
 
 use std::num::ParseFloatError;
 
-use gsens_core::pll::LoopError;
+use gsens_core::LoopError;
 
 /// An invalid value in a scenario or a model's configuration.
 ///

@@ -6,7 +6,7 @@
 //! f_body = C·(a_level − g_level), C = body_from_level, a_level the kinematic
 //! acceleration, g_level = (0, 0, −g₀) in the z-up level frame, g₀ =
 //! [`STANDARD_GRAVITY_MPS2`]. At rest and level, f = (0, 0, +g₀)
-//! (conventions.md: "at rest, level, z up: a ≈ (0, 0, +9.81)").
+//! (docs/conventions.md: "at rest, level, z up: a ≈ (0, 0, +9.81)").
 //!
 //! # Measurement model
 //!

@@ -22,7 +22,7 @@
 //! (τ ∈ \[b·1ms, (b+1)·1ms)) the oscillator's fractional frequency error is
 //! y_b = ȳ_b + a(τ_mid)ᵀΓ/f_L1 (the scenario's [`Oscillator`] noise averaged
 //! over the block plus Filler's g-sensitivity at the block's centre, exactly
-//! the Δf_b = f_L1·y_b of conventions.md), and each satellite's Doppler f_D
+//! the Δf_b = f_L1·y_b of docs/conventions.md), and each satellite's Doppler f_D
 //! is its line-of-sight Doppler at the block centre (the satellite geometry is
 //! evaluated every second and interpolated linearly, as in
 //! [`crate::session`]). The crystal drives the whole chain: the local
@@ -30,7 +30,7 @@
 //! second of receiver time the carrier and code advance by
 //!
 //! ```text
-//! f_bb = (f_D − Δf)/(1 + y)          [cycles/s]   (conventions.md: Δf adds to the NCO, i.e. subtracts from the signal)
+//! f_bb = (f_D − Δf)/(1 + y)          [cycles/s]   (docs/conventions.md: Δf adds to the NCO, i.e. subtracts from the signal)
 //! r    = 1.023e6·(1 + f_D/f_L1)/(1 + y)   [chips/s]
 //! ```
 //!

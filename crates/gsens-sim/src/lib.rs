@@ -11,7 +11,7 @@
 //! - [`scenario`]: the TOML scenario (with an embedded, commented default
 //!   reproducing the paper's experiment) and its validation;
 //! - [`channel`]: one tracking channel at the correlator level, using the
-//!   core's loop filter and NCO ([`gsens_core::pll::CarrierLoop`]);
+//!   core's loop filter and NCO ([`gsens_core::CarrierLoop`]);
 //! - [`session`]: the whole session, streamed through a [`session::SessionSink`];
 //! - [`iq`]: complex baseband GPS L1 C/A samples of the same scenario, for
 //!   software receivers (GNSS-SDR);

@@ -323,7 +323,7 @@ impl Default for MotionConfig {
 }
 
 impl MotionConfig {
-    /// The paper's experiment (conventions.md: "shaking period 1–2 s in three
+    /// The paper's experiment (docs/conventions.md: "shaking period 1–2 s in three
     /// orthogonal directions"): rest 10 s, shake x 30 s, rest 10 s, shake y
     /// 30 s, rest 10 s, shake z 30 s, rest 10 s; period 1.1 s (0.91 Hz, at the
     /// Bn = 3 Hz loop's response peak ωn/2π = 0.90 Hz), peak acceleration

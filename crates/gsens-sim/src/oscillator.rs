@@ -1,5 +1,5 @@
 //! Crystal-oscillator frequency noise: the fractional frequency y(t) that
-//! every tracking channel sees as Δf = f_carrier·y (conventions.md).
+//! every tracking channel sees as Δf = f_carrier·y (docs/conventions.md).
 //!
 //! # Model
 //!
@@ -244,7 +244,7 @@ impl OscillatorConfig {
 
 /// Theoretical Allan deviation σ_y(τ) of the FM noise of `cfg`:
 /// σ_y²(τ) = h₀/(2τ) + 2·ln2·h₋₁ + (2π²/3)·h₋₂·τ (Barnes et al. 1971;
-/// conventions.md). Deterministic terms and white PM are excluded (see
+/// docs/conventions.md). Deterministic terms and white PM are excluded (see
 /// [`allan_deviation_theory_with_pm`]).
 pub fn allan_deviation_theory(cfg: &OscillatorConfig, tau_s: f64) -> f64 {
     (cfg.h0 / (2.0 * tau_s) + 2.0 * LN_2 * cfg.h_neg1 + (2.0 * PI * PI / 3.0) * cfg.h_neg2 * tau_s).sqrt()

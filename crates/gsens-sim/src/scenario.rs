@@ -1,7 +1,7 @@
 //! The scenario of a simulated calibration session: a TOML file.
 //!
 //! Every section and key is optional; what is missing takes the default, and
-//! the defaults reproduce the paper's experiment (conventions.md): an OCXO with
+//! the defaults reproduce the paper's experiment (docs/conventions.md): an OCXO with
 //! Γ = \[+0.09, +0.08, −0.08\] Hz/(m/s²) at GPS L1, a 2nd-order PLL with
 //! Bn = 3 Hz and ζ = 1/√2 updated every 1 ms, logs at 40 Hz, a fixed antenna in
 //! Moscow with the satellites of the built-in almanac in view, the board
@@ -17,9 +17,9 @@
 
 use core::f64::consts::FRAC_1_SQRT_2;
 
-use gsens_core::pll::{LoopFilterCoeffs, LoopSpec};
-use gsens_core::regressor::LoggedPhase;
+use gsens_core::LoggedPhase;
 use gsens_core::units::GPS_L1_HZ;
+use gsens_core::{LoopFilterCoeffs, LoopSpec};
 use serde::{Deserialize, Serialize};
 
 use crate::channel::{DATA_BIT_S, Discriminator};
@@ -186,7 +186,7 @@ pub struct OscillatorSection {
     /// Override of the flicker synthesis low cutoff \[Hz\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub flicker_low_cutoff_hz: Option<f64>,
-    /// The g-sensitivity Γ \[Hz/(m/s²)\] at the carrier (conventions.md):
+    /// The g-sensitivity Γ \[Hz/(m/s²)\] at the carrier (docs/conventions.md):
     /// Δf = aᵀΓ is added to every NCO. Default: the paper's calibrated OCXO.
     pub gamma_hz_per_mps2: [f64; 3],
     /// Tracked carrier frequency \[Hz\] (default GPS L1, 1 575.42 MHz).
@@ -279,8 +279,8 @@ impl Default for LoopSection {
             order: 2,
             bn_hz: 3.0,
             zeta: FRAC_1_SQRT_2,
-            a3: gsens_core::pll::KAPLAN_A3,
-            b3: gsens_core::pll::KAPLAN_B3,
+            a3: gsens_core::KAPLAN_A3,
+            b3: gsens_core::KAPLAN_B3,
             interval_s: 0.001,
             discriminator: Discriminator::Costas,
             doppler_aiding: false,
@@ -342,7 +342,7 @@ pub enum Cn0Logged {
 pub struct LogSection {
     /// Tracking log interval \[s\], a whole number of loop intervals (0.025 = 40 Hz).
     pub interval_s: f64,
-    /// `"last"` or `"mean"` discriminator output (see `gsens_core::regressor`);
+    /// `"last"` or `"mean"` discriminator output (see `gsens_core::LoggedPhase`);
     /// rows are time-stamped at the centre of the latest integration.
     pub phase: LoggedPhaseMode,
     /// `"estimated"` or `"true"` C/N0 in the rows.

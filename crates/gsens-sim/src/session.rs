@@ -13,7 +13,7 @@
 //!   ([`specific_force_body`]), evaluated exactly on a 5 ms grid and
 //!   interpolated linearly in between (error < 1e-4 relative for a 1 s shake);
 //! - Δf_k = f_carrier·ȳ_k + a(t_k)ᵀΓ \[Hz\], added to every NCO's command
-//!   (conventions.md).
+//!   (docs/conventions.md).
 //!
 //! Then each channel integrates against its satellite's carrier, whose Doppler
 //! (and rate) come from the orbit model at 1 s intervals and are interpolated
@@ -28,7 +28,7 @@
 //!   integration k = m·n (m ≥ 1), time-stamped t_k = kT, the centre of the
 //!   latest integration; with `log.phase = "mean"` the phase is the mean of
 //!   the n discriminator outputs since the previous row. This is exactly the
-//!   convention of `gsens_core::regressor::LoggedPhase`. With the default
+//!   convention of `gsens_core::LoggedPhase`. With the default
 //!   40 Hz logs and IMU the two streams share their time stamps.
 //!
 //! # Satellites and channels
@@ -50,7 +50,7 @@
 
 use core::f64::consts::PI;
 
-use gsens_core::pll::LoopFilterCoeffs;
+use gsens_core::LoopFilterCoeffs;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
 use rand::RngExt;
 use serde::Serialize;

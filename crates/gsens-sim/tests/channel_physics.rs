@@ -1,9 +1,9 @@
-//! Correlator-level channel physics against the formulas of conventions.md
+//! Correlator-level channel physics against the formulas of docs/conventions.md
 //! and the core's loop model.
 
 use core::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
-use gsens_core::pll::{LoopFilterCoeffs, LoopSpec};
+use gsens_core::{LoopFilterCoeffs, LoopSpec};
 use gsens_sim::channel::{Channel, ChannelConfig, ChannelStart, Discriminator};
 use gsens_sim::rng::substream;
 
@@ -17,7 +17,7 @@ fn start(cn0_dbhz: f64, freq_hz: f64) -> ChannelStart {
     }
 }
 
-/// Costas tracking jitter σ² = Bn/(C/N0)·(1 + 1/(2T·C/N0)) (conventions.md).
+/// Costas tracking jitter σ² = Bn/(C/N0)·(1 + 1/(2T·C/N0)) (docs/conventions.md).
 fn costas_sigma_rad(bn_hz: f64, cn0_dbhz: f64, t_s: f64) -> f64 {
     let c = 10f64.powf(cn0_dbhz / 10.0);
     (bn_hz / c * (1.0 + 1.0 / (2.0 * t_s * c))).sqrt()

@@ -1,4 +1,4 @@
-//! The seed paper's qualitative claims (conventions.md, "Values from the
+//! The seed paper's qualitative claims (docs/conventions.md, "Values from the
 //! paper"), reproduced by closed-loop simulation. Nothing here is scripted:
 //! lock, slips and the phase errors come out of the channels' dynamics.
 

@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use gsens_core::regressor::RegressorModel;
+use gsens_core::RegressorModel;
 use gsens_sim::imu::ImuPreset;
 use gsens_sim::motion::{Axis, Segment};
 use gsens_sim::satellites::Constellation;

@@ -35,7 +35,7 @@
 //!
 //! For a linear model take e_k = θ_signal − θ_replica at the start of record
 //! k, g_k the signal's carrier frequency relative to the replica's nominal
-//! (here g_k = −Δf_k: the oscillator bias adds to the NCO, conventions.md) and
+//! (here g_k = −Δf_k: the oscillator bias adds to the NCO, docs/conventions.md) and
 //! T = N·T₁. Then (the mean phase error over a linear ramp)
 //!
 //! ```text
