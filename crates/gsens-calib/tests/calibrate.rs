@@ -1,48 +1,23 @@
 //! The calibration job on synthetic series: coloured noise, gaps, unobservable axes.
 
-use gsens_calib::{EpochSeries, EstimateSettings, Method, calibrate};
+mod common;
+
+use common::{GAMMA, paper_session, series, times};
+use gsens_calib::{EstimateSettings, Method, calibrate};
 use gsens_core::LoopModel;
-use gsens_core::{DiscretePll, LoopSpec};
-use rand::SeedableRng;
+use gsens_core::LoopSpec;
 use rand_distr::{Distribution, StandardNormal};
-use rand_xoshiro::Xoshiro256PlusPlus;
-use std::f64::consts::TAU;
 
-const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
-const T: f64 = 0.025;
-
-fn times(n: usize) -> Vec<f64> {
-    (0..n).map(|k| k as f64 * T).collect()
-}
-
-/// Paper-like session: x, then y, then z shaken for 20 s each, with rests;
-/// φ from the same discrete loop; AR(1) noise (ρ = 0.97, ~1 s correlation) on top.
+/// The paper-like session with AR(1) noise (ρ = 0.97, ~1 s correlation) of
+/// `noise_rad` and a gap every 10 s (no channel present).
 fn session(seed: u64, noise_rad: f64, shake_z: bool) -> (Vec<Option<f64>>, Vec<[f64; 3]>) {
-    let n = (80.0 / T) as usize;
-    let mut pll = DiscretePll::new(LoopSpec::PAPER.coeffs().unwrap(), T);
-    pll.settle(9.80665 * GAMMA[2]);
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let rho: f64 = 0.97;
     let mut ar = 0.0;
-    let mut phase = Vec::with_capacity(n);
-    let mut accel = Vec::with_capacity(n);
-    for k in 0..n {
-        let t = k as f64 * T;
-        let mut a = [0.0, 0.0, 9.80665];
-        let axis = ((t - 5.0) / 25.0).floor();
-        let within = (t - 5.0) - 25.0 * axis;
-        if (0.0..3.0).contains(&axis) && within < 20.0 && (axis < 2.0 || shake_z) {
-            a[axis as usize] += 3.0 * (TAU * 0.9 * within).sin() * (std::f64::consts::PI * within / 20.0).sin();
-        }
-        let df: f64 = (0..3).map(|i| a[i] * GAMMA[i]).sum();
-        let e: f64 = StandardNormal.sample(&mut rng);
+    paper_session(seed, shake_z, |rng, k, phi| {
+        let e: f64 = StandardNormal.sample(rng);
         ar = rho * ar + (1.0 - rho * rho).sqrt() * e;
-        let phi = pll.step(df) + noise_rad * ar;
-        // A gap every 10 s (no channel present).
-        phase.push(if k % 400 == 399 { None } else { Some(phi) });
-        accel.push(a);
-    }
-    (phase, accel)
+        (k % 400 != 399).then_some(phi + noise_rad * ar)
+    })
 }
 
 #[test]
@@ -53,13 +28,8 @@ fn robust_sigma_is_honest_under_coloured_noise_and_white_sigma_is_not() {
     // 1/√(2·1800) = 0.017, so 3 standard errors are ±0.05.
     for seed in 0..600 {
         let (phase, accel) = session(seed, 0.02, true);
-        let series = EpochSeries {
-            log_interval_s: T,
-            t_s: &times(phase.len()),
-            phase_err_rad: &phase,
-            accel_mps2: &accel,
-            imu_time_offset_s: 0.0,
-        };
+        let t_s = times(phase.len());
+        let series = series(&t_s, &phase, &accel);
         let c = calibrate(&series, &EstimateSettings::default()).unwrap();
         for i in 0..3 {
             let err = c.gamma_hz_per_mps2[i].unwrap() - GAMMA[i];
@@ -77,13 +47,8 @@ fn robust_sigma_is_honest_under_coloured_noise_and_white_sigma_is_not() {
 #[test]
 fn every_method_recovers_gamma_and_compensation_removes_the_g_part() {
     let (phase, accel) = session(1, 0.002, true);
-    let series = EpochSeries {
-        log_interval_s: T,
-        t_s: &times(phase.len()),
-        phase_err_rad: &phase,
-        accel_mps2: &accel,
-        imu_time_offset_s: 0.0,
-    };
+    let t_s = times(phase.len());
+    let series = series(&t_s, &phase, &accel);
     for method in [Method::Batch, Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }] {
         let settings = EstimateSettings::default().with_method(method);
         let c = calibrate(&series, &settings).unwrap();
@@ -99,13 +64,8 @@ fn every_method_recovers_gamma_and_compensation_removes_the_g_part() {
 #[test]
 fn axis_never_shaken_is_reported_unobservable_not_as_a_number() {
     let (phase, accel) = session(2, 0.005, false);
-    let series = EpochSeries {
-        log_interval_s: T,
-        t_s: &times(phase.len()),
-        phase_err_rad: &phase,
-        accel_mps2: &accel,
-        imu_time_offset_s: 0.0,
-    };
+    let t_s = times(phase.len());
+    let series = series(&t_s, &phase, &accel);
     let c = calibrate(&series, &EstimateSettings::default()).unwrap();
     assert_eq!(c.observable, [true, true, false]);
     assert_eq!(c.gamma_hz_per_mps2[2], None);
@@ -128,13 +88,8 @@ fn axis_never_shaken_is_reported_unobservable_not_as_a_number() {
 #[test]
 fn wrong_loop_interval_is_an_error_not_garbage() {
     let (phase, accel) = session(3, 0.005, true);
-    let series = EpochSeries {
-        log_interval_s: T,
-        t_s: &times(phase.len()),
-        phase_err_rad: &phase,
-        accel_mps2: &accel,
-        imu_time_offset_s: 0.0,
-    };
+    let t_s = times(phase.len());
+    let series = series(&t_s, &phase, &accel);
     let settings = EstimateSettings::default().with_loop(LoopModel::kaplan(LoopSpec::PAPER, Some(0.007)));
     let e = calibrate(&series, &settings).unwrap_err().to_string();
     assert!(e.contains("not an integer multiple"), "{e}");
@@ -147,7 +102,7 @@ fn imu_systematic_sigma_matches_monte_carlo_of_the_sensing_matrix() {
     let (s_sigma, m_sigma) = (2e-3, 1.5e-3);
     let predicted = imu_systematic_sigma(&GAMMA, s_sigma, m_sigma);
     // Draw E = diag(s) + N, form Γ̂ = (I + E)⁻ᵀ·Γ exactly, compare the spread.
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+    let mut rng = <rand_xoshiro::Xoshiro256PlusPlus as rand::SeedableRng>::seed_from_u64(9);
     let (ns, nm) = (Normal::new(0.0, s_sigma).unwrap(), Normal::new(0.0, m_sigma).unwrap());
     let n = 20_000;
     let mut ss = [0.0; 3];
@@ -165,6 +120,7 @@ fn imu_systematic_sigma_matches_monte_carlo_of_the_sensing_matrix() {
     }
     for i in 0..3 {
         let sd = (ss[i] / n as f64).sqrt();
-        assert!((sd / predicted[i] - 1.0).abs() < 0.03, "axis {i}: {sd} vs {}", predicted[i]);
+        // The sample SD of 20 000 draws has a relative standard error of 1/√(2n) = 0.005.
+        assert!((sd / predicted[i] - 1.0).abs() < 0.015, "axis {i}: {sd} vs {}", predicted[i]);
     }
 }

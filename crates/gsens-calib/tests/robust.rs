@@ -1,17 +1,16 @@
 //! Huber's M-estimate (`robust = huber`): against outliers it stays on the
 //! truth where least squares is pulled; without them it agrees with least squares.
 
+mod common;
+
+use common::{GAMMA, T, paper_session, series};
 use gsens_calib::huber_irls;
-use gsens_calib::{EpochSeries, EstimateSettings, Method, Robust, calibrate};
+use gsens_calib::{EstimateSettings, Method, Robust, calibrate};
 use gsens_core::HuberWeights;
-use gsens_core::{DiscretePll, LoopSpec};
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::TAU;
-
-const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
-const T: f64 = 0.025;
 
 /// Regressors and φ = φ_aᵀΓ + white noise of `noise_rad`; with `outliers`,
 /// 1 % of the epochs get 2 rad of the sign of their g-induced phase (a
@@ -89,47 +88,25 @@ fn without_outliers_huber_agrees_with_least_squares() {
     }
 }
 
-/// The paper-like session of `calibrate.rs`, with 1 % outliers in the phase.
+/// The paper-like session with white noise of 0.005 rad and, with
+/// `outliers`, 1 % of the epochs off by 1.5 rad.
 fn session(seed: u64, outliers: bool) -> (Vec<Option<f64>>, Vec<[f64; 3]>) {
-    let n = (80.0 / T) as usize;
-    let mut pll = DiscretePll::new(LoopSpec::PAPER.coeffs().unwrap(), T);
-    pll.settle(9.80665 * GAMMA[2]);
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut phase = Vec::with_capacity(n);
-    let mut accel = Vec::with_capacity(n);
-    for k in 0..n {
-        let t = k as f64 * T;
-        let mut a = [0.0, 0.0, 9.80665];
-        let axis = ((t - 5.0) / 25.0).floor();
-        let within = (t - 5.0) - 25.0 * axis;
-        if (0.0..3.0).contains(&axis) && within < 20.0 {
-            a[axis as usize] += 3.0 * (TAU * 0.9 * within).sin() * (std::f64::consts::PI * within / 20.0).sin();
-        }
-        let df: f64 = (0..3).map(|i| a[i] * GAMMA[i]).sum();
-        let phi = pll.step(df);
-        let e: f64 = StandardNormal.sample(&mut rng);
+    paper_session(seed, true, |rng, _, phi| {
+        let e: f64 = StandardNormal.sample(rng);
         let mut p = phi + 0.005 * e;
         if outliers && rng.random::<f64>() < 0.01 {
             p = phi + 1.5 * phi.signum();
         }
-        phase.push(Some(p));
-        accel.push(a);
-    }
-    (phase, accel)
+        Some(p)
+    })
 }
 
 #[test]
 fn calibrate_with_huber() {
-    let times: Vec<f64> = (0..3200).map(|k| k as f64 * T).collect();
+    let times = common::times(3200);
     let run = |outliers: bool, robust: Robust| {
         let (phase, accel) = session(3, outliers);
-        let series = EpochSeries {
-            log_interval_s: T,
-            t_s: &times,
-            phase_err_rad: &phase,
-            accel_mps2: &accel,
-            imu_time_offset_s: 0.0,
-        };
+        let series = series(&times, &phase, &accel);
         calibrate(&series, &EstimateSettings::default().with_robust(robust)).unwrap()
     };
     let (ls, huber) = (run(true, Robust::None), run(true, Robust::Huber));
@@ -159,15 +136,9 @@ fn calibrate_with_huber() {
 
 #[test]
 fn huber_needs_the_batch_method() {
-    let times: Vec<f64> = (0..3200).map(|k| k as f64 * T).collect();
+    let times = common::times(3200);
     let (phase, accel) = session(3, false);
-    let series = EpochSeries {
-        log_interval_s: T,
-        t_s: &times,
-        phase_err_rad: &phase,
-        accel_mps2: &accel,
-        imu_time_offset_s: 0.0,
-    };
+    let series = series(&times, &phase, &accel);
     for method in [Method::Rls { lambda: 1.0 }, Method::Gradient { gain_k: 0.5 }, Method::Gls] {
         let e = calibrate(&series, &EstimateSettings::default().with_robust(Robust::Huber).with_method(method))
             .unwrap_err()
