@@ -4,9 +4,7 @@
 
 mod common;
 
-use common::{gsens, json, vec3};
-
-use std::process::Command;
+use common::{fails, gsens, json, vec3};
 
 #[test]
 fn simulate_then_estimate_recovers_the_truth() {
@@ -89,20 +87,11 @@ fn scenario_command_prints_a_parsable_default() {
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = -3.0")).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2));
+    let simulate = ["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()];
+    let err = fails(&simulate);
     assert!(err.contains("bad.toml") && err.contains("bn_hz"), "{err}");
     std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = 3.0\nbandwidth = 2")).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2));
+    let err = fails(&simulate);
     assert!(err.contains("bandwidth"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{gsens, run, s};
+use common::{fails, gsens, run, s};
 
 use std::path::{Path, PathBuf};
 
@@ -122,27 +122,10 @@ fn bad_dumps_are_refused_naming_the_file() {
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(e.contains("trk_ch_0.dat") && e.contains("not a whole number of records"), "{e}");
     std::fs::write(d.join("trk_ch_0.dat"), b"").unwrap();
-    let out = run(&[
-        "import",
-        "gnss-sdr",
-        &s(&d),
-        "--conf",
-        &s(&f.join("order2/gnss-sdr.conf")),
-        "--out",
-        &s(&d.join("x.csv")),
-    ]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("empty tracking dump"));
-    let empty = tmp("empty");
-    let out = run(&[
-        "import",
-        "gnss-sdr",
-        &s(&empty),
-        "--conf",
-        &s(&f.join("order2/gnss-sdr.conf")),
-        "--out",
-        &s(&d.join("x.csv")),
-    ]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no tracking dump"));
+    let conf = s(&f.join("order2/gnss-sdr.conf"));
+    let import = |dir: &Path| fails(&["import", "gnss-sdr", &s(dir), "--conf", &conf, "--out", &s(&d.join("x.csv"))]);
+    assert!(import(&d).contains("empty tracking dump"));
+    assert!(import(&tmp("empty")).contains("no tracking dump"));
     // --gnss-sdr needs its configuration.
     let out = run(&["estimate", "--imu", &s(&f.join("imu.csv")), "--gnss-sdr", &s(&f.join("order2"))]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--gnss-sdr-conf"));

@@ -7,53 +7,22 @@ mod common;
 use common::{gsens, json, temp_dir, vec3};
 
 /// The paper's session cut to 80 s: 20 s of shaking per axis, 5 s rests.
-const SHORT: &str = r#"
-[[motion.segments]]
-kind = "rest"
-duration_s = 5.0
-
-[[motion.segments]]
-kind = "shake"
-axis = "x"
-duration_s = 20.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-jitter = { period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }
-
-[[motion.segments]]
-kind = "rest"
-duration_s = 5.0
-
-[[motion.segments]]
-kind = "shake"
-axis = "y"
-duration_s = 20.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-jitter = { period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }
-
-[[motion.segments]]
-kind = "rest"
-duration_s = 5.0
-
-[[motion.segments]]
-kind = "shake"
-axis = "z"
-duration_s = 20.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-jitter = { period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }
-
-[[motion.segments]]
-kind = "rest"
-duration_s = 5.0
-"#;
+fn short_scenario() -> String {
+    let rest = "[[motion.segments]]\nkind = \"rest\"\nduration_s = 5.0\n\n";
+    let shake = |axis: &str| {
+        format!(
+            "[[motion.segments]]\nkind = \"shake\"\naxis = \"{axis}\"\nduration_s = 20.0\nperiod_s = 1.1\n\
+             amplitude_mps2 = 3.0\njitter = {{ period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }}\n\n"
+        )
+    };
+    ["x", "y", "z"].iter().map(|a| format!("{rest}{}", shake(a))).collect::<String>() + rest
+}
 
 #[test]
 fn gls_spread_is_at_the_cramer_rao_bound_and_runs_are_reproducible() {
     let dir = temp_dir("short");
     let scenario = dir.join("short.toml");
-    std::fs::write(&scenario, SHORT).unwrap();
+    std::fs::write(&scenario, short_scenario()).unwrap();
     let sc = scenario.to_str().unwrap();
     let (a, b) = (dir.join("a.json"), dir.join("b.json"));
     let args = ["montecarlo", "--scenario", sc, "--runs", "30", "--seed", "1", "--methods", "batch,gls", "--json"];

@@ -37,3 +37,13 @@ pub fn temp_dir(name: &str) -> PathBuf {
 pub fn s(p: &Path) -> String {
     p.display().to_string()
 }
+
+/// Runs `gsens` with `args`, asserts exit status 2 (an error, not a panic)
+/// and returns its standard error.
+pub fn fails(args: &[&str]) -> String {
+    let out = run(args);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "gsens {args:?}: {err}");
+    assert!(!err.contains("panicked"), "gsens {args:?} panicked: {err}");
+    err
+}
