@@ -103,13 +103,19 @@ impl LoopArgs {
     }
 }
 
-/// The estimator and the error model.
+/// The estimator of a single calibration (`estimate`, `report`, `demo`).
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Estimator")]
-pub struct EstimatorArgs {
+pub struct MethodChoice {
     /// Estimator.
     #[arg(long, value_enum, default_value_t = MethodArg::Batch)]
     pub method: MethodArg,
+}
+
+/// The estimators' parameters and the error model.
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Estimator")]
+pub struct EstimatorArgs {
     /// Gain k of the gradient observer.
     #[arg(long, default_value_t = 0.5)]
     pub gain_k: f64,
@@ -153,11 +159,11 @@ impl EstimatorArgs {
         }
     }
 
-    /// The estimation settings (checked by the library), the loop left at
-    /// its default for the caller to set.
-    pub fn settings(&self) -> EstimateSettings {
+    /// The estimation settings for `method` (checked by the library), the
+    /// loop left at its default for the caller to set.
+    pub fn settings(&self, method: MethodArg) -> EstimateSettings {
         let mut s = EstimateSettings::default();
-        s.method = self.method(self.method);
+        s.method = self.method(method);
         s.warmup_s = self.warmup_s;
         s.imu_scale_sigma = self.imu_scale_sigma_ppm * 1e-6;
         s.imu_misalignment_sigma_rad = self.imu_misalignment_sigma_mrad * 1e-3;

@@ -2,7 +2,7 @@
 //! write the logs, estimate Γ from the files as a user would, and show the
 //! estimate next to the truth.
 
-use crate::args::{EstimatorArgs, SelectionArgs, SystematicArgs, pipeline_settings};
+use crate::args::{EstimatorArgs, MethodChoice, SelectionArgs, SystematicArgs, pipeline_settings};
 use crate::simulate::simulate_to_dir;
 use anyhow::Result;
 use clap::Args;
@@ -27,6 +27,8 @@ pub struct DemoArgs {
     #[arg(long)]
     pub figures: Option<PathBuf>,
     #[command(flatten)]
+    pub method: MethodChoice,
+    #[command(flatten)]
     pub estimator: EstimatorArgs,
     #[command(flatten)]
     pub selection: SelectionArgs,
@@ -45,7 +47,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         dir.display()
     ))?;
     let truth = simulate_to_dir(&scenario, args.scenario.seed, &dir)?;
-    let base = args.estimator.settings();
+    let base = args.estimator.settings(args.method.method);
     let settings = pipeline_settings(scenario_settings(&scenario, &base)?, &args.selection, &args.systematic);
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));

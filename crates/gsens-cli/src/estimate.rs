@@ -1,6 +1,8 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{EstimatorArgs, GnssSdrArgs, LoggedArg, LoopArgs, SelectionArgs, SystematicArgs, pipeline_settings};
+use crate::args::{
+    EstimatorArgs, GnssSdrArgs, LoggedArg, LoopArgs, MethodChoice, SelectionArgs, SystematicArgs, pipeline_settings,
+};
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::{Outcome, PipelineSettings, ResultDocument, calibrate_files, calibrate_gnss_sdr};
@@ -33,6 +35,8 @@ pub struct CalibrationArgs {
     #[command(flatten)]
     pub loop_args: LoopArgs,
     #[command(flatten)]
+    pub method: MethodChoice,
+    #[command(flatten)]
     pub estimator: EstimatorArgs,
     #[command(flatten)]
     pub selection: SelectionArgs,
@@ -47,7 +51,7 @@ impl CalibrationArgs {
             LoggedArg::Last => LoggedPhase::Last,
             LoggedArg::Mean => LoggedPhase::Mean,
         };
-        let mut estimate = self.estimator.settings();
+        let mut estimate = self.estimator.settings(self.method.method);
         estimate.receiver_loop = self.loop_args.loop_model();
         estimate.logged_phase = logged;
         estimate.carrier_hz = self.carrier_hz;

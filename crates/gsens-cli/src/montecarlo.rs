@@ -32,7 +32,7 @@ pub struct MonteCarloArgs {
 
 pub fn run(args: &MonteCarloArgs) -> Result<()> {
     let scenario = args.scenario.load()?;
-    let base = args.estimator.settings();
+    let base = args.estimator.settings(MethodArg::Batch);
     let methods = args
         .methods
         .iter()

@@ -73,9 +73,26 @@ fn same_seed_same_bytes() {
 #[test]
 fn demo_shows_estimate_next_to_truth() {
     let dir = std::env::temp_dir().join(format!("gsens-demo-test-{}", std::process::id()));
-    let text = gsens(&["demo", "--out", dir.to_str().unwrap()]);
-    assert!(text.contains("truth"), "{text}");
-    assert!(text.contains("% of |Γ|"), "{text}");
+    let doc = dir.join("demo.json");
+    let text = gsens(&["demo", "--out", dir.to_str().unwrap(), "--json", doc.to_str().unwrap()]);
+    let truth = vec3(&json(&dir.join("truth.json"))["gamma_hz_per_mps2"]);
+    let v = json(&doc);
+    assert_eq!(vec3(&v["truth_gamma_hz_per_mps2"]), truth);
+    let gamma = vec3(&v["gamma_hz_per_mps2"]);
+    // Each axis line: Γ̂, its 1σ, ppb/g, the truth and the error, as in the document.
+    for (i, axis) in ["x", "y", "z"].iter().enumerate() {
+        let line = text.lines().find(|l| l.trim_start().starts_with(&format!("{axis}  "))).expect("an axis line");
+        let f: Vec<f64> =
+            line.split_whitespace().skip(1).filter_map(|w| w.trim_start_matches('±').parse().ok()).collect();
+        assert_eq!(f[0], (gamma[i] * 1e5).round() / 1e5, "{line}");
+        assert_eq!(f[4], truth[i], "{line}");
+        assert!((f[5] - (gamma[i] - truth[i])).abs() <= 5e-6, "{line}");
+    }
+    // The summary line is the norm of the errors against the truth's norm.
+    let norm = |x: [f64; 3]| x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let pct = 100.0 * norm([0, 1, 2].map(|i| gamma[i] - truth[i])) / norm(truth);
+    assert!(text.contains(&format!("= {pct:.2} % of |Γ|")), "{pct:.2}: {text}");
+    assert!(pct < 2.0, "{pct}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
