@@ -202,8 +202,8 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
         .collect();
     Ok(Run {
         seed,
-        gamma_hz_per_mps2: truth.gamma_hz_per_mps2,
-        gamma_imu_axes_hz_per_mps2: truth.gamma_imu_axes_hz_per_mps2,
+        gamma_hz_per_mps2: truth.sensitivity.gamma_hz_per_mps2,
+        gamma_imu_axes_hz_per_mps2: truth.sensitivity.gamma_imu_axes_hz_per_mps2,
         methods: results,
     })
 }

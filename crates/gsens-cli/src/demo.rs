@@ -62,13 +62,20 @@ pub fn run(args: &DemoArgs) -> Result<()> {
          --loop-interval-s {} --logged-phase {logged})\n\n",
         l.order, l.bn_hz, l.interval_s
     ))?;
-    let doc = outcome.document(Some(truth.gamma_hz_per_mps2));
+    let doc = outcome.document(Some(truth.sensitivity.gamma_hz_per_mps2));
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
         crate::estimate::write_json(path, &doc)?;
     }
     if let Some(fig_dir) = &args.figures {
-        write_demo_figures(fig_dir, &outcome, &tracking, truth.gamma_hz_per_mps2, &scenario, args.scenario.seed)?;
+        write_demo_figures(
+            fig_dir,
+            &outcome,
+            &tracking,
+            truth.sensitivity.gamma_hz_per_mps2,
+            &scenario,
+            args.scenario.seed,
+        )?;
     }
     Ok(())
 }

@@ -75,9 +75,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         slips,
         args.scenario.seed,
         args.out.display(),
-        truth.gamma_hz_per_mps2[0],
-        truth.gamma_hz_per_mps2[1],
-        truth.gamma_hz_per_mps2[2],
+        truth.sensitivity.gamma_hz_per_mps2[0],
+        truth.sensitivity.gamma_hz_per_mps2[1],
+        truth.sensitivity.gamma_hz_per_mps2[2],
         truth.loop_interval_s,
         truth.log_interval_s,
         match truth.logged_phase {

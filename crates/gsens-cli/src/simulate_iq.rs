@@ -47,7 +47,7 @@ pub fn run(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
 
     let prns: Vec<String> =
         truth.satellites.iter().map(|s| format!("{} ({:.1} dB-Hz)", s.prn, s.start_cn0_dbhz)).collect();
-    let g = truth.gamma_hz_per_mps2;
+    let g = truth.sensitivity.gamma_hz_per_mps2;
     crate::out(&format!(
         "wrote {:.1} s of {} samples at {} Hz ({} samples, {:.1} MB) in {:.1} s ({:.1}x real time) → {}\n\
          satellites: PRN {}\n\

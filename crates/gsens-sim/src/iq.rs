@@ -64,7 +64,7 @@ pub mod lnav;
 use std::f64::consts::TAU;
 use std::io::Write;
 
-use gsens_core::units::{SPEED_OF_LIGHT_MPS, hz_per_mps2_to_ppb_per_g};
+use gsens_core::units::SPEED_OF_LIGHT_MPS;
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
@@ -249,14 +249,9 @@ pub struct IqSatelliteTruth {
 /// The truth of a generated file (`truth.json` of `gsens simulate --iq`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IqTruth {
-    /// Γ \[Hz/(m/s²)\] at the carrier, body axes.
-    pub gamma_hz_per_mps2: [f64; 3],
-    /// Γ \[ppb/g\].
-    pub gamma_ppb_per_g: [f64; 3],
-    /// Γ as seen through the IMU's readings, M⁻ᵀΓ (see [`crate::session::Truth`]).
-    pub gamma_imu_axes_hz_per_mps2: [f64; 3],
-    /// Carrier \[Hz\].
-    pub carrier_hz: f64,
+    /// The g-sensitivity simulated (flattened: its keys are truth.json's).
+    #[serde(flatten)]
+    pub sensitivity: crate::session::SensitivityTruth,
     /// Seed.
     pub seed: u64,
     /// Generator name and version.
@@ -720,10 +715,7 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
     progress(1.0);
 
     Ok(IqTruth {
-        gamma_hz_per_mps2: gamma,
-        gamma_ppb_per_g: gamma.map(|g| hz_per_mps2_to_ppb_per_g(g, carrier_hz)),
-        gamma_imu_axes_hz_per_mps2: crate::session::inverse_transpose_times(&imu.sensing_matrix(), &gamma),
-        carrier_hz,
+        sensitivity: crate::session::SensitivityTruth::new(gamma, carrier_hz, &imu.sensing_matrix()),
         seed,
         generator: format!("{} {} (iq)", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
         start_gps_s,

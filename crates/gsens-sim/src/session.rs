@@ -224,10 +224,10 @@ pub struct ChannelSummary {
     pub stats: ChannelStats,
 }
 
-/// The truth of a run: Γ and everything needed to reproduce it
-/// (`truth.json`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Truth {
+/// The g-sensitivity a simulation ran with, in every form a calibration is
+/// compared against (the first keys of every `truth.json`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SensitivityTruth {
     /// Γ \[Hz/(m/s²)\] at the carrier, body axes.
     pub gamma_hz_per_mps2: [f64; 3],
     /// Γ in ppb/g: Γ·g₀/f_carrier·1e9.
@@ -239,6 +239,27 @@ pub struct Truth {
     pub gamma_imu_axes_hz_per_mps2: [f64; 3],
     /// Tracked carrier \[Hz\].
     pub carrier_hz: f64,
+}
+
+impl SensitivityTruth {
+    /// Γ at `carrier_hz` as seen through an IMU with sensing matrix `m`.
+    pub fn new(gamma_hz_per_mps2: [f64; 3], carrier_hz: f64, m: &[[f64; 3]; 3]) -> Self {
+        SensitivityTruth {
+            gamma_hz_per_mps2,
+            gamma_ppb_per_g: gamma_hz_per_mps2.map(|g| hz_per_mps2_to_ppb_per_g(g, carrier_hz)),
+            gamma_imu_axes_hz_per_mps2: inverse_transpose_times(m, &gamma_hz_per_mps2),
+            carrier_hz,
+        }
+    }
+}
+
+/// The truth of a run: Γ and everything needed to reproduce it
+/// (`truth.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Truth {
+    /// The g-sensitivity simulated (flattened: its keys are truth.json's).
+    #[serde(flatten)]
+    pub sensitivity: SensitivityTruth,
     /// The seed.
     pub seed: u64,
     /// The simulator and its version, e.g. `gsens-sim 0.1.0`.
@@ -480,10 +501,7 @@ pub fn simulate<S: SessionSink + ?Sized>(
     done.extend(tracks.iter().map(|tr| tr.summary(end_s)));
     done.sort_by(|a, b| a.start_s.total_cmp(&b.start_s).then(a.channel.cmp(&b.channel)));
     Ok(Truth {
-        gamma_hz_per_mps2: gamma,
-        gamma_ppb_per_g: gamma.map(|g| hz_per_mps2_to_ppb_per_g(g, carrier_hz)),
-        gamma_imu_axes_hz_per_mps2: inverse_transpose_times(&imu.sensing_matrix(), &gamma),
-        carrier_hz,
+        sensitivity: SensitivityTruth::new(gamma, carrier_hz, &imu.sensing_matrix()),
         seed,
         generator: format!("{} {}", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
         start_gps_s,

@@ -40,9 +40,9 @@ fn correlation_with_the_true_replica_recovers_amplitude_and_phase() {
     let amp = amplitude(cfg.noise_sigma, 70.0, fs) as f64;
     let df = blocks[0].0;
     for s in &truth.satellites {
-        let y = df / truth.carrier_hz;
+        let y = df / truth.sensitivity.carrier_hz;
         let f_bb = (s.start_doppler_hz - df) / (1.0 + y);
-        let rate = CA_CHIP_RATE_HZ * (1.0 + s.start_doppler_hz / truth.carrier_hz) / (1.0 + y);
+        let rate = CA_CHIP_RATE_HZ * (1.0 + s.start_doppler_hz / truth.sensitivity.carrier_hz) / (1.0 + y);
         // One code period: the data bit is constant within it.
         let n = 4000;
         let (i, q) =
@@ -74,8 +74,8 @@ fn carrier_phase_follows_doppler_minus_delta_f() {
     let s = &truth.satellites[0];
     let df = blocks[0].0;
     assert!((df - 157.542).abs() < 1.0, "{df}");
-    let y = df / truth.carrier_hz;
-    let rate = CA_CHIP_RATE_HZ * (1.0 + s.start_doppler_hz / truth.carrier_hz) / (1.0 + y);
+    let y = df / truth.sensitivity.carrier_hz;
+    let rate = CA_CHIP_RATE_HZ * (1.0 + s.start_doppler_hz / truth.sensitivity.carrier_hz) / (1.0 + y);
     let n = 2048;
     let mut phases = Vec::new();
     for (with_df, tol) in [(true, 0.05), (false, f64::INFINITY)] {
