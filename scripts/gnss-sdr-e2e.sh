@@ -39,6 +39,7 @@ gnss-sdr --version
 echo "== building gsens"
 cargo build --release -q -p gsens-cli
 G=$PWD/target/release/gsens
+. scripts/lib/scenario.sh
 
 scenario() { # $1 = loop order
     cat <<TOML
@@ -53,40 +54,8 @@ bn_hz = 3.0
 [satellites]
 elevation_mask_deg = 4.0
 max_channels = 8
-[[motion.segments]]
-kind = "rest"
-duration_s = 30.0
-[[motion.segments]]
-kind = "shake"
-axis = "x"
-duration_s = 30.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-jitter = { period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }
-[[motion.segments]]
-kind = "rest"
-duration_s = 10.0
-[[motion.segments]]
-kind = "shake"
-axis = "y"
-duration_s = 30.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-jitter = { period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }
-[[motion.segments]]
-kind = "rest"
-duration_s = 10.0
-[[motion.segments]]
-kind = "shake"
-axis = "z"
-duration_s = 30.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-jitter = { period_rel = 0.07, amplitude_rel = 0.07, correlation_s = 3.0 }
-[[motion.segments]]
-kind = "rest"
-duration_s = 10.0
 TOML
+    shake_sequence 30.0 30.0 10.0 1
 }
 scenario 2 > "$OUT/scenario-order2.toml"
 scenario 3 > "$OUT/scenario-order3.toml"

@@ -25,6 +25,7 @@ rm -rf "$WORK" && mkdir -p "$WORK"
 WORK=$(cd "$WORK" && pwd)
 cargo build --release -q -p gsens-cli
 G=$PWD/target/release/gsens
+. scripts/lib/scenario.sh
 cat > "$WORK/scenario.toml" <<'TOML'
 [session]
 start_utc = "2024-02-08T12:00:00Z"
@@ -41,37 +42,8 @@ max_channels = 2
 zenith_cn0_dbhz = 55.0
 horizon_cn0_dbhz = 55.0
 per_satellite_offset_sigma_db = 0.0
-[[motion.segments]]
-kind = "rest"
-duration_s = 20.0
-[[motion.segments]]
-kind = "shake"
-axis = "x"
-duration_s = 5.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-[[motion.segments]]
-kind = "rest"
-duration_s = 1.0
-[[motion.segments]]
-kind = "shake"
-axis = "y"
-duration_s = 5.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-[[motion.segments]]
-kind = "rest"
-duration_s = 1.0
-[[motion.segments]]
-kind = "shake"
-axis = "z"
-duration_s = 5.0
-period_s = 1.1
-amplitude_mps2 = 3.0
-[[motion.segments]]
-kind = "rest"
-duration_s = 1.0
 TOML
+shake_sequence 20.0 5.0 1.0 >> "$WORK/scenario.toml"
 "$G" simulate --scenario "$WORK/scenario.toml" --seed $SEED --out "$WORK" --iq "$WORK/signal.bin" \
     --fs-hz 2048000 --iq-carrier-truth
 for order in 2 3; do
