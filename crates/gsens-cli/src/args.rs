@@ -272,6 +272,32 @@ pub struct SystematicArgs {
     pub identify_damping: bool,
 }
 
+/// The options of a single calibration besides its receiver loop (`estimate`,
+/// `report`, `demo`).
+#[derive(Args, Debug, Clone)]
+pub struct AnalysisArgs {
+    #[command(flatten)]
+    pub method: MethodChoice,
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
+    #[command(flatten)]
+    pub selection: SelectionArgs,
+    #[command(flatten)]
+    pub systematic: SystematicArgs,
+}
+
+impl AnalysisArgs {
+    /// The estimation settings with the loop at its default.
+    pub fn estimate_settings(&self) -> EstimateSettings {
+        self.estimator.settings(self.method.method)
+    }
+
+    /// The pipeline settings around `estimate`.
+    pub fn pipeline_settings(&self, estimate: EstimateSettings) -> PipelineSettings {
+        pipeline_settings(estimate, &self.selection, &self.systematic)
+    }
+}
+
 /// The whole pipeline's settings from the option groups.
 pub fn pipeline_settings(
     estimate: EstimateSettings,

@@ -2,7 +2,7 @@
 //! write the logs, estimate Γ from the files as a user would, and show the
 //! estimate next to the truth.
 
-use crate::args::{EstimatorArgs, MethodChoice, SelectionArgs, SystematicArgs, pipeline_settings};
+use crate::args::AnalysisArgs;
 use crate::simulate::simulate_to_dir;
 use anyhow::Result;
 use clap::Args;
@@ -27,13 +27,7 @@ pub struct DemoArgs {
     #[arg(long)]
     pub figures: Option<PathBuf>,
     #[command(flatten)]
-    pub method: MethodChoice,
-    #[command(flatten)]
-    pub estimator: EstimatorArgs,
-    #[command(flatten)]
-    pub selection: SelectionArgs,
-    #[command(flatten)]
-    pub systematic: SystematicArgs,
+    pub analysis: AnalysisArgs,
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
@@ -47,8 +41,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         dir.display()
     ))?;
     let truth = simulate_to_dir(&scenario, args.scenario.seed, &dir)?;
-    let base = args.estimator.settings(args.method.method);
-    let settings = pipeline_settings(scenario_settings(&scenario, &base)?, &args.selection, &args.systematic);
+    let base = args.analysis.estimate_settings();
+    let settings = args.analysis.pipeline_settings(scenario_settings(&scenario, &base)?);
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
     let outcome = calibrate_files(&tracking, &imu, &settings)?;

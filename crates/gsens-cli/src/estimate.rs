@@ -1,8 +1,6 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{
-    EstimatorArgs, GnssSdrArgs, LoggedArg, LoopArgs, MethodChoice, SelectionArgs, SystematicArgs, pipeline_settings,
-};
+use crate::args::{AnalysisArgs, GnssSdrArgs, LoggedArg, LoopArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::{Outcome, PipelineSettings, ResultDocument, calibrate_files, calibrate_gnss_sdr};
@@ -35,13 +33,7 @@ pub struct CalibrationArgs {
     #[command(flatten)]
     pub loop_args: LoopArgs,
     #[command(flatten)]
-    pub method: MethodChoice,
-    #[command(flatten)]
-    pub estimator: EstimatorArgs,
-    #[command(flatten)]
-    pub selection: SelectionArgs,
-    #[command(flatten)]
-    pub systematic: SystematicArgs,
+    pub analysis: AnalysisArgs,
 }
 
 impl CalibrationArgs {
@@ -51,11 +43,11 @@ impl CalibrationArgs {
             LoggedArg::Last => LoggedPhase::Last,
             LoggedArg::Mean => LoggedPhase::Mean,
         };
-        let mut estimate = self.estimator.settings(self.method.method);
+        let mut estimate = self.analysis.estimate_settings();
         estimate.receiver_loop = self.loop_args.loop_model();
         estimate.logged_phase = logged;
         estimate.carrier_hz = self.carrier_hz;
-        pipeline_settings(estimate, &self.selection, &self.systematic)
+        self.analysis.pipeline_settings(estimate)
     }
 }
 
