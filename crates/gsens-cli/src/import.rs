@@ -51,20 +51,16 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     let rows = if a.common_grid {
         let grid = gsens_gnss_sdr::resample(&imported, imported.interval_s);
-        let mut w = gsens_io::TrackingWriter::new(file)?;
-        for row in &grid {
-            w.write_row(row)?;
-        }
-        w.finish()?;
+        gsens_io::write_tracking_csv(file, &grid)?;
         grid.len()
     } else {
         write_imported_csv(file, &imported.rows)?;
         imported.rows.len()
     };
     let stage = settings.stage();
-    println!(
+    crate::out(&format!(
         "wrote {} rows → {}{}; estimate with the GNSS-SDR loop model: gsens estimate --gnss-sdr {} --gnss-sdr-conf \
-         <conf> (order {}, Bn {} Hz, {} ms)",
+         <conf> (order {}, Bn {} Hz, {} ms)\n",
         rows,
         a.out.display(),
         if a.common_grid { " (common grid)" } else { " (times at the middle of each integration)" },
@@ -72,7 +68,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
         stage.order,
         stage.bw_hz,
         stage.symbols
-    );
+    ))?;
     if let Some(p) = &a.tracks_json {
         let conversion = gsens_calib::GnssSdrConversion { conversion: settings, tracks: imported.tracks };
         std::fs::write(p, serde_json::to_string_pretty(&conversion)? + "\n")

@@ -12,7 +12,6 @@ mod montecarlo;
 mod report;
 mod response;
 mod simulate;
-mod simulate_iq;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};

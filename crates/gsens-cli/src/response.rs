@@ -8,7 +8,6 @@ use gsens_calib::LoopSummary;
 use gsens_report::Format;
 use gsens_report::figures::{DEFAULT_SIZE, ResponseData, fig_response};
 use serde::Serialize;
-use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -51,26 +50,7 @@ pub fn run(args: &ResponseArgs) -> Result<()> {
     let model = args.loop_args.loop_model();
     let table = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, args.points, model.to_string())
         .with_context(|| format!("the loop ({model})"))?;
-    let band = table.half_power_band_hz.expect("from_loop finds the band");
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "L(j2πf) = φ/Δf of the loop: {model}")?;
-    writeln!(out, "   f [Hz]   |L| [rad/Hz]   phase [deg]")?;
-    for k in 0..table.frequency_hz.len() {
-        let (f, m, p) = (table.frequency_hz[k], table.magnitude_rad_per_hz[k], table.phase_deg[k]);
-        writeln!(out, "{f:>9.4}   {m:>11.5}   {p:>10.1}")?;
-    }
-    writeln!(
-        out,
-        "peak: |L| = {:.4} rad/Hz at {:.4} Hz → shake with a period of about {:.2} s \
-         (half-power band {:.2}–{:.2} Hz, periods {:.2}–{:.2} s)",
-        table.peak_rad_per_hz,
-        table.peak_hz,
-        1.0 / table.peak_hz,
-        band[0],
-        band[1],
-        1.0 / band[1],
-        1.0 / band[0]
-    )?;
+    crate::out(&gsens_report::render_response_text(&table))?;
     if let Some(path) = &args.json {
         let json = ResponseJson {
             loop_interval_s: model.interval_s(),
@@ -91,7 +71,7 @@ pub fn run(args: &ResponseArgs) -> Result<()> {
         fig_response(&plot, format, DEFAULT_SIZE)?
             .write_to(path)
             .with_context(|| format!("{}: cannot write", path.display()))?;
-        writeln!(out, "figure: {}", path.display())?;
+        crate::out(&format!("figure: {}\n", path.display()))?;
     }
     Ok(())
 }

@@ -429,20 +429,6 @@ pub fn write_imported_csv<W: std::io::Write>(w: W, rows: &[ImportedRow]) -> std:
     out.finish()
 }
 
-/// Writes rows `(t_s, channel, prn, cn0_dbhz, phase_err_rad)` in the
-/// `tracking.csv` schema (elevation empty) with [`gsens_io::TrackingWriter`]
-/// (a non-finite value is refused).
-pub fn write_tracking_csv<W: std::io::Write>(
-    w: W,
-    rows: impl IntoIterator<Item = (f64, u32, u32, f64, f64)>,
-) -> std::io::Result<W> {
-    let mut out = gsens_io::TrackingWriter::new(w)?;
-    for (t_s, channel, prn, cn0_dbhz, phase_err_rad) in rows {
-        out.write_row(&gsens_io::TrackingRow { t_s, channel, prn, cn0_dbhz, elev_deg: None, phase_err_rad })?;
-    }
-    out.finish()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -598,9 +584,17 @@ mod tests {
         let e = write_imported_csv(Vec::new(), &[row(7.4, f64::NAN)]).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
         assert!(e.to_string().contains("carrier_lock_test"), "{e}");
-        let e = write_tracking_csv(Vec::new(), [(0.02, 0, 1, f64::INFINITY, 0.0)]).unwrap_err();
+        let grid = |cn0_dbhz| gsens_io::TrackingRow {
+            t_s: 0.02,
+            channel: 0,
+            prn: 1,
+            cn0_dbhz,
+            elev_deg: None,
+            phase_err_rad: -0.25,
+        };
+        let e = gsens_io::write_tracking_csv(Vec::new(), &[grid(f64::INFINITY)]).unwrap_err();
         assert!(e.to_string().contains("cn0_dbhz"), "{e}");
-        let text = write_tracking_csv(Vec::new(), [(0.02, 0, 1, 40.5, -0.25)]).unwrap();
+        let text = gsens_io::write_tracking_csv(Vec::new(), &[grid(40.5)]).unwrap();
         assert_eq!(text, b"t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n0.02,0,1,40.5,,-0.25\n");
     }
 }

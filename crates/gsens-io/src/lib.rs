@@ -37,4 +37,4 @@ pub mod writers;
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use tracking::{ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
-pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv};
+pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv, write_tracking_csv};

@@ -38,6 +38,16 @@ pub fn write_imu_csv<W: Write>(w: W, imu: &ImuSeries) -> io::Result<()> {
     out.finish().map(|_| ())
 }
 
+/// Writes `rows` as `tracking.csv` to `w` with [`TrackingWriter`] (every
+/// number checked finite); returns `w`.
+pub fn write_tracking_csv<W: Write>(w: W, rows: &[TrackingRow]) -> io::Result<W> {
+    let mut out = TrackingWriter::new(w)?;
+    for row in rows {
+        out.write_row(row)?;
+    }
+    out.finish()
+}
+
 /// A streaming writer of `imu.csv`, one sample at a time (header written by
 /// [`ImuWriter::new`]).
 #[derive(Debug)]

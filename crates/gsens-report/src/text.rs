@@ -213,3 +213,27 @@ pub fn render_gnss_sdr_tracks(tracks: &[TrackSummary], interval_s: f64) -> Strin
     }
     s
 }
+
+/// A loop's response as a table (f, |L|, phase) with its peak, the shaking
+/// period it implies and the half-power band (what `gsens response` prints).
+pub fn render_response_text(r: &crate::figures::ResponseData) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "L(j2πf) = φ/Δf of the loop: {}", r.description);
+    let _ = writeln!(s, "   f [Hz]   |L| [rad/Hz]   phase [deg]");
+    for k in 0..r.frequency_hz.len() {
+        let (f, m, p) = (r.frequency_hz[k], r.magnitude_rad_per_hz[k], r.phase_deg[k]);
+        let _ = writeln!(s, "{f:>9.4}   {m:>11.5}   {p:>10.1}");
+    }
+    let _ = write!(
+        s,
+        "peak: |L| = {:.4} rad/Hz at {:.4} Hz → shake with a period of about {:.2} s",
+        r.peak_rad_per_hz,
+        r.peak_hz,
+        1.0 / r.peak_hz
+    );
+    if let Some([lo, hi]) = r.half_power_band_hz {
+        let _ = write!(s, " (half-power band {lo:.2}–{hi:.2} Hz, periods {:.2}–{:.2} s)", 1.0 / hi, 1.0 / lo);
+    }
+    s.push('\n');
+    s
+}
