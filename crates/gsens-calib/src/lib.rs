@@ -68,8 +68,8 @@ pub use estimate::{
     CompensatedEpoch, EpochSeries, HISTORY_INTERVAL_S, calibrate, compensation_series, imu_systematic_sigma, regressors,
 };
 pub use pipeline::{
-    LoopIdentificationMode, Outcome, PipelineError, PipelineSettings, TimeOffset, calibrate_files, calibrate_gnss_sdr,
-    calibrate_logs, gnss_sdr_tracking_log, series_of,
+    LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, TimeOffset,
+    calibrate_files, calibrate_gnss_sdr, calibrate_logs, gnss_sdr_tracking_log, series_of,
 };
 pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};

@@ -27,6 +27,27 @@ pub enum TimeOffset {
     },
 }
 
+impl core::str::FromStr for TimeOffset {
+    type Err = ParseTimeOffsetError;
+
+    /// `auto` (searched within ±0.25 s), `none` (0) or a number of seconds.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(TimeOffset::default()),
+            "none" => Ok(TimeOffset::Fixed { imu_time_offset_s: 0.0 }),
+            _ => match s.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(TimeOffset::Fixed { imu_time_offset_s: v }),
+                _ => Err(ParseTimeOffsetError(s.to_string())),
+            },
+        }
+    }
+}
+
+/// A time offset that is neither `auto`, `none` nor a finite number of seconds.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("expected auto, none or a number of seconds, got `{0}`")]
+pub struct ParseTimeOffsetError(pub String);
+
 impl Default for TimeOffset {
     fn default() -> Self {
         TimeOffset::Auto { max_abs_s: 0.25 }

@@ -232,35 +232,13 @@ impl SelectionArgs {
     }
 }
 
-/// How the IMU/tracking time offset is given.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum OffsetArg {
-    /// Estimated jointly with Γ.
-    Auto,
-    /// Zero.
-    None,
-    /// This many seconds (IMU time stamp minus true time).
-    Seconds(f64),
-}
-
-fn parse_time_offset(s: &str) -> Result<OffsetArg, String> {
-    match s {
-        "auto" => Ok(OffsetArg::Auto),
-        "none" => Ok(OffsetArg::None),
-        _ => match s.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(OffsetArg::Seconds(v)),
-            _ => Err(format!("expected auto, none or a number of seconds, got `{s}`")),
-        },
-    }
-}
-
 /// Systematic errors estimated jointly with Γ.
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Systematic errors")]
 pub struct SystematicArgs {
     /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
-    #[arg(long, default_value = "auto", value_parser = parse_time_offset, allow_hyphen_values = true)]
-    pub time_offset: OffsetArg,
+    #[arg(long, default_value = "auto", allow_hyphen_values = true)]
+    pub time_offset: TimeOffset,
     /// Search range ± of `--time-offset auto` [s].
     #[arg(long, default_value_t = 0.25)]
     pub time_offset_max_s: f64,
@@ -308,9 +286,8 @@ pub fn pipeline_settings(
     p.estimate = estimate;
     p.selection = selection.selection();
     p.time_offset = match systematic.time_offset {
-        OffsetArg::Auto => TimeOffset::Auto { max_abs_s: systematic.time_offset_max_s },
-        OffsetArg::None => TimeOffset::Fixed { imu_time_offset_s: 0.0 },
-        OffsetArg::Seconds(v) => TimeOffset::Fixed { imu_time_offset_s: v },
+        TimeOffset::Auto { .. } => TimeOffset::Auto { max_abs_s: systematic.time_offset_max_s },
+        fixed => fixed,
     };
     p.loop_identification = match (systematic.identify_loop, systematic.identify_damping) {
         (false, _) => LoopIdentificationMode::Off,

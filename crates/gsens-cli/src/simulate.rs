@@ -71,25 +71,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         return run_iq(&scenario, args, iq);
     }
     let truth = simulate_to_dir(&scenario, args.scenario.seed, &args.out)?;
-    let slips: u64 = truth.channels.iter().map(|c| c.stats.cycle_slips).sum();
-    crate::out(&format!(
-        "simulated {:.1} s, {} channel passes ({} cycle slips), seed {} → {}\n\
-         truth Γ = [{:+.4}, {:+.4}, {:+.4}] Hz/(m/s²); loop interval {} s, log interval {} s, logged phase {}\n",
-        truth.duration_s,
-        truth.channels.len(),
-        slips,
-        args.scenario.seed,
-        args.out.display(),
-        truth.sensitivity.gamma_hz_per_mps2[0],
-        truth.sensitivity.gamma_hz_per_mps2[1],
-        truth.sensitivity.gamma_hz_per_mps2[2],
-        truth.loop_interval_s,
-        truth.log_interval_s,
-        match truth.logged_phase {
-            gsens_sim::scenario::LoggedPhaseMode::Last => "last",
-            gsens_sim::scenario::LoggedPhaseMode::Mean => "mean",
-        }
-    ))
+    crate::out(&format!("{truth}\nlogs: imu.csv, tracking.csv, truth.json in {}\n", args.out.display()))
 }
 
 /// Writes `iq` and, in `--out`, the files of `gsens_sim::simulate_iq_to_dir`
@@ -108,7 +90,7 @@ fn run_iq(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
             bar.set_position((f * 1000.0) as u64)
         })?;
     bar.finish_and_clear();
-    let (truth, wall_s) = (&session.truth, session.wall_s);
+    let truth = &session.truth;
 
     // The GNSS-SDR configuration: absolute paths, so it runs from anywhere.
     let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
@@ -128,26 +110,9 @@ fn run_iq(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
     let conf_path = out.join("gnss-sdr.conf");
     std::fs::write(&conf_path, iq_file_conf(&o)).with_context(|| format!("{}: cannot write", conf_path.display()))?;
 
-    let prns: Vec<String> =
-        truth.satellites.iter().map(|s| format!("{} ({:.1} dB-Hz)", s.prn, s.start_cn0_dbhz)).collect();
-    let g = truth.sensitivity.gamma_hz_per_mps2;
     crate::out(&format!(
-        "wrote {:.1} s of {} samples at {} Hz ({} samples, {:.1} MB) in {:.1} s ({:.1}x real time) → {}\n\
-         satellites: PRN {}\n\
-         truth Γ = [{:+.4}, {:+.4}, {:+.4}] Hz/(m/s²); imu.csv, truth.json, delta_f.csv, gnss-sdr.conf in {}\n\
-         run: gnss-sdr --config_file={}\n",
-        truth.duration_s,
-        format.gnss_sdr_item_type(),
-        fs_hz,
-        truth.samples,
-        (truth.samples * format.bytes_per_sample() as u64) as f64 / 1e6,
-        wall_s,
-        truth.duration_s / wall_s,
+        "{session}\nfiles: {} and imu.csv, truth.json, delta_f.csv, gnss-sdr.conf in {}\nrun: gnss-sdr --config_file={}\n",
         iq.display(),
-        prns.join(", PRN "),
-        g[0],
-        g[1],
-        g[2],
         out.display(),
         abs(&conf_path).display()
     ))

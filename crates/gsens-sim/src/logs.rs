@@ -170,6 +170,30 @@ pub struct IqSession {
     pub wall_s: f64,
 }
 
+impl core::fmt::Display for IqSession {
+    /// What was written, in three lines: duration, format, rate, size and
+    /// speed; the satellites; Γ.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let t = &self.truth;
+        let g = t.sensitivity.gamma_hz_per_mps2;
+        let prns: Vec<String> =
+            t.satellites.iter().map(|s| format!("{} ({:.1} dB-Hz)", s.prn, s.start_cn0_dbhz)).collect();
+        writeln!(
+            f,
+            "wrote {:.1} s of {} samples at {} Hz ({} samples, {:.1} MB) in {:.1} s ({:.1}x real time)",
+            t.duration_s,
+            t.format.gnss_sdr_item_type(),
+            t.fs_hz,
+            t.samples,
+            (t.samples * t.format.bytes_per_sample() as u64) as f64 / 1e6,
+            self.wall_s,
+            t.duration_s / self.wall_s
+        )?;
+        writeln!(f, "satellites: PRN {}", prns.join(", PRN "))?;
+        write!(f, "truth Γ = [{:+.4}, {:+.4}, {:+.4}] Hz/(m/s²)", g[0], g[1], g[2])
+    }
+}
+
 /// Generates the IF samples of `scenario` into `iq_path` and, in `dir`:
 /// `imu.csv`, `truth.json`, `delta_f.csv` (`t_s,delta_f_hz,g_induced_hz` per
 /// 1 ms block) and, with `carrier_truth`, `carrier.csv` (`t_s,prn<N>_hz,…`:

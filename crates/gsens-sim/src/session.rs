@@ -253,6 +253,31 @@ impl SensitivityTruth {
     }
 }
 
+impl core::fmt::Display for Truth {
+    /// What was simulated, in two lines: duration, channel passes, cycle
+    /// slips and seed; Γ and the loop and log settings.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let slips: u64 = self.channels.iter().map(|c| c.stats.cycle_slips).sum();
+        let g = self.sensitivity.gamma_hz_per_mps2;
+        let logged = match self.logged_phase {
+            crate::scenario::LoggedPhaseMode::Last => "last",
+            crate::scenario::LoggedPhaseMode::Mean => "mean",
+        };
+        writeln!(
+            f,
+            "simulated {:.1} s, {} channel passes ({slips} cycle slips), seed {}",
+            self.duration_s,
+            self.channels.len(),
+            self.seed
+        )?;
+        write!(
+            f,
+            "truth Γ = [{:+.4}, {:+.4}, {:+.4}] Hz/(m/s²); loop interval {} s, log interval {} s, logged phase {logged}",
+            g[0], g[1], g[2], self.loop_interval_s, self.log_interval_s
+        )
+    }
+}
+
 /// The truth of a run: Γ and everything needed to reproduce it
 /// (`truth.json`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
