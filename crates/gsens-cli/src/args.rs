@@ -24,15 +24,6 @@ pub enum MethodArg {
     Gls,
 }
 
-/// A switch.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum OnOff {
-    /// Enabled.
-    On,
-    /// Disabled.
-    Off,
-}
-
 /// The simulated scenario and its seed (`demo`, `simulate`, `montecarlo`).
 #[derive(Args, Debug, Clone)]
 pub struct ScenarioArgs {
@@ -193,8 +184,8 @@ pub struct SelectionArgs {
     #[arg(long, value_enum, default_value_t = WeightsArg::Equal)]
     pub weights: WeightsArg,
     /// Per-channel screening before averaging: cycle slips, losses of lock, C/N0 drops, |φ| beyond the linear range.
-    #[arg(long, value_enum, default_value_t = OnOff::On)]
-    pub screening: OnOff,
+    #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
+    pub screening: bool,
     /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
     #[arg(long, default_value_t = 6.0)]
     pub cn0_drop_db: f64,
@@ -225,7 +216,7 @@ impl SelectionArgs {
             },
             ..SelectionConfig::default()
         };
-        s.screening.enabled = self.screening == OnOff::On;
+        s.screening.enabled = self.screening;
         s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);
         s.screening.max_abs_phase_rad = (self.max_abs_phase_rad > 0.0).then_some(self.max_abs_phase_rad);
         s
