@@ -42,15 +42,8 @@ G=$PWD/target/release/gsens
 . scripts/lib/scenario.sh
 
 scenario() { # $1 = loop order
+    paper_session "$1"
     cat <<TOML
-[session]
-start_utc = "2024-02-08T12:00:00Z"
-[oscillator]
-preset = "ocxo"
-gamma_hz_per_mps2 = [0.09, 0.08, -0.08]
-[loop]
-order = $1
-bn_hz = 3.0
 [satellites]
 elevation_mask_deg = 4.0
 max_channels = 8

@@ -26,15 +26,8 @@ WORK=$(cd "$WORK" && pwd)
 cargo build --release -q -p gsens-cli
 G=$PWD/target/release/gsens
 . scripts/lib/scenario.sh
-cat > "$WORK/scenario.toml" <<'TOML'
-[session]
-start_utc = "2024-02-08T12:00:00Z"
-[oscillator]
-preset = "ocxo"
-gamma_hz_per_mps2 = [0.09, 0.08, -0.08]
-[loop]
-order = 2
-bn_hz = 3.0
+paper_session 2 > "$WORK/scenario.toml"
+cat >> "$WORK/scenario.toml" <<'TOML'
 [satellites]
 elevation_mask_deg = 10.0
 max_channels = 2

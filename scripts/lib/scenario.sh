@@ -1,4 +1,12 @@
-# Shared by the GNSS-SDR scripts: TOML for the paper's hand-shaking sequence.
+# Shared by the GNSS-SDR scripts: TOML pieces of their scenarios.
+#
+# paper_session ORDER
+#   the session start, the paper's OCXO with its Γ and a 3 Hz loop of ORDER.
+paper_session() {
+    printf '[session]\nstart_utc = "2024-02-08T12:00:00Z"\n[oscillator]\npreset = "ocxo"\n'
+    printf 'gamma_hz_per_mps2 = [0.09, 0.08, -0.08]\n[loop]\norder = %s\nbn_hz = 3.0\n' "$1"
+}
+
 #
 # shake_sequence FIRST_REST_S SHAKE_S REST_S [JITTER]
 #   rest FIRST_REST_S, then x, y, z each shaken for SHAKE_S at a 1.1 s period

@@ -23,17 +23,11 @@ fn import_writes_tracking_csv() {
     let f = fixtures();
     let d = tmp("import");
     let raw = d.join("raw.csv");
-    let out = gsens(&[
-        "import",
-        "gnss-sdr",
-        &s(&f.join("order2")),
-        "--conf",
-        &s(&f.join("order2/gnss-sdr.conf")),
-        "--out",
-        &s(&raw),
-        "--tracks-json",
-        &s(&d.join("tracks.json")),
-    ]);
+    let (dumps, conf) = (s(&f.join("order2")), s(&f.join("order2/gnss-sdr.conf")));
+    let import = |out: &Path, extra: &[&str]| {
+        gsens(&[&["import", "gnss-sdr", &dumps, "--conf", &conf, "--out", &s(out)], extra].concat())
+    };
+    let out = import(&raw, &["--tracks-json", &s(&d.join("tracks.json"))]);
     assert!(out.contains("2 tracks, 2 used"), "{out}");
     let text = std::fs::read_to_string(&raw).unwrap();
     let mut lines = text.lines();
@@ -46,16 +40,7 @@ fn import_writes_tracking_csv() {
     let t: Vec<f64> = rows.iter().map(|r| r[0].parse().unwrap()).collect();
     assert!(t.iter().any(|v| ((v / 0.02).round() * 0.02 - v).abs() > 1e-4));
     let grid = d.join("grid.csv");
-    gsens(&[
-        "import",
-        "gnss-sdr",
-        &s(&f.join("order2")),
-        "--conf",
-        &s(&f.join("order2/gnss-sdr.conf")),
-        "--out",
-        &s(&grid),
-        "--common-grid",
-    ]);
+    import(&grid, &["--common-grid"]);
     let g = std::fs::read_to_string(&grid).unwrap();
     for line in g.lines().skip(1) {
         let v: f64 = line.split(',').next().unwrap().parse().unwrap();
