@@ -180,6 +180,11 @@ impl ResultDocument {
         }
     }
 
+    /// Writes [`ResultDocument::to_json_string`] to `path`.
+    pub fn write_json_file(&self, path: &std::path::Path) -> std::io::Result<()> {
+        std::fs::write(path, self.to_json_string().map_err(std::io::Error::other)?)
+    }
+
     /// The document as pretty-printed JSON with a final newline.
     pub fn to_json_string(&self) -> Result<String, serde_json::Error> {
         Ok(serde_json::to_string_pretty(self)? + "\n")

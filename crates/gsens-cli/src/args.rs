@@ -40,11 +40,6 @@ impl ScenarioArgs {
     pub fn load(&self) -> Result<gsens_sim::scenario::Scenario> {
         Ok(gsens_sim::load_scenario(self.scenario.as_deref())?)
     }
-
-    /// The scenario's name in reports: its file, or `default`.
-    pub fn name(&self) -> String {
-        self.scenario.as_ref().map_or("default".into(), |p| p.display().to_string())
-    }
 }
 
 /// The receiver's carrier loop.

@@ -4,7 +4,7 @@
 
 use crate::args::AnalysisArgs;
 use crate::simulate::simulate_to_dir;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::montecarlo::scenario_settings;
 use gsens_calib::{Outcome, calibrate_files};
@@ -59,7 +59,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let doc = outcome.document(Some(truth.sensitivity.gamma_hz_per_mps2));
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
-        crate::estimate::write_json(path, &doc)?;
+        doc.write_json_file(path).with_context(|| format!("{}: cannot write", path.display()))?;
     }
     if let Some(fig_dir) = &args.figures {
         write_demo_figures(

@@ -3,7 +3,7 @@
 use crate::args::{AnalysisArgs, GnssSdrArgs, LoggedArg, LoopArgs};
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::{Outcome, PipelineSettings, ResultDocument, calibrate_files, calibrate_gnss_sdr};
+use gsens_calib::{Outcome, PipelineSettings, calibrate_files, calibrate_gnss_sdr};
 use gsens_core::LoggedPhase;
 use std::path::{Path, PathBuf};
 
@@ -51,11 +51,6 @@ impl CalibrationArgs {
     }
 }
 
-/// Writes the document as JSON to `path`.
-pub fn write_json(path: &Path, doc: &ResultDocument) -> Result<()> {
-    std::fs::write(path, doc.to_json_string()?).with_context(|| format!("{}: cannot write", path.display()))
-}
-
 /// Runs the calibration the options describe: from tracking.csv, or from
 /// GNSS-SDR dumps (printing what became of each track).
 pub fn calibrate(
@@ -87,7 +82,7 @@ pub fn run(args: &EstimateArgs) -> Result<()> {
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
-        write_json(path, &doc)?;
+        doc.write_json_file(path).with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(())
 }

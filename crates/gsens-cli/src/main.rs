@@ -61,6 +61,14 @@ pub fn out(text: &str) -> anyhow::Result<()> {
     }
 }
 
+/// A bar on stderr (drawn only on a terminal) for work counted in thousandths.
+pub fn progress_bar(verb: &str) -> ProgressBar {
+    let bar = ProgressBar::new(1000);
+    let template = format!("{verb} {{bar:40}} {{percent:>3}}% {{elapsed_precise}} (eta {{eta}})");
+    bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
+    bar
+}
+
 /// A spinner on stderr (drawn only on a terminal).
 pub fn spinner() -> ProgressBar {
     let bar = ProgressBar::new_spinner();

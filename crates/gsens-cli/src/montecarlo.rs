@@ -47,7 +47,8 @@ pub fn run(args: &MonteCarloArgs) -> Result<()> {
         ProgressStyle::with_template("monte carlo {bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta})")
             .expect("valid template"),
     );
-    let (name, seed) = (args.scenario.name(), args.scenario.seed);
+    let name = args.scenario.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
+    let seed = args.scenario.seed;
     let mc = monte_carlo(&scenario, &name, args.runs, seed, &methods, || bar.inc(1))?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_montecarlo_text(&mc))?;

@@ -3,10 +3,9 @@
 //! figures as PNG and SVG.
 
 use crate::estimate::{CalibrationArgs, calibrate};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gsens_calib::tool_version;
-use gsens_report::{FigureInputs, ReportData, ReportMeta, write_figures};
+use gsens_report::{FigureInputs, write_report_dir};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -42,24 +41,10 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let doc = outcome.document(truth);
     bar.set_message("reading the tracking log for C/N0");
     let tracking = gsens_io::read_tracking_file(&args.tracking)?;
-    let inputs: Vec<(&str, &str)> = doc.inputs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
-    let meta = ReportMeta::now(tool_version(), &inputs);
-    let out = &args.out;
-    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     let figure_inputs = FigureInputs::new(&outcome, Some(&tracking), truth)?;
-    let figures =
-        write_figures(&figure_inputs.figures(), &out.join("figures"), |id| bar.set_message(format!("drawing {id}")))?;
-    bar.set_message("writing the report");
-    let header = gsens_report::cheader::render_c_header(&outcome.calibration, &meta);
-    let data = ReportData { title: args.title.clone(), document: &doc, meta, figures, c_header: Some(header.clone()) };
-    let write = |name: &str, text: &str| -> Result<PathBuf> {
-        let p = out.join(name);
-        std::fs::write(&p, text).with_context(|| format!("{}: cannot write", p.display()))?;
-        Ok(p)
-    };
-    let html = write("report.html", &gsens_report::html::render_html(&data))?;
-    write("report.json", &gsens_report::json::report_json_string(&data)?)?;
-    write("gsens_gamma.h", &header)?;
+    let html = write_report_dir(&args.out, &args.title, &doc, &figure_inputs.figures(), |id| {
+        bar.set_message(format!("drawing {id}"))
+    })?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_text(&doc))?;
     crate::out(&format!("\nreport: {} (with report.json, gsens_gamma.h and figures/ beside it)\n", html.display()))

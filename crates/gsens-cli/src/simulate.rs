@@ -3,13 +3,12 @@
 //! IMU log, the truth, Δf per millisecond and a GNSS-SDR configuration that
 //! tracks the file.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gsens_gnss_sdr::conf::{IqConfOptions, iq_file_conf};
+use gsens_gnss_sdr::conf::{IqConfOptions, write_iq_conf};
 use gsens_sim::iq::{IqConfig, IqFormat};
 use gsens_sim::scenario::Scenario;
 use gsens_sim::session::Truth;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -48,18 +47,10 @@ pub enum IqFormatArg {
     GrComplex,
 }
 
-/// A progress bar on stderr (drawn only on a terminal) for work counted in thousandths.
-pub fn progress_bar(verb: &str) -> ProgressBar {
-    let bar = ProgressBar::new(1000);
-    let template = format!("{verb} {{bar:40}} {{percent:>3}}% {{elapsed_precise}} (eta {{eta}})");
-    bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
-    bar
-}
-
 /// Simulates `scenario` into `dir` (imu.csv, tracking.csv, truth.json) with a
 /// progress bar on a terminal.
 pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Truth> {
-    let bar = progress_bar("simulating");
+    let bar = crate::progress_bar("simulating");
     let truth = gsens_sim::simulate_to_dir(scenario, seed, dir, |f| bar.set_position((f * 1000.0) as u64))?;
     bar.finish_and_clear();
     Ok(truth)
@@ -83,7 +74,7 @@ fn run_iq(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
         IqFormatArg::Ishort => IqFormat::Ishort,
         IqFormatArg::GrComplex => IqFormat::GrComplex,
     };
-    let bar = progress_bar("generating");
+    let bar = crate::progress_bar("generating");
     let cfg = IqConfig::new(fs_hz, format, scenario);
     let session =
         gsens_sim::simulate_iq_to_dir(scenario, args.scenario.seed, &cfg, iq, out, args.iq_carrier_truth, |f| {
@@ -92,28 +83,15 @@ fn run_iq(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
     bar.finish_and_clear();
     let truth = &session.truth;
 
-    // The GNSS-SDR configuration: absolute paths, so it runs from anywhere.
-    let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
-    let dumps = out.join("gnss-sdr");
-    std::fs::create_dir_all(&dumps).with_context(|| format!("{}: cannot create", dumps.display()))?;
     let l = &scenario.tracking_loop;
     let sats = truth.satellites.len() as u32;
-    let mut o = IqConfOptions::for_iq_file(
-        &abs(iq).display().to_string(),
-        format.gnss_sdr_item_type(),
-        fs_hz,
-        sats,
-        l.order,
-        l.bn_hz,
-    );
-    o.dump_filename = format!("{}/trk_ch_", abs(&dumps).display());
-    let conf_path = out.join("gnss-sdr.conf");
-    std::fs::write(&conf_path, iq_file_conf(&o)).with_context(|| format!("{}: cannot write", conf_path.display()))?;
-
+    let item = format.gnss_sdr_item_type();
+    let options = IqConfOptions::for_iq_file(&iq.display().to_string(), item, fs_hz, sats, l.order, l.bn_hz);
+    let conf_path = write_iq_conf(out, options)?;
     crate::out(&format!(
         "{session}\nfiles: {} and imu.csv, truth.json, delta_f.csv, gnss-sdr.conf in {}\nrun: gnss-sdr --config_file={}\n",
         iq.display(),
         out.display(),
-        abs(&conf_path).display()
+        conf_path.display()
     ))
 }

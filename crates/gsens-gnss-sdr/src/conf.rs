@@ -441,6 +441,25 @@ PVT.dump=false
     )
 }
 
+/// Writes `gnss-sdr.conf` into `dir` for the IF file `options.filename`
+/// (made absolute, so the configuration runs from anywhere), with the
+/// tracking dumps going to `dir/gnss-sdr/trk_ch_<N>.dat`; returns the
+/// configuration's absolute path.
+pub fn write_iq_conf(dir: &Path, mut options: IqConfOptions) -> Result<std::path::PathBuf, GnssSdrError> {
+    let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let write_err = |p: &Path| {
+        let file = p.display().to_string();
+        move |error| GnssSdrError::Write { file, error }
+    };
+    let dumps = dir.join("gnss-sdr");
+    std::fs::create_dir_all(&dumps).map_err(write_err(&dumps))?;
+    options.filename = abs(Path::new(&options.filename)).display().to_string();
+    options.dump_filename = format!("{}/trk_ch_", abs(&dumps).display());
+    let conf_path = dir.join("gnss-sdr.conf");
+    std::fs::write(&conf_path, iq_file_conf(&options)).map_err(write_err(&conf_path))?;
+    Ok(abs(&conf_path))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

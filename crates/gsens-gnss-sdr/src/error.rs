@@ -16,6 +16,15 @@ pub enum GnssSdrError {
         #[source]
         error: std::io::Error,
     },
+    /// A file or directory could not be written.
+    #[error("{file}: cannot write: {error}")]
+    Write {
+        /// The file.
+        file: String,
+        /// The underlying error.
+        #[source]
+        error: std::io::Error,
+    },
     /// Neither the configuration nor the caller gives the sampling rate.
     #[error(
         "the sampling rate is unknown: the configuration gives neither GNSS-SDR.internal_fs_sps nor \

@@ -269,3 +269,33 @@ pub fn write_figures(
     }
     Ok(blocks)
 }
+
+/// Writes a whole report into `dir`: `figures/` (PNG and SVG of `figs`),
+/// `report.html`, `report.json` and `gsens_gamma.h`, for the result document
+/// `document` titled `title`; `on_figure` is told each figure's id before it
+/// is drawn. Returns the path of `report.html`.
+pub fn write_report_dir(
+    dir: &Path,
+    title: &str,
+    document: &gsens_calib::ResultDocument,
+    figs: &[Figure],
+    on_figure: impl FnMut(&str),
+) -> Result<std::path::PathBuf, WriteError> {
+    let io = |p: &Path| {
+        let path = p.display().to_string();
+        move |error| WriteError::Io { path, error }
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let figures = write_figures(figs, &dir.join("figures"), on_figure)?;
+    let inputs: Vec<(&str, &str)> = document.inputs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+    let meta = crate::ReportMeta::now(gsens_calib::tool_version(), &inputs);
+    let header = crate::cheader::render_c_header(&document.calibration, &meta);
+    let data = crate::ReportData { title: title.to_string(), document, meta, figures, c_header: Some(header.clone()) };
+    let json = crate::json::report_json_string(&data).expect("the document serializes");
+    for (name, text) in
+        [("report.html", crate::html::render_html(&data)), ("report.json", json), ("gsens_gamma.h", header)]
+    {
+        std::fs::write(dir.join(name), text).map_err(io(&dir.join(name)))?;
+    }
+    Ok(dir.join("report.html"))
+}

@@ -34,7 +34,7 @@ pub mod spectrum;
 mod text;
 mod time;
 
-pub use figure_set::{Figure, FigureInputs, WriteError, write_figures};
+pub use figure_set::{Figure, FigureInputs, WriteError, write_figures, write_report_dir};
 pub use figures::{Format, Image, RenderError};
 pub use montecarlo_text::render_montecarlo_text;
 pub use text::{render_gnss_sdr_tracks, render_response_text, render_text};
