@@ -152,6 +152,8 @@ impl ResultDocument {
             truth_gamma_hz_per_mps2,
         );
         doc.gnss_sdr = outcome.gnss_sdr.clone();
+        let inputs = crate::checks::input_warnings(&outcome.session.accel_mps2, &doc.calibration, &doc.loop_summary);
+        doc.warnings.extend(inputs);
         doc
     }
 

@@ -48,6 +48,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod checks;
 mod document;
 mod error;
 mod estimate;
