@@ -154,6 +154,16 @@ impl ResultDocument {
         doc.gnss_sdr = outcome.gnss_sdr.clone();
         let inputs = crate::checks::input_warnings(&outcome.session.accel_mps2, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
+        if let Some(first) = outcome.imu_spikes_t_s.first() {
+            doc.warnings.push(Warning {
+                code: "imu_spikes",
+                message: format!(
+                    "{} isolated IMU sample(s) no hand motion can produce (the first at {first} s) were replaced by \
+                     the mean of their neighbours; check the IMU and its logger",
+                    outcome.imu_spikes_t_s.len()
+                ),
+            });
+        }
         doc
     }
 

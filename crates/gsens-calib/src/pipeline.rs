@@ -7,7 +7,7 @@ use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, calibrate, e
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
-use gsens_session::{PreparedSession, SelectionConfig, prepare_session, reinterpolate_imu};
+use gsens_session::{PreparedSession, SelectionConfig, despike_imu, prepare_session, reinterpolate_imu};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -71,7 +71,8 @@ pub enum LoopIdentificationMode {
 /// Everything that decides a calibration from logs.
 ///
 /// Start from [`PipelineSettings::default`] and set what differs.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 #[non_exhaustive]
 pub struct PipelineSettings {
     /// The estimation stage: loop, estimator, error model.
@@ -82,6 +83,21 @@ pub struct PipelineSettings {
     pub time_offset: TimeOffset,
     /// Loop identification.
     pub loop_identification: LoopIdentificationMode,
+    /// Replace isolated IMU spikes by the mean of their neighbours before
+    /// anything else ([`gsens_session::despike_imu`]; default on).
+    pub despike_imu: bool,
+}
+
+impl Default for PipelineSettings {
+    fn default() -> Self {
+        PipelineSettings {
+            estimate: EstimateSettings::default(),
+            selection: SelectionConfig::default(),
+            time_offset: TimeOffset::default(),
+            loop_identification: LoopIdentificationMode::default(),
+            despike_imu: true,
+        }
+    }
 }
 
 /// Why a calibration from logs could not run.
@@ -144,6 +160,8 @@ pub struct Outcome {
     pub settings: PipelineSettings,
     /// What the GNSS-SDR conversion did, for sessions from GNSS-SDR dumps.
     pub gnss_sdr: Option<GnssSdrConversion>,
+    /// Time stamps of the IMU samples replaced as isolated spikes \[s\].
+    pub imu_spikes_t_s: Vec<f64>,
     /// The inputs as role → path (`imu`, `tracking`, `gnss_sdr_dumps`, …);
     /// empty for logs given in memory. Callers may add their own (`truth`).
     pub inputs: Vec<(String, String)>,
@@ -193,6 +211,8 @@ pub fn calibrate_logs(
             (0.0, Some(max_abs_s))
         }
     };
+    let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
+    let imu = &despiked;
     let mut session = prepare_session(tracking, imu, imu_name, &settings.selection, assumed)?;
     let mut estimate = settings.estimate;
     let mut identification = None;
@@ -220,7 +240,14 @@ pub fn calibrate_logs(
     calibration.imu_time_offset_estimated = offset_sigma.is_some();
     calibration.imu_time_offset_sigma_s = offset_sigma;
     calibration.loop_identification = identification;
-    Ok(Outcome { session, calibration, settings: settings.clone(), gnss_sdr: None, inputs: Vec::new() })
+    Ok(Outcome {
+        session,
+        calibration,
+        settings: settings.clone(),
+        gnss_sdr: None,
+        imu_spikes_t_s: spikes.t_s,
+        inputs: Vec::new(),
+    })
 }
 
 /// [`calibrate_logs`] on files: `imu.csv` and `tracking.csv`.

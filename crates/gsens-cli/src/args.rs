@@ -234,6 +234,9 @@ pub struct SystematicArgs {
     /// With --identify-loop: identify the damping ζ too (weakly determined by near-sinusoidal shaking).
     #[arg(long)]
     pub identify_damping: bool,
+    /// Replace isolated IMU spikes (single samples no hand motion can produce) by their neighbours' mean.
+    #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
+    pub imu_despike: bool,
 }
 
 /// The options of a single calibration besides its receiver loop (`estimate`,
@@ -275,6 +278,7 @@ pub fn pipeline_settings(
         TimeOffset::Auto { .. } => TimeOffset::Auto { max_abs_s: systematic.time_offset_max_s },
         fixed => fixed,
     };
+    p.despike_imu = systematic.imu_despike;
     p.loop_identification = match (systematic.identify_loop, systematic.identify_damping) {
         (false, _) => LoopIdentificationMode::Off,
         (true, false) => LoopIdentificationMode::NaturalFrequency,

@@ -187,10 +187,12 @@
 #![deny(missing_docs)]
 
 mod error;
+mod imu_screening;
 mod screening;
 mod session;
 
 pub use error::{ScreeningConfigError, SessionError};
+pub use imu_screening::{ImuSpikes, SPIKE_SIGMAS, despike_imu};
 pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
     ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, Weighting, prepare_session,
