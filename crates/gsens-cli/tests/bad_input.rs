@@ -123,4 +123,6 @@ fn missing_file() {
     let (code, stderr) = estimate(&case.path("nope.csv"), &case.path("tracking.csv"), &[]);
     assert_eq!(code, 2);
     assert!(stderr.contains("nope.csv"), "{stderr}");
+    // The OS's reason is said once, not once per level of the error chain.
+    assert_eq!(stderr.matches("os error").count(), 1, "{stderr}");
 }

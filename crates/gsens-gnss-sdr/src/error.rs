@@ -12,8 +12,7 @@ pub enum GnssSdrError {
     Io {
         /// The file.
         file: String,
-        /// The underlying error.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: std::io::Error,
     },
     /// A file or directory could not be written.
@@ -21,8 +20,7 @@ pub enum GnssSdrError {
     Write {
         /// The file.
         file: String,
-        /// The underlying error.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: std::io::Error,
     },
     /// Neither the configuration nor the caller gives the sampling rate.

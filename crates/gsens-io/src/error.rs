@@ -36,8 +36,7 @@ pub enum FormatError {
     Io {
         /// Source name.
         file: String,
-        /// The underlying I/O error.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: std::io::Error,
     },
     /// The file holds nothing, not even a header line.

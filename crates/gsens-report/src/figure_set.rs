@@ -20,8 +20,7 @@ pub enum WriteError {
     Render {
         /// The figure.
         id: &'static str,
-        /// Why.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: RenderError,
     },
     /// A file or folder could not be written.
@@ -29,8 +28,7 @@ pub enum WriteError {
     Io {
         /// The path.
         path: String,
-        /// Why.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: std::io::Error,
     },
 }

@@ -20,8 +20,7 @@ pub enum LogsError {
     Io {
         /// The file.
         path: String,
-        /// Why.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: std::io::Error,
     },
     /// The simulated tracking rows did not pass the readers' checks.
@@ -65,8 +64,7 @@ pub enum LoadError {
     Io {
         /// The file.
         path: String,
-        /// Why.
-        #[source]
+        /// The underlying error, quoted in the message (so not also a `source`: a printed chain would say it twice).
         error: std::io::Error,
     },
     /// The file is not a valid scenario.
