@@ -338,7 +338,7 @@ pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<
         }
         let n = (2 * len).next_power_of_two().max(2 * (model.order() + 1));
         let fft = planner.plan_fft_forward(n);
-        let mut x: Vec<Vec<Complex<f64>>> = (0..3)
+        let x: Vec<Vec<Complex<f64>>> = (0..3)
             .map(|i| {
                 let mut v = vec![Complex::new(0.0, 0.0); n];
                 for (k, a) in phi_a[seg.clone()].iter().enumerate() {
@@ -362,7 +362,6 @@ pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<
                 }
             }
         }
-        x.clear();
     }
     for i in 0..3 {
         for j in 0..i {

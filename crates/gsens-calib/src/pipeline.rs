@@ -124,16 +124,6 @@ pub enum PipelineError {
     /// The estimation failed.
     #[error(transparent)]
     Calib(#[from] CalibError),
-    /// A setting outside its range.
-    #[error("setting {name} = {value} is out of range: expected {expected}")]
-    Setting {
-        /// The setting's name (as in the result document's `settings`).
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The range it must be in.
-        expected: &'static str,
-    },
     /// The time-offset search ended at its limit.
     #[error(
         "the IMU time offset search ended at its limit ({found_s:+.3} s): the offset may be larger than the search \
@@ -203,11 +193,16 @@ pub fn calibrate_logs(
     settings.estimate.validate()?;
     let (assumed, max_abs_s) = match settings.time_offset {
         TimeOffset::Fixed { imu_time_offset_s } => {
-            check("imu_time_offset_s", imu_time_offset_s, false, true)?;
+            if !imu_time_offset_s.is_finite() {
+                let expected = "finite";
+                return Err(
+                    CalibError::Setting { name: "imu_time_offset_s", value: imu_time_offset_s, expected }.into()
+                );
+            }
             (imu_time_offset_s, None)
         }
         TimeOffset::Auto { max_abs_s } => {
-            check("time_offset.max_abs_s", max_abs_s, true, false)?;
+            crate::settings::check_range("time_offset.max_abs_s", max_abs_s, true)?;
             (0.0, Some(max_abs_s))
         }
     };
@@ -291,18 +286,4 @@ pub fn calibrate_gnss_sdr(
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
     outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];
     Ok(outcome)
-}
-
-fn check(name: &'static str, x: f64, strict: bool, signed: bool) -> Result<(), PipelineError> {
-    let ok = x.is_finite() && (signed || if strict { x > 0.0 } else { x >= 0.0 });
-    if ok {
-        Ok(())
-    } else {
-        let expected = match (signed, strict) {
-            (true, _) => "finite",
-            (false, true) => "finite and > 0",
-            (false, false) => "finite and ≥ 0",
-        };
-        Err(PipelineError::Setting { name, value: x, expected })
-    }
 }
