@@ -56,6 +56,19 @@ pub struct Warning {
     pub message: String,
 }
 
+/// Warning codes that report something gsens already corrected for (the
+/// estimate stays trustworthy); every other code means the estimate may be
+/// wrong beyond its σ.
+pub const INFORMATIONAL_WARNINGS: &[&str] = &["imu_spikes"];
+
+impl Warning {
+    /// Whether this warning makes the estimate untrustworthy (every code but
+    /// the [`INFORMATIONAL_WARNINGS`]).
+    pub fn affects_trust(&self) -> bool {
+        !INFORMATIONAL_WARNINGS.contains(&self.code)
+    }
+}
+
 /// What the GNSS-SDR conversion did (sessions from GNSS-SDR dumps).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GnssSdrConversion {
@@ -107,6 +120,10 @@ pub struct ResultDocument {
     /// The estimate (flattened: its keys are the document's).
     #[serde(flatten)]
     pub calibration: Calibration,
+    /// Whether the estimate can be trusted within its σ: no warning but the
+    /// [`INFORMATIONAL_WARNINGS`], and at least one axis observable with a
+    /// finite Γ̂ and σ. `gsens` exits with status 3 when it is false.
+    pub trustworthy: bool,
     /// The loop modelled, its peak and band.
     #[serde(rename = "loop")]
     pub loop_summary: LoopSummary,
@@ -164,7 +181,42 @@ impl ResultDocument {
                 ),
             });
         }
+        if let Some(ch) = &outcome.chosen_loop {
+            doc.warnings.push(Warning {
+                code: "loop_not_stated",
+                message: format!(
+                    "no receiver loop was stated: of {} typical receiver loops the data fit best {} with the log \
+                     holding the {} discriminator output (the runner-up, {}, fits with {:.2} times the residual). \
+                     Γ̂ is given under it, but a chosen loop is not a checked one: state the receiver's loop (order, \
+                     bandwidth, update interval, what its log holds) to get a trustworthy estimate",
+                    ch.candidates,
+                    ch.model,
+                    match ch.logged_phase {
+                        gsens_core::LoggedPhase::Last => "last",
+                        gsens_core::LoggedPhase::Mean => "mean of the",
+                    },
+                    ch.runner_up,
+                    ch.runner_up_rss_ratio
+                ),
+            });
+        }
+        doc.judge();
         doc
+    }
+
+    /// Sets [`ResultDocument::trustworthy`] from the warnings and the axes.
+    pub fn judge(&mut self) {
+        let c = &self.calibration;
+        let any_axis = (0..3).any(|i| c.gamma_hz_per_mps2[i].is_some() && c.sigma_hz_per_mps2[i].is_some());
+        if !any_axis && !self.warnings.iter().any(|w| w.code == "nothing_observable") {
+            self.warnings.push(Warning {
+                code: "nothing_observable",
+                message: "no axis is observable: the data hold too little g-induced phase error to estimate Γ; \
+                          shake the board harder, along each axis in turn, near the loop's peak response"
+                    .into(),
+            });
+        }
+        self.trustworthy = !self.warnings.iter().any(Warning::affects_trust);
     }
 
     /// The document of a calibration estimated from an epoch series the
@@ -177,8 +229,9 @@ impl ResultDocument {
         inputs: &[(&str, &str)],
         truth_gamma_hz_per_mps2: Option<[f64; 3]>,
     ) -> Self {
-        ResultDocument {
+        let mut doc = ResultDocument {
             tool: tool_version(),
+            trustworthy: true,
             loop_summary: LoopSummary::of(&calibration.loop_used),
             warnings: warnings(&calibration),
             calibration,
@@ -189,7 +242,9 @@ impl ResultDocument {
             truth_gamma_hz_per_mps2,
             gnss_sdr: None,
             report: None,
-        }
+        };
+        doc.judge();
+        doc
     }
 
     /// Writes [`ResultDocument::to_json_string`] to `path`.
@@ -206,6 +261,16 @@ impl ResultDocument {
 /// The warnings a calibration's own numbers raise.
 fn warnings(c: &Calibration) -> Vec<Warning> {
     let mut w = Vec::new();
+    if c.gamma_raw_hz_per_mps2.iter().any(|g| !g.is_finite()) {
+        w.push(Warning {
+            code: "not_finite",
+            message: format!(
+                "the estimator did not give a finite Γ̂ ({}): with the gradient observer, lower its gain (the \
+                 paper's k = 0.5) or use the batch estimator",
+                c.settings.method
+            ),
+        });
+    }
     let (peak, lin) = (c.predicted_peak_phase_err_rad, DISCRIMINATOR_LINEAR_RANGE_RAD);
     if peak > lin {
         w.push(Warning {
@@ -216,13 +281,35 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
             ),
         });
     }
-    if let Some(id) = c.loop_identification.filter(|id| id.assumed_loop_rejected) {
+    if let Some(j) = c.joint_fit.as_ref().filter(|j| j.stated_loop_rejected) {
+        let (f, f0) = (j.natural_frequency_hz.unwrap_or(f64::NAN), j.stated_natural_frequency_hz.unwrap_or(f64::NAN));
         w.push(Warning {
             code: "loop_rejected",
             message: format!(
-                "the data reject the stated loop (likelihood ratio {:.1}): the identified loop, ωn/2π = {:.4} Hz \
-                 instead of {:.4} Hz, was used; check the receiver's loop settings",
-                id.likelihood_ratio, id.natural_frequency_hz, id.assumed_natural_frequency_hz
+                "the data reject the stated loop ({}): its natural frequency fits at {f:.4} ± {:.4} Hz instead of \
+                 {f0:.4} Hz (z = {:+.1}, beyond ±{:.2}, a {} % false-alarm test). Γ̂ is given under the fitted loop \
+                 ({}); under the stated loop it would be {:+.5}, {:+.5}, {:+.5}. Check the receiver's loop settings \
+                 (bandwidth, order, update interval, what its log holds) and state them",
+                j.stated_loop,
+                j.sigma_natural_frequency_hz.unwrap_or(f64::NAN),
+                j.loop_test_z.unwrap_or(f64::NAN),
+                j.loop_test_threshold_z,
+                j.loop_test_false_alarm * 100.0,
+                j.fitted_loop,
+                j.gamma_stated_loop_hz_per_mps2[0],
+                j.gamma_stated_loop_hz_per_mps2[1],
+                j.gamma_stated_loop_hz_per_mps2[2],
+            ),
+        });
+    }
+    if let Some(j) = c.joint_fit.as_ref().filter(|j| j.offset_at_limit) {
+        let found = j.imu_time_offset_s.unwrap_or(f64::NAN);
+        let max = j.offset_max_abs_s.unwrap_or(f64::NAN);
+        w.push(Warning {
+            code: "time_offset_at_limit",
+            message: format!(
+                "the IMU time offset search ended at its limit ({found:+.3} s, the search spans ±{max} s): the IMU and tracking clocks \
+                 may differ by more; widen the search (--time-offset-max-s) or state the offset (--time-offset)"
             ),
         });
     }

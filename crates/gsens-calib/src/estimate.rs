@@ -182,6 +182,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     // estimator's own covariance (the same residual colour affects them all).
     let white_batch = batch.estimate();
     let obs = assess(batch.normal_equations(), &estimate, &settings.criteria);
+    let mut observable = [false; 3];
     let mut sigma = [None; 3];
     let mut sigma_stat = [None; 3];
     let mut sigma_imu = [None; 3];
@@ -203,7 +204,11 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         };
         ratios[i] = ratio;
         sigma_white[i] = own.max(0.0).sqrt();
-        if obs.observable[i] {
+        // An axis is observable only with a finite estimate and σ (a
+        // diverged estimator's NaN is not a number to present).
+        let finite = gamma[i].is_finite() && (own * ratio).is_finite() && sys[i].is_finite();
+        observable[i] = obs.observable[i] && finite;
+        if observable[i] {
             let stat = (own * ratio).sqrt();
             sigma_stat[i] = Some(stat);
             sigma_imu[i] = Some(sys[i]);
@@ -215,18 +220,13 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         [0, 1, 2].map(|j| {
             let stat = estimate.covariance[i][j] * (ratios[i] * ratios[j]).sqrt();
             let imu = if i == j { sys[i] * sys[i] } else { 0.0 };
-            (obs.observable[i] && obs.observable[j]).then_some(stat + imu)
+            (observable[i] && observable[j]).then_some(stat + imu)
         })
     });
     let ppb = |x: Option<f64>| x.map(|v| hz_per_mps2_to_ppb_per_g(v, settings.carrier_hz));
     let loop_used = settings.loop_at(series.log_interval_s);
-    let axes = verdict::axis_verdicts(
-        series.accel_mps2,
-        series.log_interval_s,
-        &loop_used,
-        obs.observable,
-        obs.excitation_rms,
-    );
+    let axes =
+        verdict::axis_verdicts(series.accel_mps2, series.log_interval_s, &loop_used, observable, obs.excitation_rms);
     let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
     Ok(Calibration {
         gamma_hz_per_mps2: gamma_out,
@@ -235,7 +235,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         sigma_imu_hz_per_mps2: sigma_imu,
         gamma_ppb_per_g: gamma_out.map(ppb),
         sigma_ppb_per_g: sigma.map(ppb),
-        observable: obs.observable,
+        observable,
         excitation_rms: obs.excitation_rms,
         covariance_hz_per_mps2_sq: covariance,
         condition_number: obs.condition_number.is_finite().then_some(obs.condition_number),
@@ -243,13 +243,13 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         sigma_white_hz_per_mps2: sigma_white.map(|s| s.is_finite().then_some(s)),
         crlb_hz_per_mps2: [0, 1, 2].map(|i| {
             let c = noise_fit.as_ref().map(|g| g.crlb_hz_per_mps2()[i]);
-            c.filter(|c| c.is_finite() && obs.observable[i])
+            c.filter(|c| c.is_finite() && observable[i])
         }),
         noise_ar_order: noise_fit.as_ref().map_or(0, |g| g.noise.order()),
         imu_time_offset_s: series.imu_time_offset_s,
         imu_time_offset_estimated: false,
         imu_time_offset_sigma_s: None,
-        loop_identification: None,
+        joint_fit: None,
         huber,
         axes,
         predicted_peak_phase_err_rad: peak_phase,

@@ -327,10 +327,24 @@ impl GlsFit {
 /// two-sided spectrum per sample (aliasing of γ beyond N samples neglected).
 /// O(N log N) per segment.
 pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<usize>]) -> [[f64; 3]; 3] {
+    let columns: Vec<Vec<f64>> = (0..3).map(|i| phi_a.iter().map(|a| a[i]).collect()).collect();
+    let m = covariance_middle_columns(model, &columns, segments);
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[(i, j)]))
+}
+
+/// [`covariance_middle`] for any number of regressor columns, each a series
+/// over the same epochs (the joint fit of Γ with the loop and the time
+/// offset has four to six).
+pub fn covariance_middle_columns(
+    model: &ArModel,
+    columns: &[Vec<f64>],
+    segments: &[Range<usize>],
+) -> nalgebra::DMatrix<f64> {
     use rustfft::FftPlanner;
     use rustfft::num_complex::Complex;
+    let p = columns.len();
     let mut planner = FftPlanner::<f64>::new();
-    let mut m = [[0.0; 3]; 3];
+    let mut m = nalgebra::DMatrix::<f64>::zeros(p, p);
     for seg in segments {
         let len = seg.len();
         if len == 0 {
@@ -338,11 +352,12 @@ pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<
         }
         let n = (2 * len).next_power_of_two().max(2 * (model.order() + 1));
         let fft = planner.plan_fft_forward(n);
-        let x: Vec<Vec<Complex<f64>>> = (0..3)
-            .map(|i| {
+        let x: Vec<Vec<Complex<f64>>> = columns
+            .iter()
+            .map(|c| {
                 let mut v = vec![Complex::new(0.0, 0.0); n];
-                for (k, a) in phi_a[seg.clone()].iter().enumerate() {
-                    v[k].re = a[i];
+                for (k, a) in c[seg.clone()].iter().enumerate() {
+                    v[k].re = *a;
                 }
                 fft.process(&mut v);
                 v
@@ -356,16 +371,16 @@ pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<
         fft.process(&mut a);
         for f in 0..n {
             let s = model.innovation_variance / a[f].norm_sqr();
-            for i in 0..3 {
-                for j in i..3 {
-                    m[i][j] += s * (x[i][f] * x[j][f].conj()).re / n as f64;
+            for i in 0..p {
+                for j in i..p {
+                    m[(i, j)] += s * (x[i][f] * x[j][f].conj()).re / n as f64;
                 }
             }
         }
     }
-    for i in 0..3 {
+    for i in 0..p {
         for j in 0..i {
-            m[i][j] = m[j][i];
+            m[(i, j)] = m[(j, i)];
         }
     }
     m

@@ -18,7 +18,7 @@
 //!   residuals of a carrier loop are coloured, so the uncertainty is
 //!   autocorrelation-robust ([`gsens_core::hac_covariance`]) or
 //!   from an AR noise model ([`gls`]);
-//! - **systematic errors** ([`estimate_time_offset`], [`identify_loop`]): the
+//! - **systematic errors** ([`joint_fit`], [`choose_loop`]): the
 //!   IMU time offset and the loop's natural frequency, jointly with Γ.
 //!
 //! The method, units and signs are in `docs/conventions.md`.
@@ -53,6 +53,7 @@ mod document;
 mod error;
 mod estimate;
 pub mod gls;
+mod joint;
 pub mod montecarlo;
 mod pipeline;
 mod result;
@@ -62,11 +63,16 @@ mod settings;
 mod verdict;
 
 pub use document::{
-    FigureInfo, GnssSdrConversion, LoopSummary, PipelineSummary, ReportInfo, ResultDocument, Warning, tool_version,
+    FigureInfo, GnssSdrConversion, INFORMATIONAL_WARNINGS, LoopSummary, PipelineSummary, ReportInfo, ResultDocument,
+    Warning, tool_version,
 };
 pub use error::CalibError;
 pub use estimate::{
     CompensatedEpoch, EpochSeries, HISTORY_INTERVAL_S, calibrate, compensation_series, imu_systematic_sigma, regressors,
+};
+pub use joint::{
+    ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,
+    joint_fit,
 };
 pub use pipeline::{
     LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, TimeOffset,
@@ -74,6 +80,5 @@ pub use pipeline::{
 };
 pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};
-pub use search::{LoopIdentification, TimeOffsetEstimate, estimate_time_offset, identify_loop};
 pub use settings::{EstimateSettings, Method, Robust};
 pub use verdict::{AxisVerdict, DISCRIMINATOR_LINEAR_RANGE_RAD};

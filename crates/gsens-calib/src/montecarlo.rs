@@ -40,6 +40,10 @@ pub struct MethodRun {
     pub natural_frequency_error_hz: Option<f64>,
     /// Order of the AR noise model.
     pub noise_ar_order: usize,
+    /// Whether the result document called the estimate trustworthy.
+    pub trustworthy: bool,
+    /// The codes of the warnings it raised.
+    pub warnings: Vec<&'static str>,
 }
 
 /// One run: its seed, truth and each method's result (or why it failed).
@@ -100,8 +104,18 @@ pub struct MethodStats {
     pub crlb: [f64; 3],
     /// rmse / crlb.
     pub rmse_over_crlb: [f64; 3],
-    /// Fraction of runs with |Γ̂ − Γ_imu| ≤ 3σ (the method's statistical σ).
+    /// Fraction of runs with |Γ̂ − Γ_imu| ≤ 1σ (the method's statistical σ;
+    /// 68.3 % when σ is honest and the errors Gaussian).
+    pub within_1sigma: [f64; 3],
+    /// Fraction within 2σ (95.4 %).
+    pub within_2sigma: [f64; 3],
+    /// Fraction within 3σ (99.7 %).
     pub within_3sigma: [f64; 3],
+    /// Fraction of the runs with an estimate that the result document
+    /// flagged as not trustworthy (on a clean scenario: the false-alarm rate).
+    pub untrustworthy: f64,
+    /// How often each warning code was raised, over the runs with an estimate.
+    pub warning_counts: std::collections::BTreeMap<&'static str, usize>,
     /// RMS of (Γ̂ − Γ_imu)/σ: 1 when the reported σ is honest.
     pub z_rms: [f64; 3],
     /// Mean of Γ̂ − Γ (body frame) \[Hz/(m/s²)\].
@@ -144,7 +158,17 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
     let err_body = |r: &Run, m: &MethodRun, i: usize| m.gamma_hz_per_mps2[i].unwrap_or(0.0) - r.gamma_hz_per_mps2[i];
     let crlb = |_: &Run, m: &MethodRun, i: usize| m.crlb_hz_per_mps2[i].unwrap_or(f64::NAN);
     let z = |r: &Run, m: &MethodRun, i: usize| err(r, m, i) / m.sigma_statistical_hz_per_mps2[i].unwrap_or(f64::NAN);
+    let within1 = |r: &Run, m: &MethodRun, i: usize| if z(r, m, i).abs() <= 1.0 { 1.0 } else { 0.0 };
+    let within2 = |r: &Run, m: &MethodRun, i: usize| if z(r, m, i).abs() <= 2.0 { 1.0 } else { 0.0 };
     let within = |r: &Run, m: &MethodRun, i: usize| if z(r, m, i).abs() <= 3.0 { 1.0 } else { 0.0 };
+    let produced: Vec<&MethodRun> = runs.iter().filter_map(|r| r.methods[j].result.as_ref()).collect();
+    let mut warning_counts = std::collections::BTreeMap::new();
+    for m in &produced {
+        for w in &m.warnings {
+            *warning_counts.entry(*w).or_insert(0) += 1;
+        }
+    }
+    let untrustworthy = produced.iter().filter(|m| !m.trustworthy).count() as f64 / produced.len().max(1) as f64;
     let rmse = rms(&err);
     let crlb_rms = rms(&crlb);
     let collect = |f: &dyn Fn(&MethodRun) -> Option<f64>| -> Vec<f64> { ok.iter().filter_map(|(_, m)| f(m)).collect() };
@@ -155,7 +179,11 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
         rmse,
         crlb: crlb_rms,
         rmse_over_crlb: [0, 1, 2].map(|i| rmse[i] / crlb_rms[i]),
+        within_1sigma: mean(&within1),
+        within_2sigma: mean(&within2),
         within_3sigma: mean(&within),
+        untrustworthy,
+        warning_counts,
         z_rms: rms(&z),
         bias_body: mean(&err_body),
         rmse_body: rms(&err_body),
@@ -180,10 +208,12 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
         .iter()
         .map(|settings| {
             let method = method_name(&settings.estimate.method);
-            let c: Calibration = match calibrate_logs(tracking, imu, &imu_name, settings) {
-                Ok(o) => o.calibration,
+            let outcome = match calibrate_logs(tracking, imu, &imu_name, settings) {
+                Ok(o) => o,
                 Err(e) => return MethodOutcome { method, result: None, error: Some(e.to_string()) },
             };
+            let doc = outcome.document(Some(truth.sensitivity.gamma_hz_per_mps2));
+            let c: Calibration = outcome.calibration;
             let result = MethodRun {
                 gamma_hz_per_mps2: c.gamma_hz_per_mps2,
                 sigma_statistical_hz_per_mps2: c.sigma_statistical_hz_per_mps2,
@@ -192,10 +222,12 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
                     .imu_time_offset_estimated
                     .then_some(c.imu_time_offset_s - truth.imu_time_offset_s),
                 natural_frequency_error_hz: c
-                    .loop_identification
+                    .joint_fit
                     .as_ref()
-                    .and_then(|id| true_fn_hz.map(|t| id.natural_frequency_hz - t)),
+                    .and_then(|j| j.natural_frequency_hz.zip(true_fn_hz).map(|(f, t)| f - t)),
                 noise_ar_order: c.noise_ar_order,
+                trustworthy: doc.trustworthy,
+                warnings: doc.warnings.iter().map(|w| w.code).collect(),
             };
             MethodOutcome { method, result: Some(result), error: None }
         })

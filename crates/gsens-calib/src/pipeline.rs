@@ -3,7 +3,7 @@
 //! estimate Γ, and describe it all in one [`ResultDocument`].
 
 use crate::document::{GnssSdrConversion, ResultDocument};
-use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, calibrate, estimate_time_offset, identify_loop};
+use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
@@ -54,18 +54,23 @@ impl Default for TimeOffset {
     }
 }
 
-/// Whether the loop's natural frequency (and damping) are identified from the data.
+/// How the data test the stated loop ([`crate::joint_fit`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LoopIdentificationMode {
-    /// The stated loop is used as it is.
-    #[default]
+    /// The stated loop is taken as exact (its uncertainty is not in σ).
     Off,
-    /// The natural frequency is identified jointly with Γ (and the time offset);
-    /// the identified loop is used when the data reject the stated one.
+    /// The loop's natural frequency is estimated jointly with Γ (and the time
+    /// offset), the stated one tested against it, and Γ̂ given under the
+    /// fitted loop with the loop's uncertainty in its σ.
+    #[default]
     NaturalFrequency,
     /// The natural frequency and a 2nd-order loop's damping.
     NaturalFrequencyAndDamping,
+    /// The stated loop is tested the same way, but Γ̂ is given under it (its
+    /// uncertainty not in σ) unless the data reject it: for a loop known
+    /// exactly, such as GNSS-SDR's from its own configuration.
+    TestOnly,
 }
 
 /// Everything that decides a calibration from logs.
@@ -83,6 +88,10 @@ pub struct PipelineSettings {
     pub time_offset: TimeOffset,
     /// Loop identification.
     pub loop_identification: LoopIdentificationMode,
+    /// Whether the receiver loop in `estimate` was stated by the user. When
+    /// not, the loop is chosen among typical receiver loops by the data
+    /// ([`crate::choose_loop`]) and the estimate is flagged until it is stated.
+    pub loop_stated: bool,
     /// Replace isolated IMU spikes by the mean of their neighbours before
     /// anything else ([`gsens_session::despike_imu`]; default on).
     pub despike_imu: bool,
@@ -95,6 +104,7 @@ impl Default for PipelineSettings {
             selection: SelectionConfig::default(),
             time_offset: TimeOffset::default(),
             loop_identification: LoopIdentificationMode::default(),
+            loop_stated: true,
             despike_imu: true,
         }
     }
@@ -124,17 +134,6 @@ pub enum PipelineError {
     /// The estimation failed.
     #[error(transparent)]
     Calib(#[from] CalibError),
-    /// The time-offset search ended at its limit.
-    #[error(
-        "the IMU time offset search ended at its limit ({found_s:+.3} s): the offset may be larger than the search \
-         range ±{max_abs_s} s; widen the search or state the offset"
-    )]
-    TimeOffsetAtLimit {
-        /// Where the search ended \[s\].
-        found_s: f64,
-        /// The search range \[s\].
-        max_abs_s: f64,
-    },
 }
 
 /// A calibration from logs: the prepared session it was estimated from and
@@ -150,6 +149,8 @@ pub struct Outcome {
     pub settings: PipelineSettings,
     /// What the GNSS-SDR conversion did, for sessions from GNSS-SDR dumps.
     pub gnss_sdr: Option<GnssSdrConversion>,
+    /// The loop the data chose when none was stated.
+    pub chosen_loop: Option<crate::ChosenLoop>,
     /// Time stamps of the IMU samples replaced as isolated spikes \[s\].
     pub imu_spikes_t_s: Vec<f64>,
     /// The inputs as role → path (`imu`, `tracking`, `gnss_sdr_dumps`, …);
@@ -210,36 +211,45 @@ pub fn calibrate_logs(
     let imu = &despiked;
     let mut session = prepare_session(tracking, imu, imu_name, &settings.selection, assumed)?;
     let mut estimate = settings.estimate;
-    let mut identification = None;
-    if settings.loop_identification != LoopIdentificationMode::Off {
-        // A loop error mimics a time offset: with `Auto` both are searched together.
-        let damping = settings.loop_identification == LoopIdentificationMode::NaturalFrequencyAndDamping;
-        let id = identify_loop(&series_of(&session), &estimate, damping, max_abs_s)
-            .map_err(|source| PipelineError::Stage { stage: "identifying the loop", source })?;
-        if id.assumed_loop_rejected {
-            estimate.receiver_loop = id.identified(&estimate.receiver_loop);
-        }
-        identification = Some(id);
+    let spec = JointSpec {
+        natural_frequency: settings.loop_identification != LoopIdentificationMode::Off,
+        damping: settings.loop_identification == LoopIdentificationMode::NaturalFrequencyAndDamping,
+        offset_max_abs_s: max_abs_s,
+    };
+    let mut chosen_loop = None;
+    if !settings.loop_stated {
+        let chosen = crate::choose_loop(&series_of(&session), &estimate, max_abs_s)
+            .map_err(|source| PipelineError::Stage { stage: "choosing the receiver loop", source })?;
+        estimate.receiver_loop = chosen.model;
+        estimate.logged_phase = chosen.logged_phase;
+        chosen_loop = Some(chosen);
     }
-    let mut offset_sigma = None;
-    if let Some(max_abs_s) = max_abs_s {
-        let found = estimate_time_offset(&series_of(&session), &estimate, max_abs_s)
-            .map_err(|source| PipelineError::Stage { stage: "estimating the IMU time offset", source })?;
-        if (found.imu_time_offset_s - assumed).abs() >= max_abs_s * 0.999 {
-            return Err(PipelineError::TimeOffsetAtLimit { found_s: found.imu_time_offset_s, max_abs_s });
+    let mut joint = None;
+    if spec.natural_frequency || spec.offset_max_abs_s.is_some() {
+        let stage = |source| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", source };
+        let mut fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
+        if settings.loop_identification == LoopIdentificationMode::TestOnly && !fit.stated_loop_rejected {
+            // The loop passed its test and is known: Γ̂ and the offset under it.
+            let known = JointSpec { natural_frequency: false, damping: false, ..spec };
+            fit = fit.with_loop_known(joint_fit(&series_of(&session), &estimate, known).map_err(stage)?);
         }
-        reinterpolate_imu(&mut session, imu, found.imu_time_offset_s);
-        offset_sigma = Some(found.sigma_s);
+        if let Some(offset_s) = fit.imu_time_offset_s {
+            reinterpolate_imu(&mut session, imu, offset_s);
+        }
+        // Γ̂ under the fitted loop: its σ then covers the loop's uncertainty.
+        estimate.receiver_loop = fit.fitted(&estimate.loop_at(session.log_interval_s));
+        joint = Some(fit);
     }
     let mut calibration = calibrate(&series_of(&session), &estimate)?;
-    calibration.imu_time_offset_estimated = offset_sigma.is_some();
-    calibration.imu_time_offset_sigma_s = offset_sigma;
-    calibration.loop_identification = identification;
+    if let Some(fit) = joint {
+        calibration.include_nuisance(&fit);
+    }
     Ok(Outcome {
         session,
         calibration,
         settings: settings.clone(),
         gnss_sdr: None,
+        chosen_loop,
         imu_spikes_t_s: spikes.t_s,
         inputs: Vec::new(),
     })
@@ -282,6 +292,11 @@ pub fn calibrate_gnss_sdr(
     let mut settings = settings.clone();
     settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
     settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
+    settings.loop_stated = true;
+    // GNSS-SDR's loop is modelled exactly from its own configuration: tested, not fitted.
+    if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
+        settings.loop_identification = LoopIdentificationMode::TestOnly;
+    }
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
     outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];

@@ -1,6 +1,6 @@
 //! The result of the estimation stage.
 
-use crate::search::LoopIdentification;
+use crate::JointFit;
 use crate::{AxisVerdict, EstimateSettings, HuberFit};
 use serde::{Deserialize, Serialize};
 
@@ -51,8 +51,9 @@ pub struct Calibration {
     pub imu_time_offset_estimated: bool,
     /// 1σ of the estimated time offset \[s\] (when estimated).
     pub imu_time_offset_sigma_s: Option<f64>,
-    /// The loop identification, when asked for.
-    pub loop_identification: Option<LoopIdentification>,
+    /// The joint fit of Γ with the loop and the IMU time offset, and the
+    /// test of the stated loop (when either was estimated).
+    pub joint_fit: Option<JointFit>,
     /// The Huber fit (with `robust = huber`): scale, threshold, epochs down-weighted.
     pub huber: Option<HuberFit>,
     /// The verdict per axis (shaking frequency, sensitivity reached, advice).
@@ -95,4 +96,37 @@ pub struct HistoryPoint {
     pub gamma_hz_per_mps2: [f64; 3],
     /// Its 1σ so far, assuming white residuals \[Hz/(m/s²)\] (+∞ while unexcited).
     pub sigma_hz_per_mps2: [f64; 3],
+}
+
+impl Calibration {
+    /// Takes in the joint fit's uncertainty: the statistical covariance of
+    /// each axis pair scaled by √(r_i·r_j), r the fit's variance inflation
+    /// (the loop and the offset unknown instead of known), and the offset
+    /// and its σ as fitted.
+    pub(crate) fn include_nuisance(&mut self, fit: &JointFit) {
+        let r = fit.variance_inflation;
+        for i in 0..3 {
+            let imu = self.sigma_imu_hz_per_mps2[i].unwrap_or(0.0);
+            for j in 0..3 {
+                if let Some(c) = &mut self.covariance_hz_per_mps2_sq[i][j] {
+                    let imu_ij = if i == j { imu * imu } else { 0.0 };
+                    *c = (*c - imu_ij) * (r[i] * r[j]).sqrt() + imu_ij;
+                }
+            }
+            if let (Some(stat), Some(total)) = (&mut self.sigma_statistical_hz_per_mps2[i], self.sigma_hz_per_mps2[i]) {
+                *stat *= r[i].sqrt();
+                let new_total = stat.hypot(imu);
+                self.sigma_hz_per_mps2[i] = Some(new_total);
+                if let Some(p) = &mut self.sigma_ppb_per_g[i] {
+                    *p *= if total > 0.0 { new_total / total } else { 1.0 };
+                }
+            }
+        }
+        if let Some(offset_s) = fit.imu_time_offset_s {
+            self.imu_time_offset_estimated = true;
+            self.imu_time_offset_sigma_s = fit.sigma_imu_time_offset_s;
+            self.imu_time_offset_s = offset_s;
+        }
+        self.joint_fit = Some(fit.clone());
+    }
 }

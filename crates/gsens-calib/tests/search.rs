@@ -1,6 +1,7 @@
-//! Time offset and loop identification on synthetic sessions with known truth.
+//! The joint fit of Γ with the time offset and the loop on synthetic
+//! sessions with known truth.
 
-use gsens_calib::{EpochSeries, EstimateSettings, calibrate, estimate_time_offset, identify_loop};
+use gsens_calib::{EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit};
 use gsens_core::LoopModel;
 use gsens_core::{DiscretePll, LoopSpec};
 use rand::SeedableRng;
@@ -9,6 +10,8 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
 const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
+const OFFSET_ONLY: JointSpec = JointSpec { natural_frequency: false, damping: false, offset_max_abs_s: Some(0.2) };
+const LOOP_ONLY: JointSpec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s: None };
 const T: f64 = 0.025;
 
 /// Paper-like motion: x, y, z shaken 20 s each at ~0.9 Hz with rests.
@@ -77,12 +80,13 @@ fn a_30_ms_imu_offset_is_found_within_2_ms_and_its_bias_removed() {
         EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
     let settings = EstimateSettings::default();
     let biased = calibrate(&series, &settings).unwrap();
-    let off = estimate_time_offset(&series, &settings, 0.2).unwrap();
-    assert!((off.imu_time_offset_s - 0.030).abs() < 0.002, "{off:?}");
-    assert!(off.sigma_s < 0.002, "{off:?}");
+    let fit = joint_fit(&series, &settings, OFFSET_ONLY).unwrap();
+    let (offset_s, sigma_s) = (fit.imu_time_offset_s.unwrap(), fit.sigma_imu_time_offset_s.unwrap());
+    assert!((offset_s - 0.030).abs() < 3.0 * sigma_s, "{fit:?}");
+    assert!(sigma_s < 0.002, "{fit:?}");
     // Re-sample the IMU at the found offset (true time t ↔ IMU stamp t + offset).
-    let fixed_imu: Vec<[f64; 3]> = t_s.iter().map(|&t| accel(t + off.imu_time_offset_s - 0.030)).collect();
-    let series2 = EpochSeries { accel_mps2: &fixed_imu, imu_time_offset_s: off.imu_time_offset_s, ..series };
+    let fixed_imu: Vec<[f64; 3]> = t_s.iter().map(|&t| accel(t + offset_s - 0.030)).collect();
+    let series2 = EpochSeries { accel_mps2: &fixed_imu, imu_time_offset_s: offset_s, ..series };
     let fixed = calibrate(&series2, &settings).unwrap();
     let rel = |c: &gsens_calib::Calibration| {
         (0..3).map(|i| (c.gamma_hz_per_mps2[i].unwrap() - GAMMA[i]).powi(2)).sum::<f64>().sqrt() / 0.142
@@ -109,8 +113,9 @@ fn no_offset_is_found_where_there_is_none() {
     let (t_s, phase, imu) = session(LoopSpec::PAPER, 0.0, 0.01, 2);
     let series =
         EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
-    let off = estimate_time_offset(&series, &EstimateSettings::default(), 0.2).unwrap();
-    assert!(off.imu_time_offset_s.abs() < 0.001, "{off:?}");
+    let fit = joint_fit(&series, &EstimateSettings::default(), OFFSET_ONLY).unwrap();
+    let (offset_s, sigma_s) = (fit.imu_time_offset_s.unwrap(), fit.sigma_imu_time_offset_s.unwrap());
+    assert!(offset_s.abs() < 3.0 * sigma_s && sigma_s < 0.002, "{fit:?}");
 }
 
 #[test]
@@ -123,10 +128,11 @@ fn a_loop_assumed_10_percent_off_is_detected_and_corrected() {
         let assumed = EstimateSettings::default()
             .with_loop(LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: bn, zeta: FRAC_1_SQRT_2 }, None));
         let wrong = calibrate(&series, &assumed).unwrap();
-        let id = identify_loop(&series, &assumed, false, None).unwrap();
-        assert!(id.assumed_loop_rejected, "Bn {bn}: {id:?}");
-        assert!((id.natural_frequency_hz - 0.9003).abs() < 0.01, "Bn {bn}: {id:?}");
-        let fixed = calibrate(&series, &assumed.with_loop(id.identified(&assumed.receiver_loop))).unwrap();
+        let id = joint_fit(&series, &assumed, LOOP_ONLY).unwrap();
+        assert!(id.stated_loop_rejected, "Bn {bn}: {id:?}");
+        let f = id.natural_frequency_hz.unwrap();
+        assert!((f - 0.9003).abs() < 3.0 * id.sigma_natural_frequency_hz.unwrap(), "Bn {bn}: {id:?}");
+        let fixed = calibrate(&series, &assumed.with_loop(id.fitted(&assumed.loop_at(T)))).unwrap();
         let err = |c: &gsens_calib::Calibration| {
             (0..3).map(|i| (c.gamma_hz_per_mps2[i].unwrap() / GAMMA[i] - 1.0).abs()).fold(0.0, f64::max)
         };
@@ -134,8 +140,8 @@ fn a_loop_assumed_10_percent_off_is_detected_and_corrected() {
         assert!(err(&fixed) < 0.01, "Bn {bn}: {} after identification", err(&fixed));
     }
     // The right loop is not rejected.
-    let id = identify_loop(&series, &EstimateSettings::default(), false, None).unwrap();
-    assert!(!id.assumed_loop_rejected, "{id:?}");
+    let id = joint_fit(&series, &EstimateSettings::default(), LOOP_ONLY).unwrap();
+    assert!(!id.stated_loop_rejected, "{id:?}");
 }
 
 #[test]
@@ -148,9 +154,13 @@ fn loop_and_time_offset_identified_together() {
         EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
     let assumed = EstimateSettings::default()
         .with_loop(LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 3.3, zeta: FRAC_1_SQRT_2 }, None));
-    let id = identify_loop(&series, &assumed, false, Some(0.2)).unwrap();
+    let id = joint_fit(&series, &assumed, JointSpec { offset_max_abs_s: Some(0.2), ..LOOP_ONLY }).unwrap();
     eprintln!("{id:?}");
-    assert!(id.assumed_loop_rejected, "{id:?}");
-    assert!((id.natural_frequency_hz - 0.9003).abs() < 0.01, "{id:?}");
-    assert!((id.imu_time_offset_s.unwrap() - 0.030).abs() < 0.002, "{id:?}");
+    assert!(id.stated_loop_rejected, "{id:?}");
+    let f = id.natural_frequency_hz.unwrap();
+    assert!((f - 0.9003).abs() < 3.0 * id.sigma_natural_frequency_hz.unwrap(), "{id:?}");
+    let offset_s = id.imu_time_offset_s.unwrap();
+    assert!((offset_s - 0.030).abs() < 3.0 * id.sigma_imu_time_offset_s.unwrap(), "{id:?}");
+    // Not knowing the loop and the offset costs σ, and the fit says how much.
+    assert!(id.variance_inflation.iter().all(|r| *r > 1.0), "{id:?}");
 }

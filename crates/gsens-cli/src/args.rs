@@ -47,11 +47,11 @@ impl ScenarioArgs {
 #[command(next_help_heading = "Receiver loop")]
 pub struct LoopArgs {
     /// Loop order of the receiver's carrier PLL.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
-    pub order: u8,
-    /// One-sided noise bandwidth Bn of the receiver's PLL [Hz].
-    #[arg(long, default_value_t = 3.0)]
-    pub bn_hz: f64,
+    #[arg(long, value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub order: Option<u8>,
+    /// One-sided noise bandwidth Bn of the receiver's PLL [Hz] (default 3).
+    #[arg(long)]
+    pub bn_hz: Option<f64>,
     /// Damping ratio ζ (2nd-order loop).
     #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2)]
     pub zeta: f64,
@@ -64,9 +64,9 @@ pub struct LoopArgs {
     /// The receiver's loop update interval [s] (default: the log interval).
     #[arg(long)]
     pub loop_interval_s: Option<f64>,
-    /// What a log row holds when the loop runs faster than the log.
-    #[arg(long, value_enum, default_value_t = LoggedArg::Last)]
-    pub logged_phase: LoggedArg,
+    /// What a log row holds when the loop runs faster than the log (default: last).
+    #[arg(long, value_enum)]
+    pub logged_phase: Option<LoggedArg>,
 }
 
 /// What a log row holds when the loop runs faster than the log.
@@ -81,11 +81,26 @@ pub enum LoggedArg {
 impl LoopArgs {
     /// The loop as the library models it.
     pub fn loop_model(&self) -> LoopModel {
+        let bn_hz = self.bn_hz.unwrap_or(3.0);
         let spec = match self.order {
-            3 => LoopSpec::ThirdOrder { bn_hz: self.bn_hz, a3: self.a3, b3: self.b3 },
-            _ => LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta },
+            Some(3) => LoopSpec::ThirdOrder { bn_hz, a3: self.a3, b3: self.b3 },
+            _ => LoopSpec::SecondOrder { bn_hz, zeta: self.zeta },
         };
         LoopModel::kaplan(spec, self.loop_interval_s)
+    }
+
+    /// Whether any of the loop's order, bandwidth, update interval or
+    /// logged phase was given (otherwise the data choose the loop).
+    pub fn stated(&self) -> bool {
+        self.order.is_some() || self.bn_hz.is_some() || self.loop_interval_s.is_some() || self.logged_phase.is_some()
+    }
+
+    /// What a log row holds.
+    pub fn logged(&self) -> gsens_core::LoggedPhase {
+        match self.logged_phase {
+            Some(LoggedArg::Mean) => gsens_core::LoggedPhase::Mean,
+            _ => gsens_core::LoggedPhase::Last,
+        }
     }
 }
 
@@ -228,10 +243,15 @@ pub struct SystematicArgs {
     /// Search range ± of `--time-offset auto` [s].
     #[arg(long, default_value_t = 0.25)]
     pub time_offset_max_s: f64,
-    /// Identify the loop's natural frequency jointly with Γ and use it when the data reject the assumed loop.
-    #[arg(long)]
+    /// Test the stated loop against the data: its natural frequency is estimated jointly with Γ and the time offset, a
+    /// stated loop the data reject is flagged, and Γ̂ is given under the fitted loop with the loop's uncertainty in its
+    /// σ. `off` takes the stated loop as exact.
+    #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
+    pub loop_check: bool,
+    /// Kept for old scripts: the loop check is on by default (see --loop-check).
+    #[arg(long, hide = true)]
     pub identify_loop: bool,
-    /// With --identify-loop: identify the damping ζ too (weakly determined by near-sinusoidal shaking).
+    /// With the loop check: fit a 2nd-order loop's damping ζ too (weakly determined by near-sinusoidal shaking).
     #[arg(long)]
     pub identify_damping: bool,
     /// Replace isolated IMU spikes (single samples no hand motion can produce) by their neighbours' mean.
@@ -279,7 +299,7 @@ pub fn pipeline_settings(
         fixed => fixed,
     };
     p.despike_imu = systematic.imu_despike;
-    p.loop_identification = match (systematic.identify_loop, systematic.identify_damping) {
+    p.loop_identification = match (systematic.loop_check || systematic.identify_loop, systematic.identify_damping) {
         (false, _) => LoopIdentificationMode::Off,
         (true, false) => LoopIdentificationMode::NaturalFrequency,
         (true, true) => LoopIdentificationMode::NaturalFrequencyAndDamping,

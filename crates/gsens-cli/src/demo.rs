@@ -30,7 +30,7 @@ pub struct DemoArgs {
     pub analysis: AnalysisArgs,
 }
 
-pub fn run(args: &DemoArgs) -> Result<()> {
+pub fn run(args: &DemoArgs) -> Result<crate::Status> {
     let scenario = args.scenario.load()?;
     let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
     crate::out(&format!(
@@ -71,7 +71,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             args.scenario.seed,
         )?;
     }
-    Ok(())
+    Ok(crate::Status::of(&doc))
 }
 
 /// The figures of the demo's calibration plus the Allan deviation of the

@@ -1,10 +1,9 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{AnalysisArgs, GnssSdrArgs, LoggedArg, LoopArgs};
+use crate::args::{AnalysisArgs, GnssSdrArgs, LoopArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::{Outcome, PipelineSettings, calibrate_files, calibrate_gnss_sdr};
-use gsens_core::LoggedPhase;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -39,15 +38,13 @@ pub struct CalibrationArgs {
 impl CalibrationArgs {
     /// The pipeline settings.
     pub fn settings(&self) -> PipelineSettings {
-        let logged = match self.loop_args.logged_phase {
-            LoggedArg::Last => LoggedPhase::Last,
-            LoggedArg::Mean => LoggedPhase::Mean,
-        };
         let mut estimate = self.analysis.estimate_settings();
         estimate.receiver_loop = self.loop_args.loop_model();
-        estimate.logged_phase = logged;
+        estimate.logged_phase = self.loop_args.logged();
         estimate.carrier_hz = self.carrier_hz;
-        self.analysis.pipeline_settings(estimate)
+        let mut p = self.analysis.pipeline_settings(estimate);
+        p.loop_stated = self.loop_args.stated();
+        p
     }
 }
 
@@ -76,7 +73,7 @@ pub fn calibrate(
     }
 }
 
-pub fn run(args: &EstimateArgs) -> Result<()> {
+pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings();
     let outcome = calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?;
     let doc = outcome.document(None);
@@ -84,5 +81,5 @@ pub fn run(args: &EstimateArgs) -> Result<()> {
     if let Some(path) = &args.json {
         doc.write_json_file(path).with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    Ok(())
+    Ok(crate::Status::of(&doc))
 }

@@ -52,6 +52,23 @@ enum Command {
     Scenario,
 }
 
+/// How a command ended when it did not fail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Done; any estimate is trustworthy.
+    Done,
+    /// An estimate was produced (and every file written) but it is not
+    /// trustworthy: exit status 3.
+    Untrustworthy,
+}
+
+impl Status {
+    /// The status of a result document.
+    pub fn of(doc: &gsens_calib::ResultDocument) -> Self {
+        if doc.trustworthy { Status::Done } else { Status::Untrustworthy }
+    }
+}
+
 /// Writes `text` to standard output; a closed pipe (`gsens response | head`)
 /// ends the output quietly.
 pub fn out(text: &str) -> anyhow::Result<()> {
@@ -82,15 +99,16 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
         Command::Estimate(args) => estimate::run(&args),
-        Command::Simulate(args) => simulate::run(&args),
-        Command::Response(args) => response::run(&args),
+        Command::Simulate(args) => simulate::run(&args).map(|()| Status::Done),
+        Command::Response(args) => response::run(&args).map(|()| Status::Done),
         Command::Montecarlo(args) => montecarlo::run(&args),
         Command::Report(args) => report::run(&args),
-        Command::Import(args) => import::run(&args),
-        Command::Scenario => out(gsens_sim::scenario::Scenario::default_toml()),
+        Command::Import(args) => import::run(&args).map(|()| Status::Done),
+        Command::Scenario => out(gsens_sim::scenario::Scenario::default_toml()).map(|()| Status::Done),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(Status::Done) => ExitCode::SUCCESS,
+        Ok(Status::Untrustworthy) => ExitCode::from(3),
         Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) => {
             ExitCode::SUCCESS
         }

@@ -30,7 +30,7 @@ pub struct MonteCarloArgs {
     pub systematic: SystematicArgs,
 }
 
-pub fn run(args: &MonteCarloArgs) -> Result<()> {
+pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
     let scenario = args.scenario.load()?;
     let base = args.estimator.settings(MethodArg::Batch);
     let methods = args
@@ -56,5 +56,5 @@ pub fn run(args: &MonteCarloArgs) -> Result<()> {
         std::fs::write(path, serde_json::to_string_pretty(&mc)? + "\n")
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    Ok(())
+    Ok(crate::Status::Done)
 }

@@ -29,7 +29,7 @@ pub struct ReportArgs {
     pub calibration: CalibrationArgs,
 }
 
-pub fn run(args: &ReportArgs) -> Result<()> {
+pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings();
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let bar = crate::spinner();
@@ -47,5 +47,6 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_text(&doc))?;
-    crate::out(&format!("\nreport: {} (with report.json, gsens_gamma.h and figures/ beside it)\n", html.display()))
+    crate::out(&format!("\nreport: {} (with report.json, gsens_gamma.h and figures/ beside it)\n", html.display()))?;
+    Ok(crate::Status::of(&doc))
 }

@@ -3,12 +3,12 @@
 
 mod common;
 
-use common::{gsens, json, s, temp_dir};
+use common::{gsens, gsens_any, json, s, temp_dir};
 
 /// The simulated session's logs, the receiver's loop as truth.json states it.
 fn estimate(dir: &std::path::Path, imu: &str, out: &str) -> (String, serde_json::Value) {
     let out_json = dir.join(out);
-    let text = gsens(&[
+    let (text, trusted) = gsens_any(&[
         "estimate",
         "--imu",
         &s(&dir.join(imu)),
@@ -21,7 +21,9 @@ fn estimate(dir: &std::path::Path, imu: &str, out: &str) -> (String, serde_json:
         "--json",
         &s(&out_json),
     ]);
-    (text, json(&out_json))
+    let v = json(&out_json);
+    assert_eq!(v["trustworthy"], trusted, "the exit status says what the document says");
+    (text, v)
 }
 
 #[test]

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{gsens, json, vec3};
+use common::{gsens, gsens_any, json, vec3};
 
 const SCENARIO: &str = "\
 [log]
@@ -55,8 +55,10 @@ fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
             out.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        let text = gsens(&args);
-        (text, json(&out))
+        let (text, trusted) = gsens_any(&args);
+        let v = json(&out);
+        assert_eq!(v["trustworthy"], trusted, "the exit status says what the document says");
+        (text, v)
     };
     let (text, on) = estimate(&[], "on.json");
     let (_, off) = estimate(&["--screening", "off"], "off.json");
@@ -72,6 +74,9 @@ fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
     eprintln!("screening off: |Γ̂ − Γ| = {:.2} %, z = {z_off:+.2?}", 100.0 * err_off);
     assert!(err_on < 0.02 && z_on.iter().all(|z| z.abs() < 3.0), "screened: {err_on}, {z_on:?}");
     assert!(err_off > 0.1 && z_off.iter().any(|z| z.abs() > 10.0), "unscreened: {err_off}, {z_off:?}");
+    // Screened, trustworthy; the lost locks left in, flagged.
+    assert_eq!(on["trustworthy"], true, "{}", on["warnings"]);
+    assert_eq!(off["trustworthy"], false, "an unscreened session this wrong must be flagged");
 
     // The two weak channels are excluded whole, and said so, in the JSON and the text.
     let channels = on["channels"].as_array().unwrap();

@@ -9,7 +9,7 @@
 //! so a session is described everywhere by the loop that produced it
 //! (`docs/conventions.md#loop-models`).
 
-use crate::math::{TAU, exp, ln, sqrt};
+use crate::math::{TAU, exp, ln, round, sqrt};
 use crate::pll::gnss_sdr::{A2, A3, B3, BN_OVER_WN_ORDER2, BN_OVER_WN_ORDER3, GnssSdrPll, GnssSdrStage};
 use crate::pll::{Complex, DiscretePll, LoopError, LoopFilterCoeffs, LoopSpec, ModelLoop};
 
@@ -270,8 +270,12 @@ impl core::fmt::Display for LoopModel {
         match self {
             LoopModel::Kaplan { spec, interval_s } => {
                 match *spec {
-                    LoopSpec::SecondOrder { bn_hz, zeta } => write!(f, "2nd order, Bn {bn_hz} Hz, ζ {zeta:.3}")?,
-                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => write!(f, "3rd order, Bn {bn_hz} Hz, a3 {a3}, b3 {b3}")?,
+                    LoopSpec::SecondOrder { bn_hz, zeta } => {
+                        write!(f, "2nd order, Bn {} Hz, ζ {zeta:.3}", Short(bn_hz))?
+                    }
+                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
+                        write!(f, "3rd order, Bn {} Hz, a3 {a3}, b3 {b3}", Short(bn_hz))?
+                    }
                     LoopSpec::Coefficients(c) => {
                         write!(f, "filter c0 {} /s, c1 {} /s², c2 {} /s³", c.c0_per_s, c.c1_per_s2, c.c2_per_s3)?
                     }
@@ -291,5 +295,16 @@ impl core::fmt::Display for LoopModel {
                 nat(f)
             }
         }
+    }
+}
+
+/// A value with at most four decimals and no trailing zeros (3 → `3`,
+/// 2.976367 → `2.9764`): a fitted bandwidth reads like a stated one.
+struct Short(f64);
+
+impl core::fmt::Display for Short {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let r = round(self.0 * 1e4) / 1e4;
+        if r == self.0 || !r.is_finite() { write!(f, "{}", self.0) } else { write!(f, "{r}") }
     }
 }

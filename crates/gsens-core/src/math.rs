@@ -35,6 +35,11 @@ pub(crate) fn ln(x: f64) -> f64 {
 pub(crate) fn pow10(x: f64) -> f64 {
     libm::pow(10.0, x)
 }
+/// x rounded half away from zero.
+#[inline]
+pub(crate) fn round(x: f64) -> f64 {
+    libm::round(x)
+}
 /// |x|.
 #[inline]
 pub(crate) fn abs(x: f64) -> f64 {

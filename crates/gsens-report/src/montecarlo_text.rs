@@ -24,19 +24,23 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         s_,
         "errors Γ̂ − Γ_imu (Γ through the IMU's scale and misalignment) [Hz/(m/s²)]; CRLB: RMS over runs of each run's bound\n"
     );
-    let _ =
-        writeln!(s_, "method    axis      bias        RMSE        CRLB   RMSE/CRLB  |e|≤3σ   z RMS   RMSE vs body Γ");
+    let _ = writeln!(
+        s_,
+        "method    axis      bias        RMSE        CRLB   RMSE/CRLB  |e|≤1σ  |e|≤2σ  |e|≤3σ   z RMS   RMSE vs body Γ"
+    );
     for (name, st) in stats {
         for i in 0..3 {
             let _ = writeln!(
                 s_,
-                "{:<9} {:>3}  {:>+10.6}  {:>10.6}  {:>10.6}  {:>9.3}  {:>5.1} %  {:>6.2}   {:>10.6}",
+                "{:<9} {:>3}  {:>+10.6}  {:>10.6}  {:>10.6}  {:>9.3}  {:>5.1} %  {:>5.1} %  {:>5.1} %  {:>6.2}   {:>10.6}",
                 if i == 0 { *name } else { "" },
                 AXES[i],
                 st.bias[i],
                 st.rmse[i],
                 st.crlb[i],
                 st.rmse_over_crlb[i],
+                100.0 * st.within_1sigma[i],
+                100.0 * st.within_2sigma[i],
                 100.0 * st.within_3sigma[i],
                 st.z_rms[i],
                 st.rmse_body[i]
@@ -53,6 +57,13 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         let _ = writeln!(s_, "\nbest: {b} (largest RMSE/CRLB over the axes {worst:.3})");
     }
     for (name, st) in stats {
+        let codes: Vec<String> = st.warning_counts.iter().map(|(c, n)| format!("{c} ×{n}")).collect();
+        let _ = writeln!(
+            s_,
+            "{name}: flagged not trustworthy in {:.1} % of the runs with an estimate{}",
+            100.0 * st.untrustworthy,
+            if codes.is_empty() { String::new() } else { format!(" (warnings: {})", codes.join(", ")) }
+        );
         if let Some(t) = st.time_offset_error_s {
             let _ =
                 writeln!(s_, "{name}: IMU time offset error: bias {:+.3} ms, RMS {:.3} ms", 1e3 * t.mean, 1e3 * t.rms);

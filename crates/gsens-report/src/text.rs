@@ -21,6 +21,9 @@ pub fn render_text(doc: &ResultDocument) -> String {
     for w in &doc.warnings {
         let _ = writeln!(s_, "warning [{}]: {}", w.code, w.message);
     }
+    if !doc.trustworthy {
+        let _ = writeln!(s_, "{}\n", verdict_line(doc));
+    }
     let _ = writeln!(
         s_,
         "log: {} epochs at {:.3} Hz ({dur:.1} s), {} used after a {} s warm-up",
@@ -94,29 +97,45 @@ pub fn render_text(doc: &ResultDocument) -> String {
             let _ = writeln!(s_, "IMU time offset: {:+.4} s, assumed", c.imu_time_offset_s);
         }
     }
-    if let Some(id) = &c.loop_identification {
+    if let Some(j) = &c.joint_fit
+        && let (Some(f), Some(sf), Some(f0), Some(z)) =
+            (j.natural_frequency_hz, j.sigma_natural_frequency_hz, j.stated_natural_frequency_hz, j.loop_test_z)
+    {
         let _ = writeln!(
             s_,
-            "loop identification: ωn/2π = {:.4} ± {:.4} Hz{} (assumed {:.4} Hz{}), likelihood ratio {:.1}: {}",
-            id.natural_frequency_hz,
-            id.sigma_natural_frequency_hz,
-            id.zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
-            id.assumed_natural_frequency_hz,
-            id.assumed_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
-            id.likelihood_ratio,
-            if id.assumed_loop_rejected {
-                "the data reject the assumed loop; the identified one is used"
+            "loop check: ωn/2π fits at {f:.4} ± {sf:.4} Hz{} (stated {f0:.4} Hz{}), z = {z:+.2}: {}",
+            j.zeta.map(|z| format!(", ζ {:.3} ± {:.3}", z[0], z[1])).unwrap_or_default(),
+            j.stated_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+            if j.stated_loop_rejected {
+                format!("the data REJECT the stated loop (|z| > {:.2})", j.loop_test_threshold_z)
             } else {
-                "the data agree with the assumed loop; it is kept"
+                format!(
+                    "consistent with the stated loop (|z| ≤ {:.2}, {} % false alarms)",
+                    j.loop_test_threshold_z,
+                    100.0 * j.loop_test_false_alarm
+                )
             }
         );
-        let s = id.gamma_sensitivity_per_percent_wn;
+        let inflation = j.variance_inflation.map(f64::sqrt);
         let _ = writeln!(
             s_,
-            "  sensitivity of Γ̂ to the loop: {:+.2} %, {:+.2} %, {:+.2} % (x, y, z) per +1 % of ωn",
-            100.0 * s[0],
-            100.0 * s[1],
-            100.0 * s[2]
+            "  {}widens σ by ×{:.2}, ×{:.2}, ×{:.2} (x, y, z){}",
+            match (j.fitted_loop_used, j.imu_time_offset_s.is_some()) {
+                (true, true) => "Γ̂ under the fitted loop; not knowing the loop and the offset ",
+                (true, false) => "Γ̂ under the fitted loop; not knowing the loop ",
+                (false, true) => "Γ̂ under the stated loop, taken as known; not knowing the offset ",
+                (false, false) => "Γ̂ under the stated loop, taken as known; ",
+            },
+            inflation[0],
+            inflation[1],
+            inflation[2],
+            j.correlation_loop_offset
+                .filter(|r| r.abs() > 0.9)
+                .map(|r| format!(
+                    "; loop and offset are confounded (correlation {r:+.2}): shake at more than one rate to \
+                         separate them"
+                ))
+                .unwrap_or_default()
         );
     }
     let head = if truth.is_some() { "      truth       error" } else { "" };
@@ -187,7 +206,18 @@ pub fn render_text(doc: &ResultDocument) -> String {
             b[0], b[1], b[2], c.noise_ar_order
         );
     }
+    let _ = writeln!(s_, "\n{}", verdict_line(doc));
     s
+}
+
+/// The one-line verdict: trustworthy, or not and why (the warning codes).
+fn verdict_line(doc: &ResultDocument) -> String {
+    if doc.trustworthy {
+        "verdict: TRUSTWORTHY: Γ̂ holds within its σ as far as gsens's checks can tell".into()
+    } else {
+        let codes: Vec<&str> = doc.warnings.iter().filter(|w| w.affects_trust()).map(|w| w.code).collect();
+        format!("verdict: NOT TRUSTWORTHY ({}): do not use Γ̂ before the warnings are resolved", codes.join(", "))
+    }
 }
 
 /// What became of each track of a GNSS-SDR import, as text.

@@ -16,6 +16,16 @@ pub fn gsens(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// Runs `gsens` with `args`, asserts that it produced an estimate (exit
+/// status 0, or 3: produced but not trustworthy) and returns its standard
+/// output and whether it was trustworthy.
+pub fn gsens_any(args: &[&str]) -> (String, bool) {
+    let out = run(args);
+    let code = out.status.code();
+    assert!(matches!(code, Some(0 | 3)), "gsens {args:?}: status {code:?}: {}", String::from_utf8_lossy(&out.stderr));
+    (String::from_utf8(out.stdout).unwrap(), code == Some(0))
+}
+
 /// The JSON file at `path`.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

@@ -1,0 +1,471 @@
+//! The stated loop tested by the data: Γ, the loop's natural frequency (and,
+//! when asked, a 2nd-order loop's damping) and the IMU time offset estimated
+//! jointly, with one covariance for all of them.
+//!
+//! The model of the high-passed, channel-averaged phase error is
+//! φ_k = φ_a,k(s, ζ, τ)ᵀΓ + n_k, where φ_a,k(s, ζ, τ) is the regressor triad
+//! run with the stated loop's natural frequency scaled by s (its damping set
+//! to ζ) and the IMU read at true time + τ, and n is coloured noise. It is
+//! solved by Gauss–Newton: at θ = (ln s, ζ, τ) the Jacobian of φ_aᵀΓ is
+//!
+//! - ∂/∂ln s and ∂/∂ζ: central differences of two triad runs at ln s ± h;
+//! - ∂/∂τ: the time derivative of φ_aᵀΓ (the series shifted by ±ε by
+//!   Catmull–Rom interpolation, as the offset search does);
+//!
+//! and one least-squares step on [φ_a, ∂θ] updates Γ and θ together.
+//!
+//! The covariance of (Γ, θ) is the least-squares sandwich
+//! (JᵀJ)⁻¹·JᵀΣJ·(JᵀJ)⁻¹ with Σ the autocovariance of an AR model fitted to
+//! the joint fit's own residuals ([`crate::gls::covariance_middle_columns`]):
+//! a carrier loop's residuals are strongly coloured, and a white-noise
+//! likelihood ratio would reject correct loops far more often than it says.
+//! The test of the stated loop is then the Wald test z = ln ŝ/σ(ln ŝ),
+//! two-sided at [`LOOP_TEST_FALSE_ALARM`]. The Γ block of the covariance is
+//! the uncertainty of Γ̂ with the loop and the offset unknown: where they are
+//! confounded (a constant shaking rate, whose phase lag a loop error and a
+//! delay both explain) it grows, instead of one absorbing the other.
+
+use crate::search::{batch_pass, catmull_rom, offset_profile, scaled_loop};
+use crate::{CalibError, EpochSeries, EstimateSettings, gls};
+use gsens_core::{FedEpoch, LoopModel, LoopSpec};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// False-alarm probability of the test of the stated loop (two-sided).
+pub const LOOP_TEST_FALSE_ALARM: f64 = 1e-3;
+
+/// |z| above which the stated loop is rejected: the standard normal's
+/// two-sided point for [`LOOP_TEST_FALSE_ALARM`], Φ⁻¹(1 − 0.0005) = 3.2905.
+pub const LOOP_TEST_Z: f64 = 3.2905;
+
+/// Which nuisance parameters are estimated with Γ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointSpec {
+    /// Estimate the loop's natural frequency (the stated loop's scaled).
+    pub natural_frequency: bool,
+    /// Also a 2nd-order loop's damping ζ.
+    pub damping: bool,
+    /// Estimate the IMU time offset within ± this many seconds of the
+    /// series' own offset.
+    pub offset_max_abs_s: Option<f64>,
+}
+
+/// The joint estimate of Γ, the loop and the IMU time offset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub struct JointFit {
+    /// The loop stated (or assumed), in words.
+    pub stated_loop: String,
+    /// The loop that fits the data, in words.
+    pub fitted_loop: String,
+    /// The stated loop's natural frequency ωn/2π \[Hz\] (None: not estimated).
+    pub stated_natural_frequency_hz: Option<f64>,
+    /// The fitted natural frequency \[Hz\].
+    pub natural_frequency_hz: Option<f64>,
+    /// Its 1σ \[Hz\].
+    pub sigma_natural_frequency_hz: Option<f64>,
+    /// The fitted loop's noise bandwidth Bn \[Hz\].
+    pub bn_hz: Option<f64>,
+    /// The stated damping (2nd order, when estimated).
+    pub stated_zeta: Option<f64>,
+    /// The fitted damping and its 1σ.
+    pub zeta: Option<[f64; 2]>,
+    /// z = ln(ωn̂/ωn,stated)/σ: the test statistic of the stated loop.
+    pub loop_test_z: Option<f64>,
+    /// |z| above which the stated loop is rejected ([`LOOP_TEST_Z`]).
+    pub loop_test_threshold_z: f64,
+    /// Its false-alarm probability ([`LOOP_TEST_FALSE_ALARM`]).
+    pub loop_test_false_alarm: f64,
+    /// Whether the data reject the stated loop.
+    pub stated_loop_rejected: bool,
+    /// IMU time stamp minus true time \[s\] (total), when estimated.
+    pub imu_time_offset_s: Option<f64>,
+    /// Its 1σ \[s\].
+    pub sigma_imu_time_offset_s: Option<f64>,
+    /// The offset's search range ± \[s\] (around the series' own offset).
+    pub offset_max_abs_s: Option<f64>,
+    /// Whether the offset ended at the edge of its search range.
+    pub offset_at_limit: bool,
+    /// Correlation of ln ωn̂ with the offset: near ±1 the two are confounded.
+    pub correlation_loop_offset: Option<f64>,
+    /// Γ̂ of the joint fit \[Hz/(m/s²)\].
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// Γ̂ under the stated loop (at the fitted offset) \[Hz/(m/s²)\].
+    pub gamma_stated_loop_hz_per_mps2: [f64; 3],
+    /// Per axis, the variance of Γ̂ with the nuisance parameters estimated
+    /// over the variance with them known (≥ 1): how much not knowing the
+    /// loop and the offset costs.
+    pub variance_inflation: [f64; 3],
+    /// Whether Γ̂ is under the fitted loop (false: under the stated loop,
+    /// which passed its test and is taken as known).
+    pub fitted_loop_used: bool,
+    /// Residual sum of squares of the joint fit \[rad²\].
+    pub rss_rad2: f64,
+    /// Epochs in the fit.
+    pub epochs: usize,
+    /// Gauss–Newton iterations run.
+    pub iterations: u32,
+}
+
+/// The series of φ_a for one loop: every epoch as the estimator fed it.
+fn triad_pass(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    model: &LoopModel,
+) -> Result<Vec<FedEpoch>, CalibError> {
+    let mut s = *settings;
+    s.receiver_loop = *model;
+    Ok(batch_pass(series, &s)?.0)
+}
+
+/// φ_a of `fed` at epoch k shifted by `dtau_s` (IMU read later by dtau).
+fn shifted(fed: &[FedEpoch], phi_a: &[[f64; 3]], k: usize, dtau_s: f64, t: f64) -> [f64; 3] {
+    if dtau_s == 0.0 { fed[k].phi_a } else { catmull_rom(phi_a, k as f64 + dtau_s / t) }
+}
+
+fn dot(a: &[f64; 3], g: &[f64; 3]) -> f64 {
+    a[0] * g[0] + a[1] * g[1] + a[2] * g[2]
+}
+
+/// The damping of a 2nd-order Kaplan loop.
+fn zeta_of(model: &LoopModel) -> Option<f64> {
+    match model {
+        LoopModel::Kaplan { spec: LoopSpec::SecondOrder { zeta, .. }, .. } => Some(*zeta),
+        _ => None,
+    }
+}
+
+/// Estimates Γ jointly with the nuisance parameters `spec` asks for, starting
+/// from the stated loop `settings.receiver_loop` and the series' offset.
+pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
+    let t = series.log_interval_s;
+    let stated = settings.loop_at(t);
+    let wn_stated = stated.natural_frequency_hz();
+    let fit_loop = spec.natural_frequency && wn_stated.is_some();
+    let zeta0 = zeta_of(&stated);
+    let fit_zeta = fit_loop && spec.damping && zeta0.is_some();
+    let margin = spec.offset_max_abs_s.map_or(0, |m| (m / t).ceil() as usize + 2);
+
+    // Start: the stated loop, the offset from the global search under it.
+    let mut ln_s = 0.0f64;
+    let mut zeta = zeta0;
+    let fed0 = triad_pass(series, settings, &stated)?;
+    let mut dtau = match spec.offset_max_abs_s {
+        Some(max) => offset_profile(&fed0, t, max)?.dtau_s,
+        None => 0.0,
+    };
+    let n = fed0.len();
+    let used: Vec<usize> =
+        (margin..n.saturating_sub(margin)).filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some()).collect();
+    if used.len() < 20 {
+        return Err(CalibError::TooFewEpochs { epochs: used.len() as u64, warmup_s: settings.warmup_s });
+    }
+    let phi: Vec<f64> = used.iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
+    let h = 0.01;
+    let eps = 0.1 * t;
+    let loop_at = |ln_s: f64, zeta: Option<f64>| scaled_loop(&stated, ln_s.exp(), zeta);
+    let phi_a_of = |fed: &[FedEpoch]| -> Vec<[f64; 3]> { fed.iter().map(|e| e.phi_a).collect() };
+
+    let p = 3 + fit_loop as usize + fit_zeta as usize + spec.offset_max_abs_s.is_some() as usize;
+    let mut iterations = 0;
+    let (jac, resid, gamma, gamma_stated) = loop {
+        iterations += 1;
+        let center = if ln_s == 0.0 && zeta == zeta0 {
+            fed0.clone()
+        } else {
+            triad_pass(series, settings, &loop_at(ln_s, zeta))?
+        };
+        let pa_c = phi_a_of(&center);
+        let a: Vec<[f64; 3]> = used.iter().map(|&k| shifted(&center, &pa_c, k, dtau, t)).collect();
+        // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
+        let mut ne = gsens_core::NormalEquations::default();
+        for (ak, pk) in a.iter().zip(&phi) {
+            ne.add(*pk, ak);
+        }
+        let g = ne.solve().gamma_hz_per_mps2;
+        let mut columns: Vec<Vec<f64>> = (0..3).map(|i| a.iter().map(|v| v[i]).collect()).collect();
+        let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
+            let (fl, fh) = (triad_pass(series, settings, lo)?, triad_pass(series, settings, hi)?);
+            let (pl, ph) = (phi_a_of(&fl), phi_a_of(&fh));
+            Ok(used
+                .iter()
+                .map(|&k| (dot(&shifted(&fh, &ph, k, dtau, t), &g) - dot(&shifted(&fl, &pl, k, dtau, t), &g)) / step)
+                .collect())
+        };
+        if fit_loop {
+            columns.push(diff(&loop_at(ln_s - h, zeta), &loop_at(ln_s + h, zeta), 2.0 * h)?);
+        }
+        if fit_zeta {
+            let z = zeta.unwrap_or(0.707);
+            columns.push(diff(&loop_at(ln_s, Some(z - h)), &loop_at(ln_s, Some(z + h)), 2.0 * h)?);
+        }
+        if spec.offset_max_abs_s.is_some() {
+            columns.push(
+                used.iter()
+                    .map(|&k| {
+                        (dot(&catmull_rom(&pa_c, k as f64 + (dtau + eps) / t), &g)
+                            - dot(&catmull_rom(&pa_c, k as f64 + (dtau - eps) / t), &g))
+                            / (2.0 * eps)
+                    })
+                    .collect(),
+            );
+        }
+        let jac = DMatrix::from_fn(used.len(), p, |r, c| columns[c][r]);
+        let y = DVector::from_column_slice(&phi);
+        let jtj = jac.transpose() * &jac;
+        let Some(jtj_inv) = jtj.clone().try_inverse() else {
+            return Err(CalibError::Unsupported("the joint fit of Γ, the loop and the time offset is singular"));
+        };
+        let beta = &jtj_inv * (jac.transpose() * &y);
+        // Converged when every step is far below its (white-noise) σ.
+        let white_var = {
+            let r = &y - &jac * &beta;
+            r.norm_squared() / (used.len() as f64 - p as f64).max(1.0)
+        };
+        let small = |c: usize, d: f64| d.abs() <= 0.02 * (jtj_inv[(c, c)] * white_var).max(0.0).sqrt();
+        let mut converged = true;
+        let mut c = 3;
+        if fit_loop {
+            let d = beta[c].clamp(-0.3, 0.3);
+            converged &= small(c, d);
+            ln_s = (ln_s + d).clamp(-1.5, 1.5);
+            c += 1;
+        }
+        if fit_zeta {
+            let d = beta[c].clamp(-0.2, 0.2);
+            converged &= small(c, d);
+            zeta = zeta.map(|z| (z + d).clamp(0.25, 2.0));
+            c += 1;
+        }
+        if let Some(max) = spec.offset_max_abs_s {
+            let d = beta[c].clamp(-0.25 * max, 0.25 * max);
+            converged &= small(c, d);
+            dtau = (dtau + d).clamp(-max, max);
+        }
+        // Converged (steps far below any σ) or out of iterations: Γ at the
+        // final θ and the Jacobian there give the covariance.
+        if converged || iterations >= 12 || p == 3 {
+            let resid = &y - &jac * &beta;
+            let gamma = [beta[0], beta[1], beta[2]];
+            let gamma_stated = if fit_loop || fit_zeta {
+                let pa0 = phi_a_of(&fed0);
+                let mut ne = gsens_core::NormalEquations::default();
+                for (&k, pk) in used.iter().zip(&phi) {
+                    ne.add(*pk, &shifted(&fed0, &pa0, k, dtau, t));
+                }
+                ne.solve().gamma_hz_per_mps2
+            } else {
+                gamma
+            };
+            break (jac, resid, gamma, gamma_stated);
+        }
+    };
+
+    // The sandwich with an AR model of the residuals (over the used epochs'
+    // contiguous runs).
+    let mut mask = vec![false; n];
+    for &k in &used {
+        mask[k] = true;
+    }
+    let segments = gls::segments_of(mask.iter().copied());
+    let mut full_resid = vec![0.0; n];
+    for (r, &k) in used.iter().enumerate() {
+        full_resid[k] = resid[r];
+    }
+    let slices: Vec<&[f64]> = segments.iter().map(|s| &full_resid[s.clone()]).collect();
+    let max_order = ((gls::MAX_AR_SPAN_S / t).ceil() as usize).min(used.len() / 20).max(1);
+    let noise = gls::fit_ar(&slices, max_order);
+    let full_columns: Vec<Vec<f64>> = (0..p)
+        .map(|c| {
+            let mut v = vec![0.0; n];
+            for (r, &k) in used.iter().enumerate() {
+                v[k] = jac[(r, c)];
+            }
+            v
+        })
+        .collect();
+    let middle = gls::covariance_middle_columns(&noise, &full_columns, &segments);
+    let jtj_inv = (jac.transpose() * &jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
+    let cov = &jtj_inv * middle * &jtj_inv;
+    // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
+    let a3 = jac.columns(0, 3).into_owned();
+    let a3_inv = (a3.transpose() * &a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(3, 3));
+    let middle3 = gls::covariance_middle_columns(&noise, &full_columns[..3], &segments);
+    let cov3 = &a3_inv * middle3 * &a3_inv;
+    let variance_inflation =
+        [0, 1, 2].map(|i| if cov3[(i, i)] > 0.0 { (cov[(i, i)] / cov3[(i, i)]).max(1.0) } else { 1.0 });
+
+    let mut c = 3;
+    let (mut loop_idx, mut zeta_idx, mut tau_idx) = (None, None, None);
+    if fit_loop {
+        loop_idx = Some(c);
+        c += 1;
+    }
+    if fit_zeta {
+        zeta_idx = Some(c);
+        c += 1;
+    }
+    if spec.offset_max_abs_s.is_some() {
+        tau_idx = Some(c);
+    }
+    let sd = |i: usize| cov[(i, i)].max(0.0).sqrt();
+    let fitted = loop_at(ln_s, zeta);
+    let sigma_ln = loop_idx.map(sd);
+    let z = sigma_ln.map(|s| if s > 0.0 { ln_s / s } else { 0.0 });
+    let rejected = z.is_some_and(|z| z.abs() > LOOP_TEST_Z);
+    let correlation = match (loop_idx, tau_idx) {
+        (Some(l), Some(o)) if sd(l) > 0.0 && sd(o) > 0.0 => Some(cov[(l, o)] / (sd(l) * sd(o))),
+        _ => None,
+    };
+    let offset_at_limit = spec.offset_max_abs_s.is_some_and(|m| dtau.abs() >= 0.999 * m);
+    Ok(JointFit {
+        stated_loop: stated.to_string(),
+        fitted_loop: fitted.to_string(),
+        stated_natural_frequency_hz: fit_loop.then_some(wn_stated).flatten(),
+        natural_frequency_hz: fit_loop.then(|| fitted.natural_frequency_hz()).flatten(),
+        sigma_natural_frequency_hz: match (sigma_ln, fitted.natural_frequency_hz()) {
+            (Some(s), Some(f)) => Some(s * f),
+            _ => None,
+        },
+        bn_hz: fitted.bn_hz(),
+        stated_zeta: fit_zeta.then_some(zeta0).flatten(),
+        zeta: zeta_idx.and_then(|i| zeta.map(|z| [z, sd(i)])),
+        loop_test_z: z,
+        loop_test_threshold_z: LOOP_TEST_Z,
+        loop_test_false_alarm: LOOP_TEST_FALSE_ALARM,
+        stated_loop_rejected: rejected,
+        imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + dtau),
+        sigma_imu_time_offset_s: tau_idx.map(sd),
+        offset_max_abs_s: spec.offset_max_abs_s,
+        offset_at_limit,
+        correlation_loop_offset: correlation,
+        gamma_hz_per_mps2: gamma,
+        gamma_stated_loop_hz_per_mps2: gamma_stated,
+        variance_inflation,
+        fitted_loop_used: fit_loop,
+        rss_rad2: resid.norm_squared(),
+        epochs: used.len(),
+        iterations,
+    })
+    .map(|mut f: JointFit| {
+        if !fit_loop {
+            f.fitted_loop = f.stated_loop.clone();
+        }
+        f
+    })
+}
+
+impl JointFit {
+    /// This fit's test of the stated loop with everything else from `known`,
+    /// the fit with the loop known: Γ̂ under the stated loop.
+    pub fn with_loop_known(self, known: JointFit) -> JointFit {
+        JointFit {
+            stated_loop: self.stated_loop,
+            stated_natural_frequency_hz: self.stated_natural_frequency_hz,
+            natural_frequency_hz: self.natural_frequency_hz,
+            sigma_natural_frequency_hz: self.sigma_natural_frequency_hz,
+            stated_zeta: self.stated_zeta,
+            zeta: self.zeta,
+            loop_test_z: self.loop_test_z,
+            stated_loop_rejected: self.stated_loop_rejected,
+            correlation_loop_offset: self.correlation_loop_offset,
+            fitted_loop_used: false,
+            ..known
+        }
+    }
+
+    /// The fitted loop, given the stated one (the stated loop itself when
+    /// the loop was not estimated).
+    pub fn fitted(&self, stated: &LoopModel) -> LoopModel {
+        if !self.fitted_loop_used {
+            return *stated;
+        }
+        match (self.natural_frequency_hz, self.stated_natural_frequency_hz) {
+            (Some(f), Some(f0)) => scaled_loop(stated, f / f0, self.zeta.map(|z| z[0]).or(zeta_of(stated))),
+            _ => *stated,
+        }
+    }
+}
+
+/// The update intervals typical receivers run their carrier loop at \[s\]:
+/// the C/A code period and its multiples up to a navigation bit.
+pub const TYPICAL_LOOP_INTERVALS_S: [f64; 6] = [0.001, 0.002, 0.004, 0.005, 0.01, 0.02];
+
+/// A loop the data chose among typical receiver loops when none was stated.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChosenLoop {
+    /// The candidate that fits best (its natural frequency then fitted).
+    pub model: LoopModel,
+    /// What the log holds.
+    pub logged_phase: gsens_core::LoggedPhase,
+    /// Candidates tried.
+    pub candidates: usize,
+    /// RSS of the runner-up over the best's (≥ 1): near 1 the data hardly
+    /// tell them apart.
+    pub runner_up_rss_ratio: f64,
+    /// The runner-up, in words.
+    pub runner_up: String,
+}
+
+/// Chooses the receiver loop when none was stated: every order (2nd with
+/// ζ = 1/√2, 3rd with Kaplan's a3, b3), update interval among
+/// [`TYPICAL_LOOP_INTERVALS_S`] that divide the log interval (and the log
+/// interval itself) and logged phase (last or mean), each with its natural
+/// frequency fitted jointly with Γ from `settings.receiver_loop`'s bandwidth;
+/// the smallest residual wins. The discrete choices are not tested with a
+/// stated false-alarm rate, so the caller must say the loop was chosen, not
+/// checked.
+pub fn choose_loop(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    offset_max_abs_s: Option<f64>,
+) -> Result<ChosenLoop, CalibError> {
+    let t = series.log_interval_s;
+    let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(3.0);
+    let mut intervals: Vec<f64> = TYPICAL_LOOP_INTERVALS_S
+        .iter()
+        .copied()
+        .filter(|&i| i < t * (1.0 - 1e-9) && ((t / i) - (t / i).round()).abs() < 1e-6)
+        .collect();
+    intervals.push(t);
+    let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s };
+    let mut tried: Vec<(f64, LoopModel, gsens_core::LoggedPhase)> = Vec::new();
+    for order in [2u8, 3] {
+        let loop_spec = match order {
+            2 => LoopSpec::SecondOrder { bn_hz, zeta: core::f64::consts::FRAC_1_SQRT_2 },
+            _ => LoopSpec::ThirdOrder { bn_hz, a3: gsens_core::KAPLAN_A3, b3: gsens_core::KAPLAN_B3 },
+        };
+        for &interval in &intervals {
+            let logged: &[gsens_core::LoggedPhase] = if interval < t {
+                &[gsens_core::LoggedPhase::Last, gsens_core::LoggedPhase::Mean]
+            } else {
+                &[gsens_core::LoggedPhase::Last]
+            };
+            for &lp in logged {
+                let mut s = *settings;
+                s.receiver_loop = LoopModel::kaplan(loop_spec, Some(interval));
+                s.logged_phase = lp;
+                if let Ok(fit) = joint_fit(series, &s, spec) {
+                    tried.push((fit.rss_rad2, fit.fitted(&s.loop_at(t)), lp));
+                }
+            }
+        }
+    }
+    tried.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let Some(best) = tried.first().cloned() else {
+        return Err(CalibError::Unsupported("no typical receiver loop could be fitted to the data"));
+    };
+    let runner = tried.get(1);
+    Ok(ChosenLoop {
+        model: best.1,
+        logged_phase: best.2,
+        candidates: tried.len(),
+        runner_up_rss_ratio: runner.map_or(f64::INFINITY, |r| r.0 / best.0),
+        runner_up: runner
+            .map(|r| {
+                let logged = if r.2 == gsens_core::LoggedPhase::Mean { "the mean" } else { "the last output" };
+                format!("{} with the log holding {logged}", r.1)
+            })
+            .unwrap_or_default(),
+    })
+}
