@@ -55,6 +55,7 @@ mod estimate;
 pub mod gls;
 pub mod montecarlo;
 mod pipeline;
+mod response_check;
 mod result;
 mod robust;
 mod search;
@@ -71,6 +72,10 @@ pub use estimate::{
 pub use pipeline::{
     LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, TimeOffset,
     calibrate_files, calibrate_gnss_sdr, calibrate_logs, gnss_sdr_tracking_log, series_of,
+};
+pub use response_check::{
+    ResponseBin, ResponseCheck, ResponseCheckError, ResponseSettings, epoch_response, measure_response,
+    measure_response_with, student_t_quantile_two_sided, student_t_two_sided_tail,
 };
 pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};
