@@ -229,14 +229,23 @@ fn too_short_or_unexcited_sessions_are_reported() {
 /// was simulated with passes; analysed with a loop 20 % wider, it fails.
 #[test]
 fn simulated_session_passes_with_its_loop() {
+    // Seed 1 is `gsens demo`'s default: these are the demo session's numbers.
+    // Its single shaking period (1.1 s) probes 0.7–1.2 Hz only, where Γ̂
+    // absorbs most of a bandwidth error: Bn 3.6 Hz shows 3.2σ against a 3.0σ
+    // threshold there, too close to assert; seed 7's 5.8σ is asserted.
+    simulated_session(1, false);
+    simulated_session(7, true);
+}
+
+fn simulated_session(seed: u64, assert_wrong_fails: bool) {
     let scenario = gsens_sim::scenario::Scenario::default();
-    let logs = gsens_sim::simulate_logs(&scenario, 7).unwrap();
+    let logs = gsens_sim::simulate_logs(&scenario, seed).unwrap();
     let mut ps = PipelineSettings::default();
     ps.estimate = scenario_settings(&scenario, &EstimateSettings::default()).unwrap();
     let outcome = calibrate_logs(&logs.tracking, &logs.imu, "imu", &ps).unwrap();
     let c = &outcome.calibration;
     let r = measure_response(&outcome.series(), &c.settings, &c.gamma_raw_hz_per_mps2).unwrap();
-    println!("simulated, right loop: {}", r.summary());
+    println!("simulated (seed {seed}), right loop: {}", r.summary());
     println!("  K {} n_e {:.1} M {:.1} p {:.3}", r.segments, r.effective_segments, r.independent_tests, r.p_value);
     for b in r.tested() {
         println!(
@@ -263,6 +272,6 @@ fn simulated_session_passes_with_its_loop() {
     let outcome = calibrate_logs(&logs.tracking, &logs.imu, "imu", &wrong).unwrap();
     let c = &outcome.calibration;
     let r = measure_response(&outcome.series(), &c.settings, &c.gamma_raw_hz_per_mps2).unwrap();
-    println!("simulated, Bn 3.6 Hz model: {}", r.summary());
-    assert!(!r.consistent, "{}", r.summary());
+    println!("simulated (seed {seed}), Bn 3.6 Hz model: {}", r.summary());
+    assert!(!assert_wrong_fails || !r.consistent, "{}", r.summary());
 }
