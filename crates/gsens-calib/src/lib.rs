@@ -56,6 +56,7 @@ pub mod gls;
 mod joint;
 pub mod montecarlo;
 mod pipeline;
+mod response_check;
 mod result;
 mod robust;
 mod search;
@@ -77,6 +78,10 @@ pub use joint::{
 pub use pipeline::{
     LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, TimeOffset,
     calibrate_files, calibrate_gnss_sdr, calibrate_logs, gnss_sdr_tracking_log, series_of,
+};
+pub use response_check::{
+    ResponseBin, ResponseCheck, ResponseCheckError, ResponseSettings, epoch_response, measure_response,
+    measure_response_with, student_t_quantile_two_sided, student_t_two_sided_tail,
 };
 pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};

@@ -31,6 +31,9 @@ use std::ops::Range;
 use std::path::Path;
 use std::sync::Once;
 
+mod measured_response;
+pub use measured_response::{MEASURED_BAND_SIGMA, MeasuredPoint, MeasuredResponseData, fig_measured_response};
+
 /// The bundled font (DejaVu Sans; license in `assets/DejaVuSans-LICENSE.txt`).
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static FONT_ONCE: Once = Once::new();
