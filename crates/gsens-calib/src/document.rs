@@ -59,7 +59,7 @@ pub struct Warning {
 /// Warning codes that report something gsens already corrected for (the
 /// estimate stays trustworthy); every other code means the estimate may be
 /// wrong beyond its σ.
-pub const INFORMATIONAL_WARNINGS: &[&str] = &["imu_spikes"];
+pub const INFORMATIONAL_WARNINGS: &[&str] = &["imu_spikes", "response_unchecked"];
 
 impl Warning {
     /// Whether this warning makes the estimate untrustworthy (every code but
@@ -129,6 +129,9 @@ pub struct ResultDocument {
     pub loop_summary: LoopSummary,
     /// Warnings: conditions under which the estimate may not hold.
     pub warnings: Vec<Warning>,
+    /// The loop's response measured from the session against the model
+    /// ([`crate::measure_response`]); `null` where it could not be measured.
+    pub loop_response: Option<crate::ResponseCheck>,
     /// Every track of the log and what became of it.
     pub channels: Vec<ChannelSummary>,
     /// The channel selection used.
@@ -180,6 +183,30 @@ impl ResultDocument {
                     outcome.imu_spikes_t_s.len()
                 ),
             });
+        }
+        let c = &outcome.calibration;
+        // Its false alarms at 0.5 %, so that with the loop test's 0.1 % a clean
+        // session is flagged less than 1 % of the time.
+        let response_settings = crate::ResponseSettings { false_alarm: 0.005, ..Default::default() };
+        match crate::measure_response_with(&outcome.series(), &c.settings, &c.gamma_raw_hz_per_mps2, &response_settings)
+        {
+            Ok(check) => {
+                if !check.consistent {
+                    doc.warnings.push(Warning {
+                        code: "loop_response",
+                        message: format!(
+                            "the loop's response measured from the session does not match the model: {}; check the \
+                             receiver loop's order, bandwidth, update interval and what its log holds",
+                            check.summary().trim_start_matches("measured loop response: ")
+                        ),
+                    });
+                }
+                doc.loop_response = Some(check);
+            }
+            Err(e) => doc.warnings.push(Warning {
+                code: "response_unchecked",
+                message: format!("the loop's response could not be measured from the session: {e}"),
+            }),
         }
         if let Some(ch) = &outcome.chosen_loop {
             doc.warnings.push(Warning {
@@ -234,6 +261,7 @@ impl ResultDocument {
             trustworthy: true,
             loop_summary: LoopSummary::of(&calibration.loop_used),
             warnings: warnings(&calibration),
+            loop_response: None,
             calibration,
             channels,
             selection,

@@ -103,6 +103,9 @@ pub struct JointFit {
     pub rss_rad2: f64,
     /// Epochs in the fit.
     pub epochs: usize,
+    /// Covariance of the batch Γ̂ with the loop and the offset estimated
+    /// (the Γ block of the joint sandwich) \[(Hz/(m/s²))²\].
+    pub gamma_covariance_hz_per_mps2_sq: [[f64; 3]; 3],
     /// Gauss–Newton iterations run.
     pub iterations: u32,
 }
@@ -345,6 +348,7 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         fitted_loop_used: fit_loop,
         rss_rad2: resid.norm_squared(),
         epochs: used.len(),
+        gamma_covariance_hz_per_mps2_sq: [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov[(i, j)])),
         iterations,
     })
     .map(|mut f: JointFit| {

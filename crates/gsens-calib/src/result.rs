@@ -99,23 +99,43 @@ pub struct HistoryPoint {
 }
 
 impl Calibration {
-    /// Takes in the joint fit's uncertainty: the statistical covariance of
-    /// each axis pair scaled by √(r_i·r_j), r the fit's variance inflation
-    /// (the loop and the offset unknown instead of known), and the offset
-    /// and its σ as fitted.
+    /// Takes in the joint fit's uncertainty. The batch estimator (and RLS
+    /// without forgetting, the same solution) gets the Γ block of the joint
+    /// sandwich itself; the others their own statistical covariance scaled by
+    /// √(r_i·r_j), r the fit's variance inflation (the loop and the offset
+    /// unknown instead of known). The offset and its σ are the fitted ones.
     pub(crate) fn include_nuisance(&mut self, fit: &JointFit) {
-        let r = fit.variance_inflation;
-        for i in 0..3 {
-            let imu = self.sigma_imu_hz_per_mps2[i].unwrap_or(0.0);
-            for j in 0..3 {
-                if let Some(c) = &mut self.covariance_hz_per_mps2_sq[i][j] {
-                    let imu_ij = if i == j { imu * imu } else { 0.0 };
-                    *c = (*c - imu_ij) * (r[i] * r[j]).sqrt() + imu_ij;
-                }
+        let batch_like = match self.settings.method {
+            crate::Method::Batch => true,
+            crate::Method::Rls { lambda } => lambda == 1.0,
+            _ => false,
+        };
+        let imu = self.sigma_imu_hz_per_mps2.map(|s| s.unwrap_or(0.0));
+        let stat_of = |c: &Self, i: usize, j: usize| -> Option<f64> {
+            let imu_ij = if i == j { imu[i] * imu[i] } else { 0.0 };
+            c.covariance_hz_per_mps2_sq[i][j].map(|v| v - imu_ij)
+        };
+        let mut stat = [[None; 3]; 3];
+        for (i, row) in stat.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = stat_of(self, i, j).map(|old| {
+                    if batch_like {
+                        fit.gamma_covariance_hz_per_mps2_sq[i][j]
+                    } else {
+                        old * (fit.variance_inflation[i] * fit.variance_inflation[j]).sqrt()
+                    }
+                });
             }
-            if let (Some(stat), Some(total)) = (&mut self.sigma_statistical_hz_per_mps2[i], self.sigma_hz_per_mps2[i]) {
-                *stat *= r[i].sqrt();
-                let new_total = stat.hypot(imu);
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                let imu_ij = if i == j { imu[i] * imu[i] } else { 0.0 };
+                self.covariance_hz_per_mps2_sq[i][j] = stat[i][j].map(|v| v + imu_ij);
+            }
+            if let (Some(var), Some(total)) = (stat[i][i], self.sigma_hz_per_mps2[i]) {
+                let s = var.max(0.0).sqrt();
+                self.sigma_statistical_hz_per_mps2[i] = Some(s);
+                let new_total = s.hypot(imu[i]);
                 self.sigma_hz_per_mps2[i] = Some(new_total);
                 if let Some(p) = &mut self.sigma_ppb_per_g[i] {
                     *p *= if total > 0.0 { new_total / total } else { 1.0 };

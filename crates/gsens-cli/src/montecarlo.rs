@@ -22,6 +22,10 @@ pub struct MonteCarloArgs {
     /// Write the statistics (and every run's estimates) as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// State the receiver loop's bandwidth this many times the true one (1: right), as a user who got it
+    /// wrong would: how often the loop check catches the mistake.
+    #[arg(long, default_value_t = 1.0)]
+    pub stated_bn_scale: f64,
     #[command(flatten)]
     pub estimator: EstimatorArgs,
     #[command(flatten)]
@@ -39,6 +43,11 @@ pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
         .map(|&m| {
             let mut s = scenario_settings(&scenario, &base)?;
             s.method = args.estimator.method(m);
+            if args.stated_bn_scale != 1.0 {
+                s.receiver_loop = s.receiver_loop.with_bn_scaled(args.stated_bn_scale).ok_or_else(|| {
+                    anyhow::anyhow!("--stated-bn-scale: the scenario's loop has no bandwidth to scale")
+                })?;
+            }
             Ok(pipeline_settings(s, &args.selection, &args.systematic))
         })
         .collect::<Result<Vec<_>>>()?;

@@ -132,6 +132,22 @@ impl LoopModel {
         }
     }
 
+    /// The same loop with its noise bandwidth Bn times `scale` (its shape,
+    /// ζ or a3/b3, and interval kept); `None` for a loop given by its filter
+    /// coefficients.
+    pub fn with_bn_scaled(&self, scale: f64) -> Option<LoopModel> {
+        match *self {
+            LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz, zeta }, interval_s } => {
+                Some(LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz: bn_hz * scale, zeta }, interval_s })
+            }
+            LoopModel::Kaplan { spec: LoopSpec::ThirdOrder { bn_hz, a3, b3 }, interval_s } => {
+                Some(LoopModel::Kaplan { spec: LoopSpec::ThirdOrder { bn_hz: bn_hz * scale, a3, b3 }, interval_s })
+            }
+            LoopModel::Kaplan { .. } => None,
+            LoopModel::GnssSdr(stage) => Some(LoopModel::GnssSdr(GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage })),
+        }
+    }
+
     /// The nominal noise bandwidth Bn \[Hz\] where the loop is specified by it.
     pub fn bn_hz(&self) -> Option<f64> {
         match self {

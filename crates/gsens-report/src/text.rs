@@ -138,6 +138,9 @@ pub fn render_text(doc: &ResultDocument) -> String {
                 .unwrap_or_default()
         );
     }
+    if let Some(r) = &doc.loop_response {
+        let _ = writeln!(s_, "{}", r.summary());
+    }
     let head = if truth.is_some() { "      truth       error" } else { "" };
     let _ = writeln!(s_, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
     let advice = doc.loop_summary.peak_hz.map(|f| format!(" or closer to {f:.2} Hz")).unwrap_or_default();
