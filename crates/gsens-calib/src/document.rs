@@ -152,7 +152,7 @@ impl ResultDocument {
             truth_gamma_hz_per_mps2,
         );
         doc.gnss_sdr = outcome.gnss_sdr.clone();
-        let inputs = crate::checks::input_warnings(&outcome.session.accel_mps2, &doc.calibration, &doc.loop_summary);
+        let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
         if let Some(first) = outcome.imu_spikes_t_s.first() {
             doc.warnings.push(Warning {

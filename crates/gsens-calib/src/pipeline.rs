@@ -7,7 +7,10 @@ use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, calibrate, e
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
-use gsens_session::{PreparedSession, SelectionConfig, despike_imu, prepare_session, reinterpolate_imu};
+use gsens_session::{
+    FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session,
+    reinterpolate_imu,
+};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -152,6 +155,13 @@ pub struct Outcome {
     pub gnss_sdr: Option<GnssSdrConversion>,
     /// Time stamps of the IMU samples replaced as isolated spikes \[s\].
     pub imu_spikes_t_s: Vec<f64>,
+    /// Runs of identical IMU samples no noise or motion makes (stuck,
+    /// clipped; [`gsens_session::find_flat_runs`]), and the log's sample
+    /// interval, step and noise behind the test.
+    pub imu_flat_runs: FlatRuns,
+    /// Epochs left out of the estimate because their IMU reading touches a
+    /// flat run ([`gsens_session::mask_flat_runs`]).
+    pub imu_flat_run_epochs: usize,
     /// The inputs as role → path (`imu`, `tracking`, `gnss_sdr_dumps`, …);
     /// empty for logs given in memory. Callers may add their own (`truth`).
     pub inputs: Vec<(String, String)>,
@@ -207,8 +217,11 @@ pub fn calibrate_logs(
         }
     };
     let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
+    let flat_runs = find_flat_runs(imu);
     let imu = &despiked;
     let mut session = prepare_session(tracking, imu, imu_name, &settings.selection, assumed)?;
+    // A stuck or clipped stretch would enter every regressor: its epochs become gaps before any search.
+    let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;
     let mut identification = None;
     if settings.loop_identification != LoopIdentificationMode::Off {
@@ -229,6 +242,7 @@ pub fn calibrate_logs(
             return Err(PipelineError::TimeOffsetAtLimit { found_s: found.imu_time_offset_s, max_abs_s });
         }
         reinterpolate_imu(&mut session, imu, found.imu_time_offset_s);
+        flat_run_epochs += mask_flat_runs(&mut session, &flat_runs);
         offset_sigma = Some(found.sigma_s);
     }
     let mut calibration = calibrate(&series_of(&session), &estimate)?;
@@ -241,6 +255,8 @@ pub fn calibrate_logs(
         settings: settings.clone(),
         gnss_sdr: None,
         imu_spikes_t_s: spikes.t_s,
+        imu_flat_runs: flat_runs,
+        imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
     })
 }
