@@ -1,8 +1,12 @@
 //! Plausibility checks of a session's inputs, from physics alone: each finds
 //! a likely mistake in how the logs were written and says how to fix it.
 
+use crate::pipeline::Outcome;
 use crate::{Calibration, LoopSummary, Warning};
+use gsens_core::LoggedPhase;
 use gsens_core::units::STANDARD_GRAVITY_MPS2;
+use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
+use std::f64::consts::{PI, TAU};
 
 /// How far the median specific-force magnitude may stray from g₀ before the
 /// IMU's units or scale are doubted: gravity varies by ±0.3 % over the Earth,
@@ -15,17 +19,45 @@ const GRAVITY_TOLERANCE: f64 = 0.10;
 /// the response).
 const MIN_SAMPLES_PER_PEAK_PERIOD: f64 = 4.0;
 
-/// The warnings about the inputs of `calibration`, whose specific force per
-/// epoch was `accel_mps2` and whose loop is summarized by `loop_summary`.
+/// A log interval this long or longer \[s\] is no GNSS receiver's tracking
+/// log and no IMU's sample interval while the board is shaken at about 1 Hz:
+/// together with a loop peak that 1/1000 of it would resolve, it is a time
+/// stamp in milliseconds.
+const MS_SUSPECT_INTERVAL_S: f64 = 1.0;
+
+/// Phase units are doubted when the channels' median ratio of measured to
+/// predicted scatter is farther than the geometric midpoint from 1 towards a
+/// wrong unit's factor: below 1/√(2π) ≈ 0.40 (cycles give 1/(2π)), above
+/// √(180/π) ≈ 7.6 (degrees give 180/π). The prediction holds within a few
+/// tens of per cent (C/N0 estimator bias of 1–2 dB, the median of the other
+/// channels in the deviation, multipath), far inside both margins (×2.5).
+const CYCLES_BELOW: f64 = 0.398_942_280_401_432_7; // 1/√(2π)
+const DEGREES_ABOVE: f64 = 7.569_397_566_060_481; // √(180/π)
+
+/// More than this fraction of the epochs with an averaged phase error beyond
+/// π — the range of any discriminator (atan2; a Costas atan stops at π/2) —
+/// is not a phase error in radians.
+const BEYOND_PI_FRACTION: f64 = 0.01;
+
+/// The warnings about the inputs of the calibration `c` of `outcome`, whose
+/// loop is summarized by `loop_summary`.
 ///
 /// - `imu_units`: the median |f| over the epochs is gravity, g₀ = 9.80665
 ///   m/s², within 10 % for any board shaken by hand (the shaking averages
 ///   out of the median). Near 1 it is in g, otherwise the scale is wrong.
 /// - `log_rate`: the log must sample the loop's peak response f_peak at
-///   least 4 times per period, T_log ≤ 1/(4·f_peak); a longer interval is
-///   most often time stamps in milliseconds.
-pub(crate) fn input_warnings(accel_mps2: &[[f64; 3]], c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
+///   least 4 times per period, T_log ≤ 1/(4·f_peak).
+/// - `time_units`: a tracking log interval or an IMU sample interval of 1 s
+///   or more that would satisfy the same rule if it were in milliseconds
+///   (it replaces `log_rate` for the tracking log).
+/// - `imu_rate`: the IMU too must sample the loop's peak 4 times a period:
+///   its specific force is interpolated linearly onto the epochs.
+/// - `phase_units`: [`phase_units`].
+/// - `imu_stuck`, `imu_clipped`: the runs of identical IMU samples
+///   [`gsens_session::find_flat_runs`] found, and the epochs left out.
+pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
     let mut w = Vec::new();
+    let accel_mps2 = &outcome.session.accel_mps2;
     let mut norms: Vec<f64> = accel_mps2.iter().map(|a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()).collect();
     if !norms.is_empty() {
         let mid = norms.len() / 2;
@@ -48,21 +80,238 @@ pub(crate) fn input_warnings(accel_mps2: &[[f64; 3]], c: &Calibration, loop_summ
             });
         }
     }
-    if let Some(f_peak) = loop_summary.peak_hz {
+    // The longest interval that still samples the loop's peak 4 times a period.
+    let longest_s = loop_summary.peak_hz.map(|f| 1.0 / (MIN_SAMPLES_PER_PEAK_PERIOD * f));
+    let in_ms = |interval_s: f64| {
+        interval_s >= MS_SUSPECT_INTERVAL_S && longest_s.is_none_or(|l| interval_s * 1e-3 <= l && interval_s > l)
+    };
+    let span_s = |t: &[f64]| t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a);
+    if in_ms(c.log_interval_s) {
+        w.push(Warning {
+            code: "time_units",
+            message: format!(
+                "the tracking log's interval is {} s and it lasts {:.0} s ({:.1} h) for a session shaken by hand: \
+                 its time stamps look like milliseconds ({} ms would be a usual log interval); divide t_s by 1000 \
+                 (and the IMU's if it is in milliseconds too)",
+                c.log_interval_s,
+                span_s(&outcome.session.t_s),
+                span_s(&outcome.session.t_s) / 3600.0,
+                c.log_interval_s
+            ),
+        });
+    } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
+        && c.log_interval_s > longest_s
+    {
         let samples = 1.0 / (f_peak * c.log_interval_s);
-        if samples < MIN_SAMPLES_PER_PEAK_PERIOD {
-            w.push(Warning {
-                code: "log_rate",
-                message: format!(
-                    "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
-                     ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
-                     resolved. If the time stamps are in milliseconds, convert them to seconds; otherwise log at least \
-                     every {:.3} s",
-                    c.log_interval_s,
-                    1.0 / (MIN_SAMPLES_PER_PEAK_PERIOD * f_peak)
-                ),
-            });
+        w.push(Warning {
+            code: "log_rate",
+            message: format!(
+                "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
+                 ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
+                 resolved; log at least every {longest_s:.3} s",
+                c.log_interval_s,
+            ),
+        });
+    }
+    let imu_h = outcome.imu_flat_runs.sample_interval_s;
+    if imu_h > 0.0 && in_ms(imu_h) {
+        w.push(Warning {
+            code: "time_units",
+            message: format!(
+                "the IMU's sample interval is {imu_h} s: its time stamps look like milliseconds ({imu_h} ms would \
+                 be a usual IMU interval), so the tracking epochs see the specific force of a few samples \
+                 stretched over the session; divide the IMU's t_s by 1000"
+            ),
+        });
+    } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
+        && imu_h > longest_s
+    {
+        w.push(Warning {
+            code: "imu_rate",
+            message: format!(
+                "the IMU's sample interval {imu_h} s gives {:.1} samples per period of the loop's peak response \
+                 ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the motion that excites the loop is not \
+                 resolved; log the IMU at least every {longest_s:.3} s",
+                1.0 / (f_peak * imu_h)
+            ),
+        });
+    }
+    w.extend(phase_units(outcome, c));
+    w.extend(flat_run_warnings(&outcome.imu_flat_runs, outcome.imu_flat_run_epochs));
+    w
+}
+
+/// The variance of one logged phase error \[rad²\] that thermal noise alone
+/// gives a channel of C/N0 `cn0_hz` (as a ratio, Hz) behind a loop that
+/// integrates for `t_s` and logs one value per `n` integrations (`mean`: the
+/// mean of the n discriminator outputs; `last`: the latest one).
+///
+/// A Costas/atan discriminator's output for one integration of length T has
+/// σ_d² = 1/(2·T·C/N0)·(1 + 1/(2·T·C/N0)) (the second factor the squaring
+/// loss; Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.6, whose loop
+/// jitter Bn/(C/N0)·(1 + 1/(2·T·C/N0)) is this times 2·Bn·T). The logged
+/// value is that noise less the part the replica follows: for `last` the
+/// variance is σ_d²·(1 + 2·Bn·T) (the replica's jitter is independent of the
+/// current integration's noise, the loop having a one-update latency), for
+/// `mean` about σ_d²/n (the loop removes only the part below ~Bn of the
+/// averaged noise's bandwidth 1/(2·n·T), a fraction Bn·n·T ≈ 8 % at 3 Hz and
+/// 25 ms). Both within 10 % of σ_d²·(1 or 1/n), which is what is returned.
+/// The loop's jitter alone (Kaplan's formula) would under-predict a `mean`
+/// log of 25 × 1 ms by a factor 2.6 in σ, close to the 2π of a log in cycles.
+pub(crate) fn logged_phase_variance_rad2(cn0_hz: f64, t_s: f64, n: u32, logged: LoggedPhase) -> f64 {
+    let snr = 2.0 * t_s * cn0_hz;
+    let per_output = (1.0 + 1.0 / snr) / snr;
+    match logged {
+        LoggedPhase::Last => per_output,
+        LoggedPhase::Mean => per_output / f64::from(n.max(1)),
+    }
+}
+
+/// The ratio of a channel's measured high-frequency phase scatter to the
+/// thermal scatter its C/N0 predicts ([`logged_phase_variance_rad2`]), and
+/// whether the measured value is only an upper bound (the screening's scale
+/// sits at its floor `min_sigma_rad`). The measured scatter is the
+/// screening's robust σ of the channel's deviation from the median of the
+/// other channels, in which the oscillator's (and the g-induced) phase
+/// cancels; the others' median adds 20–25 % of the channel's own σ for a
+/// handful of channels.
+fn scatter_ratio(
+    ch: &ChannelSummary,
+    t_s: f64,
+    n: u32,
+    logged: LoggedPhase,
+    min_sigma_rad: f64,
+) -> Option<(f64, bool)> {
+    let measured = ch.screening.deviation_sigma_rad?;
+    let cn0_dbhz = ch.screening.median_cn0_dbhz.unwrap_or(ch.mean_cn0_dbhz);
+    let predicted = logged_phase_variance_rad2(10f64.powf(cn0_dbhz / 10.0), t_s, n, logged).sqrt();
+    (predicted.is_finite() && predicted > 0.0).then(|| (measured / predicted, measured <= min_sigma_rad * (1.0 + 1e-9)))
+}
+
+/// `phase_units`: a phase error logged in cycles or degrees instead of
+/// radians, from two pieces of physics.
+///
+/// 1. Each channel's measured scatter against its thermal prediction from its
+///    own C/N0 ([`scatter_ratio`]): the median ratio over the channels
+///    (every track the screening compared with two others or more) is near 1
+///    for radians, near 1/(2π) for cycles and 180/π for degrees; the
+///    thresholds are the geometric midpoints, [`CYCLES_BELOW`] and
+///    [`DEGREES_ABOVE`]. A ratio that is only an upper bound counts for the
+///    cycles test, where it is conservative, not for the degrees test.
+/// 2. A discriminator's output cannot exceed π (atan2; a Costas atan π/2):
+///    more than [`BEYOND_PI_FRACTION`] of the epochs' averaged phase beyond π
+///    is degrees when the first test has no channel to go by, and is quoted as
+///    evidence when it has.
+///
+/// The loop-predicted g-induced error cannot tell units apart: Γ̂ absorbs the
+/// unit's factor, and nothing else fixes the size of Γ.
+fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
+    let logged = c.settings.logged_phase;
+    let n = c.model_substeps.max(1);
+    let t_s = c.loop_used.interval_s().unwrap_or(c.log_interval_s / f64::from(n));
+    let floor = outcome.session.selection.screening.min_sigma_rad;
+    let ratios: Vec<(f64, bool)> =
+        outcome.session.channels.iter().filter_map(|ch| scatter_ratio(ch, t_s, n, logged, floor)).collect();
+    let median = |mut v: Vec<f64>| -> Option<f64> {
+        if v.is_empty() {
+            return None;
         }
+        v.sort_by(f64::total_cmp);
+        let m = v.len() / 2;
+        Some(if v.len() % 2 == 1 { v[m] } else { 0.5 * (v[m - 1] + v[m]) })
+    };
+    let all = median(ratios.iter().map(|r| r.0).collect());
+    let exact = median(ratios.iter().filter(|r| !r.1).map(|r| r.0).collect());
+    let phases: Vec<f64> = outcome.session.phase_err_rad.iter().flatten().copied().collect();
+    let beyond = phases.iter().filter(|p| p.abs() > PI).count() as f64 / phases.len().max(1) as f64;
+    let scatter = |r: f64| {
+        format!(
+            "the channels' phase errors scatter {r:.3} times (median over {} channels) what their C/N0 predicts for \
+             a discriminator's output in radians",
+            ratios.len()
+        )
+    };
+    let (unit, factor, evidence) = if let Some(r) = all.filter(|&r| r < CYCLES_BELOW) {
+        ("cycles", "multiply phase_err_rad by 2π", format!("{}, near 1/(2π) = {:.3}", scatter(r), 1.0 / TAU))
+    } else if let Some(r) = exact.filter(|&r| r > DEGREES_ABOVE) {
+        let e = format!(
+            "{}, near 180/π = {:.1}; {:.0} % of the epochs' phase lies beyond ±π, where no discriminator's output goes",
+            scatter(r),
+            180.0 / PI,
+            beyond * 100.0
+        );
+        ("degrees", "multiply phase_err_rad by π/180", e)
+    } else if exact.is_none() && beyond > BEYOND_PI_FRACTION {
+        let e = format!(
+            "{:.0} % of the epochs' phase lies beyond ±π, where no discriminator's output goes",
+            beyond * 100.0
+        );
+        (
+            "degrees",
+            "multiply phase_err_rad by π/180 (or, if it is an unwrapped phase, log the discriminator's output)",
+            e,
+        )
+    } else {
+        return None;
+    };
+    Some(Warning {
+        code: "phase_units",
+        message: format!(
+            "{evidence}: the phase error looks like it is in {unit}; {factor}. Γ̂ scales with the phase's unit"
+        ),
+    })
+}
+
+/// `imu_stuck` and `imu_clipped`: what [`gsens_session::find_flat_runs`]
+/// found, and how many epochs were left out of the estimate for it.
+fn flat_run_warnings(runs: &FlatRuns, masked_epochs: usize) -> Vec<Warning> {
+    let axis = ["x", "y", "z"];
+    let mut w = Vec::new();
+    for (kind, code) in [(FlatRunKind::Stuck, "imu_stuck"), (FlatRunKind::Clipped, "imu_clipped")] {
+        let of_kind: Vec<_> = runs.runs.iter().filter(|r| r.kind == kind).collect();
+        let Some(first) = of_kind.first() else { continue };
+        let samples: usize = of_kind.iter().map(|r| r.samples).sum();
+        let mut axes: Vec<&str> = of_kind.iter().map(|r| axis[r.axis]).collect();
+        axes.dedup();
+        axes.sort_unstable();
+        axes.dedup();
+        let limits: Vec<String> = (0..3)
+            .map(|i| match runs.noise_run_limit[i] {
+                Some(l) => format!("{} {l}", axis[i]),
+                None => format!("{} none (noise below the step)", axis[i]),
+            })
+            .collect();
+        let (what, fix) = match kind {
+            FlatRunKind::Stuck => (
+                "identical samples that neither the sensor's noise nor a continuous motion makes (a stuck sensor or \
+                 a logger repeating its last value)",
+                "check the IMU's read-out and the logger",
+            ),
+            FlatRunKind::Clipped => (
+                "identical samples at the axis's extreme value (the sensor clipped at its range)",
+                "shake more gently or set the accelerometer to a wider range",
+            ),
+        };
+        let masked = match masked_epochs {
+            0 => "No epoch of the estimate reads them".to_owned(),
+            m => format!("The {m} epochs that read them (stuck or clipped) were left out of the estimate"),
+        };
+        w.push(Warning {
+            code,
+            message: format!(
+                "{} run(s) of {what} on axis {} ({samples} samples in all; the first: {} samples from {} s at {} \
+                 m/s²). At the log's output steps ({} m/s²) and noise, runs are implausible from (samples per axis) \
+                 {} (none: the noise is below the step, identical samples at rest are normal and only a jump at a \
+                 run's end tells). {masked}; {fix}",
+                of_kind.len(),
+                axes.join(", "),
+                first.samples,
+                first.start_s,
+                first.value_mps2,
+                runs.quantum_mps2.map(|q| format!("{q:.3e}")).join(", "),
+                limits.join(", "),
+            ),
+        });
     }
     w
 }

@@ -59,7 +59,7 @@ pub struct Warning {
 /// Warning codes that report something gsens already corrected for (the
 /// estimate stays trustworthy); every other code means the estimate may be
 /// wrong beyond its σ.
-pub const INFORMATIONAL_WARNINGS: &[&str] = &["imu_spikes", "response_unchecked"];
+pub const INFORMATIONAL_WARNINGS: &[&str] = &["imu_spikes", "imu_stuck", "imu_clipped", "response_unchecked"];
 
 impl Warning {
     /// Whether this warning makes the estimate untrustworthy (every code but
@@ -172,7 +172,7 @@ impl ResultDocument {
             truth_gamma_hz_per_mps2,
         );
         doc.gnss_sdr = outcome.gnss_sdr.clone();
-        let inputs = crate::checks::input_warnings(&outcome.session.accel_mps2, &doc.calibration, &doc.loop_summary);
+        let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
         if let Some(first) = outcome.imu_spikes_t_s.first() {
             doc.warnings.push(Warning {

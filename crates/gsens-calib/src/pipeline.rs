@@ -7,7 +7,10 @@ use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, c
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
-use gsens_session::{PreparedSession, SelectionConfig, despike_imu, prepare_session, reinterpolate_imu};
+use gsens_session::{
+    FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session,
+    reinterpolate_imu,
+};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -153,6 +156,13 @@ pub struct Outcome {
     pub chosen_loop: Option<crate::ChosenLoop>,
     /// Time stamps of the IMU samples replaced as isolated spikes \[s\].
     pub imu_spikes_t_s: Vec<f64>,
+    /// Runs of identical IMU samples no noise or motion makes (stuck,
+    /// clipped; [`gsens_session::find_flat_runs`]), and the log's sample
+    /// interval, step and noise behind the test.
+    pub imu_flat_runs: FlatRuns,
+    /// Epochs left out of the estimate because their IMU reading touches a
+    /// flat run ([`gsens_session::mask_flat_runs`]).
+    pub imu_flat_run_epochs: usize,
     /// The inputs as role → path (`imu`, `tracking`, `gnss_sdr_dumps`, …);
     /// empty for logs given in memory. Callers may add their own (`truth`).
     pub inputs: Vec<(String, String)>,
@@ -208,8 +218,11 @@ pub fn calibrate_logs(
         }
     };
     let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
+    let flat_runs = find_flat_runs(imu);
     let imu = &despiked;
     let mut session = prepare_session(tracking, imu, imu_name, &settings.selection, assumed)?;
+    // A stuck or clipped stretch would enter every regressor: its epochs become gaps before any search.
+    let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;
     let spec = JointSpec {
         natural_frequency: settings.loop_identification != LoopIdentificationMode::Off,
@@ -235,6 +248,7 @@ pub fn calibrate_logs(
         }
         if let Some(offset_s) = fit.imu_time_offset_s {
             reinterpolate_imu(&mut session, imu, offset_s);
+            flat_run_epochs += mask_flat_runs(&mut session, &flat_runs);
         }
         // Γ̂ under the fitted loop: its σ then covers the loop's uncertainty.
         estimate.receiver_loop = fit.fitted(&estimate.loop_at(session.log_interval_s));
@@ -251,6 +265,8 @@ pub fn calibrate_logs(
         gnss_sdr: None,
         chosen_loop,
         imu_spikes_t_s: spikes.t_s,
+        imu_flat_runs: flat_runs,
+        imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
     })
 }

@@ -192,7 +192,10 @@ mod screening;
 mod session;
 
 pub use error::{ScreeningConfigError, SessionError};
-pub use imu_screening::{ImuSpikes, SPIKE_SIGMAS, despike_imu};
+pub use imu_screening::{
+    FLAT_RUN_FALSE_ALARM, FlatRun, FlatRunKind, FlatRuns, ImuSpikes, MIN_FLAT_RUN, SPIKE_SIGMAS, despike_imu,
+    find_flat_runs, mask_flat_runs,
+};
 pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
     ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, Weighting, prepare_session,
