@@ -1,0 +1,118 @@
+//! The trap suite: the mistakes a calibration engineer makes describing a
+//! session, each on a simulated session whose logs (or options) are changed
+//! the way a user might have got them wrong. Every one must come out either
+//! accurate (within 2 % of |Γ|, and within 3σ) or flagged (exit status 3,
+//! `trustworthy: false`); the correctly described session must come out
+//! trustworthy.
+
+mod common;
+
+use common::{gsens, json, run, s, temp_dir, vec3};
+use std::path::Path;
+
+/// The receiver's loop as the simulator ran it (truth.json).
+const RIGHT_LOOP: [&str; 6] = ["--order", "2", "--bn-hz", "3", "--loop-interval-s", "0.001"];
+
+/// Rewrites every value of column `col` (0-based) of `src` into `dst`.
+fn rewrite(dir: &Path, src: &str, dst: &str, f: impl Fn(usize, f64) -> f64) {
+    let text = std::fs::read_to_string(dir.join(src)).unwrap();
+    let mut lines = text.lines();
+    let mut out = format!("{}\n", lines.next().unwrap());
+    for l in lines {
+        let fields: Vec<String> = l
+            .split(',')
+            .enumerate()
+            .map(|(i, v)| match v.parse::<f64>() {
+                Ok(x) => format!("{}", f(i, x)),
+                Err(_) => v.to_string(),
+            })
+            .collect();
+        out += &fields.join(",");
+        out.push('\n');
+    }
+    std::fs::write(dir.join(dst), out).unwrap();
+}
+
+/// Outcome of one trap: (exit status, relative error |Γ̂ − Γ|/|Γ|, max |z|).
+fn estimate(dir: &Path, imu: &str, tracking: &str, opts: &[&str], truth: [f64; 3]) -> (i32, f64, f64, String) {
+    let out = dir.join("out.json");
+    let (i, t, o) = (s(&dir.join(imu)), s(&dir.join(tracking)), s(&out));
+    let mut args = vec!["estimate", "--imu", &i, "--tracking", &t, "--json", &o];
+    args.extend_from_slice(opts);
+    let r = run(&args);
+    let code = r.status.code().unwrap_or(-1);
+    assert!(matches!(code, 0 | 3), "{args:?}: {}", String::from_utf8_lossy(&r.stderr));
+    let v = json(&out);
+    assert_eq!(v["trustworthy"] == true, code == 0, "exit status and document agree");
+    let g = vec3(&v["gamma_hz_per_mps2"]);
+    let sg = vec3(&v["sigma_hz_per_mps2"]);
+    let norm = truth.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let err = (0..3).map(|k| (g[k] - truth[k]).powi(2)).sum::<f64>().sqrt() / norm;
+    let z = (0..3).map(|k| ((g[k] - truth[k]) / sg[k]).abs()).fold(0.0, f64::max);
+    let codes: Vec<String> =
+        v["warnings"].as_array().unwrap().iter().map(|w| w["code"].as_str().unwrap().to_string()).collect();
+    (code, if err.is_nan() { f64::INFINITY } else { err }, if z.is_nan() { f64::INFINITY } else { z }, codes.join(","))
+}
+
+#[test]
+fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
+    let dir = temp_dir("traps");
+    gsens(&["simulate", "--out", &s(&dir), "--seed", "21"]);
+    let truth = vec3(&json(&dir.join("truth.json"))["gamma_imu_axes_hz_per_mps2"]);
+    // Logs written wrongly.
+    rewrite(&dir, "imu.csv", "imu_g.csv", |c, x| if c == 0 { x } else { x / 9.80665 });
+    rewrite(&dir, "tracking.csv", "phase_cycles.csv", |c, x| if c == 5 { x / std::f64::consts::TAU } else { x });
+    rewrite(&dir, "tracking.csv", "phase_deg.csv", |c, x| if c == 5 { x.to_degrees() } else { x });
+    rewrite(&dir, "imu.csv", "imu_late.csv", |c, x| if c == 0 { x + 0.4 } else { x });
+    rewrite(&dir, "imu.csv", "imu_ms.csv", |c, x| if c == 0 { x * 1e3 } else { x });
+
+    let right: Vec<&str> = RIGHT_LOOP.iter().copied().chain(["--logged-phase", "mean"]).collect();
+    let with = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v: Vec<&'static str> = vec!["--order", "2", "--loop-interval-s", "0.001", "--logged-phase", "mean"];
+        v.extend_from_slice(extra);
+        v
+    };
+    let (code, err, z, codes) = estimate(&dir, "imu.csv", "tracking.csv", &right, truth);
+    eprintln!("clean: exit {code}, error {:.2} %, max |z| {z:.2}, warnings [{codes}]", 100.0 * err);
+    assert_eq!(code, 0, "the correctly described session is trustworthy: [{codes}]");
+    assert!(err < 0.02 && z < 3.0, "clean: {err} {z}");
+
+    let traps: Vec<(&str, &str, &str, Vec<&str>)> = vec![
+        ("loop 10 % too wide", "imu.csv", "tracking.csv", with(&["--bn-hz", "3.3"])),
+        ("loop 10 % too narrow", "imu.csv", "tracking.csv", with(&["--bn-hz", "2.7"])),
+        ("--bn-hz 5 for a 3 Hz loop", "imu.csv", "tracking.csv", with(&["--bn-hz", "5"])),
+        ("no loop options at all", "imu.csv", "tracking.csv", vec![]),
+        ("loop interval left at the log's", "imu.csv", "tracking.csv", vec!["--bn-hz", "3"]),
+        ("3rd order stated for a 2nd", "imu.csv", "tracking.csv", {
+            let mut v = right.clone();
+            v[1] = "3";
+            v
+        }),
+        ("logged last, not mean", "imu.csv", "tracking.csv", RIGHT_LOOP.to_vec()),
+        ("IMU in g", "imu_g.csv", "tracking.csv", right.clone()),
+        ("phase in cycles", "imu.csv", "phase_cycles.csv", right.clone()),
+        ("phase in degrees", "imu.csv", "phase_deg.csv", right.clone()),
+        ("IMU clock 0.4 s late", "imu_late.csv", "tracking.csv", right.clone()),
+        ("IMU stamps in ms", "imu_ms.csv", "tracking.csv", right.clone()),
+        ("gradient gain 50", "imu.csv", "tracking.csv", {
+            let mut v = right.clone();
+            v.extend_from_slice(&["--method", "gradient", "--gain-k", "50"]);
+            v
+        }),
+    ];
+    let mut failures = Vec::new();
+    for (name, imu, tracking, opts) in &traps {
+        let (code, err, z, codes) = estimate(&dir, imu, tracking, opts, truth);
+        let fine = code == 3 || (err < 0.02 && z < 3.0);
+        eprintln!(
+            "{name:<34} exit {code}  error {:>8.2} %  max |z| {z:>8.2}  [{codes}]  {}",
+            100.0 * err,
+            if fine { "ok" } else { "CONFIDENTLY WRONG" }
+        );
+        if !fine {
+            failures.push(*name);
+        }
+    }
+    assert!(failures.is_empty(), "confidently wrong: {failures:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
