@@ -29,9 +29,61 @@ pub struct ReportArgs {
     pub calibration: CalibrationArgs,
 }
 
+/// Whether any receiver-loop option (`LoopArgs`: `--order`, `--bn-hz`,
+/// `--zeta`, `--a3`, `--b3`, `--loop-interval-s`, `--logged-phase`) is on the
+/// command line of `gsens report`: they all have defaults, so only clap's
+/// record of where each value came from tells (the command line is parsed
+/// again for it, as `main` parsed it).
+fn loop_options_given() -> bool {
+    use clap::{Args, CommandFactory, parser::ValueSource};
+    let ids: Vec<String> = crate::args::LoopArgs::augment_args(clap::Command::new("loop"))
+        .get_arguments()
+        .map(|a| a.get_id().to_string())
+        .collect();
+    let Ok(matches) = crate::Cli::command().try_get_matches_from(std::env::args_os()) else { return false };
+    let Some(("report", m)) = matches.subcommand() else { return false };
+    ids.iter().any(|id| m.value_source(id) == Some(ValueSource::CommandLine))
+}
+
+/// The settings of the options, with the receiver loop of a simulated
+/// session's `truth.json` when it states one and no loop option is given (an
+/// estimate of a simulated session should model the loop that made its log);
+/// with a note saying which loop is modelled and why.
+fn settings_and_loop_note(args: &ReportArgs) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
+    let mut settings = args.calibration.settings();
+    let Some(path) = &args.truth else { return Ok((settings, None)) };
+    let Some(truth) = gsens_sim::read_truth_loop(path)? else {
+        let note = format!("receiver loop: from the options ({} states none)", path.display());
+        return Ok((settings, Some(note)));
+    };
+    let logged = |l: gsens_core::LoggedPhase| match l {
+        gsens_core::LoggedPhase::Last => "the last discriminator output",
+        gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
+    };
+    let stated = format!("{}, logged: {}", truth.receiver_loop, logged(truth.logged_phase));
+    let note = if loop_options_given() {
+        let same = settings.estimate.receiver_loop == truth.receiver_loop
+            && settings.estimate.logged_phase == truth.logged_phase;
+        let relation = if same { "the same as" } else { "not" };
+        format!("receiver loop: from the options, {relation} the one {} states ({stated})", path.display())
+    } else {
+        settings.estimate.receiver_loop = truth.receiver_loop;
+        settings.estimate.logged_phase = truth.logged_phase;
+        format!(
+            "receiver loop: {stated} (from {}, the loop that made the log; loop options such as --bn-hz \
+             override it)",
+            path.display()
+        )
+    };
+    Ok((settings, Some(note)))
+}
+
 pub fn run(args: &ReportArgs) -> Result<()> {
-    let settings = args.calibration.settings();
+    let (settings, loop_note) = settings_and_loop_note(args)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
+    if let Some(note) = &loop_note {
+        crate::out(&format!("{note}\n"))?;
+    }
     let bar = crate::spinner();
     bar.set_message("reading the logs and estimating Γ");
     let mut outcome = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;
