@@ -28,14 +28,17 @@ pub struct ImportGnssSdrArgs {
     /// The GNSS-SDR configuration the dumps were made with (default: GNSS-SDR 0.0.17's defaults).
     #[arg(long)]
     pub conf: Option<PathBuf>,
-    /// Output tracking.csv.
-    #[arg(long)]
+    /// Output tracking.csv (`gsens estimate --tracking` reads it as written).
+    #[arg(long, default_value = "tracking.csv")]
     pub out: PathBuf,
     /// Put all channels on the common grid t = j·T (T the narrow integration) by cubic
-    /// interpolation, as `gsens estimate --tracking` needs; default: each record at the
-    /// middle of its own integration.
-    #[arg(long)]
+    /// interpolation, as `gsens estimate --tracking` needs. The default; kept for scripts.
+    #[arg(long, conflicts_with = "record_times")]
     pub common_grid: bool,
+    /// Write each record at the middle of its own integration instead, with its carrier
+    /// lock test (channels are not on one grid: `gsens estimate --tracking` refuses it).
+    #[arg(long)]
+    pub record_times: bool,
     /// Also write what became of each track (JSON).
     #[arg(long)]
     pub tracks_json: Option<PathBuf>,
@@ -45,11 +48,15 @@ pub struct ImportGnssSdrArgs {
 
 pub fn run(args: &ImportArgs) -> Result<()> {
     let ImportSource::GnssSdr(a) = &args.source;
+    // The dumps first: a missing or empty directory is the first thing to fix,
+    // whatever the configuration says.
+    gsens_gnss_sdr::find_dumps(&a.dump_dir, None)?;
     let settings = a.conversion.import_settings(a.conf.as_deref())?;
     let imported = import_dir(&a.dump_dir, &settings)?;
     crate::out(&gsens_report::render_gnss_sdr_tracks(&imported.tracks, imported.interval_s))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
-    let rows = if a.common_grid {
+    let common_grid = a.common_grid || !a.record_times;
+    let rows = if common_grid {
         let grid = gsens_gnss_sdr::resample(&imported, imported.interval_s);
         gsens_io::write_tracking_csv(file, &grid)?;
         grid.len()
@@ -63,7 +70,11 @@ pub fn run(args: &ImportArgs) -> Result<()> {
          <conf> (order {}, Bn {} Hz, {} ms)\n",
         rows,
         a.out.display(),
-        if a.common_grid { " (common grid)" } else { " (times at the middle of each integration)" },
+        if common_grid {
+            " (common grid, for gsens estimate --tracking)"
+        } else {
+            " (times at the middle of each integration; not for gsens estimate --tracking)"
+        },
         a.dump_dir.display(),
         stage.order,
         stage.bw_hz,

@@ -29,9 +29,46 @@ pub struct ReportArgs {
     pub calibration: CalibrationArgs,
 }
 
+/// The settings of the options, with the receiver loop of a simulated
+/// session's `truth.json` when it states one and no loop option is given (an
+/// estimate of a simulated session should model the loop that made its log);
+/// with a note saying which loop is modelled and why.
+fn settings_and_loop_note(args: &ReportArgs) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
+    let mut settings = args.calibration.settings();
+    let Some(path) = &args.truth else { return Ok((settings, None)) };
+    let Some(truth) = gsens_sim::read_truth_loop(path)? else {
+        let note = format!("receiver loop: from the options ({} states none)", path.display());
+        return Ok((settings, Some(note)));
+    };
+    let logged = |l: gsens_core::LoggedPhase| match l {
+        gsens_core::LoggedPhase::Last => "the last discriminator output",
+        gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
+    };
+    let stated = format!("{}, logged: {}", truth.receiver_loop, logged(truth.logged_phase));
+    let note = if args.calibration.loop_args.stated() {
+        let same = settings.estimate.receiver_loop == truth.receiver_loop
+            && settings.estimate.logged_phase == truth.logged_phase;
+        let relation = if same { "the same as" } else { "not" };
+        format!("receiver loop: from the options, {relation} the one {} states ({stated})", path.display())
+    } else {
+        settings.estimate.receiver_loop = truth.receiver_loop;
+        settings.estimate.logged_phase = truth.logged_phase;
+        settings.loop_stated = true;
+        format!(
+            "receiver loop: {stated} (from {}, the loop that made the log; loop options such as --bn-hz \
+             override it)",
+            path.display()
+        )
+    };
+    Ok((settings, Some(note)))
+}
+
 pub fn run(args: &ReportArgs) -> Result<crate::Status> {
-    let settings = args.calibration.settings();
+    let (settings, loop_note) = settings_and_loop_note(args)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
+    if let Some(note) = &loop_note {
+        crate::out(&format!("{note}\n"))?;
+    }
     let bar = crate::spinner();
     bar.set_message("reading the logs and estimating Γ");
     let mut outcome = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;

@@ -27,7 +27,7 @@ fn import_writes_tracking_csv() {
     let import = |out: &Path, extra: &[&str]| {
         gsens(&[&["import", "gnss-sdr", &dumps, "--conf", &conf, "--out", &s(out)], extra].concat())
     };
-    let out = import(&raw, &["--tracks-json", &s(&d.join("tracks.json"))]);
+    let out = import(&raw, &["--record-times", "--tracks-json", &s(&d.join("tracks.json"))]);
     assert!(out.contains("2 tracks, 2 used"), "{out}");
     let text = std::fs::read_to_string(&raw).unwrap();
     let mut lines = text.lines();

@@ -90,7 +90,7 @@ pub enum SessionError {
     #[error(
         "{imu_file} and {tracking_file} do not overlap in time: the IMU covers [{imu_start_s}, {imu_end_s}] s \
          (time stamps minus imu_time_offset_s = {imu_time_offset_s} s), the tracking epochs cover \
-         [{tracking_start_s}, {tracking_end_s}] s"
+         [{tracking_start_s}, {tracking_end_s}] s. {hint}"
     )]
     NoOverlap {
         /// IMU source name.
@@ -107,6 +107,10 @@ pub enum SessionError {
         tracking_start_s: f64,
         /// Last tracking epoch \[s\].
         tracking_end_s: f64,
+        /// The likely cause read from the two spans (a log in milliseconds,
+        /// clocks on different bases: Unix time, GPS time, seconds of the
+        /// week or since power-on) and the fix ([`overlap_hint`](crate::overlap_hint)).
+        hint: String,
     },
     /// The selection settings are invalid (e.g. a NaN threshold).
     #[error("{file}: invalid selection settings: {reason}")]

@@ -80,7 +80,12 @@
 //! epoch at time `t` reads the IMU at stamp `t + imu_time_offset_s`; when that
 //! is one of the IMU's stamps the sample is used exactly. Epochs outside the
 //! IMU's span are dropped from the ends: the usable span is the overlap of the
-//! two logs.
+//! two logs (logs that do not overlap are an error that names both spans and
+//! the likely cause, [`overlap_hint`]: a log in milliseconds, clocks on
+//! different bases). The session then runs from the first to the last epoch
+//! at which a used track has a kept row: the epochs outside hold no
+//! measurement, and a leading stretch without one (every used track's
+//! start-up screened out) would be a gap to the estimator.
 //!
 //! # Screening
 //!
@@ -171,6 +176,22 @@
 //!    [`ScreeningConfig::cn0_drop_db`] below the track's median are excluded
 //!    with the guard.
 //!
+//! **Start-up.** A track begins with the loop pulling in from the
+//! acquisition's frequency and phase error, and the receiver's C/N0 estimator
+//! averages that pull-in into its first window: the start of a track looks
+//! like a slip and a C/N0 drop. An event of test 1 or a drop of test 5 that
+//! *begins* within [`ScreeningConfig::startup_s`] of the track's first row in
+//! the log is its start-up: it and every row of the track before it are
+//! excluded (reason `startup`, [`TrackScreening::rows_startup`]) but it is
+//! neither a slip nor a drop, and no step. Later events are what they are.
+//!
+//! **What cannot be checked.** A track with never two other tracks at its
+//! epochs cannot be compared (tests 1–3); the gain test needs a
+//! [`ScreeningConfig::gain_window_s`] window with a quarter of it in rows,
+//! and its whole-track form two such windows. A test that cannot run does not
+//! exclude anything; the track's [`TrackScreening::not_checked`] (and its
+//! one-line summary) says which and why, e.g. for a 10 s session.
+//!
 //! A track of which the cross-channel tests (1–3) flag more than
 //! [`ScreeningConfig::max_excluded_fraction`] of the rows is excluded
 //! entirely: what is left of it is not to be trusted. (Rows beyond the linear
@@ -198,6 +219,6 @@ pub use imu_screening::{
 };
 pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
-    ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, Weighting, prepare_session,
-    prepare_session_files, reinterpolate_imu,
+    ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, Weighting, overlap_hint,
+    prepare_session, prepare_session_files, reinterpolate_imu,
 };

@@ -46,6 +46,18 @@ pub struct ScreeningConfig {
     pub max_excluded_fraction: f64,
     /// Floor of a track's deviation σ \[rad\] (noise-free logs). Default 0.005 rad.
     pub min_sigma_rad: f64,
+    /// The start-up of a track: its first `startup_s` seconds in the log \[s\].
+    /// A slip / excursion event or a C/N0 drop that *begins* in it is the
+    /// track's pull-in, not a slip or a drop: the loop settles from the
+    /// acquisition's frequency and phase error, and the receiver's C/N0
+    /// estimator averages that pull-in into its first window(s). Its rows are
+    /// excluded (reason `startup`) and counted in
+    /// [`TrackScreening::rows_startup`], not as slips or drops. Default 2 s:
+    /// an acquisition error decays as e^(−ζωn·t) in a 2nd-order loop, ζωn =
+    /// 4 s⁻¹ for the paper's Bn = 3 Hz, ζ = 1/√2 (to e⁻⁴ ≈ 2 % in 1 s), plus
+    /// one window of a 1 s C/N0 estimator; a narrower loop (settling ≈ 4/(ζωn))
+    /// or a longer C/N0 window needs more. 0: no start-up allowance.
+    pub startup_s: f64,
 }
 
 impl Default for ScreeningConfig {
@@ -66,6 +78,7 @@ impl Default for ScreeningConfig {
             cn0_drop_db: Some(6.0),
             max_excluded_fraction: 0.5,
             min_sigma_rad: 0.005,
+            startup_s: 2.0,
         }
     }
 }
@@ -97,6 +110,7 @@ impl ScreeningConfig {
             ("min_gain", self.min_gain),
             ("min_sigma_rad", self.min_sigma_rad),
             ("min_track_gain", self.min_track_gain),
+            ("startup_s", self.startup_s),
         ];
         for (key, value) in non_negative {
             if !(value >= 0.0 && value.is_finite()) {
@@ -126,7 +140,8 @@ pub struct ExcludedSpan {
     pub end_s: f64,
     /// Excluded rows in the stretch.
     pub rows: usize,
-    /// Why: any of `slip`, `noisy`, `low_gain`, `phase_range`, `cn0_drop`, `track`.
+    /// Why: any of `slip`, `noisy`, `low_gain`, `phase_range`, `cn0_drop`,
+    /// `track`, `startup` (the track's pull-in, [`ScreeningConfig::startup_s`]).
     pub reasons: Vec<String>,
 }
 
@@ -153,6 +168,9 @@ pub struct TrackScreening {
     pub rows_phase_range: usize,
     /// Rows flagged for a C/N0 drop.
     pub rows_cn0_drop: usize,
+    /// Rows of the track's start-up transient (pull-in; [`ScreeningConfig::startup_s`]):
+    /// excluded, but neither slips nor C/N0 drops.
+    pub rows_startup: usize,
     /// Whether the whole track is excluded (too large a fraction flagged).
     pub track_excluded: bool,
     /// Robust σ of the track's deviation from the other channels \[rad\];
@@ -166,14 +184,25 @@ pub struct TrackScreening {
     /// (steps > 0) and is averaged with offsets removed; else empty.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub segment_offsets_rad: Vec<f64>,
+    /// The tests that could not be applied to the track, each with why (e.g.
+    /// `low gain: no 10 s window with enough rows …`): the track passed them
+    /// untested. Empty when every test ran.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub not_checked: Vec<String>,
 }
 
 impl TrackScreening {
-    /// A one-line summary, e.g. `screened out 312 rows: 2 slips (1 step), 40 noisy`;
-    /// `None` when nothing was excluded.
+    /// A one-line summary, e.g. `screened out 312 rows: 2 slips (1 step), 40 noisy`,
+    /// followed by what could not be checked (`not checked: low gain (…)`);
+    /// `None` when nothing was excluded and every test ran.
     pub fn brief(&self) -> Option<String> {
+        let unchecked = if self.not_checked.is_empty() {
+            String::new()
+        } else {
+            format!("not checked: {}", self.not_checked.join("; "))
+        };
         if self.rows_excluded == 0 && self.steps == 0 {
-            return None;
+            return (!unchecked.is_empty()).then_some(unchecked);
         }
         let mut parts = Vec::new();
         if self.slips > 0 {
@@ -186,13 +215,15 @@ impl TrackScreening {
             (self.rows_low_gain, "low gain"),
             (self.rows_phase_range, "|φ| range"),
             (self.rows_cn0_drop, "C/N0 drop"),
+            (self.rows_startup, "start-up"),
         ] {
             if n > 0 {
                 parts.push(format!("{n} {what}"));
             }
         }
         let whole = if self.track_excluded { ", whole track excluded" } else { "" };
-        Some(format!("screened out {} rows: {}{whole}", self.rows_excluded, parts.join(", ")))
+        let unchecked = if unchecked.is_empty() { unchecked } else { format!("; {unchecked}") };
+        Some(format!("screened out {} rows: {}{whole}{unchecked}", self.rows_excluded, parts.join(", ")))
     }
 }
 
@@ -208,13 +239,21 @@ pub(crate) mod flag {
     pub const PHASE_RANGE: u8 = 8;
     pub const CN0_DROP: u8 = 16;
     pub const TRACK: u8 = 32;
-    pub const NAMES: [(u8, &str); 6] = [
+    /// The start-up transient, as the slip test sees it (reset with SLIP in its second round).
+    pub const STARTUP: u8 = 64;
+    /// The start-up transient, as the C/N0 test sees it.
+    pub const STARTUP_CN0: u8 = 128;
+    /// Either start-up flag.
+    pub const ANY_STARTUP: u8 = STARTUP | STARTUP_CN0;
+    /// The names in `ExcludedSpan::reasons` (a mask of several bits: one name for any of them).
+    pub const NAMES: [(u8, &str); 7] = [
         (SLIP, "slip"),
         (NOISY, "noisy"),
         (LOW_GAIN, "low_gain"),
         (PHASE_RANGE, "phase_range"),
         (CN0_DROP, "cn0_drop"),
         (TRACK, "track"),
+        (ANY_STARTUP, "startup"),
     ];
 }
 
@@ -229,6 +268,10 @@ pub(crate) struct Rows {
     pub phase: Vec<f64>,
     /// C/N0 \[dB-Hz\].
     pub cn0: Vec<f64>,
+    /// Per track: the epoch (exclusive) where its start-up ends
+    /// ([`ScreeningConfig::startup_s`] after its first row in the log; 0 when
+    /// that lies before the first epoch). Missing: no start-up.
+    pub startup_end: Vec<u32>,
 }
 
 impl Rows {
@@ -238,6 +281,11 @@ impl Rows {
 
     fn range(&self, i: usize) -> core::ops::Range<usize> {
         self.track_start[i]..self.track_start[i + 1]
+    }
+
+    /// The epoch (exclusive) where track `i`'s start-up ends.
+    fn startup_end(&self, i: usize) -> u32 {
+        self.startup_end.get(i).copied().unwrap_or(0)
     }
 }
 
@@ -443,7 +491,7 @@ fn local_sigma(epoch: &[u32], d: &[f64], window: u32, scratch: &mut Vec<f64>) ->
 
 /// The median over a regular subsample of the epochs (at most
 /// [`MEDIAN_SAMPLE`]) of each track's departure from the mean of the tracks
-/// present (at least two; rows in C/N0 drops left out of the mean).
+/// present (at least two; rows in C/N0 drops, start-up ones included, left out of the mean).
 fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
     let n_tracks = rows.tracks();
     let stride = n_epochs.div_ceil(MEDIAN_SAMPLE).max(1);
@@ -468,7 +516,7 @@ fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
             }
             if *c < end && rows.epoch[*c] as usize == e {
                 at.push((i, *c));
-                if flags[*c] & flag::CN0_DROP == 0 {
+                if flags[*c] & (flag::CN0_DROP | flag::STARTUP_CN0) == 0 {
                     sum += rows.phase[*c];
                     n += 1;
                 }
@@ -516,12 +564,32 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
         let median_cn0 = sampled_median(&rows.cn0[range.clone()], &mut scratch, |v| v);
         out.summaries[i].median_cn0_dbhz = Some(median_cn0).filter(|v| v.is_finite());
         if let Some(x) = cfg.cn0_drop_db {
-            for r in range.clone() {
-                if rows.cn0[r] < median_cn0 - x {
-                    flags[r] |= flag::CN0_DROP;
+            let (ep, cn0) = (&rows.epoch[range.clone()], &rows.cn0[range.clone()]);
+            let low: Vec<bool> = cn0.iter().map(|&v| v < median_cn0 - x).collect();
+            let mut drop: Vec<u8> = low.iter().map(|&l| if l { flag::CN0_DROP } else { 0 }).collect();
+            spread_with_guard(ep, &mut drop, flag::CN0_DROP, guard);
+            // Each stretch (drops closer than two guards merged) is the
+            // start-up when its first low row lies in the track's start-up;
+            // then so is every row before it: the estimator averaged them
+            // (the pull-in) into that low C/N0.
+            let (fl, startup_end) = (&mut flags[range], rows.startup_end(i));
+            let mut j = 0;
+            while j < drop.len() {
+                if drop[j] == 0 {
+                    j += 1;
+                    continue;
+                }
+                let a = j;
+                while j < drop.len() && drop[j] != 0 {
+                    j += 1;
+                }
+                let first_low = (a..j).find(|&r| low[r]).unwrap_or(a);
+                let (bit, from) =
+                    if ep[first_low] < startup_end { (flag::STARTUP_CN0, 0) } else { (flag::CN0_DROP, a) };
+                for f in &mut fl[from..j] {
+                    *f |= bit;
                 }
             }
-            spread_with_guard(&rows.epoch[range.clone()], &mut flags[range], flag::CN0_DROP, guard);
         }
     }
 
@@ -541,10 +609,13 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     let mut sigma = vec![f64::NAN; n_tracks];
     let mut buf = Vec::new();
     let noisy_window = epochs_of(cfg.noisy_window_s).max(1);
+    let mut startup_events = vec![0usize; n_tracks];
     for round in 0..2 {
-        // The rows kept out of the medians: C/N0 drops, and the first round's slips.
+        // The rows kept out of the medians: C/N0 drops, and the first round's
+        // slips; start-up transients as either.
+        let cn0_mask = flag::CN0_DROP | flag::STARTUP_CN0;
         let (mask, shift) =
-            if round == 0 { (flag::CN0_DROP, None) } else { (flag::CN0_DROP | flag::SLIP, Some(level.as_slice())) };
+            if round == 0 { (cn0_mask, None) } else { (cn0_mask | flag::SLIP | flag::STARTUP, Some(level.as_slice())) };
         deviations(rows, n_epochs, flags, mask, &c, shift, &mut d, &mut reference);
         // Each track's own offset refined by the median of its deviations (the
         // others' medians are robust to their small errors); σ from the local MAD.
@@ -567,7 +638,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
                 out.segment[range.clone()].fill(0);
                 level[range.clone()].fill(0.0);
                 for f in &mut flags[range.clone()] {
-                    *f &= !flag::SLIP;
+                    *f &= !(flag::SLIP | flag::STARTUP);
                 }
             }
             if !sigma[i].is_finite() {
@@ -581,18 +652,20 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
                 log_interval_s,
                 cfg,
                 guard,
+                rows.startup_end(i),
                 &mut level[r0..r1],
                 &mut flags[r0..r1],
                 &mut out.segment[r0..r1],
                 &mut buf,
             );
-            out.summaries[i].slips = ev.0;
-            out.summaries[i].steps = ev.1;
-            out.segments[i] = ev.1 + 1;
+            out.summaries[i].slips = ev.slips;
+            out.summaries[i].steps = ev.steps;
+            out.segments[i] = ev.steps + 1;
+            startup_events[i] = ev.startup;
         }
         if round == 0 {
             // Nothing found: the second round would find the same.
-            if out.summaries.iter().all(|s| s.slips == 0) {
+            if out.summaries.iter().zip(&startup_events).all(|(s, &st)| s.slips == 0 && st == 0) {
                 break;
             }
         }
@@ -605,6 +678,10 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             let range = rows.range(i);
             for r in range.clone() {
                 let p = rows.phase[r];
+                // A start-up row is excluded already, as the pull-in it is.
+                if flags[r] & flag::ANY_STARTUP != 0 {
+                    continue;
+                }
                 if p.abs() > limit && (!d[r].is_finite() || (p - d[r]).abs() < 0.5 * limit) {
                     flags[r] |= flag::PHASE_RANGE;
                 }
@@ -642,8 +719,32 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut fits);
         }
     }
-    low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
+    let tested = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
     drop(inputs);
+    // What could not be checked, track by track.
+    for i in 0..n_tracks {
+        let not_checked = &mut out.summaries[i].not_checked;
+        if !sigma[i].is_finite() {
+            not_checked
+                .push("slips, noisy stretches, low gain (never two other tracks at its epochs to compare with)".into());
+            continue;
+        }
+        let range = rows.range(i);
+        let rows_i = range.len();
+        let min_rows = (gain_window as usize / 4).max(10);
+        match tested[i] {
+            0 if rows_i < min_rows => not_checked.push(format!(
+                "low gain (needs {min_rows} rows in one {} s window; the track has {rows_i})",
+                cfg.gain_window_s
+            )),
+            0 => not_checked.push(format!(
+                "low gain (no {} s window with {min_rows} of its rows in which three tracks follow a common signal)",
+                cfg.gain_window_s
+            )),
+            1 => not_checked.push(format!("whole-track gain (one {} s window tested; needs two)", cfg.gain_window_s)),
+            _ => {}
+        }
+    }
 
     // Whole tracks (the fraction flagged by the cross-channel tests), counts, spans.
     for i in 0..n_tracks {
@@ -673,6 +774,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
         sum.rows_low_gain = count(flag::LOW_GAIN);
         sum.rows_phase_range = count(flag::PHASE_RANGE);
         sum.rows_cn0_drop = count(flag::CN0_DROP);
+        sum.rows_startup = fl.iter().filter(|&&f| f & flag::ANY_STARTUP != 0).count();
         let ep = &rows.epoch[range];
         let spans = &mut out.spans[i];
         let mut j = 0;
@@ -735,7 +837,19 @@ fn flag_epochs(epoch: &[u32], flags: &mut [u8], first: u32, last: u32, bit: u8) 
     }
 }
 
-/// Test 1 on one track: returns (events, steps); sets the SLIP flags, the
+/// What test 1 found on one track.
+#[derive(Debug, Clone, Copy, Default)]
+struct SlipEvents {
+    /// Slip / excursion events (start-up ones not included).
+    slips: usize,
+    /// Of them, those that settled on a new level.
+    steps: usize,
+    /// Events that began in the track's start-up (its pull-in).
+    startup: usize,
+}
+
+/// Test 1 on one track: sets the SLIP flags (STARTUP for an event beginning
+/// before epoch `startup_end`: the pull-in, neither a slip nor a step), the
 /// level of every row and the segment of every row.
 #[allow(clippy::too_many_arguments)]
 fn slip_events(
@@ -745,11 +859,12 @@ fn slip_events(
     log_interval_s: f64,
     cfg: &ScreeningConfig,
     guard: u32,
+    startup_end: u32,
     level: &mut [f64],
     flags: &mut [u8],
     segment: &mut [u16],
     ev: &mut Vec<usize>,
-) -> (usize, usize) {
+) -> SlipEvents {
     let n = epoch.len();
     let thr = cfg.deviation_k * sigma;
     let alpha = (log_interval_s / cfg.level_tau_s).min(1.0);
@@ -757,11 +872,26 @@ fn slip_events(
     let (settle, step_min, step_win) =
         (to_epochs(cfg.settle_s), to_epochs(cfg.step_min_s), to_epochs(cfg.step_min_s / 2.0));
     let Some(first_valid) = d.iter().position(|v| v.is_finite()) else {
-        return (0, 0);
+        return SlipEvents::default();
     };
     // The offset makes the track's median deviation zero: the level of its bulk.
     let mut l = 0.0;
-    let (mut events, mut steps) = (0usize, 0usize);
+    let mut found = SlipEvents::default();
+    // An event that began in the start-up is the pull-in: flagged as such, not counted as a slip.
+    let close = |first: usize, found: &mut SlipEvents| {
+        if epoch[first] < startup_end {
+            found.startup += 1;
+            flag::STARTUP
+        } else {
+            found.slips += 1;
+            flag::SLIP
+        }
+    };
+    // Where an event's exclusion starts: the guard before its first row, or
+    // the track's first row for the start-up (what precedes the pull-in's
+    // excursion is the pull-in too).
+    let excluded_from =
+        |bit: u8, first: usize| if bit == flag::STARTUP { epoch[0] } else { epoch[first].saturating_sub(guard) };
     let mut seg: u16 = 0;
     // The event: its rows with a deviation (`ev`), the latest out of bounds.
     ev.clear();
@@ -790,8 +920,8 @@ fn slip_events(
             last_out = j;
         } else if epoch[j] - epoch[last_out] >= settle {
             // Back within bounds long enough: the event ends.
-            flag_epochs(epoch, flags, epoch[ev[0]].saturating_sub(guard), epoch[last_out] + guard, flag::SLIP);
-            events += 1;
+            let bit = close(ev[0], &mut found);
+            flag_epochs(epoch, flags, excluded_from(bit, ev[0]), epoch[last_out] + guard, bit);
             ev.clear();
             continue;
         }
@@ -818,14 +948,15 @@ fn slip_events(
         let rb = ev[b];
         let eb = epoch[rb];
         if rb != first_valid {
-            let lo = epoch[ev[0]].saturating_sub(guard);
-            flag_epochs(epoch, flags, lo, eb.saturating_sub(1).max(lo), flag::SLIP);
-            flag_epochs(epoch, flags, eb, eb + guard, flag::SLIP);
-            events += 1;
+            let bit = close(ev[0], &mut found);
+            let lo = excluded_from(bit, ev[0]);
+            flag_epochs(epoch, flags, lo, eb.saturating_sub(1).max(lo), bit);
+            flag_epochs(epoch, flags, eb, eb + guard, bit);
             // A new level beyond the bounds of the old one (not at the
-            // track's start): a step, and a new segment from row rb.
-            if (m - l).abs() > thr {
-                steps += 1;
+            // track's start, nor the level a pull-in settles on): a step,
+            // and a new segment from row rb.
+            if bit == flag::SLIP && (m - l).abs() > thr {
+                found.steps += 1;
                 seg = seg.saturating_add(1);
             }
         }
@@ -836,10 +967,10 @@ fn slip_events(
     }
     if !ev.is_empty() {
         // Never settled: excluded to the end of the track.
-        flag_epochs(epoch, flags, epoch[ev[0]].saturating_sub(guard), u32::MAX, flag::SLIP);
-        events += 1;
+        let bit = close(ev[0], &mut found);
+        flag_epochs(epoch, flags, excluded_from(bit, ev[0]), u32::MAX, bit);
     }
-    (events, steps)
+    found
 }
 
 /// Test 2 on one track: windows whose deviation RMS (about the level, over the
@@ -1005,7 +1136,8 @@ fn gain_fits(g: &GainInput, track: usize, window: u32, flags: &[u8], fits: &mut 
 /// (the common signal dominates the reference's noise), a track whose slope
 /// relative to it is below `min_gain` by more than two standard errors is
 /// flagged; so is a whole track whose tested windows pooled are below
-/// `min_track_gain` by more than two standard errors.
+/// `min_track_gain` by more than two standard errors. Returns the number of
+/// windows tested per track.
 fn low_gain_windows(
     inputs: &[Option<GainInput>],
     rows: &Rows,
@@ -1013,7 +1145,7 @@ fn low_gain_windows(
     cfg: &ScreeningConfig,
     guard: u32,
     flags: &mut [u8],
-) {
+) -> Vec<usize> {
     // Per track: the tested windows' gains and standard errors (for the pooled test).
     let mut tested: Vec<Vec<(f64, f64)>> = vec![Vec::new(); rows.tracks()];
     let mut low: Vec<(usize, u32, u32)> = Vec::new();
@@ -1068,6 +1200,7 @@ fn low_gain_windows(
             }
         }
     }
+    tested.iter().map(Vec::len).collect()
 }
 
 #[cfg(test)]

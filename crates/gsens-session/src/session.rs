@@ -304,6 +304,10 @@ pub fn prepare_session(
             imu_time_offset_s,
             tracking_start_s: stamps[0],
             tracking_end_s: *stamps.last().expect("non-empty"),
+            hint: overlap_hint(
+                (imu_first - imu_time_offset_s, imu_last - imu_time_offset_s),
+                (stamps[0], *stamps.last().expect("non-empty")),
+            ),
         });
     }
     let n_epochs = k_end - k_first;
@@ -359,6 +363,11 @@ pub fn prepare_session(
             continue;
         }
         candidate_of[i] = Some(rows.tracks());
+        // The start-up ends startup_s after the track's first row in the log
+        // (which may precede the usable span).
+        let startup_epochs = (selection.screening.startup_s / grid.log_interval_s).round() as u64;
+        let startup_end = (track_ks[i][0] + startup_epochs).saturating_sub(k_first).min(u32::MAX as u64);
+        rows.startup_end.push(startup_end as u32);
         for (j, &k) in track_ks[i].iter().enumerate() {
             if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
                 rows.epoch.push((k - k_first) as u32);
@@ -557,6 +566,20 @@ pub fn prepare_session(
         .collect();
     channels.sort_by_key(|c| (c.channel, c.prn));
 
+    // The session runs from the first to the last epoch with a phase: the
+    // epochs outside hold no measurement (e.g. every used track's start-up
+    // screened out), and a leading stretch without one would be a gap to the
+    // estimator, which then leaves out up to three time constants of its
+    // high-pass after it (9.5 s at 0.05 Hz), where its own warm-up suffices.
+    let first = phase_err_rad.iter().position(Option::is_some).expect("a used track keeps a row");
+    let end = phase_err_rad.iter().rposition(Option::is_some).expect("a used track keeps a row") + 1;
+    t_s.truncate(end);
+    t_s.drain(..first);
+    phase_err_rad.truncate(end);
+    phase_err_rad.drain(..first);
+    accel_mps2.truncate(end);
+    accel_mps2.drain(..first);
+
     Ok(PreparedSession {
         log_interval_s: grid.log_interval_s,
         t_s,
@@ -605,6 +628,75 @@ fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f6
         return Err(SessionError::InvalidScreening { file: file.to_owned(), error });
     }
     Ok(())
+}
+
+/// Unix time minus GPS time at the GPS epoch \[s\]: 1980-01-06 is 3 657 days
+/// after 1970-01-01 (GPS time has no leap seconds, UTC has had 18 more since).
+const UNIX_MINUS_GPS_S: f64 = 315_964_800.0;
+
+/// Seconds in a GPS week.
+const WEEK_S: f64 = 604_800.0;
+
+/// What clock a log's time stamps `[start, end]` \[s\] look like, from their
+/// magnitude: Unix time is ≈ 1.5–2.2·10⁹ s in 2017–2039, GPS time (since
+/// 1980-01-06) ≈ 0.9–1.5·10⁹ s in 2008–2027, seconds of the GPS week lie in
+/// [0, 604 800), an absolute clock in milliseconds is beyond 10¹¹.
+fn clock_base(start: f64, end: f64) -> &'static str {
+    match start {
+        s if s >= 1e11 => "an absolute clock in milliseconds or finer (Unix time in seconds is about 1.7e9)",
+        s if (1.5e9..2.2e9).contains(&s) => "Unix time (seconds since 1970-01-01)",
+        s if (0.9e9..1.5e9).contains(&s) => "GPS time (seconds since 1980-01-06)",
+        s if s >= 0.0 && end <= 1.01 * WEEK_S => "GPS seconds of the week or seconds since power-on",
+        s if s >= 0.0 => "seconds since power-on, or milliseconds",
+        _ => "a clock of unknown base (negative time stamps)",
+    }
+}
+
+/// Why two logs of one session may not overlap in time, read from their
+/// spans `[start, end]` \[s\] (IMU in true time, tracking), and the fix, for
+/// [`SessionError::NoOverlap`]: a log in milliseconds (its span 300–3000× the
+/// other's, as one session logged in both would be 1000×), clocks on
+/// different bases (the magnitudes of the stamps differ: Unix time ≈ 1.7·10⁹ s,
+/// GPS time ≈ 1.4·10⁹ s, seconds of the week below 604 800; Unix
+/// and GPS time 315 964 800 s less the leap seconds apart), or logs of
+/// different sessions.
+pub fn overlap_hint(imu: (f64, f64), tracking: (f64, f64)) -> String {
+    let (imu_len, trk_len) = (imu.1 - imu.0, tracking.1 - tracking.0);
+    let ratio = imu_len / trk_len;
+    let delta = imu.0 - tracking.0;
+    let fix = format!(
+        "Both logs must be stamped by one clock, in seconds: convert one log's t_s (if they started \
+         together, the IMU starts {delta:.3} s after the tracking); a time offset is for a small delay \
+         between the clocks, not for a clock base"
+    );
+    let (imu_base, trk_base) = (clock_base(imu.0, imu.1), clock_base(tracking.0, tracking.1));
+    let cause = if trk_len > 0.0 && (300.0..3000.0).contains(&ratio) {
+        format!(
+            "Likely cause: the IMU's t_s are in milliseconds (its span is {ratio:.0}× the tracking's); \
+             divide them by 1000"
+        )
+    } else if imu_len > 0.0 && (300.0..3000.0).contains(&(1.0 / ratio)) {
+        format!(
+            "Likely cause: the tracking's t_s are in milliseconds (its span is {:.0}× the IMU's); \
+             divide them by 1000",
+            1.0 / ratio
+        )
+    } else if (delta.abs() - UNIX_MINUS_GPS_S).abs() < 60.0 {
+        format!(
+            "Likely cause: one log is in Unix time and the other in GPS time: they are {delta:.0} s apart, \
+             the {UNIX_MINUS_GPS_S:.0} s between the two epochs less the leap seconds (18 since 2017)"
+        )
+    } else if imu_base != trk_base {
+        format!(
+            "Likely cause: the clocks have different bases: the IMU's t_s look like {imu_base}, the tracking's like {trk_base}"
+        )
+    } else {
+        format!(
+            "Both look like {imu_base}: are they logs of the same session? If so, the clocks differ by \
+             {delta:.3} s"
+        )
+    };
+    format!("{cause}. {fix}.")
 }
 
 /// The first `k` in `[lo, hi)` where `pred` is false (`pred` monotone: true then false); `hi` if none.

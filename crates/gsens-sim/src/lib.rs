@@ -34,8 +34,8 @@ pub mod session;
 pub use error::{AlmanacError, ConfigError, UtcError};
 pub use iq::IqError;
 pub use logs::{
-    IqSession, LoadError, LogsError, SimulatedLogs, load_scenario, read_truth_gamma, simulate_iq_to_dir, simulate_logs,
-    simulate_to_dir,
+    IqSession, LoadError, LogsError, SimulatedLogs, TruthLoop, load_scenario, read_truth_gamma, read_truth_loop,
+    simulate_iq_to_dir, simulate_logs, simulate_to_dir,
 };
 pub use scenario::ScenarioError;
 pub use session::SimError;

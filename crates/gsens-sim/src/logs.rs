@@ -2,8 +2,9 @@
 //! `tracking.csv` and `truth.json` into a folder, or kept in memory as the
 //! log types of `gsens-io`, exactly as its readers would return the files.
 
-use crate::scenario::Scenario;
+use crate::scenario::{LoggedPhaseMode, Scenario};
 use crate::session::{MemorySink, SessionSink, SimError, SimulatedRow, SinkError, Truth, simulate};
+use gsens_core::{LoggedPhase, LoopFilterCoeffs, LoopModel, LoopSpec};
 use gsens_io::{FormatError, ImuSeries, ImuWriter, TrackingLog, TrackingWriter};
 use std::fs::File;
 use std::path::Path;
@@ -55,6 +56,88 @@ pub fn read_truth_gamma(path: &Path) -> Result<[f64; 3], LoadError> {
     Ok(g.gamma_hz_per_mps2)
 }
 
+/// The receiver loop a simulated session's tracking log was made with, as its
+/// `truth.json` states it: what an estimate of that session should model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct TruthLoop {
+    /// The loop: the scenario's `[loop]` spec (order, Bn, ζ or a3/b3) when it
+    /// reproduces the written `loop_coeffs` exactly, otherwise those
+    /// coefficients; updated every `loop_interval_s`.
+    pub receiver_loop: LoopModel,
+    /// What a log row holds (`logged_phase`).
+    pub logged_phase: LoggedPhase,
+    /// The tracking log interval \[s\] (`log_interval_s`).
+    pub log_interval_s: f64,
+}
+
+/// The receiver loop from a simulator's `truth.json`: `loop_coeffs`
+/// {`c0_per_s`, `c1_per_s2`, `c2_per_s3`}, `loop_interval_s`, `logged_phase`,
+/// `log_interval_s`, and the `scenario`'s `loop` section for its spec
+/// (written by [`simulate_to_dir`]; see [`Truth`]). `None` for a truth file
+/// that states no such loop: an IF session's ([`crate::iq::IqTruth`]), whose
+/// receiver is GNSS-SDR with the loop of its `gnss-sdr.conf`.
+pub fn read_truth_loop(path: &Path) -> Result<Option<TruthLoop>, LoadError> {
+    #[derive(serde::Deserialize)]
+    struct Spec {
+        order: u8,
+        bn_hz: f64,
+        zeta: f64,
+        a3: f64,
+        b3: f64,
+    }
+    #[derive(serde::Deserialize)]
+    struct ScenarioLoop {
+        #[serde(rename = "loop")]
+        tracking_loop: Option<Spec>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Coeffs {
+        c0_per_s: f64,
+        c1_per_s2: f64,
+        c2_per_s3: f64,
+    }
+    #[derive(serde::Deserialize)]
+    struct Stated {
+        loop_coeffs: Coeffs,
+        loop_interval_s: f64,
+        log_interval_s: f64,
+        logged_phase: LoggedPhaseMode,
+        scenario: Option<ScenarioLoop>,
+    }
+    let text =
+        std::fs::read_to_string(path).map_err(|error| LoadError::Io { path: path.display().to_string(), error })?;
+    let bad = |reason: String| LoadError::TruthLoop { path: path.display().to_string(), reason };
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if value.get("loop_coeffs").is_none() {
+        return Ok(None);
+    }
+    let s: Stated = serde_json::from_value(value).map_err(|e| bad(e.to_string()))?;
+    let Coeffs { c0_per_s, c1_per_s2, c2_per_s3 } = s.loop_coeffs;
+    let c = LoopFilterCoeffs { c0_per_s, c1_per_s2, c2_per_s3 };
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    if !(positive(s.loop_interval_s) && positive(s.log_interval_s)) {
+        return Err(bad(format!(
+            "loop_interval_s = {} and log_interval_s = {} must be positive",
+            s.loop_interval_s, s.log_interval_s
+        )));
+    }
+    let spec = s
+        .scenario
+        .and_then(|sc| sc.tracking_loop)
+        .map(|l| match l.order {
+            3 => LoopSpec::ThirdOrder { bn_hz: l.bn_hz, a3: l.a3, b3: l.b3 },
+            _ => LoopSpec::SecondOrder { bn_hz: l.bn_hz, zeta: l.zeta },
+        })
+        .filter(|spec| spec.coeffs().is_ok_and(|k| k == c))
+        .unwrap_or(LoopSpec::Coefficients(c));
+    Ok(Some(TruthLoop {
+        receiver_loop: LoopModel::kaplan(spec, Some(s.loop_interval_s)),
+        logged_phase: s.logged_phase.into(),
+        log_interval_s: s.log_interval_s,
+    }))
+}
+
 /// Why a scenario could not be loaded.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -81,6 +164,15 @@ pub enum LoadError {
         /// The file.
         path: String,
         /// What the JSON reader said.
+        reason: String,
+    },
+    /// A truth file whose receiver loop (`loop_coeffs`, `loop_interval_s`,
+    /// `log_interval_s`, `logged_phase`) cannot be read.
+    #[error("{path}: the receiver loop it states cannot be read: {reason}")]
+    TruthLoop {
+        /// The file.
+        path: String,
+        /// What is wrong.
         reason: String,
     },
     /// The embedded default does not parse (a bug).

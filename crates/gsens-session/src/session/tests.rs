@@ -137,6 +137,35 @@ fn logs_not_overlapping_in_time() {
 }
 
 #[test]
+fn no_overlap_names_the_likely_clock_mix_up() {
+    // 10 s of tracking in GPS seconds of the week (Thursday noon).
+    let log = log_from(&(0..400).map(|k| row(388_800.0 + k as f64 * T, 1, 45.0, None, 0.0)).collect::<Vec<_>>());
+    let imu_at = |t0: f64, scale: f64| ImuSeries {
+        t_s: (0..=40).map(|j| (t0 + 0.25 * j as f64) * scale).collect(),
+        accel_mps2: vec![[0.0, 0.0, 9.81]; 41],
+    };
+    // The IMU in Unix time (2024-02-08 12:00:00 UTC).
+    let m = msg(prep(&log, &imu_at(1_707_393_600.0, 1.0), &base()).unwrap_err());
+    assert!(m.contains("the IMU covers [1707393600, 1707393610] s"), "{m}");
+    assert!(m.contains("tracking epochs cover [388800, 388809.975] s"), "{m}");
+    assert!(m.contains("the IMU's t_s look like Unix time"), "{m}");
+    assert!(m.contains("the tracking's like GPS seconds of the week or seconds since power-on"), "{m}");
+    assert!(m.contains("one clock, in seconds"), "{m}");
+    // The IMU in milliseconds of the same clock.
+    let m = msg(prep(&log, &imu_at(388_800.0, 1000.0), &base()).unwrap_err());
+    assert!(m.contains("the IMU's t_s are in milliseconds (its span is 1003× the tracking's)"), "{m}");
+    // The IMU in Unix time, the tracking in GPS time (18 leap seconds in 2024).
+    let gps = 1_707_393_600.0 - 315_964_800.0 + 18.0;
+    let log = log_from(&(0..400).map(|k| row(gps + k as f64 * T, 1, 45.0, None, 0.0)).collect::<Vec<_>>());
+    let m = msg(prep(&log, &imu_at(1_707_393_600.0, 1.0), &base()).unwrap_err());
+    assert!(m.contains("one log is in Unix time and the other in GPS time: they are 315964782 s apart"), "{m}");
+    // One base, different sessions.
+    let hint = overlap_hint((200.0, 210.0), (100.0, 110.0));
+    assert!(hint.starts_with("Both look like GPS seconds of the week or seconds since power-on"), "{hint}");
+    assert!(hint.contains("the IMU starts 100.000 s after the tracking"), "{hint}");
+}
+
+#[test]
 fn gaps_become_epochs_without_phase() {
     let rows: Vec<TrackingRow> =
         (0..40).filter(|k| !(11..15).contains(k)).map(|k| row(tk(k), 1, 45.0, None, k as f64)).collect();
