@@ -269,7 +269,8 @@ pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<Tracking
 /// Calibrates from GNSS-SDR tracking dumps (`Tracking_1C.dump=true`) and an
 /// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
 /// logged-phase settings of `settings` are replaced by the ones the dumps
-/// were made with.
+/// were made with, and the warm-up is at least
+/// [`ImportSettings::warmup_s`] (the regressor models' start-up transient).
 pub fn calibrate_gnss_sdr(
     dumps_dir: &Path,
     import: &ImportSettings,
@@ -282,6 +283,10 @@ pub fn calibrate_gnss_sdr(
     let mut settings = settings.clone();
     settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
     settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
+    // The regressor models start at the first kept record, possibly while
+    // the board is shaken: their start-up transient lasts as long as the
+    // narrow loop's own, plus the high-pass's memory of it (ImportSettings::warmup_s).
+    settings.estimate.warmup_s = settings.estimate.warmup_s.max(import.warmup_s(settings.estimate.highpass_hz));
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
     outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];
