@@ -270,7 +270,7 @@ pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<Tracking
 /// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
 /// logged-phase settings of `settings` are replaced by the ones the dumps
 /// were made with, and the warm-up is at least
-/// [`ImportSettings::warmup_s`] (the regressor models' start-up transient).
+/// [`ImportSettings::models_warmup_s`] (the regressor models' start-up error).
 pub fn calibrate_gnss_sdr(
     dumps_dir: &Path,
     import: &ImportSettings,
@@ -284,9 +284,12 @@ pub fn calibrate_gnss_sdr(
     settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
     settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
     // The regressor models start at the first kept record, possibly while
-    // the board is shaken: their start-up transient lasts as long as the
-    // narrow loop's own, plus the high-pass's memory of it (ImportSettings::warmup_s).
-    settings.estimate.warmup_s = settings.estimate.warmup_s.max(import.warmup_s(settings.estimate.highpass_hz));
+    // the board is shaken: their start-up error, computed from the IMU, is
+    // left to the warm-up (ImportSettings::models_warmup_s).
+    if let Some(start_s) = tracking_log.epoch_t_s().first() {
+        let w = import.models_warmup_s(&imu_series, *start_s, settings.estimate.highpass_hz);
+        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
+    }
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
     outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];
