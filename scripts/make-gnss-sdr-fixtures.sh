@@ -21,7 +21,8 @@
 #    a 1.4 s period along x (42 s), y and z (15 s each) with 2 s rests: the
 #    carrier lock test falls to 0.75–0.85 while shaking. Both loop orders, both
 #    channels, each the last 500 records of the 1 ms stage and all the 20 ms
-#    records; imu.csv, truth.json, both gnss-sdr.conf. About 1.8 MB.
+#    records (channel 1 of the 3rd-order run holds its reacquired track too);
+#    imu.csv, truth.json, both gnss-sdr.conf. About 2.4 MB.
 #
 # Usage: scripts/make-gnss-sdr-fixtures.sh   (needs gnss-sdr, python3)
 # Environment: ONLY=quiet|shaken (one set; default both), GSENS (a gsens binary

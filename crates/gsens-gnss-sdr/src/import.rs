@@ -168,9 +168,9 @@ impl ImportSettings {
     /// state of the specific force there (as the estimator's models do) and
     /// [`ImportSettings::warmup_s`] earlier (a reference whose own start has
     /// died out); both pass through the estimator's high-pass from `start_s`
-    /// on. The warm-up ends where the difference stays below e⁻⁵ (the
-    /// criterion of [`ImportSettings::settle_time_s`]) of the reference's
-    /// peak over two warm-ups, for every axis: 0 for a board at rest at the
+    /// on. The warm-up ends where the difference (over two warm-ups) stays
+    /// below e⁻⁵ (the criterion of [`ImportSettings::settle_time_s`]) of the
+    /// reference's peak over the log, for every axis: 0 for a board at rest at the
     /// start, up to [`ImportSettings::warmup_s`] (measured on order-2 dumps
     /// shaken from the start: σ/CRB 2.1 with a 2 s warm-up, 1.3 with this one).
     /// [`ImportSettings::warmup_s`] when the IMU log starts too late for the reference.
@@ -200,7 +200,9 @@ impl ImportSettings {
         let n_lead = (w_max / t_step).round() as usize;
         let n_after = ((2.0 * w_max / t_step).round() as usize).max(1);
         let (mut diff, mut peak) = (Vec::with_capacity(n_after), [0.0f64; 3]);
-        for k in 0..n_lead + n_after {
+        // The reference's peak over the whole IMU log from the start (a board at rest
+        // at first has no regressor to speak of yet); the difference over two warm-ups.
+        for k in 0.. {
             let t = t_ref + k as f64 * t_step;
             if t > last {
                 break;
@@ -213,10 +215,12 @@ impl ImportSettings {
             }
             let r: [f64; 3] = core::array::from_fn(|i| reference[i].step(a[i]));
             if k >= n_lead {
-                let d: [f64; 3] = core::array::from_fn(|i| {
+                for i in 0..3 {
                     peak[i] = peak[i].max(hp_ref[i].step(r[i]).abs());
-                    hp_diff[i].step(started[i].step(a[i]) - r[i]).abs()
-                });
+                }
+            }
+            if k >= n_lead && k < n_lead + n_after {
+                let d: [f64; 3] = core::array::from_fn(|i| hp_diff[i].step(started[i].step(a[i]) - r[i]).abs());
                 diff.push(d);
             }
         }
