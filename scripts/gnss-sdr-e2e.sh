@@ -17,7 +17,8 @@
 #    fails when an estimate from GNSS-SDR's dumps is more than 2 % from the truth.
 #
 # Usage: scripts/gnss-sdr-e2e.sh [OUT_DIR]   (default target/gnss-sdr-e2e; needs ~1.3 GB there)
-# Environment: FS_HZ (sampling rate), SEED, KEEP_IQ=1 (keep the sample file).
+# Environment: FS_HZ (sampling rate), SEED, KEEP_IQ=1 (keep the sample file), GSENS (a gsens
+# binary to use instead of building one; the build honours CARGO_TARGET_DIR).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-target/gnss-sdr-e2e}
@@ -36,9 +37,12 @@ if ! command -v gnss-sdr >/dev/null; then
 fi
 gnss-sdr --version
 
-echo "== building gsens"
-cargo build --release -q -p gsens-cli
-G=$PWD/target/release/gsens
+if [ -z "${GSENS:-}" ]; then
+    echo "== building gsens"
+    cargo build --release -q -p gsens-cli
+    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
+fi
+G=$GSENS
 . scripts/lib/scenario.sh
 
 scenario() { # $1 = loop order

@@ -1,21 +1,32 @@
 #!/usr/bin/env bash
 # Makes the GNSS-SDR test fixtures in crates/gsens-gnss-sdr/tests/fixtures/:
-# real tracking dumps that GNSS-SDR 0.0.17 wrote for a short gsens IF file, so
-# that the dump reader and the models of GNSS-SDR's loops are tested in CI
-# against its real output without installing it.
+# real tracking dumps that GNSS-SDR 0.0.17 wrote for short gsens IF files, so
+# that the dump reader, the models of GNSS-SDR's loops and the replay of its
+# lock detector are tested in CI against its real output without installing it.
 #
-# The file: 38 s, 2 satellites at 55 dB-Hz, 2.048 Msps ibyte, the paper's OCXO
-# and Γ, 20 s of rest (acquisition, bit synchronization, settling), then 5 s
-# shakes along x, y and z. GNSS-SDR runs it twice (2nd- and 3rd-order 3 Hz
-# loops at 20 ms after the FLL/35 Hz pull-in). Kept: both channels of the
-# 2nd-order run and channel 0 of the 3rd-order run, each the last 100 records
-# of the 1 ms pull-in and all the 20 ms records (a contiguous stretch of the
-# real dump, cut at record boundaries); imu.csv, truth.json, both
-# gnss-sdr.conf; and the true baseband carrier of the 3rd-order channel 0 per
-# millisecond from 22 s to 34 s (f32 little endian, carrier_ch0.f32, described
-# by carrier_ch0.json). About 600 KB.
+# 1. fixtures/ (ONLY=quiet): 38 s, 2 satellites at 55 dB-Hz, 2.048 Msps ibyte,
+#    the paper's OCXO and Γ, 20 s of rest (acquisition, bit synchronization,
+#    settling), then 5 s shakes along x, y and z. GNSS-SDR runs it twice (2nd-
+#    and 3rd-order 3 Hz loops at 20 ms after the FLL/35 Hz pull-in). Kept: both
+#    channels of the 2nd-order run and channel 0 of the 3rd-order run, each the
+#    last 100 records of the 1 ms pull-in and all the 20 ms records (a
+#    contiguous stretch of the real dump, cut at record boundaries); imu.csv,
+#    truth.json, both gnss-sdr.conf; and the true baseband carrier of the
+#    3rd-order channel 0 per millisecond from 22 s to 34 s (f32 little endian,
+#    carrier_ch0.f32, described by carrier_ch0.json). About 600 KB.
+# 2. fixtures/shaken/ (ONLY=shaken): a board shaken hard from 3 s on, while the
+#    channels pull in and switch to the narrow loop: 82 s, 2 satellites at
+#    45 dB-Hz, an oscillator with a TCXO's g-sensitivity (Γ = [0.2, 0.16,
+#    −0.16] Hz/(m/s²), ≈ 1.2 ppb/g) and the OCXO's noise, shakes of 3 m/s² at
+#    a 1.4 s period along x (42 s), y and z (15 s each) with 2 s rests: the
+#    carrier lock test falls to 0.75–0.85 while shaking. Both loop orders, both
+#    channels, each the last 500 records of the 1 ms stage and all the 20 ms
+#    records (channel 1 of the 3rd-order run holds its reacquired track too);
+#    imu.csv, truth.json, both gnss-sdr.conf. About 2.4 MB.
 #
 # Usage: scripts/make-gnss-sdr-fixtures.sh   (needs gnss-sdr, python3)
+# Environment: ONLY=quiet|shaken (one set; default both), GSENS (a gsens binary
+# to use instead of building one), WORK (scratch directory).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FIX=crates/gsens-gnss-sdr/tests/fixtures
@@ -23,9 +34,15 @@ WORK=${WORK:-target/gnss-sdr-fixtures}
 SEED=11
 rm -rf "$WORK" && mkdir -p "$WORK"
 WORK=$(cd "$WORK" && pwd)
-cargo build --release -q -p gsens-cli
-G=$PWD/target/release/gsens
+if [ -z "${GSENS:-}" ]; then
+    cargo build --release -q -p gsens-cli
+    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
+fi
+G=$GSENS
 . scripts/lib/scenario.sh
+
+# 1. The quiet set.
+quiet() {
 paper_session 2 > "$WORK/scenario.toml"
 cat >> "$WORK/scenario.toml" <<'TOML'
 [satellites]
@@ -48,7 +65,8 @@ for order in 2 3; do
     ln -sf "$WORK/signal.bin" "$d/signal.bin"
     (cd "$d" && gnss-sdr --config_file=gnss-sdr.conf --log_dir="$d" > gnss-sdr.log 2>&1)
 done
-rm -rf "$FIX" && mkdir -p "$FIX"
+# The quiet set only: the shaken set in fixtures/shaken is left alone.
+rm -rf "$FIX"/order2 "$FIX"/order3 && mkdir -p "$FIX"
 cp "$WORK/imu.csv" "$WORK/truth.json" "$FIX/"
 python3 - "$WORK" "$FIX" <<'PY'
 import json, os, struct, sys
@@ -80,5 +98,71 @@ for order in (2, 3):
                                "minus offset_hz, f32 little endian, from first_block on"},
                       open(f"{fix}/carrier_ch0.json", "w"), indent=1)
 PY
+}
+
+# 2. The shaken set: lock tests below 0.85 while shaking, the switch to the narrow loop mid-shake.
+shaken() {
+    local W="$WORK/shaken" F="$FIX/shaken"
+    mkdir -p "$W"
+    cat > "$W/scenario.toml" <<'TOML'
+[session]
+start_utc = "2024-02-08T12:00:00Z"
+[oscillator]
+preset = "ocxo"
+gamma_hz_per_mps2 = [0.2, 0.16, -0.16]
+[loop]
+order = 2
+bn_hz = 3.0
+[satellites]
+elevation_mask_deg = 10.0
+max_channels = 2
+[satellites.cn0]
+zenith_cn0_dbhz = 45.0
+horizon_cn0_dbhz = 45.0
+per_satellite_offset_sigma_db = 0.0
+[[motion.segments]]
+kind = "rest"
+duration_s = 3.0
+TOML
+    for seg in "x 42.0" "y 15.0" "z 15.0"; do
+        set -- $seg
+        printf '[[motion.segments]]\nkind = "shake"\naxis = "%s"\nduration_s = %s\nperiod_s = 1.4\namplitude_mps2 = 3.0\n' "$1" "$2"
+        printf '[[motion.segments]]\nkind = "rest"\nduration_s = %s\n' "$([ "$1" = z ] && echo 3.0 || echo 2.0)"
+    done >> "$W/scenario.toml"
+    "$G" simulate --scenario "$W/scenario.toml" --seed $SEED --out "$W" --iq "$W/signal.bin" --fs-hz 2048000
+    for order in 2 3; do
+        d="$W/order$order"
+        mkdir -p "$d"
+        sed -e "s|^Tracking_1C.pll_filter_order=.*|Tracking_1C.pll_filter_order=$order|" \
+            -e "s|^Tracking_1C.dump_filename=.*|Tracking_1C.dump_filename=./trk_ch_|" \
+            -e "s|^SignalSource.filename=.*|SignalSource.filename=signal.bin|" "$W/gnss-sdr.conf" > "$d/gnss-sdr.conf"
+        ln -sf "$W/signal.bin" "$d/signal.bin"
+        (cd "$d" && gnss-sdr --config_file=gnss-sdr.conf --log_dir="$d" > gnss-sdr.log 2>&1)
+    done
+    rm -rf "$F" && mkdir -p "$F"
+    cp "$W/imu.csv" "$W/truth.json" "$F/"
+    python3 - "$W" "$F" <<'PY'
+import os, struct, sys
+work, fix = sys.argv[1], sys.argv[2]
+REC = 96
+fs = 2048000.0
+for order in (2, 3):
+    os.makedirs(f"{fix}/order{order}", exist_ok=True)
+    open(f"{fix}/order{order}/gnss-sdr.conf", "w").write(open(f"{work}/order{order}/gnss-sdr.conf").read())
+    for ch in (0, 1):
+        b = open(f"{work}/order{order}/trk_ch_{ch}.dat", "rb").read()
+        n = [struct.unpack_from("<Q", b, i * REC + 28)[0] for i in range(len(b) // REC)]
+        first20 = next(i for i in range(1, len(n)) if n[i] - n[i - 1] > 15 * fs / 1000)
+        start = max(0, first20 - 500)
+        open(f"{fix}/order{order}/trk_ch_{ch}.dat", "wb").write(b[start * REC:])
+        print(f"shaken order {order} ch {ch}: records {start}..{len(n)} of {len(n)}, switch at {first20}")
+PY
+}
+
+case "${ONLY:-both}" in
+    quiet) quiet ;;
+    shaken) shaken ;;
+    *) quiet; shaken ;;
+esac
 du -ah "$FIX" | sort -k2
 echo "total: $(du -sk "$FIX" | cut -f1) KB"

@@ -295,7 +295,8 @@ pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<Tracking
 /// Calibrates from GNSS-SDR tracking dumps (`Tracking_1C.dump=true`) and an
 /// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
 /// logged-phase settings of `settings` are replaced by the ones the dumps
-/// were made with.
+/// were made with, and the warm-up is at least
+/// [`ImportSettings::models_warmup_s`] (the regressor models' start-up error).
 pub fn calibrate_gnss_sdr(
     dumps_dir: &Path,
     import: &ImportSettings,
@@ -312,6 +313,13 @@ pub fn calibrate_gnss_sdr(
     // GNSS-SDR's loop is modelled exactly from its own configuration: tested, not fitted.
     if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
         settings.loop_identification = LoopIdentificationMode::TestOnly;
+    }
+    // The regressor models start at the first kept record, possibly while
+    // the board is shaken: their start-up error, computed from the IMU, is
+    // left to the warm-up (ImportSettings::models_warmup_s).
+    if let Some(start_s) = tracking_log.epoch_t_s().first() {
+        let w = import.models_warmup_s(&imu_series, *start_s, settings.estimate.highpass_hz);
+        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
     }
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });

@@ -314,14 +314,25 @@ pub struct ConversionArgs {
     /// Sampling rate of the tracking [Hz] when the configuration does not give it.
     #[arg(long)]
     pub gnss_sdr_fs_hz: Option<f64>,
-    /// Records below this C/N0 are dropped [dB-Hz].
-    #[arg(long, default_value_t = 25.0)]
-    pub gnss_sdr_min_cn0_dbhz: f64,
-    /// Records whose carrier lock test is below this are dropped.
-    #[arg(long, default_value_t = 0.85)]
-    pub gnss_sdr_min_lock_test: f64,
-    /// Seconds dropped after a channel switches to the narrow loop (default: five time
-    /// constants of the loop's slowest mode, at least 1 s).
+    /// C/N0 threshold of GNSS-SDR's lock detector (Tracking_1C.cn0_min) [dB-Hz]: a record below
+    /// it counts as a code-lock failure [default: the conf's cn0_min, GNSS-SDR's 25 when absent].
+    #[arg(long)]
+    pub gnss_sdr_min_cn0_dbhz: Option<f64>,
+    /// Carrier lock test threshold of GNSS-SDR's lock detector (Tracking_1C.carrier_lock_th): a
+    /// record below it counts as a carrier-lock failure [default: the conf's carrier_lock_th,
+    /// GNSS-SDR's 0.7 when absent].
+    #[arg(long)]
+    pub gnss_sdr_min_lock_test: Option<f64>,
+    /// Carrier-lock failures (net of passes) after which GNSS-SDR's lock detector declares a loss
+    /// of lock (Tracking_1C.max_carrier_lock_fail) [default: the conf's, GNSS-SDR's 5000 when absent].
+    #[arg(long)]
+    pub gnss_sdr_max_carrier_lock_fail: Option<u32>,
+    /// Code-lock (C/N0) failures (net of passes) after which GNSS-SDR's lock detector declares a
+    /// loss of lock (Tracking_1C.max_lock_fail) [default: the conf's, GNSS-SDR's 50 when absent].
+    #[arg(long)]
+    pub gnss_sdr_max_lock_fail: Option<u32>,
+    /// Seconds dropped after a channel switches to the narrow loop (default: derived from the
+    /// narrow loop's slowest mode).
     #[arg(long)]
     pub gnss_sdr_settle_s: Option<f64>,
     /// Record layout `name:type,...` for dumps of versions the reader does not know.
@@ -331,7 +342,8 @@ pub struct ConversionArgs {
 
 impl ConversionArgs {
     /// The conversion settings for dumps made with the configuration `conf`
-    /// (GNSS-SDR's defaults when none is given).
+    /// (GNSS-SDR's defaults when none is given), with the options that
+    /// override the configuration's lock detector.
     pub fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
         let mut s = ImportSettings::from_conf(conf, self.gnss_sdr_fs_hz).map_err(|e| match e {
             gsens_gnss_sdr::GnssSdrError::UnknownSamplingRate => anyhow::anyhow!("{e}; give --gnss-sdr-fs-hz"),
@@ -340,8 +352,25 @@ impl ConversionArgs {
         if let Some(v) = self.gnss_sdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
             bail!("--gnss-sdr-settle-s must be ≥ 0, got {v}");
         }
-        s.min_cn0_dbhz = self.gnss_sdr_min_cn0_dbhz;
-        s.min_lock_test = self.gnss_sdr_min_lock_test;
+        let lock = &mut s.tracking.lock;
+        if let Some(v) = self.gnss_sdr_min_cn0_dbhz {
+            if !v.is_finite() {
+                bail!("--gnss-sdr-min-cn0-dbhz must be finite, got {v}");
+            }
+            lock.cn0_min_dbhz.set_option(v);
+        }
+        if let Some(v) = self.gnss_sdr_min_lock_test {
+            if !(-1.0..=1.0).contains(&v) {
+                bail!("--gnss-sdr-min-lock-test must lie in [-1, 1] (the lock test is cos 2φ), got {v}");
+            }
+            lock.carrier_lock_th.set_option(v);
+        }
+        if let Some(v) = self.gnss_sdr_max_carrier_lock_fail {
+            lock.max_carrier_lock_fail.set_option(v);
+        }
+        if let Some(v) = self.gnss_sdr_max_lock_fail {
+            lock.max_lock_fail.set_option(v);
+        }
         s.settle_s = self.gnss_sdr_settle_s;
         if let Some(spec) = &self.gnss_sdr_layout {
             s.layout = Some(DumpLayout::parse_spec(spec).map_err(|e| anyhow::anyhow!("--gnss-sdr-layout: {e}"))?);

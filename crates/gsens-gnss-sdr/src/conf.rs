@@ -20,9 +20,18 @@
 //! `pll_bw_narrow_hz` 5 (measured: the loop-filter coefficients fitted on the
 //! dumps of a run without these keys are those of a 3rd-order 35 Hz loop at
 //! 1 ms and a 5 Hz one at 20 ms, residual 1e-4 Hz), `extend_correlation_symbols`
-//! 1 (GNSS-SDR's documentation; not measured), `pull_in_time_s` taken as 10 s
-//! when absent (not measured; only used to skip an FLL pull-in when the
-//! integration is not extended).
+//! 1 (GNSS-SDR's documentation; not measured), `pull_in_time_s` 10 s
+//! (`dll_pll_conf.h`).
+//!
+//! # The lock detector
+//!
+//! [`LockDetectorConf`] holds the keys of the tracking's loss-of-lock rule
+//! (read in GNSS-SDR's `dll_pll_conf.cc`; their defaults are the command-line
+//! flags of `gnss_sdr_flags.cc`, the same in 0.0.17 and 0.0.20):
+//! `carrier_lock_th` 0.7, `cn0_min` 25 dB-Hz, `max_lock_fail` 50,
+//! `max_carrier_lock_fail` 5000 and `cn0_samples` 20. GNSS-SDR reads the
+//! integer ones as a C++ stream reads an `int` (`25.5` is 25); so does this
+//! reader. How the rule is applied: [`crate::import`].
 
 use std::path::Path;
 
@@ -51,10 +60,94 @@ pub const DEFAULT_PLL_FILTER_ORDER: u8 = 3;
 pub const DEFAULT_PLL_BW_HZ: f64 = 35.0;
 /// GNSS-SDR 0.0.17's default `pll_bw_narrow_hz` \[Hz\] (measured).
 pub const DEFAULT_PLL_BW_NARROW_HZ: f64 = 5.0;
-/// `pull_in_time_s` assumed when absent \[s\] (conservative; not measured).
-pub const ASSUMED_PULL_IN_TIME_S: f64 = 10.0;
+/// GNSS-SDR 0.0.17's default `pull_in_time_s` \[s\] (`dll_pll_conf.h`).
+pub const DEFAULT_PULL_IN_TIME_S: f64 = 10.0;
+/// GNSS-SDR's default `carrier_lock_th` (`FLAGS_carrier_lock_th`, `gnss_sdr_flags.cc`):
+/// the threshold of the smoothed carrier lock test (I² − Q²)/(I² + Q²) = cos 2φ.
+pub const DEFAULT_CARRIER_LOCK_TH: f64 = 0.7;
+/// GNSS-SDR's default `cn0_min` \[dB-Hz\] (`FLAGS_cn0_min`).
+pub const DEFAULT_CN0_MIN_DBHZ: f64 = 25.0;
+/// GNSS-SDR's default `max_lock_fail` (`FLAGS_max_lock_fail`): the code-lock (C/N0) fail counter's maximum.
+pub const DEFAULT_MAX_LOCK_FAIL: u32 = 50;
+/// GNSS-SDR's default `max_carrier_lock_fail` (`FLAGS_max_carrier_lock_fail`).
+pub const DEFAULT_MAX_CARRIER_LOCK_FAIL: u32 = 5000;
+/// GNSS-SDR's default `cn0_samples` (`FLAGS_cn0_samples`): prompt outputs per C/N0 estimate.
+pub const DEFAULT_CN0_SAMPLES: u32 = 20;
 /// The tracking implementation whose loop [`gsens_core::gnss_sdr`] models.
 pub const SUPPORTED_TRACKING: &str = "GPS_L1_CA_DLL_PLL_Tracking";
+
+/// Where a setting's value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ValueSource {
+    /// The configuration file.
+    Conf,
+    /// GNSS-SDR's default (the key is absent).
+    GnssSdrDefault,
+    /// A command-line option of gsens that overrides the configuration.
+    Option,
+}
+
+impl core::fmt::Display for ValueSource {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ValueSource::Conf => "from the conf",
+            ValueSource::GnssSdrDefault => "GNSS-SDR's default",
+            ValueSource::Option => "given as an option",
+        })
+    }
+}
+
+/// A setting's value and where it comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Sourced<T> {
+    /// The value in use.
+    pub value: T,
+    /// Where it comes from.
+    pub source: ValueSource,
+}
+
+impl<T> Sourced<T> {
+    /// A value of GNSS-SDR's default.
+    pub fn default_value(value: T) -> Self {
+        Sourced { value, source: ValueSource::GnssSdrDefault }
+    }
+
+    /// Replaces the value by one given as an option.
+    pub fn set_option(&mut self, value: T) {
+        self.value = value;
+        self.source = ValueSource::Option;
+    }
+}
+
+/// The settings of GNSS-SDR's tracking lock detector (`Tracking_1C.*`; module
+/// docs; the rule they drive: [`crate::import`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LockDetectorConf {
+    /// `carrier_lock_th`: a record whose carrier lock test is below it is a carrier-lock failure.
+    pub carrier_lock_th: Sourced<f64>,
+    /// `max_carrier_lock_fail`: loss of lock when the carrier fail counter exceeds it.
+    pub max_carrier_lock_fail: Sourced<u32>,
+    /// `cn0_min` \[dB-Hz\]: a record whose C/N0 is below it is a code-lock failure.
+    pub cn0_min_dbhz: Sourced<f64>,
+    /// `max_lock_fail`: loss of lock when the code (C/N0) fail counter exceeds it.
+    pub max_lock_fail: Sourced<u32>,
+    /// `cn0_samples`: the first this many records of a track fill the C/N0 buffer and are not judged.
+    pub cn0_samples: Sourced<u32>,
+}
+
+impl LockDetectorConf {
+    /// GNSS-SDR's defaults (module docs).
+    pub fn defaults() -> Self {
+        LockDetectorConf {
+            carrier_lock_th: Sourced::default_value(DEFAULT_CARRIER_LOCK_TH),
+            max_carrier_lock_fail: Sourced::default_value(DEFAULT_MAX_CARRIER_LOCK_FAIL),
+            cn0_min_dbhz: Sourced::default_value(DEFAULT_CN0_MIN_DBHZ),
+            max_lock_fail: Sourced::default_value(DEFAULT_MAX_LOCK_FAIL),
+            cn0_samples: Sourced::default_value(DEFAULT_CN0_SAMPLES),
+        }
+    }
+}
 
 /// The carrier-loop settings of GNSS-SDR's GPS L1 C/A tracking (`Tracking_1C.*`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -74,8 +167,12 @@ pub struct TrackingConf {
     pub enable_fll_pull_in: bool,
     /// `enable_fll_steady_state`: an FLL-assisted PLL throughout (not modelled).
     pub enable_fll_steady_state: bool,
-    /// `pull_in_time_s`: how long the FLL pull-in lasts \[s\] ([`ASSUMED_PULL_IN_TIME_S`] when absent).
+    /// `pull_in_time_s`: how long the pull-in lasts \[s\], a whole number
+    /// ([`DEFAULT_PULL_IN_TIME_S`] when absent): the FLL's time when it is
+    /// enabled, and always the time during which the lock detector counts no failure.
     pub pull_in_time_s: f64,
+    /// The lock detector's settings.
+    pub lock: LockDetectorConf,
     /// The sampling rate the tracking runs at \[Hz\]: `GNSS-SDR.internal_fs_sps`,
     /// else `SignalSource.sampling_frequency`; `None` when neither is given.
     pub fs_hz: Option<f64>,
@@ -94,7 +191,8 @@ impl TrackingConf {
             extend_correlation_symbols: 1,
             enable_fll_pull_in: false,
             enable_fll_steady_state: false,
-            pull_in_time_s: ASSUMED_PULL_IN_TIME_S,
+            pull_in_time_s: DEFAULT_PULL_IN_TIME_S,
+            lock: LockDetectorConf::defaults(),
             fs_hz: None,
             dump_filename: None,
         }
@@ -203,6 +301,38 @@ impl GnssSdrConf {
         })
     }
 
+    /// `key` as GNSS-SDR reads an unsigned integer (a C++ stream: digits, the
+    /// rest ignored), `None` when absent; an error naming the line when the
+    /// value does not start with a whole number ≥ 0.
+    pub fn get_count(&self, key: &str) -> Result<Option<u32>, GnssSdrError> {
+        match self.get_int(key)? {
+            None => Ok(None),
+            Some(n) => u32::try_from(n).map(Some).map_err(|_| self.bad_value(key, "must be a whole number ≥ 0")),
+        }
+    }
+
+    /// `key` as GNSS-SDR reads an `int` (optional sign and digits, the rest
+    /// ignored: `25.5` is 25), `None` when absent.
+    pub fn get_int(&self, key: &str) -> Result<Option<i32>, GnssSdrError> {
+        let Some(e) = self.entry(key) else { return Ok(None) };
+        let v = e.value.as_str();
+        let sign = usize::from(v.starts_with(['+', '-']));
+        let digits = v[sign..].bytes().take_while(u8::is_ascii_digit).count();
+        if digits == 0 {
+            return Err(self.bad_value(key, "is not an integer"));
+        }
+        v[..sign + digits].parse().map(Some).map_err(|_| self.bad_value(key, "is out of range"))
+    }
+
+    fn bad_value(&self, key: &str, what: &str) -> GnssSdrError {
+        let e = self.entry(key);
+        GnssSdrError::Conf {
+            file: self.source_name.clone(),
+            line: e.map_or(0, |e| e.line),
+            reason: format!("`{key}` = `{}` {what}", e.map_or("", |e| e.value.as_str())),
+        }
+    }
+
     /// `key` as a boolean (`true`/`false`/`1`/`0`), `None` when absent.
     pub fn get_bool(&self, key: &str) -> Result<Option<bool>, GnssSdrError> {
         let Some(e) = self.entry(key) else { return Ok(None) };
@@ -257,7 +387,9 @@ impl GnssSdrConf {
                 "enable_fll_steady_state = true: an FLL-assisted PLL is not modelled".into(),
             );
         }
-        let pull_in_time_s = self.get_f64("Tracking_1C.pull_in_time_s")?.unwrap_or(ASSUMED_PULL_IN_TIME_S);
+        // GNSS-SDR holds it as an unsigned integer.
+        let pull_in_time_s = self.get_count("Tracking_1C.pull_in_time_s")?.map_or(DEFAULT_PULL_IN_TIME_S, f64::from);
+        let lock = self.lock_detector()?;
         let fs_hz = match self.get_f64("GNSS-SDR.internal_fs_sps")? {
             Some(v) => Some(v),
             None => self.get_f64("SignalSource.sampling_frequency")?,
@@ -274,8 +406,42 @@ impl GnssSdrConf {
             enable_fll_pull_in,
             enable_fll_steady_state,
             pull_in_time_s,
+            lock,
             fs_hz,
             dump_filename: self.get("Tracking_1C.dump_filename").map(str::to_owned),
+        })
+    }
+}
+
+impl GnssSdrConf {
+    /// The lock detector's settings (module docs), GNSS-SDR's defaults for
+    /// absent keys; `carrier_lock_th` must lie in [−1, 1] (the lock test's range).
+    pub fn lock_detector(&self) -> Result<LockDetectorConf, GnssSdrError> {
+        let d = LockDetectorConf::defaults();
+        let from = |v: Option<f64>, dflt: Sourced<f64>| match v {
+            Some(value) => Sourced { value, source: ValueSource::Conf },
+            None => dflt,
+        };
+        let count = |key: &str, dflt: Sourced<u32>| -> Result<Sourced<u32>, GnssSdrError> {
+            Ok(match self.get_count(key)? {
+                Some(value) => Sourced { value, source: ValueSource::Conf },
+                None => dflt,
+            })
+        };
+        let carrier_lock_th = from(self.get_f64("Tracking_1C.carrier_lock_th")?, d.carrier_lock_th);
+        if !(-1.0..=1.0).contains(&carrier_lock_th.value) {
+            return Err(
+                self.bad_value("Tracking_1C.carrier_lock_th", "is outside [−1, 1], the range of the lock test cos 2φ")
+            );
+        }
+        // cn0_min is an int in GNSS-SDR.
+        let cn0_min = self.get_int("Tracking_1C.cn0_min")?.map(f64::from);
+        Ok(LockDetectorConf {
+            carrier_lock_th,
+            max_carrier_lock_fail: count("Tracking_1C.max_carrier_lock_fail", d.max_carrier_lock_fail)?,
+            cn0_min_dbhz: from(cn0_min, d.cn0_min_dbhz),
+            max_lock_fail: count("Tracking_1C.max_lock_fail", d.max_lock_fail)?,
+            cn0_samples: count("Tracking_1C.cn0_samples", d.cn0_samples)?,
         })
     }
 }
@@ -501,6 +667,39 @@ mod tests {
         let e =
             GnssSdrConf::parse("Tracking_1C.enable_fll_steady_state=true\n", "f.conf").unwrap().tracking().unwrap_err();
         assert!(e.to_string().contains("FLL"), "{e}");
+    }
+
+    #[test]
+    fn lock_detector_keys_defaults_and_sources() {
+        let l = GnssSdrConf::parse("", "e.conf").unwrap().lock_detector().unwrap();
+        assert_eq!(l, LockDetectorConf::defaults());
+        assert_eq!(
+            (l.carrier_lock_th.value, l.cn0_min_dbhz.value, l.max_lock_fail.value, l.max_carrier_lock_fail.value),
+            (0.7, 25.0, 50, 5000)
+        );
+        assert_eq!(l.cn0_samples.value, 20);
+        assert_eq!(l.carrier_lock_th.source, ValueSource::GnssSdrDefault);
+        let text = "Tracking_1C.carrier_lock_th=0.85;\nTracking_1C.cn0_min=30.7\nTracking_1C.max_lock_fail=100\n\
+                    Tracking_1C.max_carrier_lock_fail=200 ; comment\nTracking_1C.pull_in_time_s=2.9\n";
+        let t = GnssSdrConf::parse(text, "l.conf").unwrap().tracking().unwrap();
+        let l = t.lock;
+        assert_eq!(l.carrier_lock_th, Sourced { value: 0.85, source: ValueSource::Conf });
+        // Integers read as GNSS-SDR's stream reads an int: 30.7 is 30, 2.9 s is 2 s.
+        assert_eq!(l.cn0_min_dbhz.value, 30.0);
+        assert_eq!((l.max_lock_fail.value, l.max_carrier_lock_fail.value), (100, 200));
+        assert_eq!(l.max_lock_fail.source, ValueSource::Conf);
+        assert_eq!(l.cn0_samples.source, ValueSource::GnssSdrDefault);
+        assert_eq!(t.pull_in_time_s, 2.0);
+        for (text, want) in [
+            ("Tracking_1C.max_lock_fail=-3\n", "whole number ≥ 0"),
+            ("x=1\nTracking_1C.max_carrier_lock_fail=many\n", "not an integer"),
+            ("Tracking_1C.carrier_lock_th=1.2\n", "outside [−1, 1]"),
+        ] {
+            let e = GnssSdrConf::parse(text, "b.conf").unwrap().tracking().unwrap_err().to_string();
+            assert!(e.contains("b.conf") && e.contains(want), "{e}");
+        }
+        let e = GnssSdrConf::parse("x=1\nTracking_1C.max_carrier_lock_fail=many\n", "b.conf").unwrap();
+        assert!(e.tracking().unwrap_err().to_string().contains("line 2"));
     }
 
     #[test]

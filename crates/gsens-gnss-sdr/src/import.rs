@@ -22,15 +22,25 @@
 //!
 //! # What is kept
 //!
-//! Only the records of the loop the estimator models: the narrow stage after
-//! bit synchronization (or, without extended integration, the 1 ms loop),
-//! minus its first seconds ([`ImportSettings::settle_time_s`]: the switch's
-//! transient). A record whose lock test or C/N0 is below the thresholds is
-//! dropped; a track in which they fail for more than
-//! 1 − [`ImportSettings::min_good_fraction`] of the records is a false track
-//! (a lock on a sidelobe, a cross-correlation peak, a loop that never pulled
-//! in) and is dropped whole; a track that never reached the narrow stage is
-//! dropped too. Every track is reported with what became of it and why.
+//! A track is judged by the receiver's own rule: GNSS-SDR's lock detector,
+//! with the configuration's `carrier_lock_th`, `max_carrier_lock_fail`,
+//! `cn0_min` and `max_lock_fail` (GNSS-SDR's defaults when absent; options may
+//! override them), is replayed over its records ([`replay_lock_detector`]).
+//! Where GNSS-SDR would have declared a loss of lock, the track ends: that
+//! record and the later ones are not tracking and are dropped. No record is
+//! dropped for a low lock test or C/N0 alone: GNSS-SDR went on tracking
+//! through them, and the lock test falls exactly while the board is shaken
+//! (it is the smoothed cos 2φ). Whether a kept channel follows the signal the
+//! others see is the session screening's judgement (`gsens-session`), not the
+//! importer's.
+//!
+//! Of the tracking records, only those of the loop the estimator models are
+//! kept: the narrow stage after bit synchronization (or, without extended
+//! integration, the 1 ms loop), minus its first seconds
+//! ([`ImportSettings::settle_time_s`]: the switch's transient). A track that
+//! never reached the narrow stage is dropped. Every track is reported with
+//! what became of it and the rule and values that decided
+//! ([`TrackSummary::reason`]).
 //!
 //! # A common epoch grid
 //!
@@ -47,8 +57,9 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use gsens_core::LinearLoop;
 use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};
-use gsens_io::TrackingRow;
+use gsens_io::{ImuSeries, TrackingRow};
 
 use crate::conf::TrackingConf;
 use crate::dump::{DumpLayout, TrackingDump, find_dumps, read_dump};
@@ -59,41 +70,28 @@ use crate::error::GnssSdrError;
 pub struct ImportSettings {
     /// Sampling rate of the tracking \[Hz\].
     pub fs_hz: f64,
-    /// The tracking configuration that produced the dumps.
+    /// The tracking configuration that produced the dumps; its
+    /// [`TrackingConf::lock`] is the lock detector whose rule judges every
+    /// track (options that override a value are marked so in it).
     pub tracking: TrackingConf,
-    /// Records below this C/N0 are dropped \[dB-Hz\].
-    pub min_cn0_dbhz: f64,
-    /// Records whose carrier lock test is below this are dropped.
-    pub min_lock_test: f64,
     /// Time dropped after the switch to the modelled stage \[s\]; `None`:
-    /// five time constants of the modelled loop's slowest mode, at least 1 s
-    /// ([`ImportSettings::settle_time_s`]).
+    /// derived from the modelled loop ([`ImportSettings::settle_time_s`]).
     pub settle_s: Option<f64>,
-    /// Tracks whose modelled records pass the thresholds less often than this are false tracks.
-    pub min_good_fraction: f64,
     /// The dumps' record layout; `None`: detect it.
     #[serde(skip)]
     pub layout: Option<DumpLayout>,
 }
 
 impl ImportSettings {
-    /// Default thresholds (C/N0 ≥ 25 dB-Hz, lock test ≥ 0.85 as GNSS-SDR's own
-    /// lock detector, 2 s of settling, 90 % good records) for `tracking` at `fs_hz`.
+    /// The settings for `tracking` at `fs_hz`: tracks judged by its lock
+    /// detector, the settling time derived from its narrow loop.
     pub fn new(fs_hz: f64, tracking: TrackingConf) -> Self {
-        ImportSettings {
-            fs_hz,
-            tracking,
-            min_cn0_dbhz: 25.0,
-            min_lock_test: 0.85,
-            settle_s: None,
-            min_good_fraction: 0.9,
-            layout: None,
-        }
+        ImportSettings { fs_hz, tracking, settle_s: None, layout: None }
     }
 
-    /// The default thresholds for dumps made with the configuration file
-    /// `conf` (GNSS-SDR's defaults when `None`), at the sampling rate
-    /// `fs_hz` or, when `None`, the configuration's.
+    /// The settings for dumps made with the configuration file `conf`
+    /// (GNSS-SDR's defaults when `None`), at the sampling rate `fs_hz` or,
+    /// when `None`, the configuration's.
     pub fn from_conf(conf: Option<&Path>, fs_hz: Option<f64>) -> Result<Self, GnssSdrError> {
         let tracking = match conf {
             Some(p) => crate::GnssSdrConf::read(p)?.tracking()?,
@@ -118,15 +116,121 @@ impl ImportSettings {
     }
 
     /// The settling time in use \[s\]: [`ImportSettings::settle_s`], or five
-    /// time constants of the modelled loop's slowest mode, at least 1 s (the
-    /// switch to the narrow loop starts a transient the models do not know:
-    /// 13 s for GNSS-SDR's lightly damped 3rd-order 3 Hz loop, 1.3 s for its
-    /// 2nd-order one).
+    /// time constants τ of the modelled loop's slowest mode, at least 1 s
+    /// (τ = T/(−ln|λ|max) over the eigenvalues λ of its one-record
+    /// transition, [`GnssSdrPll::settling_time_s`]). The switch to the narrow
+    /// loop starts a transient the regressors do not model: measured on
+    /// GNSS-SDR's dumps of a board shaken through the switch, the residual
+    /// against the exact narrow-loop model is 0.5 rad RMS in the first 2 s
+    /// (3rd order) and back at the thermal level 5τ after the switch (12.6 s for
+    /// the lightly damped 3rd-order 3 Hz loop, 1.15 s for the 2nd-order one).
     pub fn settle_time_s(&self) -> f64 {
         self.settle_s.unwrap_or_else(|| match GnssSdrPll::new(self.stage()) {
             Ok(p) => p.settling_time_s(5.0).clamp(1.0, 60.0),
             Err(_) => 2.0,
         })
+    }
+
+    /// The longest estimator warm-up these dumps may need \[s\], with the
+    /// estimator's high-pass at `highpass_hz` (0 = off):
+    ///
+    /// ```text
+    /// W = max(S, τ_hp·(5 + ln(τ/τ_hp)))      S = 5τ (settle_time_s), τ_hp = 1/(2π·highpass_hz)
+    /// ```
+    ///
+    /// Why: the session starts at the first kept record, and the regressor
+    /// models start there in the steady state of the specific force at that
+    /// instant. When the board is already being shaken, that state is wrong
+    /// by about the loop's forced response, and the error d(t) ≈ d₀·e^(−t/τ)
+    /// dies out with the same slowest mode as the receiver's own transient (S
+    /// to reach e⁻⁵). The high-pass that both sides pass through remembers its
+    /// area d₀·τ: its output after the transient is about
+    /// d₀·(τ/τ_hp)·e^(−t/τ_hp), below e⁻⁵·d₀ (the criterion of S) after
+    /// τ_hp·(5 + ln(τ/τ_hp)). For GNSS-SDR's 3 Hz loops at 20 ms with the
+    /// default 0.05 Hz high-pass: 7.6 s (2nd order, τ = 0.23 s) and 15.2 s
+    /// (3rd order, τ = 2.5 s). Rounded up to 0.1 s.
+    /// [`ImportSettings::models_warmup_s`] computes the warm-up a session needs.
+    pub fn warmup_s(&self, highpass_hz: f64) -> f64 {
+        let s = self.settle_time_s();
+        let Ok(p) = GnssSdrPll::new(self.stage()) else { return s };
+        let tau = p.settling_time_s(1.0);
+        if !(highpass_hz > 0.0 && tau.is_finite() && tau > 0.0) {
+            return s;
+        }
+        let tau_hp = 1.0 / (core::f64::consts::TAU * highpass_hz);
+        // Rounded up to 0.1 s: a setting that reads back as written.
+        (s.max(tau_hp * (5.0 + (tau / tau_hp).ln())) * 10.0).ceil() / 10.0
+    }
+
+    /// The estimator warm-up a session starting at `start_s` needs \[s\]: the
+    /// regressor models' start-up error computed from the IMU log. Each axis
+    /// runs GNSS-SDR's narrow loop twice, started at `start_s` in the steady
+    /// state of the specific force there (as the estimator's models do) and
+    /// [`ImportSettings::warmup_s`] earlier (a reference whose own start has
+    /// died out); both pass through the estimator's high-pass from `start_s`
+    /// on. The warm-up ends where the difference (over two warm-ups) stays
+    /// below e⁻⁵ (the criterion of [`ImportSettings::settle_time_s`]) of the
+    /// reference's peak over the log, for every axis: 0 for a board at rest at the
+    /// start, up to [`ImportSettings::warmup_s`] (measured on order-2 dumps
+    /// shaken from the start: σ/CRB 2.1 with a 2 s warm-up, 1.3 with this one).
+    /// [`ImportSettings::warmup_s`] when the IMU log starts too late for the reference.
+    pub fn models_warmup_s(&self, imu: &ImuSeries, start_s: f64, highpass_hz: f64) -> f64 {
+        let w_max = self.warmup_s(highpass_hz);
+        let t_step = self.interval_s();
+        let (Some(&first), Some(&last)) = (imu.t_s.first(), imu.t_s.last()) else { return w_max };
+        let Ok(model) = GnssSdrPll::new(self.stage()) else { return w_max };
+        let t_ref = start_s - w_max;
+        if first > t_ref || t_step.is_nan() || t_step <= 0.0 {
+            return w_max;
+        }
+        let accel = |t: f64| -> [f64; 3] {
+            let k = imu.t_s.partition_point(|&x| x <= t).clamp(1, imu.t_s.len().max(2) - 1);
+            let (t0, t1) = (imu.t_s[k - 1], imu.t_s[k]);
+            let u = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+            core::array::from_fn(|i| imu.accel_mps2[k - 1][i] + u * (imu.accel_mps2[k][i] - imu.accel_mps2[k - 1][i]))
+        };
+        let mut reference = [model; 3];
+        let mut started = [model; 3];
+        let a0 = accel(t_ref);
+        for (l, a) in reference.iter_mut().zip(a0) {
+            l.settle(a);
+        }
+        let hp = gsens_core::HighPass::new(highpass_hz, t_step);
+        let (mut hp_ref, mut hp_diff) = ([hp; 3], [hp; 3]);
+        let n_lead = (w_max / t_step).round() as usize;
+        let n_after = ((2.0 * w_max / t_step).round() as usize).max(1);
+        let (mut diff, mut peak) = (Vec::with_capacity(n_after), [0.0f64; 3]);
+        // The reference's peak over the whole IMU log from the start (a board at rest
+        // at first has no regressor to speak of yet); the difference over two warm-ups.
+        for k in 0.. {
+            let t = t_ref + k as f64 * t_step;
+            if t > last {
+                break;
+            }
+            let a = accel(t);
+            if k == n_lead {
+                for (l, a) in started.iter_mut().zip(a) {
+                    l.settle(a);
+                }
+            }
+            let r: [f64; 3] = core::array::from_fn(|i| reference[i].step(a[i]));
+            if k >= n_lead {
+                for i in 0..3 {
+                    peak[i] = peak[i].max(hp_ref[i].step(r[i]).abs());
+                }
+            }
+            if k >= n_lead && k < n_lead + n_after {
+                let d: [f64; 3] = core::array::from_fn(|i| hp_diff[i].step(started[i].step(a[i]) - r[i]).abs());
+                diff.push(d);
+            }
+        }
+        let bound = peak.map(|p| (-5.0f64).exp() * p);
+        // The last epoch at which some axis is still beyond the bound.
+        let last_bad = diff.iter().rposition(|d| (0..3).any(|i| d[i] > bound[i]));
+        match last_bad {
+            None => 0.0,
+            Some(k) => ((((k + 1) as f64 * t_step) * 10.0).ceil() / 10.0).min(w_max),
+        }
     }
 }
 
@@ -165,6 +269,161 @@ impl ImportedRow {
     }
 }
 
+/// GNSS-SDR's loss-of-lock rule replayed over one track's records
+/// ([`replay_lock_detector`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LockReplay {
+    /// Records judged (from the end of the pull-in transitory and the C/N0 buffer's filling on).
+    pub judged_records: usize,
+    /// Of those, records whose carrier lock test is below `carrier_lock_th`.
+    pub carrier_lock_failures: usize,
+    /// Of those, records whose C/N0 is below `cn0_min`.
+    pub code_lock_failures: usize,
+    /// Highest value the carrier-lock fail counter reached (before a loss of lock).
+    pub carrier_fail_counter_max: u32,
+    /// Highest value the code-lock (C/N0) fail counter reached (before a loss of lock).
+    pub code_fail_counter_max: u32,
+    /// Index (within the track) of the record at which GNSS-SDR declares the
+    /// loss of lock: it and every later record are not tracking.
+    pub loss_of_lock: Option<usize>,
+    /// Which counter exceeded its maximum: `"carrier"`, `"code"` (both: `"carrier"`).
+    pub loss_by: Option<&'static str>,
+}
+
+/// Replays GNSS-SDR's tracking lock detector over a track's records (read in
+/// `dll_pll_veml_tracking.cc`, 0.0.17 and 0.0.20, `cn0_and_tracking_lock_status`;
+/// the implementation here is ours). Each record is one call of the detector,
+/// made before the record is logged, with the values the record holds (the
+/// smoothed lock test and C/N0, so the dump alone decides):
+///
+/// ```text
+/// carrier fail counter += 1 if lock_test < carrier_lock_th, else −= 1 (not below 0)
+/// code fail counter    += 1 if C/N0 < cn0_min,             else −= 1 (not below 0)
+/// loss of lock when carrier counter > max_carrier_lock_fail or code counter > max_lock_fail
+/// ```
+///
+/// The counters start at 0 with the track and count nothing during the
+/// pull-in transitory, which lasts until a whole number of seconds since
+/// acquisition, floor(Δn/fs), exceeds `pull_in_time_s` (the track's first
+/// record stands in for acquisition, which came a little earlier: the
+/// transitory may be taken to end a little late, never early), nor while the
+/// first `cn0_samples` records fill the C/N0 estimator's buffer. At a loss of
+/// lock GNSS-SDR drops the channel without logging the record: the record at
+/// which the replay declares it and every later one are not tracking (a
+/// GNSS-SDR dump made with these settings holds none; a replay that finds one
+/// was given other settings than the dumps', or a dump cut from mid-track).
+///
+/// `start_sample[k]`: sample count at the start of record k's last
+/// millisecond (when its detector call runs); `lock` and `cn0` per record.
+pub fn replay_lock_detector(
+    start_sample: &[f64],
+    lock_test: &[f64],
+    cn0_dbhz: &[f64],
+    fs_hz: f64,
+    tracking: &TrackingConf,
+) -> LockReplay {
+    let l = &tracking.lock;
+    // GNSS-SDR divides an integer sample count by (int) fs.
+    let fs_int = fs_hz.floor().max(1.0);
+    let mut r = LockReplay {
+        judged_records: 0,
+        carrier_lock_failures: 0,
+        code_lock_failures: 0,
+        carrier_fail_counter_max: 0,
+        code_fail_counter_max: 0,
+        loss_of_lock: None,
+        loss_by: None,
+    };
+    let Some(&acq) = start_sample.first() else { return r };
+    let (mut carrier, mut code) = (0u32, 0u32);
+    for k in 0..start_sample.len() {
+        let elapsed_s = ((start_sample[k] - acq) / fs_int).floor();
+        if elapsed_s <= tracking.pull_in_time_s || k < l.cn0_samples.value as usize {
+            continue;
+        }
+        r.judged_records += 1;
+        if lock_test[k] < l.carrier_lock_th.value {
+            r.carrier_lock_failures += 1;
+            carrier += 1;
+        } else {
+            carrier = carrier.saturating_sub(1);
+        }
+        if cn0_dbhz[k] < l.cn0_min_dbhz.value {
+            r.code_lock_failures += 1;
+            code += 1;
+        } else {
+            code = code.saturating_sub(1);
+        }
+        let (by_carrier, by_code) = (carrier > l.max_carrier_lock_fail.value, code > l.max_lock_fail.value);
+        if by_carrier || by_code {
+            r.loss_of_lock = Some(k);
+            r.loss_by = Some(if by_carrier { "carrier" } else { "code" });
+            break;
+        }
+        r.carrier_fail_counter_max = r.carrier_fail_counter_max.max(carrier);
+        r.code_fail_counter_max = r.code_fail_counter_max.max(code);
+    }
+    r
+}
+
+impl LockReplay {
+    /// The rule and its values in words, for a track's reason.
+    fn describe(&self, t: &TrackingConf) -> String {
+        let l = &t.lock;
+        format!(
+            "carrier lock test < carrier_lock_th = {} ({}) in {} of {} judged records, fail counter at most {} \
+             of max_carrier_lock_fail = {} ({}); C/N0 < cn0_min = {} dB-Hz ({}) in {}, counter at most {} of \
+             max_lock_fail = {} ({})",
+            l.carrier_lock_th.value,
+            l.carrier_lock_th.source,
+            self.carrier_lock_failures,
+            self.judged_records,
+            self.carrier_fail_counter_max,
+            l.max_carrier_lock_fail.value,
+            l.max_carrier_lock_fail.source,
+            l.cn0_min_dbhz.value,
+            l.cn0_min_dbhz.source,
+            self.code_lock_failures,
+            self.code_fail_counter_max,
+            l.max_lock_fail.value,
+            l.max_lock_fail.source,
+        )
+    }
+
+    /// The loss of lock in words (which counter, which values decided).
+    fn describe_loss(&self, t: &TrackingConf, at_s: f64) -> String {
+        let l = &t.lock;
+        let rule = if self.loss_by == Some("code") {
+            format!(
+                "the code-lock fail counter exceeded max_lock_fail = {} ({}), C/N0 < cn0_min = {} dB-Hz ({})",
+                l.max_lock_fail.value, l.max_lock_fail.source, l.cn0_min_dbhz.value, l.cn0_min_dbhz.source
+            )
+        } else {
+            format!(
+                "the carrier-lock fail counter exceeded max_carrier_lock_fail = {} ({}), lock test < \
+                 carrier_lock_th = {} ({})",
+                l.max_carrier_lock_fail.value,
+                l.max_carrier_lock_fail.source,
+                l.carrier_lock_th.value,
+                l.carrier_lock_th.source
+            )
+        };
+        let own =
+            [l.carrier_lock_th.source, l.max_carrier_lock_fail.source, l.cn0_min_dbhz.source, l.max_lock_fail.source]
+                .iter()
+                .all(|s| *s != crate::conf::ValueSource::Option);
+        format!(
+            "GNSS-SDR's lock detector declares loss of lock at {at_s:.2} s: {rule}{}",
+            if own {
+                " (GNSS-SDR itself would have stopped the dump there: were the dumps made with this \
+                 configuration, and from the start of the track?)"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
 /// What became of one track.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrackSummary {
@@ -184,13 +443,17 @@ pub struct TrackSummary {
     pub records: usize,
     /// Records of the modelled stage after the settling time.
     pub modelled_records: usize,
-    /// Of those, the records that pass the lock and C/N0 thresholds.
+    /// Of those, the records kept: the ones before a loss of lock.
     pub good_records: usize,
+    /// GNSS-SDR's lock detector replayed over the track.
+    pub lock: LockReplay,
+    /// Time of the record at which the lock detector declares the loss of lock \[s\] (`None`: none).
+    pub lock_loss_s: Option<f64>,
     /// Mean C/N0 over the modelled records \[dB-Hz\] (NaN when none).
     pub mean_cn0_dbhz: f64,
     /// Whether its rows are kept.
     pub used: bool,
-    /// `"used"` or why not.
+    /// `"used: …"` with the rule that kept it, or why not.
     pub reason: String,
 }
 
@@ -244,6 +507,14 @@ pub fn import_dump(
             };
             (recs[k].prn_start_sample_count as f64 - 0.5 * dn) / fs
         };
+        // The lock detector, over the whole track (its counters run through the stages).
+        let first_start = recs[i].prn_start_sample_count as f64 - f64::from(symbols[0]) * samples_per_ms;
+        let call_sample: Vec<f64> =
+            (i..j).map(|k| (recs[k].prn_start_sample_count as f64 - samples_per_ms).max(first_start)).collect();
+        let lock_test: Vec<f64> = recs[i..j].iter().map(|r| r.carrier_lock_test).collect();
+        let cn0: Vec<f64> = recs[i..j].iter().map(|r| r.cn0_dbhz).collect();
+        let lock = replay_lock_detector(&call_sample, &lock_test, &cn0, fs, &settings.tracking);
+        let tracking_end = lock.loss_of_lock.map_or(j, |k| i + k);
         let modelled_symbols = if ext > 1 { ext } else { 1 };
         let switch = (i..j).find(|&k| symbols[k - i] == modelled_symbols && (ext == 1 || k > i));
         // Without extended integration the modelled loop runs from the start,
@@ -262,7 +533,7 @@ pub fn import_dump(
                 let r = &recs[k];
                 modelled += 1;
                 cn0_sum += r.cn0_dbhz;
-                if r.carrier_lock_test >= settings.min_lock_test && r.cn0_dbhz >= settings.min_cn0_dbhz {
+                if k < tracking_end {
                     good += 1;
                     track_rows.push(ImportedRow {
                         t_s: t,
@@ -277,8 +548,11 @@ pub fn import_dump(
                 }
             }
         }
-        let frac = if modelled > 0 { good as f64 / modelled as f64 } else { 0.0 };
-        let reason = if switch.is_none() {
+        let lock_loss_s = lock.loss_of_lock.map(|k| t_mid(i + k));
+        let loss = lock_loss_s.map(|t| lock.describe_loss(&settings.tracking, t));
+        let reason = if let (Some(loss), true) = (&loss, switch.is_none_or(|k| tracking_end <= k)) {
+            format!("{loss}, before it reached the modelled loop")
+        } else if switch.is_none() {
             format!(
                 "never reached the modelled loop ({} ms integrations{}): no bit synchronization in its {} records",
                 modelled_symbols,
@@ -291,18 +565,14 @@ pub fn import_dump(
             )
         } else if modelled == 0 {
             format!("fewer than {settle_s:.1} s of the modelled loop (its settling time)")
-        } else if frac < settings.min_good_fraction {
-            format!(
-                "false track: lock test ≥ {} and C/N0 ≥ {} dB-Hz in only {:.0} % of its {} modelled records",
-                settings.min_lock_test,
-                settings.min_cn0_dbhz,
-                100.0 * frac,
-                modelled
-            )
+        } else if good == 0 {
+            format!("{}, before the modelled loop had settled", loss.unwrap_or_default())
+        } else if let Some(loss) = loss {
+            format!("used up to the loss of lock: {loss}; the {} records from there on are dropped", j - tracking_end)
         } else {
-            "used".to_owned()
+            format!("used: GNSS-SDR's lock detector keeps it to its end ({})", lock.describe(&settings.tracking))
         };
-        let used = reason == "used";
+        let used = good > 0;
         if used {
             rows.extend(track_rows);
         }
@@ -316,6 +586,8 @@ pub fn import_dump(
             records: j - i,
             modelled_records: modelled,
             good_records: good,
+            lock,
+            lock_loss_s,
             mean_cn0_dbhz: if modelled > 0 { cn0_sum / modelled as f64 } else { f64::NAN },
             used,
             reason,
@@ -432,6 +704,7 @@ pub fn write_imported_csv<W: std::io::Write>(w: W, rows: &[ImportedRow]) -> std:
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::conf::ValueSource;
     use crate::dump::TrackingRecord;
 
     fn rec(n: u64, e: f64, cn0: f64, lock: f64, prn: u32) -> TrackingRecord {
@@ -465,6 +738,8 @@ mod tests {
         let mut tc = TrackingConf::defaults();
         tc.extend_correlation_symbols = 20;
         tc.pll_bw_narrow_hz = 3.0;
+        // Counting starts floor(Δn/fs) > 0 s after a track's first record: at 1 s.
+        tc.pull_in_time_s = 0.0;
         let mut s = ImportSettings::new(1.0e6, tc);
         s.settle_s = Some(0.1);
         s
@@ -486,27 +761,97 @@ mod tests {
     }
 
     #[test]
-    fn stages_times_and_false_tracks() {
-        let s = settings();
+    fn stages_times_and_the_receivers_lock_rule() {
+        let mut s = settings();
+        s.tracking.lock.max_carrier_lock_fail = crate::conf::Sourced { value: 20, source: ValueSource::Conf };
         let mut recs = records(0, 100, 50, 5, 0.95);
         // The channel loses lock and restarts on another satellite, which never syncs.
         recs.extend(records(recs.last().unwrap().prn_start_sample_count + 50_000, 300, 0, 9, 0.95));
-        // Then a false lock: synchronized, but the lock test is poor.
-        recs.extend(records(recs.last().unwrap().prn_start_sample_count + 70_000, 50, 40, 11, 0.3));
+        // Then a satellite whose lock test sits at 0.3, below carrier_lock_th = 0.7 (the default):
+        // judged from 1 s on (record 20 of the narrow stage), lost when the counter passes 20.
+        recs.extend(records(recs.last().unwrap().prn_start_sample_count + 70_000, 50, 80, 11, 0.3));
         let d = TrackingDump { file: "trk_ch_2.dat".into(), channel: Some(2), layout: "x".into(), records: recs };
         let (rows, tracks) = import_dump(&d, &s, 0);
         assert_eq!(tracks.len(), 3);
-        assert!(tracks[0].used, "{}", tracks[0].reason);
+        assert!(
+            tracks[0].used && tracks[0].reason.starts_with("used: GNSS-SDR's lock detector"),
+            "{}",
+            tracks[0].reason
+        );
+        assert!(tracks[0].reason.contains("carrier_lock_th = 0.7 (GNSS-SDR's default)"), "{}", tracks[0].reason);
+        assert!(tracks[0].reason.contains("max_carrier_lock_fail = 20 (from the conf)"), "{}", tracks[0].reason);
+        assert_eq!(tracks[0].lock.loss_of_lock, None);
         assert!(tracks[1].reason.contains("no bit synchronization"), "{}", tracks[1].reason);
-        assert!(tracks[2].reason.contains("false track") && tracks[2].reason.contains("0 %"), "{}", tracks[2].reason);
+        // Track 2 starts at its first record's start; a record's detector call runs at the
+        // start of its last millisecond, 69 ms + m·20 ms into the track for narrow record m:
+        // judged from m = 47 on, the 21st failure is narrow record 67.
+        let t2 = &tracks[2];
+        assert_eq!(t2.lock.judged_records, 21);
+        assert_eq!(t2.lock.loss_of_lock, Some(50 + 67));
+        assert_eq!(t2.lock.loss_by, Some("carrier"));
+        assert!(t2.used, "{}", t2.reason);
+        assert!(t2.reason.starts_with("used up to the loss of lock"), "{}", t2.reason);
+        assert!(t2.reason.contains("exceeded max_carrier_lock_fail = 20 (from the conf)"), "{}", t2.reason);
+        assert!(t2.reason.contains("the 13 records from there on are dropped"), "{}", t2.reason);
+        // Narrow records 0..67, less the first 0.1 s (records 0..4 whose middles are < switch + 0.1 s).
+        assert_eq!(t2.good_records, 67 - 5);
+        assert_eq!(t2.modelled_records, 80 - 5);
+        assert!(t2.lock_loss_s.is_some());
+        assert_eq!(rows.iter().filter(|r| r.track == 2).count(), 62);
         // Track 0: first 20 ms record ends at sample 120 000, its middle at 0.110 s; settling 0.1 s.
         assert!((tracks[0].switch_s.unwrap() - 0.110).abs() < 1e-12);
         assert_eq!(tracks[0].modelled_records, 45);
-        assert_eq!(rows.len(), 45);
-        assert!(rows.iter().all(|r| r.channel == 2 && r.prn == 5 && r.symbols == 20));
-        assert!((rows[0].t_s - 0.210).abs() < 1e-12, "{}", rows[0].t_s);
+        let r0: Vec<&ImportedRow> = rows.iter().filter(|r| r.track == 0).collect();
+        assert_eq!(r0.len(), 45);
+        assert!(r0.iter().all(|r| r.channel == 2 && r.prn == 5 && r.symbols == 20));
+        assert!((r0[0].t_s - 0.210).abs() < 1e-12, "{}", r0[0].t_s);
         let want = core::f64::consts::TAU * 0.02 * (5.0f64 * 0.1).sin();
-        assert!((rows[0].phase_err_rad - want).abs() < 1e-12);
+        assert!((r0[0].phase_err_rad - want).abs() < 1e-12);
+        // A loss before bit synchronization drops the whole track, naming the rule.
+        let mut s2 = settings();
+        s2.tracking.lock.max_carrier_lock_fail.set_option(3);
+        let d = TrackingDump {
+            file: "trk_ch_3.dat".into(),
+            channel: Some(3),
+            layout: "x".into(),
+            records: records(0, 1500, 30, 7, 0.1),
+        };
+        let (rows, tracks) = import_dump(&d, &s2, 0);
+        assert!(rows.is_empty() && !tracks[0].used);
+        assert!(tracks[0].reason.contains("before it reached the modelled loop"), "{}", tracks[0].reason);
+        assert!(tracks[0].reason.contains("max_carrier_lock_fail = 3 (given as an option)"), "{}", tracks[0].reason);
+        assert!(!tracks[0].reason.contains("GNSS-SDR itself would have stopped"), "{}", tracks[0].reason);
+    }
+
+    #[test]
+    fn lock_detector_counts_up_and_down_like_gnss_sdr() {
+        let mut tc = TrackingConf::defaults();
+        tc.pull_in_time_s = 0.0;
+        tc.lock.max_lock_fail.set_option(2);
+        tc.lock.cn0_samples.set_option(0);
+        let fs = 1000.0;
+        // One call per second; the first (the track's start) is in the transitory, floor(0 s) ≤ 0.
+        let t: Vec<f64> = (0..9).map(|k| 1000.0 * k as f64).collect();
+        let lock = vec![1.0; 9];
+        // fail, fail, pass, fail, fail → counter 1, 2, 1, 2, 3 > 2: loss at the 5th judged call.
+        let cn0 = [0.0, 20.0, 20.0, 30.0, 20.0, 20.0, 30.0, 30.0, 30.0];
+        let r = replay_lock_detector(&t, &lock, &cn0, fs, &tc);
+        assert_eq!(r.loss_of_lock, Some(5));
+        assert_eq!(r.loss_by, Some("code"));
+        assert_eq!(r.code_fail_counter_max, 2);
+        assert_eq!(r.code_lock_failures, 4);
+        // The counter never goes below zero: passes first bank nothing.
+        let cn0 = [0.0, 30.0, 30.0, 30.0, 20.0, 20.0, 30.0, 20.0, 20.0];
+        let r = replay_lock_detector(&t, &lock, &cn0, fs, &tc);
+        assert_eq!(r.loss_of_lock, Some(8), "{r:?}");
+        // The pull-in transitory: with pull_in_time_s = 2 nothing is judged before floor(Δt) > 2 s.
+        tc.pull_in_time_s = 2.0;
+        let r = replay_lock_detector(&t, &lock, &[20.0; 9], fs, &tc);
+        assert_eq!((r.judged_records, r.loss_of_lock), (3, Some(5)));
+        // C/N0 exactly at cn0_min and a lock test exactly at carrier_lock_th pass (strict <).
+        tc.pull_in_time_s = 0.0;
+        let r = replay_lock_detector(&t, &[0.7; 9], &[25.0; 9], fs, &tc);
+        assert_eq!((r.carrier_lock_failures, r.code_lock_failures, r.loss_of_lock), (0, 0, None));
     }
 
     #[test]
@@ -522,6 +867,8 @@ mod tests {
             records: 0,
             modelled_records: 0,
             good_records: 0,
+            lock: replay_lock_detector(&[], &[], &[], 1.0, &TrackingConf::defaults()),
+            lock_loss_s: None,
             mean_cn0_dbhz: 40.0,
             used: true,
             reason: "used".into(),

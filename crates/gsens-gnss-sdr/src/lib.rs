@@ -9,7 +9,8 @@
 //! - [`dump`]: its tracking dumps (`Tracking_1C.dump=true`, `trk_ch_N.dat`),
 //!   version-aware, with errors that name the file, record and byte offset;
 //! - [`import`]: dumps → the `tracking.csv` schema (φ in rad, time at the
-//!   middle of each integration), false tracks dropped with a reason;
+//!   middle of each integration), each track judged by GNSS-SDR's own lock
+//!   detector replayed with the configuration's settings, with a reason;
 //! - the exact models of its carrier loops live in
 //!   [`gsens_core::gnss_sdr`] (no_std, shared with the estimator).
 #![deny(missing_docs)]
