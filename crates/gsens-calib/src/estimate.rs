@@ -98,7 +98,55 @@ pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> R
 }
 
 /// Runs the configured estimator over the series and assembles the result.
+///
+/// An axis the data cannot observe leaves the solve: its column of φ_a,
+/// however small, is still correlated with the shaken axes' and would
+/// inflate their σ (six-fold on a session shaken along x alone). The
+/// estimate is then made again with that axis's specific force set to zero,
+/// and the unobservable axis keeps the verdict and raw estimate of the first
+/// pass.
 pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
+    let all = calibrate_all_axes(series, settings)?;
+    let unobservable: Vec<usize> = (0..3).filter(|&i| !all.observable[i]).collect();
+    if unobservable.is_empty() || unobservable.len() == 3 {
+        return Ok(all);
+    }
+    let masked: Vec<[f64; 3]> = series
+        .accel_mps2
+        .iter()
+        .map(|a| {
+            let mut a = *a;
+            for &i in &unobservable {
+                a[i] = 0.0;
+            }
+            a
+        })
+        .collect();
+    let mut c = calibrate_all_axes(&EpochSeries { accel_mps2: &masked, ..*series }, settings)?;
+    for &i in &unobservable {
+        c.observable[i] = false;
+        c.excitation_rms[i] = all.excitation_rms[i];
+        c.gamma_raw_hz_per_mps2[i] = all.gamma_raw_hz_per_mps2[i];
+        c.sigma_white_hz_per_mps2[i] = all.sigma_white_hz_per_mps2[i];
+        c.axes[i] = all.axes[i].clone();
+        c.gamma_hz_per_mps2[i] = None;
+        c.sigma_hz_per_mps2[i] = None;
+        c.sigma_statistical_hz_per_mps2[i] = None;
+        c.sigma_imu_hz_per_mps2[i] = None;
+        c.gamma_ppb_per_g[i] = None;
+        c.sigma_ppb_per_g[i] = None;
+        c.crlb_hz_per_mps2[i] = None;
+        for j in 0..3 {
+            c.covariance_hz_per_mps2_sq[i][j] = None;
+            c.covariance_hz_per_mps2_sq[j][i] = None;
+        }
+    }
+    c.condition_number = all.condition_number;
+    Ok(c)
+}
+
+/// [`calibrate`] with every axis in the solve.
+fn calibrate_all_axes(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
     settings.validate()?;
     let n = series.accel_mps2.len();
     if series.phase_err_rad.len() != n || series.t_s.len() != n {

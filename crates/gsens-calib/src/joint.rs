@@ -140,7 +140,28 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 
 /// Estimates Γ jointly with the nuisance parameters `spec` asks for, starting
 /// from the stated loop `settings.receiver_loop` and the series' offset.
+///
+/// Axes the data cannot observe under the stated loop
+/// ([`gsens_core::assess`] with `settings.criteria`) are left out of the fit
+/// (their Γ̂ reads 0, their variance inflation 1): their small, correlated
+/// columns would otherwise inflate the shaken axes' σ.
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
+    let (_, ne) = batch_pass(series, settings)?;
+    let obs = gsens_core::assess(&ne, &ne.solve(), &settings.criteria);
+    let axes: Vec<usize> = (0..3).filter(|&i| obs.observable[i]).collect();
+    if axes.is_empty() || axes.len() == 3 {
+        return joint_fit_axes(series, settings, spec, &[0, 1, 2]);
+    }
+    joint_fit_axes(series, settings, spec, &axes)
+}
+
+/// [`joint_fit`] with Γ estimated on `axes` only.
+fn joint_fit_axes(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    spec: JointSpec,
+    axes: &[usize],
+) -> Result<JointFit, CalibError> {
     let t = series.log_interval_s;
     let stated = settings.loop_at(t);
     let wn_stated = stated.natural_frequency_hz();
@@ -169,7 +190,8 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     let loop_at = |ln_s: f64, zeta: Option<f64>| scaled_loop(&stated, ln_s.exp(), zeta);
     let phi_a_of = |fed: &[FedEpoch]| -> Vec<[f64; 3]> { fed.iter().map(|e| e.phi_a).collect() };
 
-    let p = 3 + fit_loop as usize + fit_zeta as usize + spec.offset_max_abs_s.is_some() as usize;
+    let na = axes.len();
+    let p = na + fit_loop as usize + fit_zeta as usize + spec.offset_max_abs_s.is_some() as usize;
     let mut iterations = 0;
     let (jac, resid, gamma, gamma_stated) = loop {
         iterations += 1;
@@ -185,8 +207,13 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         for (ak, pk) in a.iter().zip(&phi) {
             ne.add(*pk, ak);
         }
-        let g = ne.solve().gamma_hz_per_mps2;
-        let mut columns: Vec<Vec<f64>> = (0..3).map(|i| a.iter().map(|v| v[i]).collect()).collect();
+        let mut g = ne.solve().gamma_hz_per_mps2;
+        for (i, gi) in g.iter_mut().enumerate() {
+            if !axes.contains(&i) {
+                *gi = 0.0;
+            }
+        }
+        let mut columns: Vec<Vec<f64>> = axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
         let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
             let (fl, fh) = (triad_pass(series, settings, lo)?, triad_pass(series, settings, hi)?);
             let (pl, ph) = (phi_a_of(&fl), phi_a_of(&fh));
@@ -227,7 +254,7 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         };
         let small = |c: usize, d: f64| d.abs() <= 0.02 * (jtj_inv[(c, c)] * white_var).max(0.0).sqrt();
         let mut converged = true;
-        let mut c = 3;
+        let mut c = na;
         if fit_loop {
             let d = beta[c].clamp(-0.3, 0.3);
             converged &= small(c, d);
@@ -249,7 +276,10 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         // final θ and the Jacobian there give the covariance.
         if converged || iterations >= 12 || p == 3 {
             let resid = &y - &jac * &beta;
-            let gamma = [beta[0], beta[1], beta[2]];
+            let mut gamma = [0.0; 3];
+            for (k, &i) in axes.iter().enumerate() {
+                gamma[i] = beta[k];
+            }
             let gamma_stated = if fit_loop || fit_zeta {
                 let pa0 = phi_a_of(&fed0);
                 let mut ne = gsens_core::NormalEquations::default();
@@ -291,14 +321,18 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     let jtj_inv = (jac.transpose() * &jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
     let cov = &jtj_inv * middle * &jtj_inv;
     // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
-    let a3 = jac.columns(0, 3).into_owned();
-    let a3_inv = (a3.transpose() * &a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(3, 3));
-    let middle3 = gls::covariance_middle_columns(&noise, &full_columns[..3], &segments);
+    let a3 = jac.columns(0, na).into_owned();
+    let a3_inv = (a3.transpose() * &a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(na, na));
+    let middle3 = gls::covariance_middle_columns(&noise, &full_columns[..na], &segments);
     let cov3 = &a3_inv * middle3 * &a3_inv;
-    let variance_inflation =
-        [0, 1, 2].map(|i| if cov3[(i, i)] > 0.0 { (cov[(i, i)] / cov3[(i, i)]).max(1.0) } else { 1.0 });
+    // Row/column of axis i in the fit (None: left out as unobservable).
+    let at = |i: usize| axes.iter().position(|&a| a == i);
+    let variance_inflation = [0, 1, 2].map(|i| match at(i) {
+        Some(k) if cov3[(k, k)] > 0.0 => (cov[(k, k)] / cov3[(k, k)]).max(1.0),
+        _ => 1.0,
+    });
 
-    let mut c = 3;
+    let mut c = na;
     let (mut loop_idx, mut zeta_idx, mut tau_idx) = (None, None, None);
     if fit_loop {
         loop_idx = Some(c);
@@ -348,7 +382,12 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         fitted_loop_used: fit_loop,
         rss_rad2: resid.norm_squared(),
         epochs: used.len(),
-        gamma_covariance_hz_per_mps2_sq: [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov[(i, j)])),
+        gamma_covariance_hz_per_mps2_sq: [0, 1, 2].map(|i| {
+            [0, 1, 2].map(|j| match (at(i), at(j)) {
+                (Some(k), Some(l)) => cov[(k, l)],
+                _ => 0.0,
+            })
+        }),
         iterations,
     })
     .map(|mut f: JointFit| {
