@@ -107,7 +107,9 @@ pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> R
 /// pass.
 pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
     let all = calibrate_all_axes(series, settings)?;
-    let unobservable: Vec<usize> = (0..3).filter(|&i| !all.observable[i]).collect();
+    let (_, ne) = search::batch_pass(series, settings)?;
+    let in_solve = axes_in_solve(&ne, &settings.criteria);
+    let unobservable: Vec<usize> = (0..3).filter(|&i| !in_solve[i]).collect();
     if unobservable.is_empty() || unobservable.len() == 3 {
         return Ok(all);
     }
@@ -143,6 +145,30 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     }
     c.condition_number = all.condition_number;
     Ok(c)
+}
+
+/// The axes that stay in the solve: first those whose own excitation, the
+/// RMS of their φ_a column √(AᵀA_ii/n), reaches the observability floor
+/// (an axis never shaken has almost none, and its small column, correlated
+/// with a shaken one, would make the shaken one look unobservable too), then
+/// of those the ones [`gsens_core::assess`] finds observable with only them
+/// in the normal equations.
+pub(crate) fn axes_in_solve(
+    ne: &gsens_core::NormalEquations,
+    criteria: &gsens_core::ObservabilityCriteria,
+) -> [bool; 3] {
+    let n = ne.n.max(1) as f64;
+    let excited = [0, 1, 2].map(|i| (ne.ata[(i, i)] / n).max(0.0).sqrt() >= criteria.min_excitation_rms);
+    let mut kept = *ne;
+    for i in (0..3).filter(|&i| !excited[i]) {
+        for j in 0..3 {
+            kept.ata[(i, j)] = 0.0;
+            kept.ata[(j, i)] = 0.0;
+        }
+        kept.atb[i] = 0.0;
+    }
+    let obs = gsens_core::assess(&kept, &kept.solve(), criteria);
+    [0, 1, 2].map(|i| excited[i] && obs.observable[i])
 }
 
 /// [`calibrate`] with every axis in the solve.

@@ -147,8 +147,8 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 /// columns would otherwise inflate the shaken axes' σ.
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
     let (_, ne) = batch_pass(series, settings)?;
-    let obs = gsens_core::assess(&ne, &ne.solve(), &settings.criteria);
-    let axes: Vec<usize> = (0..3).filter(|&i| obs.observable[i]).collect();
+    let in_solve = crate::estimate::axes_in_solve(&ne, &settings.criteria);
+    let axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
     if axes.is_empty() || axes.len() == 3 {
         return joint_fit_axes(series, settings, spec, &[0, 1, 2]);
     }
