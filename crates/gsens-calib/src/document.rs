@@ -184,12 +184,7 @@ impl ResultDocument {
                 ),
             });
         }
-        let c = &outcome.calibration;
-        // Its false alarms at 0.5 %, so that with the loop test's 0.1 % a clean
-        // session is flagged less than 1 % of the time.
-        let response_settings = crate::ResponseSettings { false_alarm: 0.005, ..Default::default() };
-        match crate::measure_response_with(&outcome.series(), &c.settings, &c.gamma_raw_hz_per_mps2, &response_settings)
-        {
+        match &outcome.loop_response {
             Ok(check) => {
                 if !check.consistent {
                     doc.warnings.push(Warning {
@@ -201,7 +196,7 @@ impl ResultDocument {
                         ),
                     });
                 }
-                doc.loop_response = Some(check);
+                doc.loop_response = Some(check.clone());
             }
             Err(e) => doc.warnings.push(Warning {
                 code: "response_unchecked",

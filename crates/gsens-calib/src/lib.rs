@@ -76,8 +76,8 @@ pub use joint::{
     joint_fit,
 };
 pub use pipeline::{
-    LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, TimeOffset,
-    calibrate_files, calibrate_gnss_sdr, calibrate_logs, gnss_sdr_tracking_log, series_of,
+    LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, RESPONSE_CHECK_FALSE_ALARM,
+    TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_logs, gnss_sdr_tracking_log, series_of,
 };
 pub use response_check::{
     ResponseBin, ResponseCheck, ResponseCheckError, ResponseSettings, epoch_response, measure_response,

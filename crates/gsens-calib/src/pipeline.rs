@@ -76,6 +76,11 @@ pub enum LoopIdentificationMode {
     TestOnly,
 }
 
+/// False-alarm probability of the measured-response check in the pipeline:
+/// 0.5 %, so that with the loop test's 0.1 % a clean session is flagged less
+/// than 1 % of the time.
+pub const RESPONSE_CHECK_FALSE_ALARM: f64 = 0.005;
+
 /// Everything that decides a calibration from logs.
 ///
 /// Start from [`PipelineSettings::default`] and set what differs.
@@ -154,6 +159,10 @@ pub struct Outcome {
     pub gnss_sdr: Option<GnssSdrConversion>,
     /// The loop the data chose when none was stated.
     pub chosen_loop: Option<crate::ChosenLoop>,
+    /// The loop's response measured from the session against the model
+    /// ([`crate::measure_response_with`], at [`RESPONSE_CHECK_FALSE_ALARM`]),
+    /// or why it could not be measured.
+    pub loop_response: Result<crate::ResponseCheck, String>,
     /// Time stamps of the IMU samples replaced as isolated spikes \[s\].
     pub imu_spikes_t_s: Vec<f64>,
     /// Runs of identical IMU samples no noise or motion makes (stuck,
@@ -258,12 +267,21 @@ pub fn calibrate_logs(
     if let Some(fit) = joint {
         calibration.include_nuisance(&fit);
     }
+    let response_settings = crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
+    let loop_response = crate::measure_response_with(
+        &series_of(&session),
+        &calibration.settings,
+        &calibration.gamma_raw_hz_per_mps2,
+        &response_settings,
+    )
+    .map_err(|e| e.to_string());
     Ok(Outcome {
         session,
         calibration,
         settings: settings.clone(),
         gnss_sdr: None,
         chosen_loop,
+        loop_response,
         imu_spikes_t_s: spikes.t_s,
         imu_flat_runs: flat_runs,
         imu_flat_run_epochs: flat_run_epochs,

@@ -4,8 +4,9 @@
 
 use crate::FigureBlock;
 use crate::figures::{
-    AllanData, Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, RenderError, ResponseData,
-    SpectrumData, fig_allan, fig_cn0, fig_compensation, fig_estimation, fig_residual_spectrum, fig_response,
+    AllanData, Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, MeasuredResponseData,
+    RenderError, ResponseData, SpectrumData, fig_allan, fig_cn0, fig_compensation, fig_estimation,
+    fig_measured_response, fig_residual_spectrum, fig_response,
 };
 use gsens_calib::{CalibError, Calibration, Outcome, compensation_series};
 use gsens_io::TrackingLog;
@@ -86,6 +87,7 @@ pub struct FigureInputs<'a> {
     before: Vec<Option<f64>>,
     after: Vec<Option<f64>>,
     spectrum: (Vec<f64>, Vec<f64>),
+    measured_response: Option<MeasuredResponseData>,
 }
 
 impl<'a> FigureInputs<'a> {
@@ -121,7 +123,28 @@ impl<'a> FigureInputs<'a> {
         }
         let spec_before: Vec<f64> = best.clone().filter_map(|k| before[k]).collect();
         let resid: Vec<f64> = best.filter_map(|k| after[k]).collect();
-        Ok(FigureInputs { session, calibration, tracking, truth, before, after, spectrum: (spec_before, resid) })
+        let measured_response = outcome.loop_response.as_ref().ok().map(|check| {
+            let model = calibration.settings.loop_at(session.log_interval_s);
+            let desc = model.to_string();
+            MeasuredResponseData::from_check(
+                check,
+                &model,
+                session.log_interval_s,
+                calibration.settings.logged_phase,
+                200,
+                desc,
+            )
+        });
+        Ok(FigureInputs {
+            session,
+            calibration,
+            tracking,
+            truth,
+            before,
+            after,
+            spectrum: (spec_before, resid),
+            measured_response,
+        })
     }
 
     /// The figures: Figs. 3–5 of the paper, C/N0, the residual spectrum.
@@ -143,6 +166,17 @@ impl<'a> FigureInputs<'a> {
                     r.peak_hz
                 ),
                 render: Box::new(move |f| fig_response(&r, f, DEFAULT_SIZE)),
+            });
+        }
+        if let Some(m) = self.measured_response.as_ref().filter(|m| !m.points.is_empty()) {
+            figs.push(Figure {
+                id: "measured_response",
+                title: "The loop's response measured from the session".into(),
+                caption: "The response of the averaged phase error to the modelled excitation aᵀΓ̂, estimated from \
+                          the session (Welch cross-spectrum, ±2σ from the coherence; the bins the check tests in red), \
+                          beside the model's. Points off the model curve mean the stated loop is not the receiver's."
+                    .into(),
+                render: Box::new(move |f| fig_measured_response(m, f, (DEFAULT_SIZE.0, 720))),
             });
         }
         figs.push(Figure {
