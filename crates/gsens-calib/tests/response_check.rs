@@ -267,6 +267,8 @@ fn simulated_session(seed: u64, assert_wrong_fails: bool) {
     assert!(lo <= 0.91 && hi >= 0.91, "{lo}–{hi} Hz");
 
     let mut wrong = ps;
+    // The stated loop as it is (the pipeline's loop check would fit it).
+    wrong.loop_identification = gsens_calib::LoopIdentificationMode::Off;
     wrong.estimate.receiver_loop =
         LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 3.6, zeta: std::f64::consts::FRAC_1_SQRT_2 }, Some(0.001));
     let outcome = calibrate_logs(&logs.tracking, &logs.imu, "imu", &wrong).unwrap();
