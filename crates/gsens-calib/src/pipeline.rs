@@ -277,7 +277,14 @@ pub fn calibrate_logs(
     let response_settings = crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
     let loop_response =
         crate::measure_response_with(&series_of(&session), &calibration.settings, &gamma_ls, &response_settings)
-            .map_err(|e| e.to_string());
+            .map_err(|e| e.to_string())
+            .and_then(|c| {
+                if c.bins_tested == 0 {
+                    Err("no frequency bin of the shaken band has a significant coherence".to_string())
+                } else {
+                    Ok(c)
+                }
+            });
     Ok(Outcome {
         session,
         calibration,
