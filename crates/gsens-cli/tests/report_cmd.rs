@@ -48,7 +48,8 @@ fn report_writes_html_json_header_and_figures() {
     let out = Path::new(&out);
 
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert_eq!(html.matches("<svg ").count(), 5, "Figs. 3–5, C/N0, residual spectrum");
+    assert_eq!(html.matches("<svg ").count(), 6, "Figs. 3–5, the measured response, C/N0, residual spectrum");
+    assert!(html.contains("response measured from the session"), "the measured response figure");
     for needle in [
         "id=\"verdict\"",
         "id=\"estimate-table\"",
@@ -63,7 +64,7 @@ fn report_writes_html_json_header_and_figures() {
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(v["gamma_hz_per_mps2"].as_array().unwrap().len(), 3);
     assert_eq!(v["observable"], serde_json::json!([true, true, true]));
-    assert_eq!(v["report"]["figures"].as_array().unwrap().len(), 5);
+    assert_eq!(v["report"]["figures"].as_array().unwrap().len(), 6);
     assert!(v["truth_gamma_hz_per_mps2"].is_array());
     let g0 = v["gamma_hz_per_mps2"][0].as_f64().unwrap();
     // `estimate --json` writes the same result document: every key but the
