@@ -106,8 +106,7 @@ pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> R
 /// and the unobservable axis keeps the verdict and raw estimate of the first
 /// pass.
 pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
-    let all = calibrate_all_axes(series, settings)?;
-    let (_, ne) = search::batch_pass(series, settings)?;
+    let (all, ne) = calibrate_all_axes(series, settings)?;
     let in_solve = axes_in_solve(&ne, &settings.criteria);
     let unobservable: Vec<usize> = (0..3).filter(|&i| !in_solve[i]).collect();
     if unobservable.is_empty() || unobservable.len() == 3 {
@@ -124,7 +123,7 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
             a
         })
         .collect();
-    let mut c = calibrate_all_axes(&EpochSeries { accel_mps2: &masked, ..*series }, settings)?;
+    let (mut c, _) = calibrate_all_axes(&EpochSeries { accel_mps2: &masked, ..*series }, settings)?;
     for &i in &unobservable {
         c.observable[i] = false;
         c.excitation_rms[i] = all.excitation_rms[i];
@@ -171,8 +170,12 @@ pub(crate) fn axes_in_solve(
     [0, 1, 2].map(|i| excited[i] && obs.observable[i])
 }
 
-/// [`calibrate`] with every axis in the solve.
-fn calibrate_all_axes(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
+/// [`calibrate`] with every axis in the solve, and the batch pass's normal
+/// equations (which decide the axes that stay in it).
+fn calibrate_all_axes(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+) -> Result<(Calibration, gsens_core::NormalEquations), CalibError> {
     settings.validate()?;
     let n = series.accel_mps2.len();
     if series.phase_err_rad.len() != n || series.t_s.len() != n {
@@ -302,7 +305,8 @@ fn calibrate_all_axes(series: &EpochSeries, settings: &EstimateSettings) -> Resu
     let axes =
         verdict::axis_verdicts(series.accel_mps2, series.log_interval_s, &loop_used, observable, obs.excitation_rms);
     let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
-    Ok(Calibration {
+    let normal = *batch.normal_equations();
+    let calibration = Calibration {
         gamma_hz_per_mps2: gamma_out,
         sigma_hz_per_mps2: sigma,
         sigma_statistical_hz_per_mps2: sigma_stat,
@@ -339,7 +343,8 @@ fn calibrate_all_axes(series: &EpochSeries, settings: &EstimateSettings) -> Resu
         model_substeps: substeps,
         loop_used,
         settings: *settings,
-    })
+    };
+    Ok((calibration, normal))
 }
 
 /// P·M·P for a symmetric 3×3 P (nalgebra's) and M.

@@ -146,21 +146,24 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 /// (their Γ̂ reads 0, their variance inflation 1): their small, correlated
 /// columns would otherwise inflate the shaken axes' σ.
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
-    let (_, ne) = batch_pass(series, settings)?;
+    // The stated loop's pass: it decides the axes and starts the fit.
+    let (fed0, ne) = batch_pass(series, settings)?;
     let in_solve = crate::estimate::axes_in_solve(&ne, &settings.criteria);
     let axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
     if axes.is_empty() || axes.len() == 3 {
-        return joint_fit_axes(series, settings, spec, &[0, 1, 2]);
+        return joint_fit_axes(series, settings, spec, &[0, 1, 2], fed0);
     }
-    joint_fit_axes(series, settings, spec, &axes)
+    joint_fit_axes(series, settings, spec, &axes, fed0)
 }
 
-/// [`joint_fit`] with Γ estimated on `axes` only.
+/// [`joint_fit`] with Γ estimated on `axes` only, from `fed0`, the series
+/// as the stated loop fed it.
 fn joint_fit_axes(
     series: &EpochSeries,
     settings: &EstimateSettings,
     spec: JointSpec,
     axes: &[usize],
+    fed0: Vec<FedEpoch>,
 ) -> Result<JointFit, CalibError> {
     let t = series.log_interval_s;
     let stated = settings.loop_at(t);
@@ -173,7 +176,6 @@ fn joint_fit_axes(
     // Start: the stated loop, the offset from the global search under it.
     let mut ln_s = 0.0f64;
     let mut zeta = zeta0;
-    let fed0 = triad_pass(series, settings, &stated)?;
     let mut dtau = match spec.offset_max_abs_s {
         Some(max) => offset_profile(&fed0, t, max)?.dtau_s,
         None => 0.0,

@@ -82,8 +82,8 @@ fn golden(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f6
 }
 
 /// Grid search then golden-section refinement of `f` on \[lo, hi\]; returns the
-/// minimizer and the curvature f'' there (central differences at step `h`).
-fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, h: f64, mut f: impl FnMut(f64) -> f64) -> (f64, f64) {
+/// minimizer.
+fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
     let step = (hi - lo) / grid as f64;
     let (mut best_x, mut best_f) = (lo, f64::INFINITY);
     for i in 0..=grid {
@@ -94,9 +94,7 @@ fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, h: f64, mut f: impl FnMu
             best_x = x;
         }
     }
-    let x = golden((best_x - step).max(lo), (best_x + step).min(hi), tol, &mut f);
-    let (fm, f0, fp) = (f(x - h), f(x), f(x + h));
-    (x, (fp - 2.0 * f0 + fm) / (h * h))
+    golden((best_x - step).max(lo), (best_x + step).min(hi), tol, &mut f)
 }
 
 /// The profile of the RSS over the time-offset correction δτ for one batch pass.
@@ -127,34 +125,23 @@ pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result
         rss(&ne)
     };
     let grid = ((2.0 * max_abs_s / (0.25 * t)).ceil() as usize).max(8);
-    let (dtau_s, _) = minimize_1d(-max_abs_s, max_abs_s, grid, 1e-5, 0.1 * t, rss_at);
+    let dtau_s = minimize_1d(-max_abs_s, max_abs_s, grid, 1e-5, rss_at);
     Ok(OffsetProfile { dtau_s })
 }
 
 /// The loop with natural frequency scaled by `scale` and, for a 2nd-order
 /// loop, damping `zeta` (GNSS-SDR's loops: their bandwidth scaled).
 pub(crate) fn scaled_loop(model: &LoopModel, scale: f64, zeta: Option<f64>) -> LoopModel {
-    match *model {
-        LoopModel::Kaplan { spec, interval_s } => LoopModel::kaplan(scaled_spec(&spec, scale, zeta), interval_s),
-        LoopModel::GnssSdr(stage) => {
-            LoopModel::GnssSdr(gsens_core::gnss_sdr::GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage })
+    // A new damping at the same ωn first, then every time constant scaled.
+    let model = match (*model, zeta) {
+        (LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz, zeta: z0 }, interval_s }, Some(z)) => {
+            let wn = gsens_core::second_order_wn_from_bn(bn_hz, z0);
+            LoopModel::kaplan(
+                LoopSpec::SecondOrder { bn_hz: gsens_core::second_order_bn_from_wn(wn, z), zeta: z },
+                interval_s,
+            )
         }
-        other => other,
-    }
-}
-
-fn scaled_spec(spec: &LoopSpec, scale: f64, zeta: Option<f64>) -> LoopSpec {
-    match *spec {
-        LoopSpec::SecondOrder { bn_hz, zeta: z0 } => {
-            let z = zeta.unwrap_or(z0);
-            let wn = gsens_core::second_order_wn_from_bn(bn_hz, z0) * scale;
-            LoopSpec::SecondOrder { bn_hz: gsens_core::second_order_bn_from_wn(wn, z), zeta: z }
-        }
-        LoopSpec::ThirdOrder { bn_hz, a3, b3 } => LoopSpec::ThirdOrder { bn_hz: bn_hz * scale, a3, b3 },
-        LoopSpec::Coefficients(c) => LoopSpec::Coefficients(gsens_core::LoopFilterCoeffs {
-            c0_per_s: c.c0_per_s * scale,
-            c1_per_s2: c.c1_per_s2 * scale * scale,
-            c2_per_s3: c.c2_per_s3 * scale * scale * scale,
-        }),
-    }
+        (m, _) => m,
+    };
+    model.with_bn_scaled(scale)
 }

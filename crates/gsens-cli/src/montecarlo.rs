@@ -43,11 +43,7 @@ pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
         .map(|&m| {
             let mut s = scenario_settings(&scenario, &base)?;
             s.method = args.estimator.method(m);
-            if args.stated_bn_scale != 1.0 {
-                s.receiver_loop = s.receiver_loop.with_bn_scaled(args.stated_bn_scale).ok_or_else(|| {
-                    anyhow::anyhow!("--stated-bn-scale: the scenario's loop has no bandwidth to scale")
-                })?;
-            }
+            s.receiver_loop = s.receiver_loop.with_bn_scaled(args.stated_bn_scale);
             Ok(pipeline_settings(s, &args.selection, &args.systematic))
         })
         .collect::<Result<Vec<_>>>()?;

@@ -132,19 +132,25 @@ impl LoopModel {
         }
     }
 
-    /// The same loop with its noise bandwidth Bn times `scale` (its shape,
-    /// ζ or a3/b3, and interval kept); `None` for a loop given by its filter
-    /// coefficients.
-    pub fn with_bn_scaled(&self, scale: f64) -> Option<LoopModel> {
+    /// The same loop with its noise bandwidth Bn times `scale`, its shape (ζ,
+    /// or a3 and b3) and interval kept: every time constant divided by
+    /// `scale`, so a loop given by its filter coefficients has c0·s, c1·s²,
+    /// c2·s³ (Bn ∝ ωn at a fixed shape).
+    pub fn with_bn_scaled(&self, scale: f64) -> LoopModel {
         match *self {
-            LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz, zeta }, interval_s } => {
-                Some(LoopModel::Kaplan { spec: LoopSpec::SecondOrder { bn_hz: bn_hz * scale, zeta }, interval_s })
+            LoopModel::Kaplan { spec, interval_s } => {
+                let spec = match spec {
+                    LoopSpec::SecondOrder { bn_hz, zeta } => LoopSpec::SecondOrder { bn_hz: bn_hz * scale, zeta },
+                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } => LoopSpec::ThirdOrder { bn_hz: bn_hz * scale, a3, b3 },
+                    LoopSpec::Coefficients(c) => LoopSpec::Coefficients(LoopFilterCoeffs {
+                        c0_per_s: c.c0_per_s * scale,
+                        c1_per_s2: c.c1_per_s2 * scale * scale,
+                        c2_per_s3: c.c2_per_s3 * scale * scale * scale,
+                    }),
+                };
+                LoopModel::Kaplan { spec, interval_s }
             }
-            LoopModel::Kaplan { spec: LoopSpec::ThirdOrder { bn_hz, a3, b3 }, interval_s } => {
-                Some(LoopModel::Kaplan { spec: LoopSpec::ThirdOrder { bn_hz: bn_hz * scale, a3, b3 }, interval_s })
-            }
-            LoopModel::Kaplan { .. } => None,
-            LoopModel::GnssSdr(stage) => Some(LoopModel::GnssSdr(GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage })),
+            LoopModel::GnssSdr(stage) => LoopModel::GnssSdr(GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage }),
         }
     }
 
