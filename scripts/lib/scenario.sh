@@ -1,10 +1,12 @@
 # Shared by the GNSS-SDR scripts: TOML pieces of their scenarios.
 #
-# paper_session ORDER
-#   the session start, the paper's OCXO with its Γ and a 3 Hz loop of ORDER.
+# paper_session ORDER [GAMMA]
+#   the session start, the paper's OCXO with its Γ (or GAMMA, a TOML array in
+#   Hz/(m/s²), e.g. "[-0.05, 0.12, 0.03]") and a 3 Hz loop of ORDER.
 paper_session() {
+    local gamma=${2:-[0.09, 0.08, -0.08]}
     printf '[session]\nstart_utc = "2024-02-08T12:00:00Z"\n[oscillator]\npreset = "ocxo"\n'
-    printf 'gamma_hz_per_mps2 = [0.09, 0.08, -0.08]\n[loop]\norder = %s\nbn_hz = 3.0\n' "$1"
+    printf 'gamma_hz_per_mps2 = %s\n[loop]\norder = %s\nbn_hz = 3.0\n' "$gamma" "$1"
 }
 
 #
