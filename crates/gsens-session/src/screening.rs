@@ -173,8 +173,9 @@ pub struct TrackScreening {
     pub rows_startup: usize,
     /// Whether the whole track is excluded (too large a fraction flagged).
     pub track_excluded: bool,
-    /// Robust σ of the track's deviation from the other channels \[rad\];
-    /// `None` where it never had two others to compare with.
+    /// Robust σ of the track's deviation from the other channels \[rad\], on
+    /// L1's scale (the track's phases times f_L1/f_c, as averaged); `None`
+    /// where it never had two others to compare with.
     pub deviation_sigma_rad: Option<f64>,
     /// Median C/N0 of the track's rows \[dB-Hz\] (the reference of the C/N0-drop test).
     pub median_cn0_dbhz: Option<f64>,
@@ -268,6 +269,10 @@ pub(crate) struct Rows {
     pub phase: Vec<f64>,
     /// C/N0 \[dB-Hz\].
     pub cn0: Vec<f64>,
+    /// Per track: the factor f_L1/f_c its phases were scaled by onto L1's scale
+    /// (missing: 1). The linear-range test compares the discriminator's own
+    /// output, phase/to_l1, with the limit.
+    pub to_l1: Vec<f64>,
     /// Per track: the epoch (exclusive) where its start-up ends
     /// ([`ScreeningConfig::startup_s`] after its first row in the log; 0 when
     /// that lies before the first epoch). Missing: no start-up.
@@ -281,6 +286,11 @@ impl Rows {
 
     fn range(&self, i: usize) -> core::ops::Range<usize> {
         self.track_start[i]..self.track_start[i + 1]
+    }
+
+    /// The factor track `i`'s phases were scaled by (f_L1/f_c).
+    fn to_l1(&self, i: usize) -> f64 {
+        self.to_l1.get(i).copied().unwrap_or(1.0)
     }
 
     /// The epoch (exclusive) where track `i`'s start-up ends.
@@ -676,6 +686,8 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     if let Some(limit) = cfg.max_abs_phase_rad {
         for i in 0..n_tracks {
             let range = rows.range(i);
+            // In the discriminator's own units: the phase on L1's scale over f_L1/f_c.
+            let limit = limit * rows.to_l1(i);
             for r in range.clone() {
                 let p = rows.phase[r];
                 // A start-up row is excluded already, as the pull-in it is.
