@@ -154,6 +154,15 @@ pub const MAX_SPANS: usize = 100;
 pub struct TrackScreening {
     /// Rows (passing the masks) excluded.
     pub rows_excluded: usize,
+    /// The track's gain on the common signal relative to the other tracks'
+    /// (test 3, its tested windows pooled; 1 for a track on the carrier the log
+    /// gives it, f_true/f_given for one whose carrier is wrong); `None` where
+    /// fewer than two windows were tested.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_gain: Option<f64>,
+    /// The standard error of [`relative_gain`](Self::relative_gain).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_gain_se: Option<f64>,
     /// Slip / excursion events detected.
     pub slips: usize,
     /// Of the events, those that settled on a new level (the track is split into `steps + 1` segments).
@@ -731,8 +740,11 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut fits);
         }
     }
-    let tested = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
+    let (tested, pooled) = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
     drop(inputs);
+    for (sum, p) in out.summaries.iter_mut().zip(pooled) {
+        (sum.relative_gain, sum.relative_gain_se) = (p.map(|p| p.0), p.map(|p| p.1));
+    }
     // What could not be checked, track by track.
     for i in 0..n_tracks {
         let not_checked = &mut out.summaries[i].not_checked;
@@ -1149,7 +1161,8 @@ fn gain_fits(g: &GainInput, track: usize, window: u32, flags: &[u8], fits: &mut 
 /// relative to it is below `min_gain` by more than two standard errors is
 /// flagged; so is a whole track whose tested windows pooled are below
 /// `min_track_gain` by more than two standard errors. Returns the number of
-/// windows tested per track.
+/// windows tested per track and, for those with two or more, the pooled gain
+/// and its standard error.
 fn low_gain_windows(
     inputs: &[Option<GainInput>],
     rows: &Rows,
@@ -1157,7 +1170,7 @@ fn low_gain_windows(
     cfg: &ScreeningConfig,
     guard: u32,
     flags: &mut [u8],
-) -> Vec<usize> {
+) -> (Vec<usize>, Vec<Option<(f64, f64)>>) {
     // Per track: the tested windows' gains and standard errors (for the pooled test).
     let mut tested: Vec<Vec<(f64, f64)>> = vec![Vec::new(); rows.tracks()];
     let mut low: Vec<(usize, u32, u32)> = Vec::new();
@@ -1196,6 +1209,7 @@ fn low_gain_windows(
     }
     // The whole track: its windows pooled (inverse-variance weights; the
     // spread of the windows' gains bounds the standard error from below).
+    let mut pooled_of = vec![None; tested.len()];
     for (i, t) in tested.iter().enumerate() {
         if t.len() < 2 {
             continue;
@@ -1206,13 +1220,14 @@ fn low_gain_windows(
         let mean = t.iter().map(|&(g, _)| g).sum::<f64>() / nf;
         let spread = (t.iter().map(|&(g, _)| (g - mean).powi(2)).sum::<f64>() / (nf - 1.0) / nf).sqrt();
         let se = (1.0 / wsum).sqrt().max(spread);
+        pooled_of[i] = Some((pooled, se));
         if pooled + 2.0 * se < cfg.min_track_gain {
             for f in &mut flags[rows.range(i)] {
                 *f |= flag::LOW_GAIN;
             }
         }
     }
-    tested.iter().map(Vec::len).collect()
+    (tested.iter().map(Vec::len).collect(), pooled_of)
 }
 
 #[cfg(test)]
