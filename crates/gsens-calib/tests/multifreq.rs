@@ -116,7 +116,11 @@ fn mixed_signal_sessions_estimate_gamma_within_sigma_and_a_dropped_carrier_colum
         println!("  dropped column warnings: {:?}", doc_l1.warnings.iter().map(|w| w.code).collect::<Vec<_>>());
         // Caught: the G1 channels read as L1 follow the common signal by f_G1/f_L1 > 1.
         let w = doc_l1.warnings.iter().find(|w| w.code == "carrier_gain");
-        assert!(w.is_some_and(|w| w.message.contains("as a channel on e.g. G1:")), "seed {seed}: {:?}", doc_l1.warnings);
+        assert!(
+            w.is_some_and(|w| w.message.contains("as a channel on e.g. G1:")),
+            "seed {seed}: {:?}",
+            doc_l1.warnings
+        );
         assert!(!doc_l1.trustworthy);
         assert!(!doc.warnings.iter().any(|w| w.code == "carrier_gain"));
         // The L5 channel read as L1 follows it by 0.75: the screening's gain test drops it.
@@ -206,4 +210,14 @@ fn carrier_gain_check_on_a_closed_form_session() {
     let faded = [GPS_L1_HZ, GPS_L1_HZ, 0.97 * GPS_L1_HZ, GPS_L1_HZ, GPS_L1_HZ];
     let fade = closed_form_session(&faded, &[l1; 5]);
     assert!(!fade.warnings.iter().any(|w| w.code == "carrier_gain"), "{:?}", fade.warnings);
+}
+
+#[test]
+fn a_carrier_for_ppb_per_g_other_than_l1_is_refused_for_a_log_with_carriers() {
+    let sc = mixed_scenario();
+    let logs = gsens_sim::simulate_logs(&sc, 9).unwrap();
+    let mut ps = settings(&sc);
+    ps.estimate.carrier_hz = 1_176.45e6;
+    let m = calibrate_logs(&logs.tracking, &logs.imu, "imu", &ps).unwrap_err().to_string();
+    assert!(m.contains("carrier_hz = 1176450000") && m.contains("scaled to L1"), "{m}");
 }

@@ -706,6 +706,30 @@ mod tests {
     }
 
     #[test]
+    fn signals_are_checked_and_assigned_per_channel() {
+        for (toml, want) in [
+            ("[satellites]\nsignals = [\"L1CA\", \"GPSL1\"]\n", "satellites.signals[1]: `GPSL1` is not a signal"),
+            ("[satellites]\nsignals = [\"G1\"]\n", "satellites.signals[0]: G1 is a GLONASS FDMA signal"),
+            ("[satellites]\nsignals = [\"G1:+9\"]\n", "outside the GLONASS frequency channels"),
+            (
+                "[oscillator]\ncarrier_hz = 1176.45e6\n[satellites]\nsignals = [\"L5Q\"]\n",
+                "oscillator.carrier_hz = GPS L1",
+            ),
+            ("[satellites]\nmax_channels = 2\nsignals = [\"L1CA\", \"L5I\", \"B1I\"]\n", "3 signals for 2 channels"),
+        ] {
+            let e = Scenario::from_toml_str(toml).unwrap_err().to_string();
+            assert!(e.contains(want), "{toml:?}: {e}");
+        }
+        let sc = Scenario::from_toml_str("[satellites]\nsignals = [\"L5Q\", \"G1:-3\"]\n").unwrap();
+        let l1 = gsens_core::units::GPS_L1_HZ;
+        assert_eq!(sc.satellites.carrier_of(2, l1).label(), "L5Q");
+        assert_eq!(sc.satellites.carrier_of(3, l1).carrier_hz, 1_602e6 - 3.0 * 0.5625e6);
+        // The default: every channel on the oscillator's carrier, unnamed; nothing new in its TOML.
+        assert_eq!(Scenario::default().satellites.carrier_of(5, l1), gsens_io::Carrier::GPS_L1);
+        assert!(!Scenario::default().to_toml_string().contains("signals"));
+    }
+
+    #[test]
     fn utc_parsing() {
         let a = parse_utc_to_gps_s("2024-02-08T12:00:00Z").unwrap();
         let b = parse_utc_to_gps_s("2024-02-08T12:00:01.5").unwrap();
