@@ -259,7 +259,13 @@ impl Signal {
     pub fn known_names() -> String {
         SIGNALS
             .iter()
-            .map(|s| if s.fdma_step_hz.is_some() { format!("{} (with glo_k)", s.name) } else { s.name.to_owned() })
+            .map(|s| {
+                if s.fdma_step_hz.is_some() {
+                    format!("{} (with glo_k or carrier_hz)", s.name)
+                } else {
+                    s.name.to_owned()
+                }
+            })
             .collect::<Vec<_>>()
             .join(", ")
     }
@@ -355,7 +361,10 @@ mod tests {
         }
         assert!(Carrier::from_hz(1575.42).is_err() && Carrier::from_hz(4.092e6).is_err());
         let m = Signal::new("L1", None).unwrap_err().to_string();
-        assert!(m.contains("`L1` is not a signal") && m.contains("L1CA") && m.contains("G1 (with glo_k)"), "{m}");
+        assert!(
+            m.contains("`L1` is not a signal") && m.contains("L1CA") && m.contains("G1 (with glo_k or carrier_hz)"),
+            "{m}"
+        );
         assert!(SignalError::OutOfBand(1575.42).to_string().contains("1.1–1.7 GHz"));
     }
 

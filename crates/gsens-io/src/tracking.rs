@@ -765,7 +765,10 @@ mod tests {
         let h = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad";
         let m = err_raw(&format!("{h},signal\n0,1,5,45,30,0.01,L1CA\n0,2,6,45,30,0.01,GAL-E1\n"));
         assert!(m.contains("line 3, column 7 (`signal`)") && m.contains("`GAL-E1` is not a signal gsens knows"), "{m}");
-        assert!(m.contains("known: L1CA, L2C") && m.contains("B1I") && m.contains("G1 (with glo_k)"), "{m}");
+        assert!(
+            m.contains("known: L1CA, L2C") && m.contains("B1I") && m.contains("G1 (with glo_k or carrier_hz)"),
+            "{m}"
+        );
         let m = err_raw(&format!("{h},carrier_hz\n0,1,5,45,30,0.01,1575.42\n"));
         assert!(
             m.contains("line 2, column 7 (`carrier_hz`)") && m.contains("outside the GNSS bands, 1.1–1.7 GHz"),
