@@ -53,6 +53,7 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 /// - `imu_rate`: the IMU too must sample the loop's peak 4 times a period:
 ///   its specific force is interpolated linearly onto the epochs.
 /// - `phase_units`: [`phase_units`].
+/// - `carrier_gain`: [`carrier_gain`].
 /// - `imu_stuck`, `imu_clipped`: the runs of identical IMU samples
 ///   [`gsens_session::find_flat_runs`] found, and the epochs left out.
 pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
@@ -137,6 +138,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
         });
     }
     w.extend(phase_units(outcome, c));
+    w.extend(carrier_gain(&outcome.session.channels));
     w.extend(flat_run_warnings(&outcome.imu_flat_runs, outcome.imu_flat_run_epochs));
     w
 }
@@ -170,7 +172,8 @@ pub(crate) fn logged_phase_variance_rad2(cn0_hz: f64, t_s: f64, n: u32, logged: 
 /// The ratio of a channel's measured high-frequency phase scatter to the
 /// thermal scatter its C/N0 predicts ([`logged_phase_variance_rad2`]), and
 /// whether the measured value is only an upper bound (the screening's scale
-/// sits at its floor `min_sigma_rad`). The measured scatter is the
+/// sits at its floor `min_sigma_rad`). Both are on L1's scale (the
+/// prediction times f_L1/f_c, like the channel's phases). The measured scatter is the
 /// screening's robust σ of the channel's deviation from the median of the
 /// other channels, in which the oscillator's (and the g-induced) phase
 /// cancels; the others' median adds 20–25 % of the channel's own σ for a
@@ -184,7 +187,9 @@ fn scatter_ratio(
 ) -> Option<(f64, bool)> {
     let measured = ch.screening.deviation_sigma_rad?;
     let cn0_dbhz = ch.screening.median_cn0_dbhz.unwrap_or(ch.mean_cn0_dbhz);
-    let predicted = logged_phase_variance_rad2(10f64.powf(cn0_dbhz / 10.0), t_s, n, logged).sqrt();
+    // The measured σ is on L1's scale (the phases times f_L1/f_c): so is the prediction.
+    let to_l1 = gsens_core::units::GPS_L1_HZ / ch.carrier_hz;
+    let predicted = logged_phase_variance_rad2(10f64.powf(cn0_dbhz / 10.0), t_s, n, logged).sqrt() * to_l1;
     (predicted.is_finite() && predicted > 0.0).then(|| (measured / predicted, measured <= min_sigma_rad * (1.0 + 1e-9)))
 }
 
@@ -258,6 +263,84 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
         code: "phase_units",
         message: format!(
             "{evidence}: the phase error looks like it is in {unit}; {factor}. Γ̂ scales with the phase's unit"
+        ),
+    })
+}
+
+/// Family-wise false-alarm probability of `carrier_gain` over the channels tested.
+const CARRIER_GAIN_FALSE_ALARM: f64 = 1e-3;
+
+/// `carrier_gain`: a channel whose gain on the common signal exceeds the
+/// others' (the screening's pooled relative gain, test 3, by more than the
+/// one-sided Φ⁻¹(1 − 10⁻³/n) standard errors over the n used channels that
+/// have one). The oscillator puts f_c·y on every carrier, so with the
+/// phases scaled by f_L1/f_c every channel follows the common signal with
+/// gain 1; a fade or a loss of lock can only lower it (the discriminator
+/// loses gain), a carrier higher than the log says raises it by
+/// f_true/f_given (a GLONASS G1 channel read as L1: +1.4 to +1.9 %; the
+/// carrier columns dropped from a mixed-signal log). Γ̂ is then biased by
+/// the mean of f_true/f_given over the channels averaged. The candidates
+/// named are the table's carriers within 3 standard errors of gain·f_given.
+pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
+    let tested: Vec<(&ChannelSummary, f64, f64)> = channels
+        .iter()
+        .filter(|c| c.used)
+        .filter_map(|c| match (c.screening.relative_gain, c.screening.relative_gain_se) {
+            (Some(g), Some(se)) if g.is_finite() && se.is_finite() && se > 0.0 => Some((c, g, se)),
+            _ => None,
+        })
+        .collect();
+    if tested.len() < 3 {
+        return None;
+    }
+    let z_crit = -gsens_sim::iq::normal_quantile(CARRIER_GAIN_FALSE_ALARM / tested.len() as f64);
+    let high: Vec<String> = tested
+        .iter()
+        .filter(|(_, g, se)| (g - 1.0) / se > z_crit)
+        .map(|(c, g, se)| {
+            let mut candidates: Vec<String> = Vec::new();
+            for spec in &gsens_io::SIGNALS {
+                let ks: Vec<Option<i64>> = match spec.fdma_step_hz {
+                    Some(_) => gsens_io::signal::GLONASS_K.map(|k| Some(i64::from(k))).collect(),
+                    None => vec![None],
+                };
+                for k in ks {
+                    let Ok(sig) = gsens_io::Signal::new(spec.name, k) else { continue };
+                    if (sig.carrier_hz() / c.carrier_hz - g).abs() <= 3.0 * se && candidates.len() < 4 {
+                        candidates.push(sig.label());
+                    }
+                }
+            }
+            let like = if candidates.is_empty() {
+                String::new()
+            } else {
+                format!(", as a channel on e.g. {} would", candidates.join(" or "))
+            };
+            format!(
+                "channel {} (PRN {}, given as {}): gain {g:.4} ± {se:.4} (z = {:+.1}{like})",
+                c.channel,
+                c.prn,
+                c.signal,
+                (g - 1.0) / se
+            )
+        })
+        .collect();
+    if high.is_empty() {
+        return None;
+    }
+    Some(Warning {
+        code: "carrier_gain",
+        message: format!(
+            "{} of {} channels follow the common (oscillator's) signal more than fully, beyond {z_crit:.2} standard \
+             errors ({} % false alarms): {}. Scaled by f_L1/f_c, every channel's phase follows the common signal \
+             with gain 1, and a fade or loss of lock only lowers it; a higher gain is a carrier higher than the log \
+             says (or a loop other than the others'). Give tracking.csv each row's carrier (a `signal` or \
+             `carrier_hz` column: without them every row is read as GPS L1); Γ̂ is biased by the mean of \
+             f_true/f_given over the channels averaged",
+            high.len(),
+            tested.len(),
+            CARRIER_GAIN_FALSE_ALARM * 100.0,
+            high.join("; ")
         ),
     })
 }

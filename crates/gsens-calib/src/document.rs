@@ -7,7 +7,7 @@ use crate::{Calibration, DISCRIMINATOR_LINEAR_RANGE_RAD};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::import::TrackSummary;
-use gsens_session::{ChannelSummary, SelectionConfig};
+use gsens_session::{ChannelSummary, SelectionConfig, SignalSummary};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -134,6 +134,10 @@ pub struct ResultDocument {
     pub loop_response: Option<crate::ResponseCheck>,
     /// Every track of the log and what became of it.
     pub channels: Vec<ChannelSummary>,
+    /// The signals of the log's tracks and how many of each took part in the
+    /// average (their phases scaled by f_L1/f_c; Γ̂ is at L1). Empty for a
+    /// document built [`from_parts`](Self::from_parts).
+    pub signals: Vec<SignalSummary>,
     /// The channel selection used.
     pub selection: SelectionConfig,
     /// The session-level settings.
@@ -172,6 +176,8 @@ impl ResultDocument {
             truth_gamma_hz_per_mps2,
         );
         doc.gnss_sdr = outcome.gnss_sdr.clone();
+        doc.signals = outcome.session.signals.clone();
+        doc.warnings.extend(carrier_range_warning(&doc.calibration, &doc.signals));
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
         if let Some(first) = outcome.imu_spikes_t_s.first() {
@@ -259,6 +265,7 @@ impl ResultDocument {
             loop_response: None,
             calibration,
             channels,
+            signals: Vec::new(),
             selection,
             pipeline,
             inputs: inputs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
@@ -279,6 +286,28 @@ impl ResultDocument {
     pub fn to_json_string(&self) -> Result<String, serde_json::Error> {
         Ok(serde_json::to_string_pretty(self)? + "\n")
     }
+}
+
+/// `discriminator_range` for a channel on a carrier above L1: Γ̂'s predicted
+/// phase error is on L1's scale, a channel on f_c logs f_c/f_L1 times it
+/// (GLONASS G1 +1.7 to +1.9 %), so the highest used carrier is checked
+/// against the linear range (the L1 check itself is in the calibration's
+/// own warnings).
+fn carrier_range_warning(c: &Calibration, signals: &[SignalSummary]) -> Option<Warning> {
+    let lin = DISCRIMINATOR_LINEAR_RANGE_RAD;
+    let top = signals.iter().filter(|s| s.tracks_used > 0).min_by(|a, b| a.scale_to_l1.total_cmp(&b.scale_to_l1))?;
+    let peak = c.predicted_peak_phase_err_rad / top.scale_to_l1;
+    (c.predicted_peak_phase_err_rad <= lin && peak > lin).then(|| Warning {
+        code: "discriminator_range",
+        message: format!(
+            "the predicted g-induced phase error reaches {peak:.2} rad on the {} channels ({} Hz, {:.4} times \
+             L1's), beyond the discriminator's linear range ({lin:.2} rad): shake more gently or the loss of \
+             discriminator gain biases Γ̂ low",
+            top.signal,
+            top.carrier_hz,
+            1.0 / top.scale_to_l1
+        ),
+    })
 }
 
 /// The warnings a calibration's own numbers raise.

@@ -226,6 +226,17 @@ pub fn calibrate_logs(
             (0.0, Some(max_abs_s))
         }
     };
+    // A log with carriers is scaled to L1 (gsens_session): Γ̂ is at L1, and so must be its ppb/g.
+    let l1 = gsens_core::units::GPS_L1_HZ;
+    if settings.estimate.carrier_hz != l1 && tracking.tracks().iter().any(|t| !t.carrier.is_default()) {
+        return Err(CalibError::Setting {
+            name: "carrier_hz",
+            value: settings.estimate.carrier_hz,
+            expected: "GPS L1, 1575420000 Hz, for a tracking log with carrier columns: every channel's phase \
+                       error is scaled to L1 and Γ̂ is at L1 (leave --carrier-hz out)",
+        }
+        .into());
+    }
     let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
     let flat_runs = find_flat_runs(imu);
     let imu = &despiked;

@@ -177,6 +177,44 @@ pub enum FormatError {
         /// The line that has the same channel at the same time.
         previous_line: u64,
     },
+    /// A tracking row's signal name, GLONASS k or carrier is invalid
+    /// (unknown name, k missing or out of range, carrier outside the GNSS bands
+    /// or disagreeing with the signal's).
+    #[error("{file}: line {line}, {column}: {error}")]
+    InvalidCarrier {
+        /// Source name.
+        file: String,
+        /// 1-based line number.
+        line: u64,
+        /// The column at fault (`signal`, `glo_k` or `carrier_hz`).
+        column: Column,
+        /// What is wrong.
+        error: Box<crate::signal::SignalError>,
+    },
+    /// A track (one channel, one PRN) changes its carrier.
+    #[error(
+        "{file}: line {line}, {column}: channel {channel} (PRN {prn}) is on {} here but was on {} \
+         (line {previous_line}): a track keeps one carrier; a channel moved to another signal must change its \
+         channel number or PRN",
+        carriers[1],
+        carriers[0]
+    )]
+    CarrierChanged {
+        /// Source name.
+        file: String,
+        /// 1-based line number.
+        line: u64,
+        /// The carrier's column (`signal` or `carrier_hz`).
+        column: Column,
+        /// The channel.
+        channel: u32,
+        /// The PRN.
+        prn: u32,
+        /// The track's carrier so far and the row's (labels).
+        carriers: Box<[String; 2]>,
+        /// The track's latest row before.
+        previous_line: u64,
+    },
     /// An in-memory IMU series is inconsistent (lengths, order, non-finite values).
     #[error("{file}: invalid IMU series: {reason}")]
     InvalidImuSeries {

@@ -31,10 +31,12 @@
 pub mod error;
 pub mod imu;
 mod parse;
+pub mod signal;
 pub mod tracking;
 pub mod writers;
 
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
-pub use tracking::{ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
-pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv, write_tracking_csv};
+pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
+pub use tracking::{CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
+pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv, write_tracking_csv, write_tracking_csv_on};

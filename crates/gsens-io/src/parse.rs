@@ -61,6 +61,34 @@ impl<R: Read> CsvSource<R> {
         Ok((src, indices))
     }
 
+    /// The 0-based position of the optional column `name`, `None` when the
+    /// header lacks it; a column named twice is an error.
+    pub fn optional_column(&self, name: &str) -> Result<Option<usize>, FormatError> {
+        let mut found = self.header.iter().enumerate().filter(|(_, h)| *h == name).map(|(i, _)| i);
+        match (found.next(), found.next()) {
+            (Some(a), Some(b)) => Err(FormatError::DuplicateColumn {
+                file: self.file.clone(),
+                name: name.to_owned(),
+                first_index: a + 1,
+                second_index: b + 1,
+            }),
+            (a, _) => Ok(a),
+        }
+    }
+
+    /// Parses the cell at column `index` as an integer (`None` if empty).
+    pub fn opt_i64_at(&self, index: usize) -> Result<Option<i64>, FormatError> {
+        let raw = self.cell(index).trim_ascii();
+        if raw.is_empty() {
+            return Ok(None);
+        }
+        std::str::from_utf8(raw)
+            .ok()
+            .and_then(|s| s.trim_start_matches('+').parse::<i64>().ok())
+            .map(Some)
+            .ok_or_else(|| self.not_a_number_error(index, "an integer"))
+    }
+
     /// Reads the next record into `self.record`; `false` at the end of the input.
     #[inline]
     pub fn next_record(&mut self) -> Result<bool, FormatError> {

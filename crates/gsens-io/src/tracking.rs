@@ -1,5 +1,6 @@
 //! Reader of `tracking.csv`: one row per channel per epoch (long format), header
-//! `t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`.
+//! `t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`, optionally with the
+//! carrier of each row in `signal`, `glo_k` and `carrier_hz` ([`CARRIER_COLUMNS`]).
 //!
 //! The columns may come in any order and extra columns are ignored, but the six
 //! must all be present. `elev_deg` may be empty (unknown elevation); every other
@@ -13,6 +14,27 @@
 //! The log is read as a stream and stored column-wise per track, a track being
 //! one (channel, PRN) pair: a channel that is re-assigned to another satellite
 //! starts a new track.
+//!
+//! # Carrier
+//!
+//! Without any of the carrier columns every row is on GPS L1 (1575.42 MHz,
+//! [`Carrier::GPS_L1`]), as before they existed. With them, each row's carrier
+//! comes from
+//!
+//! - `signal`: a name of [`crate::SIGNALS`] (`L1CA`, `E1B`, `B1I`, `L5Q`, `G1`, …;
+//!   case-sensitive); an unknown name is an error listing the known ones;
+//! - `glo_k`: the GLONASS frequency channel number k (−7…+6) of a `G1`/`G2` row
+//!   (f = 1602 MHz + k·0.5625 MHz, 1246 MHz + k·0.4375 MHz), empty for the others;
+//! - `carrier_hz`: the carrier in Hz, within the GNSS bands 1.1–1.7 GHz. With a
+//!   `signal` it must agree with the signal's carrier within 1 Hz (and gives the k
+//!   of a `G1`/`G2` row without `glo_k`); alone (empty `signal` cell or no
+//!   `signal` column) it is the carrier of an unnamed signal.
+//!
+//! A row whose carrier cells are all empty is an error (no row is silently put on
+//! L1 in a log that names carriers). A track keeps one carrier: a row that puts
+//! a (channel, PRN) pair on another carrier is an error naming both lines (a
+//! receiver that moves a channel to another signal changes its PRN or channel
+//! number, which starts a new track).
 
 use std::collections::HashMap;
 use std::io::Read;
@@ -20,10 +42,16 @@ use std::path::Path;
 
 use crate::error::{Column, FormatError};
 use crate::parse::{CsvSource, path_name};
+use crate::signal::{Carrier, Signal, SignalError};
 use crate::writers::TrackingRow;
 
 /// The columns of `tracking.csv`, in the order the writer emits them.
 pub const TRACKING_COLUMNS: [&str; 6] = ["t_s", "channel", "prn", "cn0_dbhz", "elev_deg", "phase_err_rad"];
+
+/// The optional carrier columns of `tracking.csv` (see the [module documentation](self));
+/// the writer emits `signal` and `carrier_hz` after the six of [`TRACKING_COLUMNS`]
+/// when some row is not on L1.
+pub const CARRIER_COLUMNS: [&str; 3] = ["signal", "glo_k", "carrier_hz"];
 
 /// The rows of one (channel, PRN) pair, stored column-wise, in time order.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,13 +68,16 @@ pub struct ChannelTrack {
     pub cn0_dbhz: Vec<f64>,
     /// Satellite elevation \[deg\]; NaN where the log leaves it empty (unknown).
     pub elev_deg: Vec<f64>,
+    /// The carrier tracked (one per track; GPS L1 for a log without carrier columns).
+    pub carrier: Carrier,
 }
 
 impl ChannelTrack {
-    fn new(channel: u32, prn: u32) -> Self {
+    fn new(channel: u32, prn: u32, carrier: Carrier) -> Self {
         ChannelTrack {
             channel,
             prn,
+            carrier,
             t_s: Vec::new(),
             phase_err_rad: Vec::new(),
             cn0_dbhz: Vec::new(),
@@ -133,6 +164,7 @@ struct RowValues {
     cn0_dbhz: f64,
     elev_deg: f64,
     phase_err_rad: f64,
+    carrier: Carrier,
 }
 
 /// Assembles a [`TrackingLog`] row by row with the format's checks (time
@@ -143,7 +175,11 @@ struct Builder {
     /// The `t_s` and `channel` columns, for errors.
     t_column: Column,
     channel_column: Column,
+    /// The column that gives the carrier (for errors), `None` without carrier columns.
+    carrier_column: Option<Column>,
     tracks: Vec<ChannelTrack>,
+    /// The latest line of each track.
+    track_line: Vec<u64>,
     track_of: HashMap<(u32, u32), usize>,
     channels: HashMap<u32, ChannelState>,
     epoch_t_s: Vec<f64>,
@@ -153,12 +189,14 @@ struct Builder {
 }
 
 impl Builder {
-    fn new(file: String, t_column: Column, channel_column: Column) -> Self {
+    fn new(file: String, t_column: Column, channel_column: Column, carrier_column: Option<Column>) -> Self {
         Builder {
             file,
             t_column,
             channel_column,
+            carrier_column,
             tracks: Vec::new(),
+            track_line: Vec::new(),
             track_of: HashMap::new(),
             channels: HashMap::new(),
             epoch_t_s: Vec::new(),
@@ -168,10 +206,11 @@ impl Builder {
         }
     }
 
-    fn track_for(&mut self, channel: u32, prn: u32) -> usize {
-        let tracks = &mut self.tracks;
+    fn track_for(&mut self, channel: u32, prn: u32, carrier: Carrier) -> usize {
+        let (tracks, lines) = (&mut self.tracks, &mut self.track_line);
         *self.track_of.entry((channel, prn)).or_insert_with(|| {
-            tracks.push(ChannelTrack::new(channel, prn));
+            tracks.push(ChannelTrack::new(channel, prn, carrier));
+            lines.push(0);
             tracks.len() - 1
         })
     }
@@ -216,12 +255,25 @@ impl Builder {
                 }
                 let mut track = state.track;
                 if self.tracks[track].prn != prn {
-                    track = self.track_for(channel, prn);
+                    track = self.track_for(channel, prn, r.carrier);
                 }
                 track
             }
-            None => self.track_for(channel, prn),
+            None => self.track_for(channel, prn, r.carrier),
         };
+        if self.tracks[track].carrier != r.carrier {
+            let previous = self.tracks[track].carrier;
+            return Err(FormatError::CarrierChanged {
+                file: self.file.clone(),
+                line,
+                column: self.carrier_column.clone().unwrap_or_else(|| self.channel_column.clone()),
+                channel,
+                prn,
+                carriers: Box::new([previous.label(), r.carrier.label()]),
+                previous_line: self.track_line[track],
+            });
+        }
+        self.track_line[track] = line;
         self.channels.insert(channel, ChannelState { last_t_s: t, last_line: line, track });
         let tr = &mut self.tracks[track];
         tr.t_s.push(t);
@@ -251,16 +303,38 @@ impl TrackingLog {
     /// A tracking log from rows in memory (e.g. a simulator's output), checked
     /// exactly as [`read_tracking`] checks a file: finite values (an elevation
     /// of `None` is unknown), non-decreasing time stamps, one row per channel
-    /// per epoch. Errors name `source_name` and the line each row would have in
-    /// `tracking.csv` as [`crate::TrackingWriter`] writes it (row i on line
-    /// i + 2, columns in [`TRACKING_COLUMNS`] order).
+    /// per epoch. Every row is on GPS L1 ([`TrackingLog::from_rows_on`] for
+    /// other carriers). Errors name `source_name` and the line each row would
+    /// have in `tracking.csv` as [`crate::TrackingWriter`] writes it (row i on
+    /// line i + 2, columns in [`TRACKING_COLUMNS`] order).
     pub fn from_rows<'a>(
         source_name: &str,
         rows: impl IntoIterator<Item = &'a TrackingRow>,
     ) -> Result<TrackingLog, FormatError> {
+        Self::build(source_name, rows.into_iter().map(|r| (r, Carrier::GPS_L1)), false)
+    }
+
+    /// [`TrackingLog::from_rows`] with each row's carrier, checked as the reader
+    /// checks the carrier columns (within the GNSS bands, one carrier per
+    /// track); errors name the `carrier_hz` column as
+    /// [`crate::TrackingWriter::with_carriers`] writes it (column 8).
+    pub fn from_rows_on<'a>(
+        source_name: &str,
+        rows: impl IntoIterator<Item = (&'a TrackingRow, Carrier)>,
+    ) -> Result<TrackingLog, FormatError> {
+        Self::build(source_name, rows, true)
+    }
+
+    fn build<'a>(
+        source_name: &str,
+        rows: impl IntoIterator<Item = (&'a TrackingRow, Carrier)>,
+        carrier_columns: bool,
+    ) -> Result<TrackingLog, FormatError> {
         let column = |i: usize| Column { index: i + 1, name: TRACKING_COLUMNS[i].to_owned() };
-        let mut b = Builder::new(source_name.to_owned(), column(0), column(1));
-        for (i, row) in rows.into_iter().enumerate() {
+        let carrier_column = Column { index: TRACKING_COLUMNS.len() + 2, name: "carrier_hz".to_owned() };
+        let mut b =
+            Builder::new(source_name.to_owned(), column(0), column(1), carrier_columns.then(|| carrier_column.clone()));
+        for (i, (row, carrier)) in rows.into_iter().enumerate() {
             let line = i as u64 + 2;
             let finite = |v: f64, col: usize| {
                 if v.is_finite() {
@@ -274,6 +348,18 @@ impl TrackingLog {
                     })
                 }
             };
+            let checked = Carrier::from_hz(carrier.carrier_hz).and_then(|_| match carrier.signal {
+                Some(s) => s.check_carrier(carrier.carrier_hz),
+                None => Ok(()),
+            });
+            if let Err(error) = checked {
+                return Err(FormatError::InvalidCarrier {
+                    file: source_name.to_owned(),
+                    line,
+                    column: carrier_column,
+                    error: Box::new(error),
+                });
+            }
             let values = RowValues {
                 t_s: finite(row.t_s, 0)?,
                 channel: row.channel,
@@ -284,10 +370,116 @@ impl TrackingLog {
                     None => f64::NAN,
                 },
                 phase_err_rad: finite(row.phase_err_rad, 5)?,
+                carrier,
             };
             b.push(&values, line)?;
         }
         b.finish()
+    }
+}
+
+/// The carrier columns of a file (0-based positions) and the last row's carrier cells.
+struct CarrierCells {
+    signal: Option<usize>,
+    glo_k: Option<usize>,
+    carrier_hz: Option<usize>,
+    /// The raw cells of the previous row and its carrier: rows of one track repeat them.
+    prev: Option<(Vec<u8>, Carrier)>,
+}
+
+impl CarrierCells {
+    fn find<R: Read>(src: &CsvSource<R>) -> Result<Self, FormatError> {
+        Ok(CarrierCells {
+            signal: src.optional_column(CARRIER_COLUMNS[0])?,
+            glo_k: src.optional_column(CARRIER_COLUMNS[1])?,
+            carrier_hz: src.optional_column(CARRIER_COLUMNS[2])?,
+            prev: None,
+        })
+    }
+
+    fn any(&self) -> bool {
+        self.signal.is_some() || self.glo_k.is_some() || self.carrier_hz.is_some()
+    }
+
+    /// The column that names the carrier in errors about a track's carrier.
+    fn main_column(&self) -> Option<usize> {
+        self.signal.or(self.carrier_hz).or(self.glo_k)
+    }
+
+    /// The carrier of the current row.
+    fn carrier<R: Read>(&mut self, src: &CsvSource<R>) -> Result<Carrier, FormatError> {
+        if !self.any() {
+            return Ok(Carrier::GPS_L1);
+        }
+        let mut key = Vec::new();
+        for c in [self.signal, self.glo_k, self.carrier_hz].into_iter().flatten() {
+            key.extend_from_slice(src.cell(c));
+            key.push(b',');
+        }
+        if let Some((k, carrier)) = &self.prev
+            && *k == key
+        {
+            return Ok(*carrier);
+        }
+        let carrier = self.parse(src)?;
+        self.prev = Some((key, carrier));
+        Ok(carrier)
+    }
+
+    fn parse<R: Read>(&self, src: &CsvSource<R>) -> Result<Carrier, FormatError> {
+        let fail = |col: usize, error: SignalError| FormatError::InvalidCarrier {
+            file: src.file.clone(),
+            line: src.line(),
+            column: src.column(col),
+            error: Box::new(error),
+        };
+        let name = self
+            .signal
+            .map(|c| String::from_utf8_lossy(src.cell(c).trim_ascii()).into_owned())
+            .filter(|n| !n.is_empty());
+        let glo_k = match self.glo_k {
+            Some(c) => src.opt_i64_at(c)?,
+            None => None,
+        };
+        let hz = match self.carrier_hz {
+            Some(c) => src.opt_f64_at(c)?,
+            None => None,
+        };
+        let hz_col = self.carrier_hz.unwrap_or(0);
+        if let Some(f) = hz {
+            Carrier::from_hz(f).map_err(|e| fail(hz_col, e))?;
+        }
+        match (name, glo_k, hz) {
+            (Some(name), k, hz) => {
+                let sig_col = self.signal.expect("a name comes from the signal column");
+                let fdma = crate::signal::SIGNALS.iter().any(|s| s.name == name && s.fdma_step_hz.is_some());
+                let signal = match (k, hz) {
+                    (None, Some(f)) if fdma => Signal::with_carrier(&name, f).map_err(|e| fail(hz_col, e))?,
+                    (k, _) => Signal::new(&name, k).map_err(|e| match e {
+                        SignalError::Unknown(_) | SignalError::MissingK(_) => fail(sig_col, e),
+                        _ => fail(self.glo_k.unwrap_or(sig_col), e),
+                    })?,
+                };
+                if let Some(f) = hz {
+                    signal.check_carrier(f).map_err(|e| fail(hz_col, e))?;
+                }
+                Ok(Carrier::of(signal))
+            }
+            (None, Some(k), _) => {
+                let col = self.signal.unwrap_or(self.glo_k.expect("k comes from the glo_k column"));
+                Err(fail(col, SignalError::Unknown(format!("(empty signal with glo_k = {k})"))))
+            }
+            (None, None, Some(f)) => Ok(Carrier { carrier_hz: f, signal: None }),
+            (None, None, None) => {
+                let col = self.main_column().expect("some carrier column");
+                Err(FormatError::EmptyCell {
+                    file: src.file.clone(),
+                    line: src.line(),
+                    column: src.column(col),
+                    expected: "the row's carrier (a signal name or carrier_hz)",
+                })
+            }
+        }
     }
 }
 
@@ -296,7 +488,9 @@ impl TrackingLog {
 pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog, FormatError> {
     let (mut src, cols) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
-    let mut b = Builder::new(src.file.clone(), src.column(ct), src.column(cch));
+    let mut carriers = CarrierCells::find(&src)?;
+    let carrier_column = carriers.main_column().map(|c| src.column(c));
+    let mut b = Builder::new(src.file.clone(), src.column(ct), src.column(cch), carrier_column);
     // The rows of one epoch share the text of their time stamp: parse it once.
     let mut prev_t_text: Vec<u8> = Vec::new();
     let mut prev_t: Option<f64> = None;
@@ -320,6 +514,7 @@ pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog
             cn0_dbhz: src.f64_at(ccn0)?,
             elev_deg: src.opt_f64_at(celev)?.unwrap_or(f64::NAN),
             phase_err_rad: src.f64_at(cphase)?,
+            carrier: carriers.carrier(&src)?,
         };
         b.push(&values, src.line())?;
     }
@@ -492,6 +687,117 @@ mod tests {
         assert!(m.contains("line 2, column 5 (`elev_deg`)") && m.contains("not a finite number"), "{m}");
         let m = TrackingLog::from_rows("sim", &[]).unwrap_err().to_string();
         assert!(m.contains("no data rows"), "{m}");
+    }
+
+    fn carrier_of(label: &str) -> Carrier {
+        Carrier::of(Signal::from_label(label).unwrap())
+    }
+
+    #[test]
+    fn carriers_round_trip_through_writer_and_reader() {
+        let carriers = [
+            carrier_of("L1CA"),
+            carrier_of("G1:-7"),
+            carrier_of("G1:+6"),
+            carrier_of("L5Q"),
+            carrier_of("B1I"),
+            carrier_of("E1C"),
+            Carrier::from_hz(1_227.6e6).unwrap(),
+        ];
+        let rows: Vec<(TrackingRow, Carrier)> = (0..3)
+            .flat_map(|k| {
+                carriers.iter().enumerate().map(move |(c, &carrier)| {
+                    (row(k as f64 * 0.025, c as u32, 3 + c as u32, Some(20.0), 0.01 * c as f64), carrier)
+                })
+            })
+            .collect();
+        let csv = crate::write_tracking_csv_on(Vec::new(), &rows).unwrap();
+        let text = String::from_utf8(csv.clone()).unwrap();
+        assert!(text.starts_with("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,signal,carrier_hz\n"), "{text}");
+        assert!(text.contains(",G1,1598062500\n") && text.contains(",,1227600000\n"), "{text}");
+        let log = read_tracking(csv.as_slice(), "t.csv").unwrap();
+        let back: Vec<Carrier> = log.tracks().iter().map(|t| t.carrier).collect();
+        assert_eq!(back, carriers);
+        assert_eq!(log.tracks()[1].carrier.signal.unwrap().glo_k(), Some(-7));
+        let from_rows = TrackingLog::from_rows_on("t.csv", rows.iter().map(|(r, c)| (r, *c))).unwrap();
+        assert_eq!(from_rows.tracks().iter().map(|t| t.carrier).collect::<Vec<_>>(), carriers);
+    }
+
+    #[test]
+    fn all_l1_rows_are_written_without_carrier_columns() {
+        let rows: Vec<(TrackingRow, Carrier)> =
+            vec![(row(0.0, 1, 5, None, 0.1), Carrier::GPS_L1), (row(0.0, 2, 6, None, 0.2), carrier_of("L1CA"))];
+        let on = crate::write_tracking_csv_on(Vec::new(), &rows).unwrap();
+        let plain: Vec<TrackingRow> = rows.iter().map(|r| r.0).collect();
+        assert_eq!(on, crate::write_tracking_csv(Vec::new(), &plain).unwrap());
+        assert!(on.starts_with(HEADER.as_bytes()));
+        // A plain writer refuses a row it cannot hold.
+        let mut w = crate::TrackingWriter::new(Vec::new()).unwrap();
+        assert!(w.write_row_on(&rows[0].0, &carrier_of("L5I"), &[]).is_err());
+        // Old files: every track on L1, unnamed.
+        let log = read("0,1,5,45,30,0.01\n0,2,7,40,,0.02\n").unwrap();
+        assert!(log.tracks().iter().all(|t| t.carrier == Carrier::GPS_L1));
+    }
+
+    #[test]
+    fn carrier_columns_in_other_forms() {
+        let h = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad";
+        // glo_k beside the name; carrier_hz alone; both agreeing.
+        let log = read_tracking(
+            format!("{h},signal,glo_k\n0,1,5,45,30,0.01,G1,3\n0,2,6,45,30,0.01,L5I,\n").as_bytes(),
+            "t.csv",
+        )
+        .unwrap();
+        assert_eq!(log.tracks()[0].carrier.carrier_hz, 1_602e6 + 3.0 * 0.5625e6);
+        assert_eq!(log.tracks()[1].carrier, carrier_of("L5I"));
+        let log = read_tracking(format!("{h},carrier_hz\n0,1,5,45,30,0.01,1561098000\n").as_bytes(), "t.csv").unwrap();
+        assert_eq!(log.tracks()[0].carrier, Carrier::from_hz(1_561.098e6).unwrap());
+        let log = read_tracking(
+            format!("{h},glo_k,signal,carrier_hz\n0,1,5,45,30,0.01,-2,G1,1600875000\n").as_bytes(),
+            "t.csv",
+        )
+        .unwrap();
+        assert_eq!(log.tracks()[0].carrier, carrier_of("G1:-2"));
+    }
+
+    #[test]
+    fn bad_carriers_are_errors_naming_line_and_column() {
+        let h = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad";
+        let m = err_raw(&format!("{h},signal\n0,1,5,45,30,0.01,L1CA\n0,2,6,45,30,0.01,GAL-E1\n"));
+        assert!(m.contains("line 3, column 7 (`signal`)") && m.contains("`GAL-E1` is not a signal gsens knows"), "{m}");
+        assert!(
+            m.contains("known: L1CA, L2C") && m.contains("B1I") && m.contains("G1 (with glo_k or carrier_hz)"),
+            "{m}"
+        );
+        let m = err_raw(&format!("{h},carrier_hz\n0,1,5,45,30,0.01,1575.42\n"));
+        assert!(
+            m.contains("line 2, column 7 (`carrier_hz`)") && m.contains("outside the GNSS bands, 1.1–1.7 GHz"),
+            "{m}"
+        );
+        let m = err_raw(&format!("{h},signal\n0,1,5,45,30,0.01,G1\n"));
+        assert!(m.contains("line 2, column 7 (`signal`)") && m.contains("frequency channel number k"), "{m}");
+        let m = err_raw(&format!("{h},signal,glo_k\n0,1,5,45,30,0.01,G1,9\n"));
+        assert!(m.contains("column 8 (`glo_k`)") && m.contains("glo_k = 9"), "{m}");
+        let m = err_raw(&format!("{h},signal,carrier_hz\n0,1,5,45,30,0.01,B1I,1575420000\n"));
+        assert!(m.contains("column 8 (`carrier_hz`)") && m.contains("disagrees with signal B1I"), "{m}");
+        let m = err_raw(&format!("{h},signal,carrier_hz\n0,1,5,45,30,0.01,,\n"));
+        assert!(m.contains("line 2, column 7 (`signal`)") && m.contains("empty cell"), "{m}");
+        let m = err_raw(&format!("{h},signal,signal\n0,1,5,45,30,0.01,L1CA,L1CA\n"));
+        assert!(m.contains("`signal` appears twice"), "{m}");
+        // A track keeps its carrier.
+        let m = err_raw(&format!("{h},signal\n0,1,5,45,30,0.01,L1CA\n0.025,1,5,45,30,0.01,L5I\n"));
+        assert!(m.contains("line 3, column 7 (`signal`)") && m.contains("channel 1 (PRN 5) is on L5I"), "{m}");
+        assert!(m.contains("was on L1CA (line 2)"), "{m}");
+        // ... but a channel re-assigned to another PRN may change signal.
+        let log =
+            read_tracking(format!("{h},signal\n0,1,5,45,30,0.01,L1CA\n0.025,1,7,45,30,0.01,L5I\n").as_bytes(), "t.csv")
+                .unwrap();
+        assert_eq!(log.tracks().len(), 2);
+        // In memory: the same checks.
+        let r = row(0.0, 1, 5, None, 0.1);
+        let e = TrackingLog::from_rows_on("sim", [(&r, Carrier { carrier_hz: 4e6, signal: None })]);
+        let m = e.unwrap_err().to_string();
+        assert!(m.starts_with("sim: line 2, column 8 (`carrier_hz`)") && m.contains("outside the GNSS bands"), "{m}");
     }
 
     #[test]

@@ -9,7 +9,8 @@
 use std::io::{self, BufWriter, Write};
 
 use crate::imu::{IMU_COLUMNS, ImuSeries};
-use crate::tracking::TRACKING_COLUMNS;
+use crate::signal::Carrier;
+use crate::tracking::{CARRIER_COLUMNS, TRACKING_COLUMNS};
 
 fn non_finite(what: &str, value: f64, row: u64) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, format!("cannot write non-finite {what} = {value} (data row {row})"))
@@ -44,6 +45,22 @@ pub fn write_tracking_csv<W: Write>(w: W, rows: &[TrackingRow]) -> io::Result<W>
     let mut out = TrackingWriter::new(w)?;
     for row in rows {
         out.write_row(row)?;
+    }
+    out.finish()
+}
+
+/// Writes `rows` and their carriers as `tracking.csv` to `w`: with the carrier
+/// columns `signal,carrier_hz` ([`TrackingWriter::with_carriers`]) when some
+/// row is not on GPS L1 or names a signal other than L1 C/A
+/// ([`Carrier::is_default`]), else exactly as [`write_tracking_csv`]; returns `w`.
+pub fn write_tracking_csv_on<W: Write>(w: W, rows: &[(TrackingRow, Carrier)]) -> io::Result<W> {
+    let mut out = if rows.iter().all(|(_, c)| c.is_default()) {
+        TrackingWriter::new(w)?
+    } else {
+        TrackingWriter::with_carriers(w, &[])?
+    };
+    for (row, carrier) in rows {
+        out.write_row_on(row, carrier, &[])?;
     }
     out.finish()
 }
@@ -111,11 +128,16 @@ pub struct TrackingRow {
 /// readers ignore them): declare them with
 /// [`TrackingWriter::with_extra_columns`] and give their values with
 /// [`TrackingWriter::write_row_with`]. They are checked finite like the rest.
+///
+/// A log whose rows are not all on GPS L1 carries the carrier columns
+/// `signal,carrier_hz` after the six ([`TrackingWriter::with_carriers`], rows
+/// by [`TrackingWriter::write_row_on`]); without them every row is on L1.
 #[derive(Debug)]
 pub struct TrackingWriter<W: Write> {
     out: BufWriter<W>,
     rows: u64,
     extra_columns: Vec<String>,
+    carriers: bool,
 }
 
 impl<W: Write> TrackingWriter<W> {
@@ -129,9 +151,22 @@ impl<W: Write> TrackingWriter<W> {
     /// Errors: I/O errors; `InvalidInput` for a name that is empty, holds a
     /// comma, a quote or a line break, or repeats a column of the header.
     pub fn with_extra_columns(w: W, extra: &[&str]) -> io::Result<Self> {
+        Self::start(w, extra, false)
+    }
+
+    /// Starts a `tracking.csv` on `w` with the carrier columns: the header is
+    /// `…,phase_err_rad,signal,carrier_hz` and then the columns `extra`. Every
+    /// row gives its carrier ([`TrackingWriter::write_row_on`]; rows written
+    /// without one are on GPS L1). Errors as [`TrackingWriter::with_extra_columns`].
+    pub fn with_carriers(w: W, extra: &[&str]) -> io::Result<Self> {
+        Self::start(w, extra, true)
+    }
+
+    fn start(w: W, extra: &[&str], carriers: bool) -> io::Result<Self> {
         for (i, name) in extra.iter().enumerate() {
             let bad_chars = name.is_empty() || name.contains([',', '"', '\n', '\r']);
-            if bad_chars || TRACKING_COLUMNS.contains(name) || extra[..i].contains(name) {
+            let taken = TRACKING_COLUMNS.contains(name) || CARRIER_COLUMNS.contains(name);
+            if bad_chars || taken || extra[..i].contains(name) {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidInput,
                     format!("cannot write an extra tracking.csv column named {name:?}"),
@@ -140,11 +175,14 @@ impl<W: Write> TrackingWriter<W> {
         }
         let mut out = BufWriter::new(w);
         write!(out, "{}", TRACKING_COLUMNS.join(","))?;
+        if carriers {
+            write!(out, ",{},{}", CARRIER_COLUMNS[0], CARRIER_COLUMNS[2])?;
+        }
         for name in extra {
             write!(out, ",{name}")?;
         }
         writeln!(out)?;
-        Ok(TrackingWriter { out, rows: 0, extra_columns: extra.iter().map(|s| (*s).to_owned()).collect() })
+        Ok(TrackingWriter { out, rows: 0, extra_columns: extra.iter().map(|s| (*s).to_owned()).collect(), carriers })
     }
 
     /// Writes one row (of a writer without extra columns).
@@ -158,7 +196,28 @@ impl<W: Write> TrackingWriter<W> {
     /// were declared. Errors: I/O errors; `InvalidInput` for a non-finite
     /// value or when `extra` does not hold one value per extra column.
     pub fn write_row_with(&mut self, row: &TrackingRow, extra: &[f64]) -> io::Result<()> {
+        self.write_row_on(row, &Carrier::GPS_L1, extra)
+    }
+
+    /// Writes one row on `carrier` and the values of the extra columns. On a
+    /// writer without carrier columns the carrier must be GPS L1
+    /// ([`Carrier::is_default`]). Errors: I/O errors; `InvalidInput` for a
+    /// non-finite value, a carrier the columns cannot hold, or a wrong number
+    /// of extra values.
+    pub fn write_row_on(&mut self, row: &TrackingRow, carrier: &Carrier, extra: &[f64]) -> io::Result<()> {
         let n = self.rows + 1;
+        if !self.carriers && !carrier.is_default() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "data row {n} is on {} but the writer has no carrier columns (start it with with_carriers)",
+                    carrier.label()
+                ),
+            ));
+        }
+        if self.carriers {
+            check("carrier_hz", carrier.carrier_hz, n)?;
+        }
         if extra.len() != self.extra_columns.len() {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
@@ -187,6 +246,9 @@ impl<W: Write> TrackingWriter<W> {
             None => {
                 write!(self.out, "{},{},{},{},,{}", row.t_s, row.channel, row.prn, row.cn0_dbhz, row.phase_err_rad)?
             }
+        }
+        if self.carriers {
+            write!(self.out, ",{},{}", carrier.signal.map_or("", |s| s.name()), carrier.carrier_hz)?;
         }
         for v in extra {
             write!(self.out, ",{v}")?;

@@ -32,6 +32,8 @@ fn channels() -> Vec<ChannelSummary> {
             reason: if k > 0 { "used".into() } else { "not among the 4 strongest".into() },
             phase_offset_rad: (k > 0).then_some(0.01 * k as f64),
             screening: Default::default(),
+            signal: "L1CA".into(),
+            carrier_hz: gsens_core::units::GPS_L1_HZ,
         })
         .collect()
 }

@@ -73,6 +73,20 @@
 //! second term, small above ~30 dB-Hz): `w ∝ C/N0 = 10^(cn0_dbhz/10)` (the ratio
 //! in Hz), evaluated with each row's own C/N0.
 //!
+//! # Carriers
+//!
+//! Each track's carrier f_c comes from the tracking log (GPS L1 without carrier
+//! columns, [`gsens_io::Carrier`]). The oscillator's fractional frequency error
+//! y puts Δf_c = f_c·y on every carrier, so a loop on f_c logs (f_c/f_L1) times
+//! the phase error the same loop logs on L1: every row's phase error is
+//! multiplied by `s = f_L1/f_c` as it is read, and the screening, the offsets
+//! and the average all work on L1's scale (Γ̂ is at L1). Its thermal noise is
+//! scaled by s as well, so both weightings divide by s²: `w = 1/s²` (equal raw
+//! noise) or `w = 10^(cn0_dbhz/10)/s²`, the inverse of the scaled variance. The
+//! screening's linear-range test compares the discriminator's own output
+//! (φ/s) with its limit. [`PreparedSession::signals`] counts the tracks per
+//! signal, and each [`ChannelSummary`] names its signal and carrier.
+//!
 //! # IMU
 //!
 //! The specific force is interpolated linearly onto the epochs. The IMU sample
@@ -219,6 +233,6 @@ pub use imu_screening::{
 };
 pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
-    ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, Weighting, overlap_hint,
-    prepare_session, prepare_session_files, reinterpolate_imu,
+    ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, SignalSummary, Weighting,
+    overlap_hint, prepare_session, prepare_session_files, reinterpolate_imu,
 };

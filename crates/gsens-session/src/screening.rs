@@ -154,6 +154,15 @@ pub const MAX_SPANS: usize = 100;
 pub struct TrackScreening {
     /// Rows (passing the masks) excluded.
     pub rows_excluded: usize,
+    /// The track's gain on the common signal relative to the other tracks'
+    /// (test 3, its tested windows pooled; 1 for a track on the carrier the log
+    /// gives it, f_true/f_given for one whose carrier is wrong); `None` where
+    /// fewer than two windows were tested.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_gain: Option<f64>,
+    /// The standard error of [`relative_gain`](Self::relative_gain).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_gain_se: Option<f64>,
     /// Slip / excursion events detected.
     pub slips: usize,
     /// Of the events, those that settled on a new level (the track is split into `steps + 1` segments).
@@ -173,8 +182,9 @@ pub struct TrackScreening {
     pub rows_startup: usize,
     /// Whether the whole track is excluded (too large a fraction flagged).
     pub track_excluded: bool,
-    /// Robust σ of the track's deviation from the other channels \[rad\];
-    /// `None` where it never had two others to compare with.
+    /// Robust σ of the track's deviation from the other channels \[rad\], on
+    /// L1's scale (the track's phases times f_L1/f_c, as averaged); `None`
+    /// where it never had two others to compare with.
     pub deviation_sigma_rad: Option<f64>,
     /// Median C/N0 of the track's rows \[dB-Hz\] (the reference of the C/N0-drop test).
     pub median_cn0_dbhz: Option<f64>,
@@ -268,6 +278,10 @@ pub(crate) struct Rows {
     pub phase: Vec<f64>,
     /// C/N0 \[dB-Hz\].
     pub cn0: Vec<f64>,
+    /// Per track: the factor f_L1/f_c its phases were scaled by onto L1's scale
+    /// (missing: 1). The linear-range test compares the discriminator's own
+    /// output, phase/to_l1, with the limit.
+    pub to_l1: Vec<f64>,
     /// Per track: the epoch (exclusive) where its start-up ends
     /// ([`ScreeningConfig::startup_s`] after its first row in the log; 0 when
     /// that lies before the first epoch). Missing: no start-up.
@@ -281,6 +295,11 @@ impl Rows {
 
     fn range(&self, i: usize) -> core::ops::Range<usize> {
         self.track_start[i]..self.track_start[i + 1]
+    }
+
+    /// The factor track `i`'s phases were scaled by (f_L1/f_c).
+    fn to_l1(&self, i: usize) -> f64 {
+        self.to_l1.get(i).copied().unwrap_or(1.0)
     }
 
     /// The epoch (exclusive) where track `i`'s start-up ends.
@@ -676,6 +695,8 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     if let Some(limit) = cfg.max_abs_phase_rad {
         for i in 0..n_tracks {
             let range = rows.range(i);
+            // In the discriminator's own units: the phase on L1's scale over f_L1/f_c.
+            let limit = limit * rows.to_l1(i);
             for r in range.clone() {
                 let p = rows.phase[r];
                 // A start-up row is excluded already, as the pull-in it is.
@@ -719,8 +740,11 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut fits);
         }
     }
-    let tested = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
+    let (tested, pooled) = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
     drop(inputs);
+    for (sum, p) in out.summaries.iter_mut().zip(pooled) {
+        (sum.relative_gain, sum.relative_gain_se) = (p.map(|p| p.0), p.map(|p| p.1));
+    }
     // What could not be checked, track by track.
     for i in 0..n_tracks {
         let not_checked = &mut out.summaries[i].not_checked;
@@ -1137,7 +1161,8 @@ fn gain_fits(g: &GainInput, track: usize, window: u32, flags: &[u8], fits: &mut 
 /// relative to it is below `min_gain` by more than two standard errors is
 /// flagged; so is a whole track whose tested windows pooled are below
 /// `min_track_gain` by more than two standard errors. Returns the number of
-/// windows tested per track.
+/// windows tested per track and, for those with two or more, the pooled gain
+/// and its standard error.
 fn low_gain_windows(
     inputs: &[Option<GainInput>],
     rows: &Rows,
@@ -1145,7 +1170,7 @@ fn low_gain_windows(
     cfg: &ScreeningConfig,
     guard: u32,
     flags: &mut [u8],
-) -> Vec<usize> {
+) -> (Vec<usize>, Vec<Option<(f64, f64)>>) {
     // Per track: the tested windows' gains and standard errors (for the pooled test).
     let mut tested: Vec<Vec<(f64, f64)>> = vec![Vec::new(); rows.tracks()];
     let mut low: Vec<(usize, u32, u32)> = Vec::new();
@@ -1184,6 +1209,7 @@ fn low_gain_windows(
     }
     // The whole track: its windows pooled (inverse-variance weights; the
     // spread of the windows' gains bounds the standard error from below).
+    let mut pooled_of = vec![None; tested.len()];
     for (i, t) in tested.iter().enumerate() {
         if t.len() < 2 {
             continue;
@@ -1194,13 +1220,14 @@ fn low_gain_windows(
         let mean = t.iter().map(|&(g, _)| g).sum::<f64>() / nf;
         let spread = (t.iter().map(|&(g, _)| (g - mean).powi(2)).sum::<f64>() / (nf - 1.0) / nf).sqrt();
         let se = (1.0 / wsum).sqrt().max(spread);
+        pooled_of[i] = Some((pooled, se));
         if pooled + 2.0 * se < cfg.min_track_gain {
             for f in &mut flags[rows.range(i)] {
                 *f |= flag::LOW_GAIN;
             }
         }
     }
-    tested.iter().map(Vec::len).collect()
+    (tested.iter().map(Vec::len).collect(), pooled_of)
 }
 
 #[cfg(test)]

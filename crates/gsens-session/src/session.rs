@@ -18,15 +18,22 @@ pub const MAX_EPOCHS: u64 = 1 << 25;
 /// Relative tolerance of a time stamp around the epoch grid (fraction of the log interval).
 pub const GRID_TOLERANCE: f64 = 0.1;
 
-/// How the phase errors of the selected channels are weighted in the per-epoch average.
+/// How the phase errors of the selected channels are weighted in the per-epoch
+/// average. The phases are averaged on L1's scale (each scaled by
+/// s = f_L1/f_c, [`gsens_io::Carrier::scale_to_l1`]), which scales their
+/// thermal noise by s too: both weightings divide by s², so the weight stays
+/// the inverse of the scaled variance (for an all-L1 log s = 1 and nothing
+/// changes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Weighting {
-    /// Equal weights (the paper).
+    /// Equal weights on one carrier (the paper): `w = 1/s²`, channels assumed
+    /// to have equal raw noise.
     #[default]
     Equal,
-    /// Weights ∝ C/N0 as a ratio, `10^(cn0_dbhz/10)`: the inverse of the thermal
-    /// phase variance `Bn/(C/N0)` (squaring loss neglected), per row.
+    /// Weights ∝ C/N0 as a ratio over s², `10^(cn0_dbhz/10)/s²`: the inverse of
+    /// the scaled thermal phase variance `s²·Bn/(C/N0)` (squaring loss
+    /// neglected), per row.
     Cn0,
 }
 
@@ -94,6 +101,28 @@ pub struct ChannelSummary {
     pub phase_offset_rad: Option<f64>,
     /// What the screening excluded from the track's rows that pass the masks, and why.
     pub screening: TrackScreening,
+    /// The track's signal, [`gsens_io::Carrier::label`]: `L1CA`, `G1:+3`, or the
+    /// carrier in MHz where the log does not name it (`1575.42 MHz` for a log
+    /// without carrier columns).
+    pub signal: String,
+    /// The track's carrier \[Hz\]: its phase error enters the screening and the
+    /// average scaled by f_L1/carrier_hz.
+    pub carrier_hz: f64,
+}
+
+/// The tracks of one signal (one carrier) in a session.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SignalSummary {
+    /// The signal, as in [`ChannelSummary::signal`].
+    pub signal: String,
+    /// Its carrier \[Hz\].
+    pub carrier_hz: f64,
+    /// The factor its phase errors are scaled by, f_L1/carrier_hz.
+    pub scale_to_l1: f64,
+    /// Tracks of the log on this signal.
+    pub tracks: usize,
+    /// Of them, those in the average.
+    pub tracks_used: usize,
 }
 
 /// The inputs of the estimator, on a uniform epoch grid.
@@ -114,6 +143,9 @@ pub struct PreparedSession {
     pub accel_mps2: Vec<[f64; 3]>,
     /// Every track of the log, sorted by channel then PRN, with whether it is used.
     pub channels: Vec<ChannelSummary>,
+    /// The signals of the log's tracks, in order of carrier (highest first) then
+    /// name: which took part in the average, with how many tracks.
+    pub signals: Vec<SignalSummary>,
     /// The selection settings used.
     pub selection: SelectionConfig,
     /// The IMU time offset used \[s\] (IMU time stamp minus true time).
@@ -368,10 +400,12 @@ pub fn prepare_session(
         let startup_epochs = (selection.screening.startup_s / grid.log_interval_s).round() as u64;
         let startup_end = (track_ks[i][0] + startup_epochs).saturating_sub(k_first).min(u32::MAX as u64);
         rows.startup_end.push(startup_end as u32);
+        let to_l1 = tr.carrier.scale_to_l1();
+        rows.to_l1.push(to_l1);
         for (j, &k) in track_ks[i].iter().enumerate() {
             if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
                 rows.epoch.push((k - k_first) as u32);
-                rows.phase.push(tr.phase_err_rad[j]);
+                rows.phase.push(tr.phase_err_rad[j] * to_l1);
                 rows.cn0.push(tr.cn0_dbhz[j]);
             }
         }
@@ -458,9 +492,10 @@ pub fn prepare_session(
     // weight, phase). A slot is one segment of a track (the screening splits
     // tracks at steps), each with its own offset.
     let selected: Vec<usize> = ranked[..n_used].to_vec();
-    let weight = |cn0_dbhz: f64| match selection.weighting {
-        Weighting::Equal => 1.0,
-        Weighting::Cn0 => 10f64.powf(cn0_dbhz / 10.0),
+    // Inverse of the scaled variance: s = f_L1/f_c scales the noise by s.
+    let weight = |cn0_dbhz: f64, to_l1: f64| match selection.weighting {
+        Weighting::Equal => 1.0 / (to_l1 * to_l1),
+        Weighting::Cn0 => 10f64.powf(cn0_dbhz / 10.0) / (to_l1 * to_l1),
     };
     let selected_candidates: Vec<usize> =
         selected.iter().map(|&i| candidate_of[i].expect("a ranked track is a candidate")).collect();
@@ -470,25 +505,25 @@ pub fn prepare_session(
         slot_base.push(slot_base.last().copied().unwrap_or(0) + screened.segments[c]);
     }
     let n_slots = *slot_base.last().expect("non-empty");
-    let for_each_used_row = |f: &mut dyn FnMut(usize, usize)| {
+    let for_each_used_row = |f: &mut dyn FnMut(usize, usize, f64)| {
         for (sel, &c) in selected_candidates.iter().enumerate() {
             for r in rows.track_start[c]..rows.track_start[c + 1] {
                 if screened.flags[r] == 0 {
-                    f(slot_base[sel] + screened.segment[r] as usize, r);
+                    f(slot_base[sel] + screened.segment[r] as usize, r, rows.to_l1[c]);
                 }
             }
         }
     };
     let mut start = vec![0usize; n_epochs + 1];
-    for_each_used_row(&mut |_, r| start[rows.epoch[r] as usize + 1] += 1);
+    for_each_used_row(&mut |_, r, _| start[rows.epoch[r] as usize + 1] += 1);
     for e in 0..n_epochs {
         start[e + 1] += start[e];
     }
     let mut fill = start.clone();
     let mut entries = vec![(0usize, 0f64, 0f64); start[n_epochs]];
-    for_each_used_row(&mut |slot, r| {
+    for_each_used_row(&mut |slot, r, to_l1| {
         let e = rows.epoch[r] as usize;
-        entries[fill[e]] = (slot, weight(rows.cn0[r]), rows.phase[r]);
+        entries[fill[e]] = (slot, weight(rows.cn0[r], to_l1), rows.phase[r]);
         fill[e] += 1;
     });
     drop(fill);
@@ -561,10 +596,13 @@ pub fn prepare_session(
                 reason: std::mem::take(&mut reasons[i]),
                 phase_offset_rad: sel.map(|s| offsets_rad[slot_base[s]]),
                 screening,
+                signal: tracks[i].carrier.label(),
+                carrier_hz: tracks[i].carrier.carrier_hz,
             }
         })
         .collect();
     channels.sort_by_key(|c| (c.channel, c.prn));
+    let signals = signal_summaries(&channels);
 
     // The session runs from the first to the last epoch with a phase: the
     // epochs outside hold no measurement (e.g. every used track's start-up
@@ -586,9 +624,32 @@ pub fn prepare_session(
         phase_err_rad,
         accel_mps2,
         channels,
+        signals,
         selection: selection.clone(),
         imu_time_offset_s,
     })
+}
+
+/// The tracks per signal: highest carrier first, then by name.
+fn signal_summaries(channels: &[ChannelSummary]) -> Vec<SignalSummary> {
+    let mut out: Vec<SignalSummary> = Vec::new();
+    for c in channels {
+        match out.iter_mut().find(|s| s.signal == c.signal && s.carrier_hz == c.carrier_hz) {
+            Some(s) => {
+                s.tracks += 1;
+                s.tracks_used += usize::from(c.used);
+            }
+            None => out.push(SignalSummary {
+                signal: c.signal.clone(),
+                carrier_hz: c.carrier_hz,
+                scale_to_l1: gsens_core::units::GPS_L1_HZ / c.carrier_hz,
+                tracks: 1,
+                tracks_used: usize::from(c.used),
+            }),
+        }
+    }
+    out.sort_by(|a, b| b.carrier_hz.total_cmp(&a.carrier_hz).then_with(|| a.signal.cmp(&b.signal)));
+    out
 }
 
 /// Re-interpolates the IMU onto the session's epochs for another IMU time

@@ -44,6 +44,15 @@ pub enum ConfigError {
         /// `within [0, 70] dB-Hz`, `finite and >= 0`, …
         allowed: String,
     },
+    /// A signal of `satellites.signals` that gsens does not know, or that the
+    /// scenario cannot simulate.
+    #[error("{key}: {message}")]
+    Signal {
+        /// Key path, e.g. `satellites.signals[2]`.
+        key: String,
+        /// What is wrong (for an unknown name: the names known).
+        message: String,
+    },
     /// A direction given as a vector that is zero or not finite.
     #[error("{key}: axis vector {vector:?} must be finite and non-zero")]
     InvalidAxis {
@@ -123,7 +132,8 @@ impl ConfigError {
         match self {
             ConfigError::OutOfRange { key, .. }
             | ConfigError::InvalidAxis { key, .. }
-            | ConfigError::Time { key, .. } => Some(key),
+            | ConfigError::Time { key, .. }
+            | ConfigError::Signal { key, .. } => Some(key),
             ConfigError::LoopIntervalNotInDataBit { .. } => Some("loop.interval_s"),
             ConfigError::LogIntervalNotMultiple { .. } => Some("log.interval_s"),
             ConfigError::ThirdOrderUnstable { .. } => Some("loop.a3"),

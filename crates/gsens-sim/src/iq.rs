@@ -117,6 +117,13 @@ pub enum IqError {
     /// the start.
     #[error("no GPS satellite above the elevation mask at the start")]
     NoneInView,
+    /// The scenario puts channels on other signals (`satellites.signals`):
+    /// the IF generator makes GPS L1 C/A only.
+    #[error(
+        "the IF generator makes GPS L1 C/A samples only: remove satellites.signals ({0}) to generate IQ, or \
+         simulate the mixed-signal session's logs without --iq"
+    )]
+    SignalsNotSupported(String),
 }
 
 /// Sample format of the output file, as GNSS-SDR's `File_Signal_Source` names it.
@@ -532,6 +539,9 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
 ) -> Result<IqTruth, SimError> {
     scenario.validate()?;
     cfg.validate()?;
+    if !scenario.satellites.signals.is_empty() {
+        return Err(IqError::SignalsNotSupported(scenario.satellites.signals.join(", ")).into());
+    }
     let sc = scenario;
     let fs = cfg.fs_hz;
     let duration_s = sc.duration_s();

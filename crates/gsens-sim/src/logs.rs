@@ -191,7 +191,7 @@ impl SessionSink for FileSink {
         Ok(self.imu.write_sample(t_s, &f_mps2)?)
     }
     fn tracking(&mut self, row: &SimulatedRow) -> Result<(), SinkError> {
-        Ok(self.tracking.write_row(&row.tracking_row())?)
+        Ok(self.tracking.write_row_on(&row.tracking_row(), &row.carrier, &[])?)
     }
 }
 
@@ -215,7 +215,13 @@ pub fn simulate_to_dir(
     let (imu, tracking) = (create("imu.csv")?, create("tracking.csv")?);
     let mut sink = FileSink {
         imu: ImuWriter::new(imu).map_err(io(&dir.join("imu.csv")))?,
-        tracking: TrackingWriter::new(tracking).map_err(io(&dir.join("tracking.csv")))?,
+        // Carrier columns only for channels on named signals (the default's file is as it was).
+        tracking: if scenario.satellites.signals.is_empty() {
+            TrackingWriter::new(tracking)
+        } else {
+            TrackingWriter::with_carriers(tracking, &[])
+        }
+        .map_err(io(&dir.join("tracking.csv")))?,
     };
     let truth = simulate(scenario, seed, &mut sink, progress)?;
     sink.imu.finish().map_err(io(&dir.join("imu.csv")))?;
@@ -243,8 +249,14 @@ pub struct SimulatedLogs {
 pub fn simulate_logs(scenario: &Scenario, seed: u64) -> Result<SimulatedLogs, LogsError> {
     let mut sink = MemorySink::default();
     let truth = simulate(scenario, seed, &mut sink, |_| {})?;
-    let rows: Vec<gsens_io::TrackingRow> = sink.tracking.iter().map(SimulatedRow::tracking_row).collect();
-    let tracking = TrackingLog::from_rows(&format!("simulated tracking (seed {seed})"), &rows)?;
+    let name = format!("simulated tracking (seed {seed})");
+    let tracking = if scenario.satellites.signals.is_empty() {
+        let rows: Vec<gsens_io::TrackingRow> = sink.tracking.iter().map(SimulatedRow::tracking_row).collect();
+        TrackingLog::from_rows(&name, &rows)?
+    } else {
+        let rows: Vec<_> = sink.tracking.iter().map(SimulatedRow::tracking_row_on).collect();
+        TrackingLog::from_rows_on(&name, rows.iter().map(|(r, c)| (r, *c)))?
+    };
     let imu =
         ImuSeries { t_s: sink.imu.iter().map(|s| s.0).collect(), accel_mps2: sink.imu.iter().map(|s| s.1).collect() };
     Ok(SimulatedLogs { tracking, imu, truth })

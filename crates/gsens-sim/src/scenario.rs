@@ -433,11 +433,37 @@ pub struct SatellitesSection {
     pub max_channels: u32,
     /// `[satellites.cn0]`: C/N0 versus elevation.
     pub cn0: Cn0Model,
+    /// The signal each channel tracks, as [`gsens_io::Signal::label`]s
+    /// (`L1CA`, `L5Q`, `B1I`, `E1C`, `G1:+3` for GLONASS G1 on frequency
+    /// channel k = +3, …): channel c tracks `signals[c mod len]`. Empty (the
+    /// default): every channel on `oscillator.carrier_hz`, and `tracking.csv`
+    /// has no carrier columns. A channel on f_c sees Δf_c = f_c·y, y the
+    /// oscillator's fractional frequency (noise plus aᵀΓ/`oscillator.carrier_hz`),
+    /// and the Doppler of its satellite at f_c; its thermal noise follows its
+    /// own C/N0 as on L1. The satellites keep the GPS almanac's orbits and PRNs
+    /// whatever the signal (the geometry only sets Doppler and elevation).
+    /// Requires `oscillator.carrier_hz` = GPS L1, the carrier the estimate
+    /// reports Γ at.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub signals: Vec<String>,
 }
 
 impl Default for SatellitesSection {
     fn default() -> Self {
-        SatellitesSection { elevation_mask_deg: 10.0, max_channels: 12, cn0: Cn0Model::default() }
+        SatellitesSection { elevation_mask_deg: 10.0, max_channels: 12, cn0: Cn0Model::default(), signals: Vec::new() }
+    }
+}
+
+impl SatellitesSection {
+    /// The carrier of channel `channel`: its signal's from [`Self::signals`],
+    /// or `carrier_hz` (unnamed) when the list is empty. Panics on a name
+    /// that [`Scenario::validate`] refuses.
+    pub fn carrier_of(&self, channel: u32, carrier_hz: f64) -> gsens_io::Carrier {
+        if self.signals.is_empty() {
+            return gsens_io::Carrier { carrier_hz, signal: None };
+        }
+        let label = &self.signals[channel as usize % self.signals.len()];
+        gsens_io::Carrier::of(gsens_io::Signal::from_label(label).expect("validated signal"))
     }
 }
 
@@ -593,6 +619,27 @@ impl Scenario {
         let n = s.max_channels;
         range((1..=64).contains(&n), "satellites.max_channels", f64::from(n), "within [1, 64]")?;
         s.cn0.validate().map_err(|e| e.under("satellites"))?;
+        for (i, label) in s.signals.iter().enumerate() {
+            let key = format!("satellites.signals[{i}]");
+            let signal = gsens_io::Signal::from_label(label).map_err(|e| ConfigError::Signal {
+                key: key.clone(),
+                message: format!("{e} (a GLONASS FDMA signal is written with its k, e.g. G1:+3)"),
+            })?;
+            check(o.carrier_hz == gsens_core::units::GPS_L1_HZ, || ConfigError::Signal {
+                key: key.clone(),
+                message: format!(
+                    "channels on named signals ({}) need oscillator.carrier_hz = GPS L1 ({} Hz), the carrier Γ is \
+                     given and estimated at (got {} Hz)",
+                    signal.label(),
+                    gsens_core::units::GPS_L1_HZ,
+                    o.carrier_hz
+                ),
+            })?;
+        }
+        check(s.signals.len() <= s.max_channels as usize, || ConfigError::Signal {
+            key: "satellites.signals".into(),
+            message: format!("{} signals for {} channels (one per channel at most)", s.signals.len(), s.max_channels),
+        })?;
         Ok(())
     }
 }
@@ -656,6 +703,30 @@ mod tests {
             let e = Scenario::from_toml_str(toml).unwrap_err().to_string();
             assert!(e.contains(key), "{toml:?}: {e}");
         }
+    }
+
+    #[test]
+    fn signals_are_checked_and_assigned_per_channel() {
+        for (toml, want) in [
+            ("[satellites]\nsignals = [\"L1CA\", \"GPSL1\"]\n", "satellites.signals[1]: `GPSL1` is not a signal"),
+            ("[satellites]\nsignals = [\"G1\"]\n", "satellites.signals[0]: G1 is a GLONASS FDMA signal"),
+            ("[satellites]\nsignals = [\"G1:+9\"]\n", "outside the GLONASS frequency channels"),
+            (
+                "[oscillator]\ncarrier_hz = 1176.45e6\n[satellites]\nsignals = [\"L5Q\"]\n",
+                "oscillator.carrier_hz = GPS L1",
+            ),
+            ("[satellites]\nmax_channels = 2\nsignals = [\"L1CA\", \"L5I\", \"B1I\"]\n", "3 signals for 2 channels"),
+        ] {
+            let e = Scenario::from_toml_str(toml).unwrap_err().to_string();
+            assert!(e.contains(want), "{toml:?}: {e}");
+        }
+        let sc = Scenario::from_toml_str("[satellites]\nsignals = [\"L5Q\", \"G1:-3\"]\n").unwrap();
+        let l1 = gsens_core::units::GPS_L1_HZ;
+        assert_eq!(sc.satellites.carrier_of(2, l1).label(), "L5Q");
+        assert_eq!(sc.satellites.carrier_of(3, l1).carrier_hz, 1_602e6 - 3.0 * 0.5625e6);
+        // The default: every channel on the oscillator's carrier, unnamed; nothing new in its TOML.
+        assert_eq!(Scenario::default().satellites.carrier_of(5, l1), gsens_io::Carrier::GPS_L1);
+        assert!(!Scenario::default().to_toml_string().contains("signals"));
     }
 
     #[test]

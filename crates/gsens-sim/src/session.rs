@@ -13,7 +13,9 @@
 //!   ([`specific_force_body`]), evaluated exactly on a 5 ms grid and
 //!   interpolated linearly in between (error < 1e-4 relative for a 1 s shake);
 //! - Δf_k = f_carrier·ȳ_k + a(t_k)ᵀΓ \[Hz\], added to every NCO's command
-//!   (docs/conventions.md).
+//!   (docs/conventions.md); a channel on another carrier f_c
+//!   (`satellites.signals`) gets (f_c/f_carrier)·Δf_k, i.e. f_c times the same
+//!   fractional frequency error.
 //!
 //! Then each channel integrates against its satellite's carrier, whose Doppler
 //! (and rate) come from the orbit model at 1 s intervals and are interpolated
@@ -107,9 +109,18 @@ pub struct SimulatedRow {
     pub true_phase_err_rad: f64,
     /// Truth: the channel's true C/N0 \[dB-Hz\].
     pub true_cn0_dbhz: f64,
+    /// The carrier the channel tracks (`satellites.signals`; unnamed
+    /// `oscillator.carrier_hz` without it).
+    #[serde(skip)]
+    pub carrier: gsens_io::Carrier,
 }
 
 impl SimulatedRow {
+    /// The row as logged with its carrier, for `tracking.csv` with carrier columns.
+    pub fn tracking_row_on(&self) -> (gsens_io::TrackingRow, gsens_io::Carrier) {
+        (self.tracking_row(), self.carrier)
+    }
+
     /// The row as logged, for `tracking.csv` (the elevation is always known).
     pub fn tracking_row(&self) -> gsens_io::TrackingRow {
         gsens_io::TrackingRow {
@@ -222,6 +233,9 @@ pub struct ChannelSummary {
     pub start_cn0_dbhz: f64,
     /// Counters: integrations, integrations locked, cycle slips, losses of lock.
     pub stats: ChannelStats,
+    /// The signal tracked (`satellites.signals`; absent without it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub signal: Option<String>,
 }
 
 /// The g-sensitivity a simulation ran with, in every form a calibration is
@@ -318,6 +332,9 @@ struct Track {
     ch: Channel,
     prn: u32,
     channel: u32,
+    /// The carrier tracked, and its ratio to the oscillator's carrier (Δf scales by it).
+    carrier: gsens_io::Carrier,
+    carrier_ratio: f64,
     start_s: f64,
     start_elev_deg: f64,
     start_cn0_dbhz: f64,
@@ -345,6 +362,7 @@ impl Track {
             cn0_offset_db: self.cn0_offset_db,
             start_cn0_dbhz: self.start_cn0_dbhz,
             stats: self.ch.stats(),
+            signal: self.carrier.signal.map(|s| s.label()),
         }
     }
 }
@@ -439,7 +457,7 @@ pub fn simulate<S: SessionSink + ?Sized>(
                     continue;
                 }
                 let next = constellation.line_of_sight(tr.prn, &antenna, t_next_gps).expect("tracked PRN exists");
-                set_segment(tr, &now, &next, t, carrier_hz);
+                set_segment(tr, &now, &next, t);
                 tr.ch.set_cn0_dbhz(cn0.cn0_dbhz(tr.prn, now.elevation_deg));
                 i += 1;
             }
@@ -454,7 +472,9 @@ pub fn simulate<S: SessionSink + ?Sized>(
                     let channel = (0..).find(|c| !tracks.iter().any(|tr| tr.channel == *c)).unwrap_or(0);
                     let next = constellation.line_of_sight(los.prn, &antenna, t_next_gps).expect("visible PRN exists");
                     let rng = substream(seed, stream::CHANNEL | u64::from(los.prn) << 32 | (t as u64 & 0xFFFF_FFFF));
-                    tracks.push(start_track(&ch_cfg, &los, &next, t, channel, delta_f_hz, aiding, sc, &cn0, rng));
+                    let carrier = sc.satellites.carrier_of(channel, carrier_hz);
+                    let start = (carrier, t, channel, delta_f_hz);
+                    tracks.push(start_track(&ch_cfg, &los, &next, start, aiding, sc, &cn0, rng));
                 }
                 tracks.sort_by_key(|tr| tr.channel);
             }
@@ -464,7 +484,8 @@ pub fn simulate<S: SessionSink + ?Sized>(
         // One integration per channel.
         for tr in tracks.iter_mut() {
             let f_sig = tr.doppler0_hz + tr.doppler_slope_hz_per_s * (t - tr.seg_t0_s);
-            let bias = if aiding { delta_f_hz + f_sig } else { delta_f_hz };
+            let delta_f_c_hz = delta_f_hz * tr.carrier_ratio;
+            let bias = if aiding { delta_f_c_hz + f_sig } else { delta_f_c_hz };
             tr.ch.step(f_sig, bias);
         }
 
@@ -504,6 +525,7 @@ pub fn simulate<S: SessionSink + ?Sized>(
                     locked: snap.locked,
                     true_phase_err_rad: truth,
                     true_cn0_dbhz: tr.ch.cn0_true_dbhz(),
+                    carrier: tr.carrier,
                 };
                 sink.tracking(&row).map_err(sink_err)?;
             }
@@ -558,7 +580,8 @@ pub(crate) fn inverse_transpose_times(m: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 
 
 /// Sets a track's linear geometry for the second starting at `t` from the
 /// lines of sight at its two ends.
-fn set_segment(tr: &mut Track, now: &LineOfSight, next: &LineOfSight, t: f64, carrier_hz: f64) {
+fn set_segment(tr: &mut Track, now: &LineOfSight, next: &LineOfSight, t: f64) {
+    let carrier_hz = tr.carrier.carrier_hz;
     let d0 = now.doppler_at_hz(carrier_hz);
     let d1 = next.doppler_at_hz(carrier_hz);
     tr.doppler0_hz = d0;
@@ -574,15 +597,16 @@ fn start_track(
     cfg: &ChannelConfig,
     now: &LineOfSight,
     next: &LineOfSight,
-    t: f64,
-    channel: u32,
-    delta_f_hz: f64,
+    (carrier, t, channel, delta_f_hz): (gsens_io::Carrier, f64, u32, f64),
     aiding: bool,
     sc: &Scenario,
     cn0: &Cn0Offsets,
     mut rng: Xoshiro256PlusPlus,
 ) -> Track {
-    let carrier_hz = sc.oscillator.carrier_hz;
+    // The channel's carrier; Δf on it is f_c·y (ratio exactly 1 on the oscillator's carrier).
+    let carrier_hz = carrier.carrier_hz;
+    let carrier_ratio = carrier_hz / sc.oscillator.carrier_hz;
+    let delta_f_hz = delta_f_hz * carrier_ratio;
     let doppler_hz = now.doppler_at_hz(carrier_hz);
     let rate_hz_per_s = (next.doppler_at_hz(carrier_hz) - doppler_hz) / GEOMETRY_STEP_S;
     let freq_err_hz = normal(&mut rng, sc.tracking_loop.initial_freq_err_hz);
@@ -605,6 +629,8 @@ fn start_track(
         ch: Channel::new(cfg, &start, rng),
         prn: now.prn,
         channel,
+        carrier,
+        carrier_ratio,
         start_s: t,
         start_elev_deg: now.elevation_deg,
         start_cn0_dbhz: cn0_dbhz,
@@ -616,7 +642,7 @@ fn start_track(
         seg_t0_s: t,
         next: *next,
     };
-    set_segment(&mut tr, now, next, t, carrier_hz);
+    set_segment(&mut tr, now, next, t);
     tr
 }
 

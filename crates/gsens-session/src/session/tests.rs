@@ -534,3 +534,72 @@ fn reinterpolating_the_imu_matches_a_fresh_preparation_inside_the_span() {
     assert!(moved.phase_err_rad.last().unwrap().is_none());
     assert_eq!(moved.imu_time_offset_s, 0.037);
 }
+
+fn mixed_log(rows: &[(TrackingRow, gsens_io::Carrier)]) -> TrackingLog {
+    let csv = gsens_io::write_tracking_csv_on(Vec::new(), rows).unwrap();
+    read_tracking(csv.as_slice(), "tracking.csv").unwrap()
+}
+
+fn on(label: &str) -> gsens_io::Carrier {
+    gsens_io::Carrier::of(gsens_io::Signal::from_label(label).unwrap())
+}
+
+#[test]
+fn phases_are_scaled_to_l1_and_weighted_by_the_inverse_scaled_variance() {
+    // One common L1-scale signal s(k): a channel on f_c logs (f_c/f_L1)·s plus its own term.
+    let l1 = gsens_core::units::GPS_L1_HZ;
+    let labels = ["L1CA", "L5Q", "G1:-7", "B1I"];
+    let own = [0.01, -0.02, 0.03, 0.005];
+    let mut rows = Vec::new();
+    for k in 0..20 {
+        for (c, label) in labels.iter().enumerate() {
+            let f = on(label).carrier_hz;
+            rows.push((row(tk(k), c as u32, 40.0 + c as f64, None, f / l1 * common(k) + own[c]), on(label)));
+        }
+    }
+    let log = mixed_log(&rows);
+    for weighting in [Weighting::Equal, Weighting::Cn0] {
+        let cfg = SelectionConfig { weighting, remove_channel_offsets: false, ..base() };
+        let s = prep(&log, &wide_imu(), &cfg).unwrap();
+        // Closed form: Σ w_c·(s + own_c·f_L1/f_c) / Σ w_c, w_c = (C/N0 or 1)·(f_c/f_L1)².
+        let (mut sw, mut swx) = (0.0, 0.0);
+        for (c, label) in labels.iter().enumerate() {
+            let r = on(label).carrier_hz / l1;
+            let base = if weighting == Weighting::Cn0 { 10f64.powf((40.0 + c as f64) / 10.0) } else { 1.0 };
+            sw += base * r * r;
+            swx += base * r * r * own[c] / r;
+        }
+        for (k, p) in s.phase_err_rad.iter().enumerate() {
+            assert!((p.unwrap() - (common(k) + swx / sw)).abs() < 1e-12, "{weighting:?} epoch {k}");
+        }
+        let got: Vec<(&str, usize)> = s.signals.iter().map(|g| (g.signal.as_str(), g.tracks_used)).collect();
+        assert_eq!(got, [("G1:-7", 1), ("L1CA", 1), ("B1I", 1), ("L5Q", 1)]);
+        assert_eq!(s.channels[1].signal, "L5Q");
+        assert_eq!(s.channels[1].carrier_hz, 1_176.45e6);
+    }
+}
+
+#[test]
+fn linear_range_test_uses_each_channels_own_carrier() {
+    use gsens_io::Carrier;
+    // Four quiet L1 channels and one with an excursion of its own, `logged` rad as logged.
+    let flagged = |carrier: Carrier, logged: f64| {
+        let mut rows = Vec::new();
+        for k in 0..2400 {
+            let wiggle = 1e-3 * ((k * 7919) % 13) as f64;
+            for c in 0..4u32 {
+                rows.push((row(tk(k), c, 45.0, None, wiggle + 1e-3 * c as f64), Carrier::GPS_L1));
+            }
+            let p = if (1000..1040).contains(&k) { logged } else { wiggle };
+            rows.push((row(tk(k), 9, 45.0, None, p), carrier));
+        }
+        let s = prep(&mixed_log(&rows), &wide_imu(), &SelectionConfig::default()).unwrap();
+        s.channels.iter().find(|c| c.channel == 9).unwrap().screening.rows_phase_range
+    };
+    // 0.7 rad is within π/4 as logged, though 0.7·1575.42/1176.45 = 0.94 rad on L1's scale.
+    assert_eq!(flagged(on("L5I"), 0.7), 0);
+    assert_eq!(flagged(Carrier::GPS_L1, 0.7), 0);
+    // 0.8 rad as logged is beyond it on any carrier.
+    assert!(flagged(on("L5I"), 0.8) >= 40);
+    assert!(flagged(Carrier::GPS_L1, 0.8) >= 40);
+}
