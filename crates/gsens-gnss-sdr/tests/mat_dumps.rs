@@ -1,0 +1,112 @@
+//! The `.mat` tracking dumps against the `.dat` of the same run: GNSS-SDR
+//! 0.0.17's own two files of one short run (`tests/fixtures/mat`: 1.2 s, one
+//! satellite at 50 dB-Hz, `Tracking_1C.dump_mat=true`;
+//! `scripts/make-gnss-sdr-fixtures.sh`, ONLY=mat). With the feature off, a
+//! `.mat` file is refused with an error that names the feature.
+
+use std::path::{Path, PathBuf};
+
+use gsens_gnss_sdr::dump::{find_dumps, read_dump};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gsens-mat-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[cfg(feature = "mat")]
+mod with_feature {
+    use super::*;
+    use gsens_gnss_sdr::dump::TrackingRecord;
+    use gsens_gnss_sdr::import::{ImportSettings, import_dir};
+
+    /// Every field of two records, bit for bit.
+    fn bits(r: &TrackingRecord) -> Vec<u64> {
+        let f = [
+            r.abs_ve,
+            r.abs_e,
+            r.abs_p,
+            r.abs_l,
+            r.abs_vl,
+            r.prompt_i,
+            r.prompt_q,
+            r.acc_carrier_phase_rad,
+            r.carrier_doppler_hz,
+            r.carrier_doppler_rate_hz_per_s,
+            r.code_freq_chips_per_s,
+            r.code_freq_rate_chips_per_s2,
+            r.carr_error_cycles,
+            r.carr_error_filt_hz,
+            r.code_error_chips,
+            r.code_error_filt_chips,
+            r.cn0_dbhz,
+            r.carrier_lock_test,
+            r.aux1,
+            r.aux2,
+        ];
+        let mut v: Vec<u64> = f.iter().map(|x| x.to_bits()).collect();
+        v.extend([r.prn_start_sample_count, u64::from(r.prn)]);
+        v
+    }
+
+    #[test]
+    fn the_mat_and_the_dat_of_one_run_read_identically() {
+        let dir = fixtures().join("mat");
+        let dat = read_dump(dir.join("trk_ch_0.dat"), None).unwrap();
+        let mat = read_dump(dir.join("trk_ch_0.mat"), None).unwrap();
+        assert_eq!(dat.records.len(), 569);
+        assert_eq!(std::fs::metadata(dir.join("trk_ch_0.dat")).unwrap().len(), 569 * 96);
+        assert_eq!((mat.layout.as_str(), mat.channel, mat.modelled), ("gnss-sdr-0.0.17", Some(0), true));
+        assert_eq!(mat.records.len(), dat.records.len());
+        for (k, (a, b)) in mat.records.iter().zip(&dat.records).enumerate() {
+            assert_eq!(bits(a), bits(b), "record {k}");
+        }
+        // The importer gives the same rows from a directory holding only the .mat.
+        let only_mat = tmp("only-mat");
+        std::fs::copy(dir.join("trk_ch_0.mat"), only_mat.join("trk_ch_0.mat")).unwrap();
+        assert!(find_dumps(&only_mat, None).unwrap()[0].1.ends_with("trk_ch_0.mat"));
+        let settings = ImportSettings::from_conf(Some(&dir.join("gnss-sdr.conf")), None).unwrap();
+        let (a, b) = (import_dir(&only_mat, &settings), import_dir(&dir, &settings));
+        // 1.2 s never reaches the 20 ms loop: both say so, in the same words but the file name.
+        let (a, b) = (a.unwrap_err().to_string(), b.unwrap_err().to_string());
+        assert_eq!(a.replace(&only_mat.display().to_string(), "D"), b.replace(&dir.display().to_string(), "D"));
+        assert!(a.contains("never reached the modelled loop"), "{a}");
+    }
+
+    #[test]
+    fn bad_mat_files_get_clear_errors() {
+        let d = tmp("bad");
+        let p = d.join("trk_ch_3.mat");
+        std::fs::write(&p, b"MATLAB 5.0 MAT-file, not HDF5").unwrap();
+        let e = read_dump(&p, None).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{}: not a MATLAB v7.3 (HDF5) file", p.display())), "{e}");
+        // A real .mat forced onto the 0.0.21 layout lacks TOW_ms.
+        let e = read_dump(fixtures().join("mat/trk_ch_0.mat"), Some(&gsens_gnss_sdr::DumpLayout::v0_0_21()))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("trk_ch_0.mat: variable `TOW_ms`"), "{e}");
+    }
+}
+
+#[test]
+fn a_directory_prefers_the_dat_of_a_channel() {
+    let found = find_dumps(&fixtures().join("mat"), None).unwrap();
+    assert_eq!(found.len(), 1);
+    assert!(found[0].1.ends_with("trk_ch_0.dat"), "{found:?}");
+}
+
+#[cfg(not(feature = "mat"))]
+#[test]
+fn without_the_feature_a_mat_file_names_the_feature() {
+    let p = fixtures().join("mat/trk_ch_0.mat");
+    let e = read_dump(&p, None).unwrap_err().to_string();
+    assert!(e.starts_with(&format!("{}: a .mat tracking dump", p.display())), "{e}");
+    assert!(e.contains("built without the `mat` feature") && e.contains("--features mat"), "{e}");
+    let d = tmp("nofeature");
+    std::fs::copy(&p, d.join("trk_ch_0.mat")).unwrap();
+    assert!(find_dumps(&d, None).unwrap()[0].1.ends_with("trk_ch_0.mat"));
+}
