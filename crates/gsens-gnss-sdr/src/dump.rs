@@ -321,11 +321,16 @@ impl DumpLayout {
         self.fields.iter().map(|(_, t)| t.size()).sum()
     }
 
-    /// A layout from a spec `name:type,name:type,…` (types f32, f64, u32, u64,
-    /// i32), for dumps of versions or blocks the reader does not know. It must
-    /// contain the [`REQUIRED_FIELDS`]; only the generic plausibility rules are
-    /// checked, and the importer treats it as the modelled loop's.
+    /// A layout from a spec: the name of a [`DumpLayout::known`] one (e.g.
+    /// `gnss-sdr-0.0.21`, to force it), or `name:type,name:type,…` (types f32,
+    /// f64, u32, u64, i32) for dumps of versions or blocks the reader does not
+    /// know. Those must contain the [`REQUIRED_FIELDS`]; only the generic
+    /// plausibility rules are checked, and the importer treats them as the
+    /// modelled loop's.
     pub fn parse_spec(spec: &str) -> Result<Self, LayoutSpecError> {
+        if let Some(l) = DumpLayout::known().into_iter().find(|l| l.name == spec.trim()) {
+            return Ok(l);
+        }
         let mut fields = Vec::new();
         for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (n, t) =
@@ -1030,6 +1035,7 @@ mod tests {
             "`a : f16`: unknown type `f16` (f32, f64, u32, u64, i32)"
         );
         assert_eq!(DumpLayout::parse_spec("abs_P f32").unwrap_err().to_string(), "`abs_P f32`: expected name:type");
+        assert_eq!(DumpLayout::parse_spec(" gnss-sdr-0.0.21 ").unwrap(), DumpLayout::v0_0_21());
         assert_eq!(
             DumpLayout::parse_spec("").unwrap_err().to_string(),
             "the layout lacks the field `PRN_start_sample_count` (required: PRN_start_sample_count, carr_error_hz, \

@@ -106,7 +106,10 @@ pub enum GnssSdrError {
         second_records: u64,
     },
     /// The dump's length fits several layouts and the records do not decide.
-    #[error("{file}: {len} bytes fits several tracking-dump layouts ({candidates}); give the layout explicitly")]
+    #[error(
+        "{file}: {len} bytes fits several tracking-dump layouts ({candidates}) and every record is plausible in \
+         each; give the layout (--gnss-sdr-layout NAME)"
+    )]
     AmbiguousLayout {
         /// The dump.
         file: String,

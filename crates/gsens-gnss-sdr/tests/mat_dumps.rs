@@ -58,8 +58,9 @@ mod with_feature {
         let dir = fixtures().join("mat");
         let dat = read_dump(dir.join("trk_ch_0.dat"), None).unwrap();
         let mat = read_dump(dir.join("trk_ch_0.mat"), None).unwrap();
-        assert_eq!(dat.records.len(), 569);
-        assert_eq!(std::fs::metadata(dir.join("trk_ch_0.dat")).unwrap().len(), 569 * 96);
+        // Every byte of the .dat read (a GNSS-SDR run's record count varies from run to run).
+        let len = std::fs::metadata(dir.join("trk_ch_0.dat")).unwrap().len();
+        assert!(dat.records.len() > 300 && dat.records.len() as u64 * 96 == len, "{len}");
         assert_eq!((mat.layout.as_str(), mat.channel, mat.modelled), ("gnss-sdr-0.0.17", Some(0), true));
         assert_eq!(mat.records.len(), dat.records.len());
         for (k, (a, b)) in mat.records.iter().zip(&dat.records).enumerate() {
