@@ -41,18 +41,16 @@ fi
 G=$GSENS
 . scripts/lib/scenario.sh
 
+# satellites CHANNELS CN0: that many satellites, all at CN0 dB-Hz.
+satellites() {
+    printf '[satellites]\nelevation_mask_deg = 10.0\nmax_channels = %s\n[satellites.cn0]\n' "$1"
+    printf 'zenith_cn0_dbhz = %s\nhorizon_cn0_dbhz = %s\nper_satellite_offset_sigma_db = 0.0\n' "$2" "$2"
+}
+
 # 1. The quiet set.
 quiet() {
 paper_session 2 > "$WORK/scenario.toml"
-cat >> "$WORK/scenario.toml" <<'TOML'
-[satellites]
-elevation_mask_deg = 10.0
-max_channels = 2
-[satellites.cn0]
-zenith_cn0_dbhz = 55.0
-horizon_cn0_dbhz = 55.0
-per_satellite_offset_sigma_db = 0.0
-TOML
+satellites 2 55.0 >> "$WORK/scenario.toml"
 shake_sequence 20.0 5.0 1.0 >> "$WORK/scenario.toml"
 "$G" simulate --scenario "$WORK/scenario.toml" --seed $SEED --out "$WORK" --iq "$WORK/signal.bin" \
     --fs-hz 2048000 --iq-carrier-truth
@@ -167,14 +165,8 @@ PY
 #    (another record layout of the same size); the first 200 records (19 KB).
 short_run() {
 paper_session 2 > "$WORK/short.toml"
+satellites 1 50.0 >> "$WORK/short.toml"
 cat >> "$WORK/short.toml" <<'TOML'
-[satellites]
-elevation_mask_deg = 10.0
-max_channels = 1
-[satellites.cn0]
-zenith_cn0_dbhz = 50.0
-horizon_cn0_dbhz = 50.0
-per_satellite_offset_sigma_db = 0.0
 [[motion.segments]]
 kind = "rest"
 duration_s = 1.2

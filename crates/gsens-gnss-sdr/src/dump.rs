@@ -273,42 +273,22 @@ impl DumpLayout {
         l
     }
 
-    /// The 88-byte record of the older DLL/PLL blocks (GLONASS, GPU, TCP connector) (module docs).
+    /// The 88-byte record of the older DLL/PLL blocks (GLONASS, GPU, TCP
+    /// connector): [`DumpLayout::v0_0_17`]'s fields without the Doppler rate
+    /// and the code-rate rate, the counter at the start (module docs).
     pub fn legacy_88() -> Self {
-        use FieldType::*;
-        DumpLayout {
-            name: "gnss-sdr-legacy-88".into(),
-            description: "GNSS-SDR 0.0.17 to 0.0.20 glonass_l1/l2_ca_dll_pll(_c_aid)_tracking, 0.0.17 to 0.0.21 \
-                          gps_l1_ca_dll_pll_tracking_gpu_cc and the TCP-connector tracking blocks"
-                .into(),
-            fields: fields(&[
-                ("abs_VE", F32),
-                ("abs_E", F32),
-                ("abs_P", F32),
-                ("abs_L", F32),
-                ("abs_VL", F32),
-                ("Prompt_I", F32),
-                ("Prompt_Q", F32),
-                ("PRN_start_sample_count", U64),
-                ("acc_carrier_phase_rad", F32),
-                ("carrier_doppler_hz", F32),
-                ("code_freq_chips", F32),
-                ("carr_error_hz", F32),
-                ("carr_error_filt_hz", F32),
-                ("code_error_chips", F32),
-                ("code_error_filt_chips", F32),
-                ("CN0_SNV_dB_Hz", F32),
-                ("carrier_lock_test", F32),
-                ("aux1", F32),
-                ("aux2", F64),
-                ("PRN", U32),
-            ]),
-            // The GPU block writes 1/(cycles·T) there, the TCP blocks 0.
-            carr_error_max: None,
-            aux2: Aux2Rule::CounterPlusLength,
-            filter_is_nco: false,
-            modelled: false,
-        }
+        let mut l = DumpLayout::v0_0_17();
+        l.name = "gnss-sdr-legacy-88".into();
+        l.description = "GNSS-SDR 0.0.17 to 0.0.20 glonass_l1/l2_ca_dll_pll(_c_aid)_tracking, 0.0.17 to 0.0.21 \
+                         gps_l1_ca_dll_pll_tracking_gpu_cc and the TCP-connector tracking blocks"
+            .into();
+        l.fields.retain(|(n, _)| n != "carrier_doppler_rate_hz" && n != "code_freq_rate_chips");
+        // The GPU block writes 1/(cycles·T) as the discriminator, the TCP blocks 0.
+        l.carr_error_max = None;
+        l.aux2 = Aux2Rule::CounterPlusLength;
+        l.filter_is_nco = false;
+        l.modelled = false;
+        l
     }
 
     /// The layouts the reader tries when none is given.
@@ -801,7 +781,29 @@ pub fn find_dumps(dir: &Path, prefix: Option<&str>) -> Result<Vec<(u32, PathBuf)
 mod tests {
     use super::*;
 
-    /// A synthetic record in the 0.0.17 layout.
+    /// The frame every GNSS-SDR tracking record shares: five |correlators| and
+    /// the prompt I, Q (f32), the sample counter (uint64), the block's own
+    /// floats (f32), `aux2` (double), the PRN (uint32).
+    fn packed(counter: u64, floats: &[f32], aux2: f64, prn: u32) -> Vec<u8> {
+        let mut b = Vec::with_capacity(40 + 4 * floats.len());
+        for v in [1.0f32, 2.0, 3.0, 2.0, 1.0, 3.0, 0.1] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&counter.to_le_bytes());
+        for v in floats {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&aux2.to_le_bytes());
+        b.extend_from_slice(&prn.to_le_bytes());
+        b
+    }
+
+    /// A record as `dll_pll_veml_tracking::log_data` of GNSS-SDR v0.0.17 writes
+    /// it (src/algorithms/tracking/gnuradio_blocks/dll_pll_veml_tracking.cc at
+    /// tag v0.0.17): counter at the end; carrier phase, Doppler, Doppler rate,
+    /// code rate, code-rate rate, discriminator (cycles), filter output (= the
+    /// Doppler), code error and its filtered value, C/N0, lock test, remnant
+    /// code phase; `aux2` = the counter.
     pub(crate) fn record_bytes(
         n: u64,
         carr_error_cycles: f32,
@@ -810,17 +812,8 @@ mod tests {
         lock: f32,
         prn: u32,
     ) -> Vec<u8> {
-        let mut b = Vec::with_capacity(96);
-        for v in [1.0f32, 2.0, 3.0, 2.0, 1.0, 3.0, 0.1] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b.extend_from_slice(&n.to_le_bytes());
-        for v in [0.5f32, doppler_hz, 0.0, 1.023e6, 0.0, carr_error_cycles, doppler_hz, 0.01, 0.0, cn0, lock, 0.2] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b.extend_from_slice(&(n as f64).to_le_bytes());
-        b.extend_from_slice(&prn.to_le_bytes());
-        b
+        let f = [0.5f32, doppler_hz, 0.0, 1.023e6, 0.0, carr_error_cycles, doppler_hz, 0.01, 0.0, cn0, lock, 0.2];
+        packed(n, &f, n as f64, prn)
     }
 
     #[test]
@@ -856,18 +849,9 @@ mod tests {
     /// code error and its filtered value, C/N0, lock test, remnant code phase
     /// (f32), start + integration length (double), PRN (uint32).
     pub(crate) fn record_bytes_kf_cc(start: u64, len: u64, disc_rad: f32, prn: u32) -> Vec<u8> {
-        let mut b = Vec::with_capacity(96);
-        for v in [1.0f32, 2.0, 3.0, 2.0, 1.0, 3.0, 0.1] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b.extend_from_slice(&start.to_le_bytes());
         let tau = core::f32::consts::TAU;
-        for v in [0.5f32, 1500.0, 0.3, 1.023e6, disc_rad * tau, 0.02, 1.2 * tau, 0.01, 0.0, 45.0, 0.9, 0.2] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b.extend_from_slice(&((start + len) as f64).to_le_bytes());
-        b.extend_from_slice(&prn.to_le_bytes());
-        b
+        let f = [0.5f32, 1500.0, 0.3, 1.023e6, disc_rad * tau, 0.02, 1.2 * tau, 0.01, 0.0, 45.0, 0.9, 0.2];
+        packed(start, &f, (start + len) as f64, prn)
     }
 
     /// A record of `glonass_l1_ca_dll_pll_tracking_cc` as GNSS-SDR v0.0.17
@@ -879,17 +863,8 @@ mod tests {
     /// its filtered value, C/N0, lock test, remnant code phase (f32), start +
     /// integration length (double), PRN (uint32) — no rate fields: 88 bytes.
     pub(crate) fn record_bytes_legacy_88(start: u64, len: u64, carr_error_cycles: f32, prn: u32) -> Vec<u8> {
-        let mut b = Vec::with_capacity(88);
-        for v in [1.0f32, 2.0, 3.0, 2.0, 1.0, 3.0, 0.1] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b.extend_from_slice(&start.to_le_bytes());
-        for v in [0.5f32, 1500.0, 511e3, carr_error_cycles, 3.0, 0.01, 0.0, 45.0, 0.9, 0.2] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b.extend_from_slice(&((start + len) as f64).to_le_bytes());
-        b.extend_from_slice(&prn.to_le_bytes());
-        b
+        let f = [0.5f32, 1500.0, 511e3, carr_error_cycles, 3.0, 0.01, 0.0, 45.0, 0.9, 0.2];
+        packed(start, &f, (start + len) as f64, prn)
     }
 
     fn concat(records: impl IntoIterator<Item = Vec<u8>>) -> Vec<u8> {
