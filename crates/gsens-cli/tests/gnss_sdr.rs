@@ -95,6 +95,9 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
         assert_eq!(v["loop_used"], *l);
         assert!(v["loop"]["description"].as_str().unwrap().starts_with("GNSS-SDR"), "{}", v["loop"]);
         assert!(v["gnss_sdr"]["tracks"].as_array().unwrap().iter().all(|t| t["used"] == true));
+        // The result document names each dump's layout.
+        let layouts = v["gnss_sdr"]["tracks"].as_array().unwrap().iter().map(|t| t["layout"].as_str().unwrap());
+        assert!(layouts.clone().count() > 0 && layouts.clone().all(|l| l.starts_with("gnss-sdr-0.0.17 (GNSS-SDR")));
     }
 }
 

@@ -53,6 +53,12 @@
 //! | `aux2` | f64 | (the sample counter again, = `PRN_start_sample_count`) |
 //! | `PRN` | u32 | satellite |
 //!
+//! The Kalman trackers' records are these bytes with these meanings, so the
+//! file cannot tell them from `dll_pll_veml_tracking`'s: the configuration's
+//! `Tracking_1C.implementation` does (the importer refuses a Kalman tracker
+//! there, [`crate::conf`]), which is why `estimate --gnss-sdr` needs the
+//! configuration.
+//!
 //! (GNSS-SDR issue #734 asks why `carr_error_filt_hz` equals
 //! `carrier_doppler_hz`: the block assigns the one to the other after every
 //! filter update; the reader checks it, which tells this layout from byte
@@ -200,7 +206,7 @@ impl DumpLayout {
         DumpLayout {
             name: "gnss-sdr-0.0.17".into(),
             description: "GNSS-SDR 0.0.17 to 0.0.20 dll_pll_veml_tracking (GPS_L1_CA_DLL_PLL_Tracking); also \
-                          dll_pll_veml_tracking_fpga 0.0.17 to 0.0.21 and kf_tracking 0.0.18 to 0.0.21"
+                          dll_pll_veml_tracking_fpga 0.0.17 to 0.0.21, kf_vtl_tracking 0.0.17 and kf_tracking 0.0.18 to 0.0.21"
                 .into(),
             fields: fields(&[
                 ("abs_VE", F32),
