@@ -77,10 +77,12 @@
 //! (`GPS_L1_CA_KF_Tracking`), renamed `gps_l1_ca_gaussian_tracking_cc` from
 //! 0.0.18 on: the same field sizes, other meanings — `PRN_start_sample_count`
 //! is the counter at the *start* of the integration (`aux2` = it + the
-//! integration length), the Doppler-rate slot is the Kalman Doppler rate, and
-//! the three slots from `carr_error_hz` on hold the discriminator in rad·2π,
-//! its variance and the remnant carrier phase·2π. It writes a record every
-//! millisecond even while the channel is idle (all zeros).
+//! integration length), the Doppler-rate slot is the Kalman Doppler rate
+//! (`carrier_dopplerrate_hz2`), and the three slots after `code_freq_chips`
+//! hold the discriminator in rad·2π (`carr_error_hz`), its variance
+//! (`carr_noise_sigma2`) and the remnant carrier phase·2π (under the name
+//! `carr_error_filt_hz`), as its `save_matfile` names them. It writes a
+//! record every millisecond even while the channel is idle (all zeros).
 //!
 //! [`DumpLayout::legacy_88`], 88 bytes: the older blocks that write no
 //! Doppler rate and no code-rate field — `glonass_l1_ca_dll_pll_tracking_cc`,
@@ -260,11 +262,13 @@ impl DumpLayout {
         l.description = "GNSS-SDR 0.0.17 gps_l1_ca_kf_tracking_cc (GPS_L1_CA_KF_Tracking), 0.0.18 to 0.0.21 \
                          gps_l1_ca_gaussian_tracking_cc"
             .into();
-        // Its three slots after code_freq_chips: the discriminator, its variance, the remnant phase.
+        // GNSS-SDR's names for its slots (its save_matfile): the Doppler rate, then after
+        // code_freq_chips the discriminator, its variance and (under the filter's name) the
+        // remnant carrier phase·2π.
         let rename = [
+            ("carrier_doppler_rate_hz", "carrier_dopplerrate_hz2"),
             ("code_freq_rate_chips", "carr_error_hz"),
-            ("carr_error_hz", "carr_phase_sigma2"),
-            ("carr_error_filt_hz", "rem_carr_phase_2pi"),
+            ("carr_error_hz", "carr_noise_sigma2"),
         ];
         for (n, _) in &mut l.fields {
             if let Some((_, to)) = rename.iter().find(|(from, _)| from == n) {
