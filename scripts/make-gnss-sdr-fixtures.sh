@@ -159,48 +159,35 @@ PY
 
 # 3. fixtures/mat (ONLY=mat): GNSS-SDR's own .dat and .mat of one short run
 #    (1.2 s, one satellite at 50 dB-Hz, the default DLL/PLL tracking with
-#    Tracking_1C.dump_mat=true; about 155 KB), for the test that the .mat
+#    Tracking_1C.dump_mat=true; about 160 KB), for the test that the .mat
 #    reader gives the .dat's records bit for bit.
-# 4. fixtures/kf (ONLY=kf): the same IF file tracked by GPS_L1_CA_KF_Tracking
-#    (another record layout of the same size); the first 200 records (19 KB).
-short_run() {
-paper_session 2 > "$WORK/short.toml"
-satellites 1 50.0 >> "$WORK/short.toml"
-cat >> "$WORK/short.toml" <<'TOML'
-[[motion.segments]]
-kind = "rest"
-duration_s = 1.2
-TOML
-mkdir -p "$WORK/short"
-"$G" simulate --scenario "$WORK/short.toml" --seed 5 --out "$WORK/short" --iq "$WORK/short/signal.bin" --fs-hz 2048000
-}
-
-# $1: mat|kf; $2: Tracking_1C.implementation; $3: dump prefix.
+# 4. fixtures/kf (ONLY=kf): the same for GPS_L1_CA_KF_Tracking (another record
+#    layout of the same size as the DLL/PLL's) on 0.3 s (about 90 KB).
+# $1: mat|kf; $2: Tracking_1C.implementation; $3: dump prefix; $4: IF duration [s].
 short_fixture() {
-    local name=$1 impl=$2 prefix=$3 d="$WORK/short/$1"
-    mkdir -p "$d" && ln -sf "$WORK/short/signal.bin" "$d/signal.bin"
-    sed -e "s|^Tracking_1C.implementation=.*|Tracking_1C.implementation=$impl|" \
+    local name=$1 impl=$2 prefix=$3 d="$WORK/short-$1"
+    mkdir -p "$d"
+    paper_session 2 > "$d/short.toml"
+    satellites 1 50.0 >> "$d/short.toml"
+    printf '[[motion.segments]]\nkind = "rest"\nduration_s = %s\n' "$4" >> "$d/short.toml"
+    "$G" simulate --scenario "$d/short.toml" --seed 5 --out "$d" --iq "$d/signal.bin" --fs-hz 2048000
+    sed -i -e "s|^Tracking_1C.implementation=.*|Tracking_1C.implementation=$impl|" \
         -e "s|^Tracking_1C.dump_filename=.*|Tracking_1C.dump_filename=./$prefix|" \
-        -e "s|^Tracking_1C.dump_mat=.*|Tracking_1C.dump_mat=$([ "$name" = mat ] && echo true || echo false)|" \
+        -e "s|^Tracking_1C.dump_mat=.*|Tracking_1C.dump_mat=true|" \
         -e "s|^SignalSource.filename=.*|SignalSource.filename=signal.bin|" \
-        -e "s|$WORK/short/||g" "$WORK/short/gnss-sdr.conf" > "$d/gnss-sdr.conf"
+        -e "s|$d/||g" "$d/gnss-sdr.conf"
     (cd "$d" && gnss-sdr --config_file=gnss-sdr.conf --log_dir="$d" > gnss-sdr.log 2>&1)
     rm -rf "${FIX:?}/$name" && mkdir -p "$FIX/$name"
-    cp "$d/gnss-sdr.conf" "$FIX/$name/"
-    if [ "$name" = mat ]; then
-        cp "$d/${prefix}0.dat" "$d/${prefix}0.mat" "$FIX/$name/"
-    else
-        head -c $((200 * 96)) "$d/${prefix}0.dat" > "$FIX/$name/${prefix}0.dat"
-    fi
+    cp "$d/gnss-sdr.conf" "$d/${prefix}0.dat" "$d/${prefix}0.mat" "$FIX/$name/"
 }
 
 case "${ONLY:-both}" in
     quiet) quiet ;;
     shaken) shaken ;;
-    mat) short_run; short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ ;;
-    kf) short_run; short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ ;;
-    *) quiet; shaken; short_run; short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_;
-       short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ ;;
+    mat) short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2 ;;
+    kf) short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ 0.3 ;;
+    *) quiet; shaken; short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2;
+       short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ 0.3 ;;
 esac
 du -ah "$FIX" | sort -k2
 echo "total: $(du -sk "$FIX" | cut -f1) KB"

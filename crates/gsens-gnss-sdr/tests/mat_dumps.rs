@@ -1,7 +1,8 @@
 //! The `.mat` tracking dumps against the `.dat` of the same run: GNSS-SDR
 //! 0.0.17's own two files of one short run (`tests/fixtures/mat`: 1.2 s, one
 //! satellite at 50 dB-Hz, `Tracking_1C.dump_mat=true`;
-//! `scripts/make-gnss-sdr-fixtures.sh`, ONLY=mat). With the feature off, a
+//! `scripts/make-gnss-sdr-fixtures.sh`, ONLY=mat; and `tests/fixtures/kf`,
+//! 0.3 s tracked by `GPS_L1_CA_KF_Tracking`, ONLY=kf). With the feature off, a
 //! `.mat` file is refused with an error that names the feature.
 
 use std::path::{Path, PathBuf};
@@ -76,6 +77,20 @@ mod with_feature {
         let (a, b) = (a.unwrap_err().to_string(), b.unwrap_err().to_string());
         assert_eq!(a.replace(&only_mat.display().to_string(), "D"), b.replace(&dir.display().to_string(), "D"));
         assert!(a.contains("never reached the modelled loop"), "{a}");
+    }
+
+    /// The Kalman block's `.mat` (its own variable names) reads as its layout, the `.dat`'s records.
+    #[test]
+    fn the_kalman_trackers_mat_reads_as_its_dat() {
+        let dir = fixtures().join("kf");
+        let dat = read_dump(dir.join("trk_kf_ch_0.dat"), None).unwrap();
+        let mat = read_dump(dir.join("trk_kf_ch_0.mat"), None).unwrap();
+        assert_eq!((mat.layout.as_str(), mat.modelled), ("gnss-sdr-kf-cc", false));
+        assert_eq!(dat.layout, mat.layout);
+        assert_eq!(mat.records.len(), dat.records.len());
+        for (k, (a, b)) in mat.records.iter().zip(&dat.records).enumerate() {
+            assert_eq!(bits(a), bits(b), "record {k}");
+        }
     }
 
     #[test]
