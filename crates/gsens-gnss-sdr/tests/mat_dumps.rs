@@ -93,6 +93,73 @@ mod with_feature {
         }
     }
 
+    /// A `.mat` as GNSS-SDR 0.0.21's `save_matfile` names and types its arrays
+    /// (dll_pll_veml_tracking.cc at tag v0.0.21: 19 float, `PRN_start_sample_count`
+    /// and `TOW_ms` uint64, `aux2` double, `PRN` uint32, `WN` int32, each 1 × N),
+    /// built here from the real 0.0.17 run's records (no 0.0.21 runs here):
+    /// read as the 0.0.21 layout, the same records; a negative week number,
+    /// which the `.dat`'s uint32 cannot hold, is refused naming record and variable.
+    #[test]
+    fn a_0_0_21_mat_reads_as_the_0_0_21_layout() {
+        let dat = read_dump(fixtures().join("mat/trk_ch_0.dat"), None).unwrap();
+        let n = dat.records.len();
+        let write = |path: &Path, wn_last: i32| {
+            let f = hdf5::File::create(path).unwrap();
+            let r = &dat.records;
+            let floats: [(&str, fn(&TrackingRecord) -> f64); 19] = [
+                ("abs_VE", |x| x.abs_ve),
+                ("abs_E", |x| x.abs_e),
+                ("abs_P", |x| x.abs_p),
+                ("abs_L", |x| x.abs_l),
+                ("abs_VL", |x| x.abs_vl),
+                ("Prompt_I", |x| x.prompt_i),
+                ("Prompt_Q", |x| x.prompt_q),
+                ("acc_carrier_phase_rad", |x| x.acc_carrier_phase_rad),
+                ("carrier_doppler_hz", |x| x.carrier_doppler_hz),
+                ("carrier_doppler_rate_hz", |x| x.carrier_doppler_rate_hz_per_s),
+                ("code_freq_chips", |x| x.code_freq_chips_per_s),
+                ("code_freq_rate_chips", |x| x.code_freq_rate_chips_per_s2),
+                ("carr_error_hz", |x| x.carr_error_cycles),
+                ("carr_error_filt_hz", |x| x.carr_error_filt_hz),
+                ("code_error_chips", |x| x.code_error_chips),
+                ("code_error_filt_chips", |x| x.code_error_filt_chips),
+                ("CN0_SNV_dB_Hz", |x| x.cn0_dbhz),
+                ("carrier_lock_test", |x| x.carrier_lock_test),
+                ("aux1", |x| x.aux1),
+            ];
+            for (name, get) in floats {
+                let v: Vec<f32> = r.iter().map(|x| get(x) as f32).collect();
+                f.new_dataset::<f32>().shape([n, 1]).create(name).unwrap().write_raw(&v).unwrap();
+            }
+            let counts: Vec<u64> = r.iter().map(|x| x.prn_start_sample_count).collect();
+            f.new_dataset::<u64>().shape([n, 1]).create("PRN_start_sample_count").unwrap().write_raw(&counts).unwrap();
+            let aux2: Vec<f64> = r.iter().map(|x| x.aux2).collect();
+            f.new_dataset::<f64>().shape([n, 1]).create("aux2").unwrap().write_raw(&aux2).unwrap();
+            let prn: Vec<u32> = r.iter().map(|x| x.prn).collect();
+            f.new_dataset::<u32>().shape([n, 1]).create("PRN").unwrap().write_raw(&prn).unwrap();
+            let tow: Vec<u64> = (0..n as u64).map(|k| 345_600_000 + k).collect();
+            f.new_dataset::<u64>().shape([n, 1]).create("TOW_ms").unwrap().write_raw(&tow).unwrap();
+            let mut wn = vec![2391i32; n];
+            wn[n - 1] = wn_last;
+            f.new_dataset::<i32>().shape([n, 1]).create("WN").unwrap().write_raw(&wn).unwrap();
+        };
+        let d = tmp("v21");
+        let p = d.join("trk_ch_5.mat");
+        write(&p, 2391);
+        let m = read_dump(&p, None).unwrap();
+        assert_eq!((m.layout.as_str(), m.channel, m.records.len()), ("gnss-sdr-0.0.21", Some(5), n));
+        for (k, (a, b)) in m.records.iter().zip(&dat.records).enumerate() {
+            assert_eq!(bits(a), bits(b), "record {k}");
+            assert_eq!((a.tow_ms, a.wn), (Some(345_600_000 + k as u64), Some(2391)));
+        }
+        write(&p, -1);
+        let e = read_dump(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("trk_ch_5.mat: record {}: variable `WN` does not fit the dump's U32", n - 1)),
+            "{e}"
+        );
+    }
+
     #[test]
     fn bad_mat_files_get_clear_errors() {
         let d = tmp("bad");
