@@ -25,6 +25,9 @@ mod with_feature {
     use gsens_gnss_sdr::dump::TrackingRecord;
     use gsens_gnss_sdr::import::{ImportSettings, import_dir};
 
+    /// One field of a record.
+    type Getter = fn(&TrackingRecord) -> f64;
+
     /// Every field of two records, bit for bit.
     fn bits(r: &TrackingRecord) -> Vec<u64> {
         let f = [
@@ -106,7 +109,7 @@ mod with_feature {
         let write = |path: &Path, wn_last: i32| {
             let f = hdf5::File::create(path).unwrap();
             let r = &dat.records;
-            let floats: [(&str, fn(&TrackingRecord) -> f64); 19] = [
+            let floats: [(&str, Getter); 19] = [
                 ("abs_VE", |x| x.abs_ve),
                 ("abs_E", |x| x.abs_e),
                 ("abs_P", |x| x.abs_p),
