@@ -9,8 +9,9 @@
 //! (every 1 ms until bit synchronization, then one per extended integration),
 //! with no header. The layout is not stored in the file and has changed
 //! between versions without a word in the changelog (GNSS-SDR issue #1006:
-//! 0.0.21 appended two fields, and readers that assumed 96 bytes read
-//! garbage), so the reader knows every layout of the versions and blocks it
+//! 0.0.21 appended two fields, and a user's reader that assumed the old
+//! record got sample-counter steps twenty times too long from 0.0.21's
+//! dumps), so the reader knows every layout of the versions and blocks it
 //! was checked against ([`DumpLayout::known`]), keeps those whose record size
 //! divides the file length, and checks every record of each for plausibility
 //! ([`DumpLayout`]'s rules: PRN, finite correlators, discriminator and
