@@ -25,7 +25,7 @@
 #    imu.csv, truth.json, both gnss-sdr.conf. About 2.4 MB.
 #
 # Usage: scripts/make-gnss-sdr-fixtures.sh   (needs gnss-sdr, python3)
-# Environment: ONLY=quiet|shaken (one set; default both), GSENS (a gsens binary
+# Environment: ONLY=quiet|shaken|mat|kf (one set; default all), GSENS (a gsens binary
 # to use instead of building one), WORK (scratch directory).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,18 +41,16 @@ fi
 G=$GSENS
 . scripts/lib/scenario.sh
 
+# satellites CHANNELS CN0: that many satellites, all at CN0 dB-Hz.
+satellites() {
+    printf '[satellites]\nelevation_mask_deg = 10.0\nmax_channels = %s\n[satellites.cn0]\n' "$1"
+    printf 'zenith_cn0_dbhz = %s\nhorizon_cn0_dbhz = %s\nper_satellite_offset_sigma_db = 0.0\n' "$2" "$2"
+}
+
 # 1. The quiet set.
 quiet() {
 paper_session 2 > "$WORK/scenario.toml"
-cat >> "$WORK/scenario.toml" <<'TOML'
-[satellites]
-elevation_mask_deg = 10.0
-max_channels = 2
-[satellites.cn0]
-zenith_cn0_dbhz = 55.0
-horizon_cn0_dbhz = 55.0
-per_satellite_offset_sigma_db = 0.0
-TOML
+satellites 2 55.0 >> "$WORK/scenario.toml"
 shake_sequence 20.0 5.0 1.0 >> "$WORK/scenario.toml"
 "$G" simulate --scenario "$WORK/scenario.toml" --seed $SEED --out "$WORK" --iq "$WORK/signal.bin" \
     --fs-hz 2048000 --iq-carrier-truth
@@ -159,10 +157,37 @@ for order in (2, 3):
 PY
 }
 
+# 3. fixtures/mat (ONLY=mat): GNSS-SDR's own .dat and .mat of one short run
+#    (1.2 s, one satellite at 50 dB-Hz, the default DLL/PLL tracking with
+#    Tracking_1C.dump_mat=true; about 160 KB), for the test that the .mat
+#    reader gives the .dat's records bit for bit.
+# 4. fixtures/kf (ONLY=kf): the same for GPS_L1_CA_KF_Tracking (another record
+#    layout of the same size as the DLL/PLL's) on 0.3 s (about 90 KB).
+# $1: mat|kf; $2: Tracking_1C.implementation; $3: dump prefix; $4: IF duration [s].
+short_fixture() {
+    local name=$1 impl=$2 prefix=$3 d="$WORK/short-$1"
+    mkdir -p "$d"
+    paper_session 2 > "$d/short.toml"
+    satellites 1 50.0 >> "$d/short.toml"
+    printf '[[motion.segments]]\nkind = "rest"\nduration_s = %s\n' "$4" >> "$d/short.toml"
+    "$G" simulate --scenario "$d/short.toml" --seed 5 --out "$d" --iq "$d/signal.bin" --fs-hz 2048000
+    sed -i -e "s|^Tracking_1C.implementation=.*|Tracking_1C.implementation=$impl|" \
+        -e "s|^Tracking_1C.dump_filename=.*|Tracking_1C.dump_filename=./$prefix|" \
+        -e "s|^Tracking_1C.dump_mat=.*|Tracking_1C.dump_mat=true|" \
+        -e "s|^SignalSource.filename=.*|SignalSource.filename=signal.bin|" \
+        -e "s|$d/||g" "$d/gnss-sdr.conf"
+    (cd "$d" && gnss-sdr --config_file=gnss-sdr.conf --log_dir="$d" > gnss-sdr.log 2>&1)
+    rm -rf "${FIX:?}/$name" && mkdir -p "$FIX/$name"
+    cp "$d/gnss-sdr.conf" "$d/${prefix}0.dat" "$d/${prefix}0.mat" "$FIX/$name/"
+}
+
 case "${ONLY:-both}" in
     quiet) quiet ;;
     shaken) shaken ;;
-    *) quiet; shaken ;;
+    mat) short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2 ;;
+    kf) short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ 0.3 ;;
+    *) quiet; shaken; short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2;
+       short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ 0.3 ;;
 esac
 du -ah "$FIX" | sort -k2
 echo "total: $(du -sk "$FIX" | cut -f1) KB"

@@ -335,7 +335,9 @@ pub struct ConversionArgs {
     /// narrow loop's slowest mode).
     #[arg(long)]
     pub gnss_sdr_settle_s: Option<f64>,
-    /// Record layout `name:type,...` for dumps of versions the reader does not know.
+    /// Record layout of the dumps: a known one's name (gnss-sdr-0.0.17, gnss-sdr-0.0.21,
+    /// gnss-sdr-kf-cc, gnss-sdr-legacy-88) to force it, or `name:type,...` for versions the
+    /// reader does not know (default: recognised from each file).
     #[arg(long)]
     pub gnss_sdr_layout: Option<String>,
 }

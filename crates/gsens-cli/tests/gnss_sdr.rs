@@ -29,6 +29,13 @@ fn import_writes_tracking_csv() {
     };
     let out = import(&raw, &["--record-times", "--tracks-json", &s(&d.join("tracks.json"))]);
     assert!(out.contains("2 tracks, 2 used"), "{out}");
+    // Which layout (blocks and versions) each dump was read with.
+    for ch in 0..2 {
+        assert!(
+            out.contains(&format!("trk_ch_{ch}.dat: read as gnss-sdr-0.0.17 (GNSS-SDR 0.0.17 to 0.0.20 dll_pll_veml")),
+            "{out}"
+        );
+    }
     let text = std::fs::read_to_string(&raw).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,carrier_lock_test"));
@@ -50,6 +57,7 @@ fn import_writes_tracking_csv() {
     let tracks: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("tracks.json")).unwrap()).unwrap();
     assert_eq!(tracks["tracks"].as_array().unwrap().len(), 2);
+    assert!(tracks["tracks"][0]["layout"].as_str().unwrap().starts_with("gnss-sdr-0.0.17 (GNSS-SDR 0.0.17 to 0.0.20"));
 }
 
 #[test]
@@ -72,6 +80,7 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
             &s(&json),
         ]);
         assert!(text.contains("modelled exactly"), "{text}");
+        assert!(text.contains("trk_ch_0.dat: read as gnss-sdr-0.0.17 (GNSS-SDR 0.0.17 to 0.0.20"), "{text}");
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         for i in 0..3 {
             let g = v["gamma_hz_per_mps2"][i].as_f64().unwrap();
@@ -86,6 +95,9 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
         assert_eq!(v["loop_used"], *l);
         assert!(v["loop"]["description"].as_str().unwrap().starts_with("GNSS-SDR"), "{}", v["loop"]);
         assert!(v["gnss_sdr"]["tracks"].as_array().unwrap().iter().all(|t| t["used"] == true));
+        // The result document names each dump's layout.
+        let layouts = v["gnss_sdr"]["tracks"].as_array().unwrap().iter().map(|t| t["layout"].as_str().unwrap());
+        assert!(layouts.clone().count() > 0 && layouts.clone().all(|l| l.starts_with("gnss-sdr-0.0.17 (GNSS-SDR")));
     }
 }
 
@@ -178,7 +190,10 @@ fn bad_dumps_are_refused_naming_the_file() {
     ]);
     assert_eq!(out.status.code(), Some(2));
     let e = String::from_utf8_lossy(&out.stderr);
-    assert!(e.contains("trk_ch_0.dat") && e.contains("not a whole number of records"), "{e}");
+    assert!(
+        e.contains("trk_ch_0.dat: truncated tracking dump") && e.contains("1683 whole records of gnss-sdr-0.0.17"),
+        "{e}"
+    );
     std::fs::write(d.join("trk_ch_0.dat"), b"").unwrap();
     let conf = s(&f.join("order2/gnss-sdr.conf"));
     let import = |dir: &Path| fails(&["import", "gnss-sdr", &s(dir), "--conf", &conf, "--out", &s(&d.join("x.csv"))]);
@@ -221,4 +236,28 @@ fn simulate_iq_writes_samples_conf_and_truth() {
     let carrier = std::fs::read_to_string(d.join("carrier.csv")).unwrap();
     assert!(carrier.starts_with("t_s,prn") && carrier.lines().count() == 501);
     assert_eq!(std::fs::read_to_string(d.join("delta_f.csv")).unwrap().lines().count(), 501);
+}
+
+/// A directory holding only a `.mat` dump: read with the `mat` feature, else
+/// an error that names the feature (and the file), exit code 2.
+#[test]
+fn mat_dumps_need_the_mat_feature() {
+    let f = fixtures();
+    let d = tmp("mat");
+    std::fs::copy(f.join("mat/trk_ch_0.mat"), d.join("trk_ch_0.mat")).unwrap();
+    let out =
+        run(&["import", "gnss-sdr", &s(&d), "--conf", &s(&f.join("mat/gnss-sdr.conf")), "--out", &s(&d.join("x.csv"))]);
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    if cfg!(feature = "mat") {
+        // Read: 1.2 s never reaches the 20 ms loop, and the message says so for the .mat.
+        let records = std::fs::metadata(f.join("mat/trk_ch_0.dat")).unwrap().len() / 96;
+        assert!(
+            e.contains("never reached the modelled loop") && e.contains(&format!("in its {records} records")),
+            "{e}"
+        );
+        assert!(!e.contains("without the `mat` feature"), "{e}");
+    } else {
+        assert!(e.contains("trk_ch_0.mat: a .mat tracking dump") && e.contains("`mat` feature"), "{e}");
+    }
 }

@@ -57,21 +57,59 @@ pub enum GnssSdrError {
         /// The layouts the reader knows, with their record sizes.
         expected: String,
     },
-    /// The dump's length fits no known layout (or the one asked for).
+    /// No layout explains the dump.
     #[error(
-        "{file}: {len} bytes is not a whole number of records of any known tracking-dump layout \
-         ({expected}); a truncated record, or a dump of another GNSS-SDR version or block"
+        "{file}: {len} bytes fits no tracking-dump layout (a dump of another GNSS-SDR version or block?); tried: {tried}"
     )]
-    UnknownLayout {
+    NoLayoutFits {
         /// The dump.
         file: String,
         /// File length \[bytes\].
         len: u64,
-        /// The layouts tried, with their record sizes.
-        expected: String,
+        /// Every layout tried and why it does not fit (record, byte offset, field).
+        tried: String,
+    },
+    /// The whole records of one layout are plausible and a partial record follows.
+    #[error(
+        "{file}: truncated tracking dump: {len} bytes is {records} whole records of {layout} and {rest} bytes of a \
+         partial one (a run that did not end cleanly, or a cut copy); cut it to {records} records"
+    )]
+    TruncatedDump {
+        /// The dump.
+        file: String,
+        /// File length \[bytes\].
+        len: u64,
+        /// The layout whose whole records are plausible.
+        layout: String,
+        /// Whole records.
+        records: u64,
+        /// Bytes left over.
+        rest: u64,
+    },
+    /// Records of one layout, then records of another (a file appended to by two versions).
+    #[error(
+        "{file}: mixed tracking-dump layouts: {first_records} records of {first}, then from byte offset {offset} \
+         {second_records} records of {second} (a dump file appended to by two GNSS-SDR versions?); split it there"
+    )]
+    MixedLayouts {
+        /// The dump.
+        file: String,
+        /// The first layout.
+        first: String,
+        /// Its records.
+        first_records: u64,
+        /// Byte offset where the second layout starts.
+        offset: u64,
+        /// The second layout.
+        second: String,
+        /// Its records.
+        second_records: u64,
     },
     /// The dump's length fits several layouts and the records do not decide.
-    #[error("{file}: {len} bytes fits several tracking-dump layouts ({candidates}); give the layout explicitly")]
+    #[error(
+        "{file}: {len} bytes fits several tracking-dump layouts ({candidates}) and every record is plausible in \
+         each; give the layout (--gnss-sdr-layout NAME)"
+    )]
     AmbiguousLayout {
         /// The dump.
         file: String,
@@ -94,8 +132,40 @@ pub enum GnssSdrError {
         /// What is wrong.
         reason: String,
     },
+    /// A dump of a layout that only blocks gsens does not model write.
+    #[error(
+        "{file}: a tracking dump of layout {layout} ({description}): gsens models only the carrier loop of \
+         dll_pll_veml_tracking (GPS_L1_CA_DLL_PLL_Tracking), so it cannot convert this one; track with \
+         Tracking_1C.implementation=GPS_L1_CA_DLL_PLL_Tracking"
+    )]
+    NotModelled {
+        /// The dump.
+        file: String,
+        /// The layout's name.
+        layout: String,
+        /// Its blocks and versions.
+        description: String,
+    },
+    /// A `.mat` tracking dump that cannot be read.
+    #[error("{file}: {reason}")]
+    Mat {
+        /// The `.mat` file.
+        file: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A `.mat` tracking dump given to a build without the `mat` feature.
+    #[error(
+        "{file}: a .mat tracking dump (MATLAB v7.3 = HDF5), but this gsens was built without the `mat` feature; \
+         rebuild with `cargo build --features mat` (needs the system's libhdf5, Debian libhdf5-dev), or give the \
+         run's .dat dump instead"
+    )]
+    MatFeatureOff {
+        /// The `.mat` file.
+        file: String,
+    },
     /// A dump directory holds no `*.dat` dump.
-    #[error("{dir}: no tracking dump (files named <prefix><channel>.dat, e.g. trk_ch_0.dat) found")]
+    #[error("{dir}: no tracking dump (files named <prefix><channel>.dat or .mat, e.g. trk_ch_0.dat) found")]
     NoDumps {
         /// The directory.
         dir: String,

@@ -429,6 +429,9 @@ impl LockReplay {
 pub struct TrackSummary {
     /// The dump file.
     pub file: String,
+    /// The record layout it was read with: name, then the blocks and GNSS-SDR
+    /// versions that write it ([`DumpLayout`]).
+    pub layout: String,
     /// Channel.
     pub channel: u32,
     /// PRN.
@@ -578,6 +581,7 @@ pub fn import_dump(
         }
         tracks.push(TrackSummary {
             file: dump.file.clone(),
+            layout: format!("{} ({})", dump.layout, dump.layout_description),
             channel,
             prn: recs[i].prn,
             start_s: t_mid(i),
@@ -615,6 +619,13 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
     let mut tracks = Vec::new();
     for (_, path) in &files {
         let dump = read_dump(path, settings.layout.as_ref())?;
+        if !dump.modelled {
+            return Err(GnssSdrError::NotModelled {
+                file: dump.file,
+                layout: dump.layout,
+                description: dump.layout_description,
+            });
+        }
         let (r, t) = import_dump(&dump, settings, tracks.len());
         rows.extend(r);
         tracks.extend(t);
@@ -731,6 +742,8 @@ mod tests {
             aux1: 0.0,
             aux2: n as f64,
             prn,
+            tow_ms: None,
+            wn: None,
         }
     }
 
@@ -770,7 +783,14 @@ mod tests {
         // Then a satellite whose lock test sits at 0.3, below carrier_lock_th = 0.7 (the default):
         // judged from 1 s on (record 20 of the narrow stage), lost when the counter passes 20.
         recs.extend(records(recs.last().unwrap().prn_start_sample_count + 70_000, 50, 80, 11, 0.3));
-        let d = TrackingDump { file: "trk_ch_2.dat".into(), channel: Some(2), layout: "x".into(), records: recs };
+        let d = TrackingDump {
+            file: "trk_ch_2.dat".into(),
+            channel: Some(2),
+            layout: "x".into(),
+            layout_description: "x".into(),
+            modelled: true,
+            records: recs,
+        };
         let (rows, tracks) = import_dump(&d, &s, 0);
         assert_eq!(tracks.len(), 3);
         assert!(
@@ -814,6 +834,8 @@ mod tests {
             file: "trk_ch_3.dat".into(),
             channel: Some(3),
             layout: "x".into(),
+            layout_description: "x".into(),
+            modelled: true,
             records: records(0, 1500, 30, 7, 0.1),
         };
         let (rows, tracks) = import_dump(&d, &s2, 0);
@@ -859,6 +881,7 @@ mod tests {
         let s = settings();
         let tracks = vec![TrackSummary {
             file: String::new(),
+            layout: String::new(),
             channel: 0,
             prn: 1,
             start_s: 0.0,

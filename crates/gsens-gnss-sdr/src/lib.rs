@@ -7,7 +7,11 @@
 //!   produced a dump, and a configuration that tracks `gsens simulate --iq`
 //!   files;
 //! - [`dump`]: its tracking dumps (`Tracking_1C.dump=true`, `trk_ch_N.dat`),
-//!   version-aware, with errors that name the file, record and byte offset;
+//!   every record layout from 0.0.17 to 0.0.21 (and the Kalman, FPGA, GLONASS,
+//!   GPU and TCP blocks), recognised from the file itself, with errors that
+//!   name the file, record and byte offset;
+//! - `mat` (feature `mat`): the `.mat` copies of the dumps (MATLAB v7.3 =
+//!   HDF5, `dump_mat=true`), read to exactly the records of the `.dat`;
 //! - [`import`]: dumps → the `tracking.csv` schema (φ in rad, time at the
 //!   middle of each integration), each track judged by GNSS-SDR's own lock
 //!   detector replayed with the configuration's settings, with a reason;
@@ -19,6 +23,8 @@ pub mod conf;
 pub mod dump;
 pub mod error;
 pub mod import;
+#[cfg(feature = "mat")]
+pub mod mat;
 
 pub use conf::{GnssSdrConf, TrackingConf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};

@@ -9,7 +9,7 @@ use gsens_core::LoopModel;
 use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};
 use gsens_core::{LinearLoop, LoopSpec};
 use gsens_gnss_sdr::conf::GnssSdrConf;
-use gsens_gnss_sdr::dump::{TrackingRecord, parse_dump, read_dump};
+use gsens_gnss_sdr::dump::{DumpLayout, TrackingRecord, parse_dump, read_dump};
 use gsens_gnss_sdr::import::{ImportSettings, import_dir, resample};
 use gsens_io::read_imu_file;
 use gsens_session::{SelectionConfig, prepare_session};
@@ -69,8 +69,9 @@ fn bad_versions_of_real_dumps_get_clear_errors() {
     let name = "trk_ch_0.dat";
     // Truncated in the middle of the last record.
     let e = parse_dump(&bytes[..bytes.len() - 40], name, None).unwrap_err().to_string();
-    assert!(e.starts_with("trk_ch_0.dat:") && e.contains("not a whole number of records"), "{e}");
-    assert!(e.contains("GNSS-SDR 0.0.17 to 0.0.20") && e.contains("96 bytes per record"), "{e}");
+    assert!(e.starts_with("trk_ch_0.dat: truncated tracking dump: 161624 bytes is 1683 whole records"), "{e}");
+    assert!(e.contains("of gnss-sdr-0.0.17 (96 bytes per record: GNSS-SDR 0.0.17 to 0.0.20"), "{e}");
+    assert!(e.contains("and 56 bytes of a partial one"), "{e}");
     // Empty.
     let e = parse_dump(&[], name, None).unwrap_err().to_string();
     assert!(e.contains("empty tracking dump (0 bytes)"), "{e}");
@@ -78,15 +79,50 @@ fn bad_versions_of_real_dumps_get_clear_errors() {
     let other: Vec<u8> = bytes.chunks_exact(96).flat_map(|r| r[..88].iter().copied()).collect();
     let other = &other[..other.len() / 96 * 96];
     let e = parse_dump(other, name, None).unwrap_err().to_string();
+    assert!(e.starts_with("trk_ch_0.dat: 148128 bytes fits no tracking-dump layout"), "{e}");
     assert!(
-        e.contains("trk_ch_0.dat: record ") && e.contains("byte offset") && e.contains("layout gnss-sdr-0.0.17"),
+        e.contains("gnss-sdr-0.0.17 (96 bytes per record") && e.contains("record 0 (byte offset 0): PRN = "),
         "{e}"
     );
     // A record shifted by 4 bytes (a stray header).
     let mut shifted = vec![0u8; 96];
     shifted.extend_from_slice(&bytes[4..bytes.len() - 4 + 4 - 96]);
     let e = parse_dump(&shifted[..shifted.len() / 96 * 96], name, None).unwrap_err().to_string();
-    assert!(e.contains("record 0 (byte offset 0)") && e.contains("PRN = 0"), "{e}");
+    assert!(e.contains("record 0 (byte offset 0): PRN = 0"), "{e}");
+    // Forced onto the other layouts, GNSS-SDR 0.0.17's own bytes are refused.
+    for l in [DumpLayout::kf_cc(), DumpLayout::legacy_88(), DumpLayout::v0_0_21()] {
+        let cut = &bytes[..bytes.len() / l.record_bytes() * l.record_bytes()];
+        let e = parse_dump(cut, name, Some(&l)).unwrap_err().to_string();
+        assert!(e.starts_with("trk_ch_0.dat: record ") && e.contains(&format!("(layout {})", l.name)), "{e}");
+    }
+}
+
+/// The real 0.0.17 records re-packed as 0.0.21 writes them (TOW and WN
+/// appended, `dll_pll_veml_tracking.cc` at v0.0.21) read back as the same
+/// records; appended to the 0.0.17 file they are a mixed dump.
+#[test]
+fn real_records_in_the_0_0_21_layout_and_mixed_with_0_0_17() {
+    let bytes = std::fs::read(fixtures().join("order2/trk_ch_1.dat")).unwrap();
+    let v17 = parse_dump(&bytes, "trk_ch_1.dat", None).unwrap();
+    let mut v21 = Vec::new();
+    for (k, rec) in bytes.chunks_exact(96).enumerate() {
+        v21.extend_from_slice(rec);
+        v21.extend_from_slice(&(100_000 + 20 * k as u64).to_le_bytes());
+        v21.extend_from_slice(&2300u32.to_le_bytes());
+    }
+    let d = parse_dump(&v21, "trk_ch_1.dat", None).unwrap();
+    assert_eq!(d.layout, "gnss-sdr-0.0.21");
+    assert_eq!(d.records.len(), v17.records.len());
+    for (a, b) in d.records.iter().zip(&v17.records) {
+        assert_eq!(TrackingRecord { tow_ms: None, wn: None, ..*a }, *b);
+        assert_eq!(a.wn, Some(2300));
+    }
+    // The 0.0.17 dump with the last 50 records of the 0.0.21 one appended.
+    let mut mixed = bytes.clone();
+    mixed.extend_from_slice(&v21[v21.len() - 50 * 108..]);
+    let e = parse_dump(&mixed, "trk_ch_1.dat", None).unwrap_err().to_string();
+    assert!(e.contains("mixed tracking-dump layouts: 1684 records of gnss-sdr-0.0.17"), "{e}");
+    assert!(e.contains("from byte offset 161664 50 records of gnss-sdr-0.0.21"), "{e}");
 }
 
 /// Runs GNSS-SDR's filter (the library's) over a real dump's discriminator
@@ -276,4 +312,32 @@ fn the_exact_model_steps_like_gnss_sdr_on_a_switch() {
         last = p.step(0.4);
     }
     assert!(last.abs() < 1e-9, "{last}");
+}
+
+/// GNSS-SDR 0.0.17's own dump from `GPS_L1_CA_KF_Tracking`
+/// (`gps_l1_ca_kf_tracking_cc`; a 0.3 s run, `tests/fixtures/kf`, ONLY=kf of
+/// `scripts/make-gnss-sdr-fixtures.sh`): the
+/// reader recognises its layout (same size as dll_pll_veml_tracking's), the
+/// dll_pll_veml layout refuses it, and the importer says it cannot model it.
+#[test]
+fn a_real_kalman_tracker_dump_is_recognised_and_not_modelled() {
+    let dir = fixtures().join("kf");
+    let path = dir.join("trk_kf_ch_0.dat");
+    let d = read_dump(&path, None).unwrap();
+    let len = std::fs::metadata(&path).unwrap().len();
+    assert_eq!((d.layout.as_str(), d.modelled, d.records.len() as u64 * 96), ("gnss-sdr-kf-cc", false, len));
+    // This block writes a record per millisecond even while idle: counter at the start, aux2 one code period on.
+    for r in &d.records {
+        assert_eq!(r.aux2 - r.prn_start_sample_count as f64, 2048.0);
+        assert_eq!(r.code_freq_chips_per_s, 1.023e6);
+    }
+    let e = read_dump(&path, Some(&DumpLayout::v0_0_17())).unwrap_err().to_string();
+    assert!(e.contains("record 0 (byte offset 0): aux2 = 2048 is not the sample counter 0"), "{e}");
+    // Its configuration names a tracker gsens does not model; without it, the dump's layout says so.
+    let e = GnssSdrConf::read(dir.join("gnss-sdr.conf")).unwrap().tracking().unwrap_err().to_string();
+    assert!(e.contains("GPS_L1_CA_KF_Tracking"), "{e}");
+    let settings = ImportSettings::from_conf(None, Some(FS_HZ)).unwrap();
+    let e = import_dir(&dir, &settings).unwrap_err().to_string();
+    assert!(e.contains("trk_kf_ch_0.dat: a tracking dump of layout gnss-sdr-kf-cc"), "{e}");
+    assert!(e.contains("gsens models only the carrier loop of dll_pll_veml_tracking"), "{e}");
 }

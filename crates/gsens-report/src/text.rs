@@ -229,6 +229,16 @@ pub fn render_gnss_sdr_tracks(tracks: &[TrackSummary], interval_s: f64) -> Strin
     let used = tracks.iter().filter(|t| t.used).count();
     let _ =
         writeln!(s, "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept", tracks.len(), interval_s * 1e3);
+    // Which record layout (blocks, GNSS-SDR versions) each dump was read with.
+    let mut files: Vec<(&str, &str)> = Vec::new();
+    for t in tracks {
+        if !files.contains(&(t.file.as_str(), t.layout.as_str())) {
+            files.push((t.file.as_str(), t.layout.as_str()));
+        }
+    }
+    for (file, layout) in files {
+        let _ = writeln!(s, "  {file}: read as {layout}");
+    }
     for t in tracks {
         let _ = writeln!(
             s,
