@@ -4,9 +4,9 @@
 # file, so that the log reader and the model of PocketSDR's loop are tested in
 # CI against its real output without building it.
 #
-# 41.5 s, 3 satellites (41–46 dB-Hz), 2 Msps interleaved int8 I/Q, the paper's
-# OCXO and Γ, 4 s of rest (acquisition, the 1 s FLL pull-in, settling), then
-# 12 s shakes along x, y and z (1.1 s period, 3 m/s², the paper's jitter) with 0.5 s rests.
+# 39.5 s, 3 satellites (41–46 dB-Hz), 2 Msps interleaved int8 I/Q, the paper's
+# OCXO and Γ, 8 s of rest (acquisition, the 1 s FLL pull-in, settling), then
+# 10 s shakes along x, y and z (1.1 s period, 3 m/s², the paper's jitter) with 0.5 s rests.
 # pocket_trk runs with its default loop (b_pll = 5 Hz) and `epoch = 0.1`
 # (10 Hz $CH lines). Kept: the whole log (trk.log), opt.conf, imu.csv,
 # truth.json, and the true baseband carrier of the first satellite per
@@ -33,7 +33,7 @@ PT=$(build_pocket_trk "${POCKETSDR_DIR:-${CARGO_TARGET_DIR:-$PWD/target}/pockets
 {
     paper_session 3
     printf '[satellites]\nelevation_mask_deg = 10.0\nmax_channels = 3\n'
-    shake_sequence 4.0 12.0 0.5 1
+    shake_sequence 8.0 10.0 0.5 1
 } > "$WORK/scenario.toml"
 "$GSENS" simulate --scenario "$WORK/scenario.toml" --seed "$SEED" --out "$WORK" --iq "$WORK/signal.bin" \
     --fs-hz 2000000 --iq-carrier-truth >/dev/null
