@@ -376,7 +376,7 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
                     line: r.line,
                     field: Some((1, "time")),
                     reason: format!(
-                        "channel {} at {} s again or back in time (its previous line was at {} s)",
+                        "channel {} at {:.3} s again or back in time (its previous line was at {:.3} s)",
                         r.ch,
                         r.time_s,
                         o.last_t_ms as f64 * 1e-3
@@ -393,7 +393,7 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
                 ));
             } else if t - o.last_t_ms > step_ms + step_ms / 2 {
                 why_new = Some(format!(
-                    "no line from {} s to {} s (line {}): not tracked between",
+                    "no line from {:.3} s to {:.3} s (line {}): not tracked between",
                     o.last_t_ms as f64 * 1e-3,
                     r.time_s,
                     r.line
