@@ -19,7 +19,13 @@
 //!
 //! (what `gsens-gnss-sdr` does with GNSS-SDR's sample counter: (n − Δn/2)/fs).
 //! Every channel logs at the same cycles (`epoch` apart), so all rows of an
-//! epoch share one stamp and no resampling is needed.
+//! epoch share one stamp and no resampling is needed. Until it has decoded
+//! the navigation data, `pocket_trk` logs at the cycles that are multiples of
+//! `epoch`; afterwards at its PVT epochs, which start on a multiple of 20 ms
+//! (and may be moved by multiples of 20 ms to follow the clock). With an
+//! `epoch` that divides 0.02 s the two grids coincide; otherwise (0.025 s) the
+//! grid moves mid-log, and the lines off the grid of most lines are reported
+//! and not used (the tracking schema holds one grid).
 //!
 //! # Phase and sign
 //!
@@ -365,7 +371,12 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
             garble(Garbled {
                 line: r.line,
                 field: Some((1, "time")),
-                reason: format!("{} s is off the log's {} s epoch grid", r.time_s, epoch.value),
+                reason: format!(
+                    "{:.3} s is off the {} s epoch grid of most lines (pocket_trk moves its $CH epochs to its PVT \
+                     epochs, multiples of 20 ms, once it has decoded the navigation data; an epoch dividing 0.02 s \
+                     keeps one grid)",
+                    r.time_s, epoch.value
+                ),
             });
             continue;
         }
