@@ -317,21 +317,7 @@ mod tests {
         for (bw, f_hz) in [(5.0, 0.9), (10.0, 0.9), (5.0, 7.0), (20.0, 30.0)] {
             let l0 = pll(bw);
             assert!(l0.stage.is_stable());
-            let t = l0.stage.interval_s;
-            let mut l = l0;
-            let (mut si, mut sq) = (0.0, 0.0);
-            let k0 = (20.0 / t) as usize;
-            let k1 = k0 + (50.0 / t) as usize;
-            for k in 0..k1 {
-                let x = TAU * f_hz * k as f64 * t;
-                let phi = l.step(cos(x));
-                if k >= k0 {
-                    si += phi * cos(x);
-                    sq -= phi * sin(x);
-                }
-            }
-            let m = (k1 - k0) as f64 / 2.0;
-            let sim = Complex::new(si / m, sq / m);
+            let sim = super::super::simulated_response(l0, f_hz, l0.stage.interval_s, 20.0, 50.0);
             let model = l0.stage.response(f_hz);
             assert!((sim - model).norm() < 2e-3 * model.norm(), "{bw} {f_hz}: {sim} vs {model}");
         }
