@@ -8,9 +8,12 @@
 #    else cloned from https://github.com/tomojitakasu/PocketSDR; POCKETSDR_SRC overrides);
 # 2. writes two scenarios: the paper's OCXO with its Γ = [0.09, 0.08, -0.08] Hz/(m/s²)
 #    and a TCXO-like Γ = [-0.2, 0.15, 0.12] Hz/(m/s²) (other signs and sizes), 8
-#    satellites, 20 s of rest (acquisition, the 1 s FLL pull-in, the PLL's settling),
-#    then the board shaken by hand along x, y, z for 30 s each (1.1 s period, 3 m/s²,
-#    the paper's jitter) with 5 s rests: 125 s;
+#    satellites, 10 s of rest (acquisition, the 1 s FLL pull-in, the PLL's settling),
+#    then the board shaken by hand along x, y, z for 20 s each (1.1 s period, 3 m/s²,
+#    the paper's jitter) with 1 s rests: 73 s. Why not longer: once pocket_trk has
+#    decoded the GPS week from these files' navigation data (78 s into the TCXO file
+#    with seed 7, after 125 s in the other) it starts its PVT epochs and writes no more
+#    $CH lines (at any replay speed, -tscale 1 too); the script says so when a log ends early;
 # 3. generates each scenario's IF samples (interleaved int8 I/Q, FS_HZ, default 2 Msps),
 #    imu.csv and truth.json;
 # 4. runs pocket_trk on each file twice, with `epoch = 0.02` (50 Hz $CH lines; EPOCH_S
@@ -25,9 +28,12 @@
 #    for comparison, from gsens's own simulator logs of the same scenario (Kaplan's
 #    3rd-order loop at the same bandwidth, 1 ms updates, the last output logged);
 # 6. prints the table (truth, PocketSDR, gsens simulator) and fails when an estimate
-#    from PocketSDR's log is more than 2 % from the truth at b_pll = 5 Hz, or outside
-#    its own 2σ at 10 Hz (where a 2-minute session is noise-limited: |L| is four times
-#    smaller), or when the loop response check (`loop_response`) does not pass.
+#    from PocketSDR's log is more than 2 % from the truth at b_pll = 5 Hz and outside its
+#    own 2σ (pocket_trk logs a single 1 ms discriminator output per epoch, so σ is 1–1.4 %
+#    there: 2 % alone would be a test tighter than 2σ), or outside its own 2σ at 10 Hz
+#    (noise-limited: |L| is four times smaller), or when the loop response check
+#    (`loop_response`) fails. 2σ is taken family-wise over the 12 checks (2.89σ each,
+#    Šidák: each check at 2σ would fail a correct estimator 43 % of the time).
 #
 # Usage: scripts/pocketsdr-e2e.sh [OUT_DIR]   (default target/pocketsdr-e2e; needs ~0.6 GB there)
 # Environment: FS_HZ, SEED, KEEP_IQ=1 (keep the sample files), GSENS (a gsens binary to use
@@ -68,7 +74,7 @@ max_channels = 8
 interval_s = $EPOCH_S
 phase = "last"
 TOML
-    shake_sequence 20.0 30.0 5.0 1
+    shake_sequence 10.0 20.0 1.0 1
 }
 
 declare -A GAMMA=([paper]="[0.09, 0.08, -0.08]" [tcxo]="[-0.2, 0.15, 0.12]")
@@ -100,6 +106,12 @@ for case in paper tcxo; do
         run_pocket_trk "$PT" "$c/signal.bin" "$FS_HZ" "$prns" "$d/opt.conf" "$d/trk.log" 2>/dev/null
         T_RX[$case$bw]=$(elapsed "$t")
         echo "pocket_trk ran ${T_RX[$case$bw]} s; $(grep -c '^\$CH' "$d/trk.log") \$CH lines"
+        last=$(grep '^\$CH' "$d/trk.log" | tail -1 | cut -d, -f2)
+        if awk -v l="$last" -v d="$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["duration_s"])' "$c/truth.json")" \
+            'BEGIN { exit !(l < d - 1) }'; then
+            echo "NOTE: pocket_trk wrote its last \$CH line at $last s, before the file's end" \
+                "($(grep -c PNTPOS "$d/trk.log") PVT epochs without observations after it)"
+        fi
         echo "== estimate from PocketSDR's log, b_pll $bw Hz"
         "$G" estimate --imu "$c/imu.csv" --pocketsdr "$d/trk.log" --pocketsdr-conf "$d/opt.conf" \
             --json "$d/estimate.json" > "$d/estimate.txt" || [ $? = 3 ]
@@ -116,7 +128,13 @@ done
 python3 - "$OUT" <<'PY'
 import json, sys
 out = sys.argv[1]
-print(f"\nΓ [Hz/(m/s²)], 125 s sessions; PocketSDR: pocket_trk 0.17 logs, its exact loop;"
+truth_s = json.load(open(f"{out}/paper/truth.json"))["duration_s"]
+# 2σ per check, family-wise: 12 checks (2 files × 2 bandwidths × 3 axes) each at 2σ would fail a
+# correct estimator 43 % of the time; z_fw gives the family the 95 % of a single 2σ check (Šidák).
+from statistics import NormalDist
+n_checks = 12
+z_fw = NormalDist().inv_cdf(1 - (1 - 0.9545 ** (1 / n_checks)) / 2)
+print(f"\nΓ [Hz/(m/s²)], {truth_s:.0f} s sessions; PocketSDR: pocket_trk 0.17 logs, its exact loop;"
       " simulator: gsens's own logs of the same scenario")
 print(f"{'case':22} {'axis':>4} {'truth':>9} {'PocketSDR':>22} {'err %':>7} {'err/σ':>6} {'gsens simulator':>22} {'err %':>7}")
 ok = True
@@ -134,7 +152,10 @@ for case in ("paper", "tcxo"):
                 return f"{v:+.5f} ± {sd:.5f}", 100 * (v - g[i]) / abs(g[i]), (v - g[i]) / sd
             c1, e1, z1 = cell(e)
             c2, e2, _ = cell(s)
-            passed = (abs(e1) <= 2.0) if bw == 5 else (abs(z1) <= 2.0)
+            # 5 Hz: within 2 %, or within its own z_fw·σ where that is wider (2 % would be a
+            # test tighter than the estimate's σ: the session is noise-limited there too);
+            # 10 Hz: within z_fw·σ.
+            passed = (abs(e1) <= 2.0 or abs(z1) <= z_fw) if bw == 5 else (abs(z1) <= z_fw)
             ok &= passed
             name = f"Γ {case}, b_pll {bw} Hz" if i == 0 else ""
             mark = "" if passed else "  FAIL"
@@ -149,7 +170,8 @@ for case in ("paper", "tcxo"):
               f"{e['rms_after_rad']:.4f} rad; loop test z = {e['joint_fit']['loop_test_z']:+.2f}; "
               f"loop_response {'consistent' if consistent else 'NOT consistent'} {lrs}"
               f"; trustworthy {e['trustworthy']}")
-print("criterion: within 2 % at b_pll = 5 Hz, within its own 2σ at 10 Hz, loop_response consistent:",
+print(f"criterion: within 2 % (or its own {z_fw:.2f}σ) at b_pll = 5 Hz, within its own {z_fw:.2f}σ at 10 Hz",
+      f"({z_fw:.2f}σ: 2σ family-wise over {n_checks} checks), loop_response consistent:",
       "PASS" if ok else "FAIL")
 sys.exit(0 if ok else 1)
 PY
