@@ -405,7 +405,7 @@ pub struct PocketSdrConversionArgs {
     /// PLL's slowest mode, 5.3 s at 5 Hz].
     #[arg(long)]
     pub pocketsdr_settle_s: Option<f64>,
-    /// pocket_trk's -toff: seconds it skipped at the start of the IF file [default: 0].
+    /// pocket_trk's -toff: seconds it skipped at the start of the IF file.
     #[arg(long, default_value_t = 0.0)]
     pub pocketsdr_toff_s: f64,
 }
