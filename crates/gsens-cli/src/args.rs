@@ -402,7 +402,7 @@ pub struct PocketSdrConversionArgs {
     #[arg(long)]
     pub pocketsdr_conf: Option<PathBuf>,
     /// Seconds dropped after a track's 1 s FLL pull-in [default: five time constants of the
-    /// PLL's slowest mode, 5.3 s at 5 Hz].
+    /// PLL's slowest mode, 5.2 s at 5 Hz].
     #[arg(long)]
     pub pocketsdr_settle_s: Option<f64>,
     /// pocket_trk's -toff: seconds it skipped at the start of the IF file.

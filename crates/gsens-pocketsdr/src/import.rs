@@ -95,7 +95,7 @@ impl ImportSettings {
 
     /// The settling time after the FLL pull-in \[s\]: [`ImportSettings::settle_s`],
     /// or five time constants τ = T/(−ln ρ) of the loop's slowest mode (ρ the
-    /// largest root modulus of its characteristic polynomial): 5.3 s at
+    /// largest root modulus of its characteristic polynomial): 5.2 s at
     /// b_pll = 5 Hz, 2.6 s at 10 Hz, at least 1 s.
     pub fn settle_time_s(&self) -> f64 {
         self.settle_s.unwrap_or_else(|| self.stage().settling_time_s(5.0).clamp(1.0, 60.0))
