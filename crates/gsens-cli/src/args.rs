@@ -1,6 +1,6 @@
 //! The command-line options shared by the commands, and the one place where
 //! they become library objects (`gsens_calib::PipelineSettings`,
-//! `gsens_gnss_sdr::ImportSettings`).
+//! `gsens_gnss_sdr::ImportSettings`, `gsens_pocketsdr::ImportSettings`).
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
@@ -392,4 +392,54 @@ pub struct GnssSdrArgs {
     pub gnss_sdr_conf: Option<PathBuf>,
     #[command(flatten)]
     pub conversion: ConversionArgs,
+}
+
+/// How a PocketSDR log is converted (`gsens import pocketsdr` and `gsens estimate --pocketsdr`).
+#[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "PocketSDR logs")]
+pub struct PocketSdrConversionArgs {
+    /// The pocket_trk options file (-opt FILE) the log was made with: its b_pll (the PLL
+    /// bandwidth) and epoch (the $CH interval) [default: PocketSDR's defaults, b_pll = 5 Hz, and
+    /// the log's own interval].
+    #[arg(long)]
+    pub pocketsdr_conf: Option<PathBuf>,
+    /// Seconds dropped after a track's 1 s FLL pull-in [default: five time constants of the
+    /// PLL's slowest mode, 5.2 s at 5 Hz].
+    #[arg(long)]
+    pub pocketsdr_settle_s: Option<f64>,
+    /// pocket_trk's -toff: seconds it skipped at the start of the IF file.
+    #[arg(long, default_value_t = 0.0)]
+    pub pocketsdr_toff_s: f64,
+}
+
+impl PocketSdrConversionArgs {
+    /// The conversion settings.
+    pub fn import_settings(&self) -> Result<gsens_pocketsdr::ImportSettings> {
+        let mut s = gsens_pocketsdr::ImportSettings::from_options_file(self.pocketsdr_conf.as_deref())?;
+        if let Some(v) = self.pocketsdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
+            bail!("--pocketsdr-settle-s must be ≥ 0, got {v}");
+        }
+        if !(self.pocketsdr_toff_s >= 0.0 && self.pocketsdr_toff_s.is_finite()) {
+            bail!("--pocketsdr-toff-s must be ≥ 0, got {}", self.pocketsdr_toff_s);
+        }
+        s.settle_s = self.pocketsdr_settle_s;
+        s.toff_s = self.pocketsdr_toff_s;
+        Ok(s)
+    }
+
+    /// Whether any option differs from its default (they need a log to act on).
+    pub fn given(&self) -> bool {
+        self.pocketsdr_conf.is_some() || self.pocketsdr_settle_s.is_some() || self.pocketsdr_toff_s != 0.0
+    }
+}
+
+/// Options of `gsens estimate` for PocketSDR logs.
+#[derive(Args, Debug, Clone)]
+pub struct PocketSdrArgs {
+    /// A pocket_trk log (-log FILE, its $CH lines) to use instead of --tracking; PocketSDR's
+    /// carrier loop is modelled exactly.
+    #[arg(long, conflicts_with = "gnss_sdr")]
+    pub pocketsdr: Option<PathBuf>,
+    #[command(flatten)]
+    pub conversion: PocketSdrConversionArgs,
 }

@@ -1,6 +1,6 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{AnalysisArgs, GnssSdrArgs, LoopArgs};
+use crate::args::{AnalysisArgs, GnssSdrArgs, LoopArgs, PocketSdrArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::{Outcome, PipelineSettings, calibrate_files, calibrate_gnss_sdr};
@@ -11,8 +11,8 @@ pub struct EstimateArgs {
     /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
     #[arg(long)]
     pub imu: PathBuf,
-    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr).
-    #[arg(long, required_unless_present = "gnss_sdr", conflicts_with = "gnss_sdr")]
+    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr, --pocketsdr).
+    #[arg(long, required_unless_present_any = ["gnss_sdr", "pocketsdr"], conflicts_with_all = ["gnss_sdr", "pocketsdr"])]
     pub tracking: Option<PathBuf>,
     /// Write the result document (JSON) here.
     #[arg(long)]
@@ -21,6 +21,8 @@ pub struct EstimateArgs {
     pub calibration: CalibrationArgs,
     #[command(flatten)]
     pub gnss_sdr: GnssSdrArgs,
+    #[command(flatten)]
+    pub pocketsdr: PocketSdrArgs,
 }
 
 /// The options that decide a calibration from logs (`estimate` and `report`).
@@ -73,9 +75,27 @@ pub fn calibrate(
     }
 }
 
+/// Calibrates from a PocketSDR log with PocketSDR's loop modelled exactly,
+/// printing what became of each track.
+fn calibrate_pocketsdr(imu: &Path, log: &Path, args: &PocketSdrArgs, settings: &PipelineSettings) -> Result<Outcome> {
+    let import = args.conversion.import_settings()?;
+    let r = gsens_pocketsdr::calibrate_pocketsdr(log, &import, imu, settings)?;
+    crate::out(&gsens_pocketsdr::render_summary(&r.imported))?;
+    crate::out(&format!("PocketSDR loop: {}, modelled exactly\n", r.outcome.calibration.loop_used))?;
+    Ok(r.outcome)
+}
+
 pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings();
-    let outcome = calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?;
+    let outcome = match &args.pocketsdr.pocketsdr {
+        Some(log) => calibrate_pocketsdr(&args.imu, log, &args.pocketsdr, &settings)?,
+        None => {
+            if args.pocketsdr.conversion.given() {
+                anyhow::bail!("--pocketsdr-conf, --pocketsdr-settle-s and --pocketsdr-toff-s need --pocketsdr LOG");
+            }
+            calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?
+        }
+    };
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {

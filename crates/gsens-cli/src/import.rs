@@ -1,6 +1,6 @@
 //! `gsens import`: another receiver's logs as gsens's `tracking.csv`.
 
-use crate::args::ConversionArgs;
+use crate::args::{ConversionArgs, PocketSdrConversionArgs};
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use gsens_gnss_sdr::import::write_imported_csv;
@@ -18,6 +18,46 @@ pub struct ImportArgs {
 pub enum ImportSource {
     /// GNSS-SDR tracking dumps (Tracking_1C.dump=true: trk_ch_N.dat) → tracking.csv.
     GnssSdr(ImportGnssSdrArgs),
+    /// A PocketSDR pocket_trk log (-log FILE: $CH lines) → tracking.csv.
+    #[command(name = "pocketsdr")]
+    PocketSdr(ImportPocketSdrArgs),
+}
+
+/// `gsens import pocketsdr`.
+#[derive(Args, Debug)]
+pub struct ImportPocketSdrArgs {
+    /// The pocket_trk log.
+    pub log: PathBuf,
+    /// Output tracking.csv (`gsens estimate --tracking` reads it as written).
+    #[arg(long, default_value = "tracking.csv")]
+    pub out: PathBuf,
+    /// Also write what became of each track (JSON).
+    #[arg(long)]
+    pub tracks_json: Option<PathBuf>,
+    #[command(flatten)]
+    pub conversion: PocketSdrConversionArgs,
+}
+
+fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
+    let settings = a.conversion.import_settings()?;
+    let imported = gsens_pocketsdr::import_file(&a.log, &settings)?;
+    crate::out(&gsens_pocketsdr::render_summary(&imported))?;
+    let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
+    gsens_io::write_tracking_csv(file, &imported.rows)?;
+    crate::out(&format!(
+        "wrote {} rows → {}; estimate with PocketSDR's loop model: gsens estimate --pocketsdr {}{} \
+         (b_pll {} Hz, rows = the single 1 ms discriminator output at each epoch)\n",
+        imported.rows.len(),
+        a.out.display(),
+        a.log.display(),
+        a.conversion.pocketsdr_conf.as_ref().map_or(String::new(), |c| format!(" --pocketsdr-conf {}", c.display())),
+        imported.stage.bw_hz
+    ))?;
+    if let Some(p) = &a.tracks_json {
+        std::fs::write(p, serde_json::to_string_pretty(&imported)? + "\n")
+            .with_context(|| format!("{}: cannot write", p.display()))?;
+    }
+    Ok(())
 }
 
 /// `gsens import gnss-sdr`.
@@ -47,7 +87,10 @@ pub struct ImportGnssSdrArgs {
 }
 
 pub fn run(args: &ImportArgs) -> Result<()> {
-    let ImportSource::GnssSdr(a) = &args.source;
+    let a = match &args.source {
+        ImportSource::GnssSdr(a) => a,
+        ImportSource::PocketSdr(a) => return run_pocketsdr(a),
+    };
     // The dumps first: a missing or empty directory is the first thing to fix,
     // whatever the configuration says.
     gsens_gnss_sdr::find_dumps(&a.dump_dir, None)?;

@@ -29,6 +29,7 @@ mod robust;
 pub mod units;
 
 pub use pll::gnss_sdr;
+pub use pll::pocket_sdr;
 
 pub use calibrator::{Calibrator, FedEpoch, average_phase_rad};
 pub use compensate::{Compensator, compensated_phase_rad};

@@ -11,6 +11,7 @@
 
 use crate::math::{TAU, exp, ln, round, sqrt};
 use crate::pll::gnss_sdr::{A2, A3, B3, BN_OVER_WN_ORDER2, BN_OVER_WN_ORDER3, GnssSdrPll, GnssSdrStage};
+use crate::pll::pocket_sdr::{PocketSdrPll, PocketSdrStage};
 use crate::pll::{Complex, DiscretePll, LoopError, LoopFilterCoeffs, LoopSpec, ModelLoop};
 
 /// Lowest frequency searched for the peak of |L| \[Hz\].
@@ -39,6 +40,9 @@ pub enum LoopModel {
     /// GNSS-SDR's `dll_pll_veml` carrier loop after bit synchronization,
     /// exactly ([`crate::pll::gnss_sdr`]).
     GnssSdr(GnssSdrStage),
+    /// PocketSDR's `pocket_trk` carrier loop after its FLL pull-in, exactly
+    /// ([`crate::pll::pocket_sdr`]).
+    PocketSdr(PocketSdrStage),
 }
 
 /// The peak of |L(j2πf)|: where shaking makes the largest phase error per Hz
@@ -80,6 +84,7 @@ impl LoopModel {
         match self {
             LoopModel::Kaplan { interval_s, .. } => *interval_s,
             LoopModel::GnssSdr(stage) => Some(stage.interval_s()),
+            LoopModel::PocketSdr(stage) => Some(stage.interval_s),
         }
     }
 
@@ -94,7 +99,8 @@ impl LoopModel {
     ///
     /// For GNSS-SDR's loops (module docs of [`crate::pll::gnss_sdr`]): order 2,
     /// ωn = Bn/0.53, F = 1.414·ωn + ωn²/s; order 3, ωn = Bn/0.7845,
-    /// F = 2.4·ωn + 0.55·ωn²/s + 0.25·ωn³/s².
+    /// F = 2.4·ωn + 0.55·ωn²/s + 0.25·ωn³/s². For PocketSDR's, Kaplan's
+    /// F = 2.4·ω + 1.1·ω²/s + ω³/s², ω = b_pll/0.7845.
     pub fn coeffs(&self) -> Result<LoopFilterCoeffs, LoopError> {
         match self {
             LoopModel::Kaplan { spec, .. } => spec.coeffs(),
@@ -113,6 +119,10 @@ impl LoopModel {
                 };
                 LoopSpec::Coefficients(c).coeffs()
             }
+            LoopModel::PocketSdr(stage) => {
+                stage.check()?;
+                LoopSpec::Coefficients(stage.coeffs()).coeffs()
+            }
         }
     }
 
@@ -120,7 +130,7 @@ impl LoopModel {
     pub fn spec(&self) -> Result<LoopSpec, LoopError> {
         match self {
             LoopModel::Kaplan { spec, .. } => Ok(*spec),
-            LoopModel::GnssSdr(_) => self.coeffs().map(LoopSpec::Coefficients),
+            LoopModel::GnssSdr(_) | LoopModel::PocketSdr(_) => self.coeffs().map(LoopSpec::Coefficients),
         }
     }
 
@@ -129,6 +139,7 @@ impl LoopModel {
         match self {
             LoopModel::Kaplan { spec, .. } => spec.order(),
             LoopModel::GnssSdr(stage) => stage.order,
+            LoopModel::PocketSdr(_) => 3,
         }
     }
 
@@ -151,6 +162,7 @@ impl LoopModel {
                 LoopModel::Kaplan { spec, interval_s }
             }
             LoopModel::GnssSdr(stage) => LoopModel::GnssSdr(GnssSdrStage { bw_hz: stage.bw_hz * scale, ..stage }),
+            LoopModel::PocketSdr(stage) => LoopModel::PocketSdr(PocketSdrStage { bw_hz: stage.bw_hz * scale, ..stage }),
         }
     }
 
@@ -163,6 +175,7 @@ impl LoopModel {
             } => Some(*bn_hz),
             LoopModel::Kaplan { .. } => None,
             LoopModel::GnssSdr(stage) => Some(stage.bw_hz),
+            LoopModel::PocketSdr(stage) => Some(stage.bw_hz),
         }
     }
 
@@ -171,14 +184,17 @@ impl LoopModel {
     pub fn natural_frequency_hz(&self) -> Option<f64> {
         let wn = match self {
             LoopModel::Kaplan { spec, .. } => spec.wn_rad_per_s(),
-            LoopModel::GnssSdr(_) => self.coeffs().ok().and_then(|c| LoopSpec::Coefficients(c).wn_rad_per_s()),
+            LoopModel::GnssSdr(_) | LoopModel::PocketSdr(_) => {
+                self.coeffs().ok().and_then(|c| LoopSpec::Coefficients(c).wn_rad_per_s())
+            }
         };
         wn.map(|w| w / TAU)
     }
 
     /// Checks the loop: a valid, stable continuous filter and, when updated
     /// every T, a stable discrete loop at T (roots of its characteristic
-    /// polynomial, or the eigenvalues of GNSS-SDR's one-record transition).
+    /// polynomial, or the eigenvalues of GNSS-SDR's one-record transition, or
+    /// the roots of PocketSDR's characteristic polynomial).
     pub fn check(&self) -> Result<(), LoopError> {
         match self {
             LoopModel::Kaplan { spec, interval_s } => {
@@ -195,12 +211,16 @@ impl LoopModel {
                     Err(LoopError::UnstableAtInterval)
                 }
             }
+            LoopModel::PocketSdr(stage) => {
+                stage.check()?;
+                if stage.is_stable() { Ok(()) } else { Err(LoopError::UnstableAtInterval) }
+            }
         }
     }
 
     /// The response L = φ/Δf at `f_hz` \[rad/Hz\]: the discrete loop's
     /// L_d(e^{j2πfT}) when updated every T ([`LoopFilterCoeffs::response_discrete`],
-    /// [`GnssSdrPll::response`]), else the continuous −2π/(s + F(s)) at
+    /// [`GnssSdrPll::response`], [`PocketSdrStage::response`]), else the continuous −2π/(s + F(s)) at
     /// s = j2πf. Zero for an invalid loop (call [`LoopModel::check`] first).
     pub fn response(&self, f_hz: f64) -> Complex<f64> {
         match self {
@@ -211,6 +231,10 @@ impl LoopModel {
             },
             LoopModel::GnssSdr(stage) => match GnssSdrPll::new(*stage) {
                 Ok(p) => p.response(f_hz),
+                Err(_) => Complex::new(0.0, 0.0),
+            },
+            LoopModel::PocketSdr(stage) => match stage.check() {
+                Ok(()) => stage.response(f_hz),
                 Err(_) => Complex::new(0.0, 0.0),
             },
         }
@@ -277,6 +301,7 @@ impl LoopModel {
             LoopModel::Kaplan { spec, interval_s: Some(t) } => Ok(DiscretePll::new(spec.coeffs()?, *t).into()),
             LoopModel::Kaplan { interval_s: None, .. } => Err(LoopError::NonPositiveParameter("interval_s")),
             LoopModel::GnssSdr(stage) => Ok(GnssSdrPll::new(*stage)?.into()),
+            LoopModel::PocketSdr(stage) => Ok(PocketSdrPll::new(*stage)?.into()),
         }
     }
 }
@@ -313,6 +338,15 @@ impl core::fmt::Display for LoopModel {
                     f,
                     "GNSS-SDR dll_pll_veml, order {}, Bn {} Hz, {} ms integrations",
                     stage.order, stage.bw_hz, stage.symbols
+                )?;
+                nat(f)
+            }
+            LoopModel::PocketSdr(stage) => {
+                write!(
+                    f,
+                    "PocketSDR pocket_trk PLL, 3rd order, b_pll {} Hz, {} ms updates",
+                    Short(stage.bw_hz),
+                    stage.interval_s * 1e3
                 )?;
                 nat(f)
             }

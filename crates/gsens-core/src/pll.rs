@@ -1,6 +1,7 @@
 use crate::math::{PI, TAU, cos, sin, sqrt};
 
 pub mod gnss_sdr;
+pub mod pocket_sdr;
 
 /// 1/2π: the loop's critical path multiplies rather than divides.
 const FRAC_1_TAU: f64 = 1.0 / TAU;
@@ -455,8 +456,9 @@ impl DiscretePll {
 /// Δf to the discriminator output φ, one loop update at a time: what the
 /// estimator's regressor ([`crate::regressor::RegressorModel`]) runs three of.
 /// Implemented by [`DiscretePll`] (the loop of this module's docs),
-/// [`gnss_sdr::GnssSdrPll`] (GNSS-SDR's loop, exactly) and [`ModelLoop`]
-/// (either, chosen at run time).
+/// [`gnss_sdr::GnssSdrPll`] (GNSS-SDR's loop, exactly),
+/// [`pocket_sdr::PocketSdrPll`] (PocketSDR's, exactly) and [`ModelLoop`]
+/// (any of them, chosen at run time).
 pub trait LinearLoop {
     /// One loop update with mean NCO frequency bias `delta_f_hz` \[Hz\] over
     /// it; returns the discriminator output φ \[rad\].
@@ -488,6 +490,8 @@ pub enum ModelLoop {
     Kaplan(DiscretePll),
     /// GNSS-SDR's DLL/PLL carrier loop ([`gnss_sdr`]).
     GnssSdr(gnss_sdr::GnssSdrPll),
+    /// PocketSDR's carrier loop ([`pocket_sdr`]).
+    PocketSdr(pocket_sdr::PocketSdrPll),
 }
 
 impl From<DiscretePll> for ModelLoop {
@@ -502,24 +506,59 @@ impl From<gnss_sdr::GnssSdrPll> for ModelLoop {
     }
 }
 
+impl From<pocket_sdr::PocketSdrPll> for ModelLoop {
+    fn from(p: pocket_sdr::PocketSdrPll) -> Self {
+        ModelLoop::PocketSdr(p)
+    }
+}
+
 impl LinearLoop for ModelLoop {
     #[inline]
     fn step(&mut self, delta_f_hz: f64) -> f64 {
         match self {
             ModelLoop::Kaplan(p) => p.step(delta_f_hz),
             ModelLoop::GnssSdr(p) => p.step(delta_f_hz),
+            ModelLoop::PocketSdr(p) => p.step(delta_f_hz),
         }
     }
     fn settle(&mut self, delta_f_hz: f64) {
         match self {
             ModelLoop::Kaplan(p) => p.settle(delta_f_hz),
             ModelLoop::GnssSdr(p) => p.settle(delta_f_hz),
+            ModelLoop::PocketSdr(p) => p.settle(delta_f_hz),
         }
     }
     fn reset(&mut self) {
         match self {
             ModelLoop::Kaplan(p) => p.reset(),
             ModelLoop::GnssSdr(p) => p.reset(),
+            ModelLoop::PocketSdr(p) => p.reset(),
         }
     }
+}
+
+/// Test helper: the response φ/Δf of `l` at `f_hz` measured by simulation —
+/// driven by Δf_k = cos(2πf·kT) for `settle_s` seconds, then correlated with
+/// the input's cosine and sine over `span_s` seconds.
+#[cfg(test)]
+pub(crate) fn simulated_response(
+    mut l: impl LinearLoop,
+    f_hz: f64,
+    t_s: f64,
+    settle_s: f64,
+    span_s: f64,
+) -> Complex<f64> {
+    let (mut si, mut sq) = (0.0, 0.0);
+    let k0 = (settle_s / t_s) as usize;
+    let k1 = k0 + (span_s / t_s) as usize;
+    for k in 0..k1 {
+        let x = TAU * f_hz * k as f64 * t_s;
+        let phi = l.step(cos(x));
+        if k >= k0 {
+            si += phi * cos(x);
+            sq -= phi * sin(x);
+        }
+    }
+    let m = (k1 - k0) as f64 / 2.0;
+    Complex::new(si / m, sq / m)
 }

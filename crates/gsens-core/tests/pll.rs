@@ -217,3 +217,46 @@ fn gnss_sdr_loop_equivalent_coefficients_match_its_exact_response_at_low_rate() 
         assert_eq!(m.order(), order);
     }
 }
+
+#[test]
+fn pocket_sdr_loop_model_answers_every_question_like_kaplans_continuous_loop() {
+    use gsens_core::LinearLoop;
+    use gsens_core::pocket_sdr::PocketSdrStage;
+    // PocketSDR's loop is Kaplan's 3rd-order filter at ω = Bn/0.7845 with its
+    // own discretization: at 1 ms its peak and band are within 1 % of the
+    // continuous loop of the same filter.
+    let m = LoopModel::PocketSdr(PocketSdrStage::l1ca(5.0));
+    let c = LoopModel::kaplan(LoopSpec::Coefficients(m.coeffs().unwrap()), None);
+    let (pm, pc) = (m.peak().unwrap(), c.peak().unwrap());
+    assert!((pm.f_hz / pc.f_hz - 1.0).abs() < 1e-2, "{pm:?} {pc:?}");
+    assert!((pm.rad_per_hz / pc.rad_per_hz - 1.0).abs() < 1e-2, "{pm:?} {pc:?}");
+    let (bm, bc) = (m.half_power_band_hz().unwrap(), c.half_power_band_hz().unwrap());
+    assert!((bm[0] / bc[0] - 1.0).abs() < 1e-2 && (bm[1] / bc[1] - 1.0).abs() < 1e-2, "{bm:?} {bc:?}");
+    // The filter is Kaplan's: the same coefficients as LoopSpec::third_order_kaplan up to
+    // PocketSDR's rounded Bn/ωn (0.7845 against the closed form's 0.78445).
+    let k = LoopSpec::third_order_kaplan(5.0).coeffs().unwrap();
+    assert!((m.coeffs().unwrap().c2_per_s3 / k.c2_per_s3 - 1.0).abs() < 3e-4);
+    assert_eq!((m.order(), m.bn_hz(), m.interval_s()), (3, Some(5.0), Some(1e-3)));
+    // Scaling the bandwidth scales every time constant: the peak moves with it.
+    let m2 = m.with_bn_scaled(2.0);
+    assert_eq!(m2, LoopModel::PocketSdr(PocketSdrStage::l1ca(10.0)));
+    let p2 = m2.peak().unwrap();
+    assert!((p2.f_hz / pm.f_hz - 2.0).abs() < 0.02, "{p2:?} {pm:?}");
+    // The runnable model is the exact one: its steady sinusoid response is `response`.
+    let mut l = m.runnable().unwrap();
+    let f_hz = pm.f_hz;
+    let (mut si, mut sq, n0, n1) = (0.0, 0.0, 30_000usize, 130_000usize);
+    for k in 0..n1 {
+        let x = std::f64::consts::TAU * f_hz * k as f64 * 1e-3;
+        let phi = l.step(x.cos());
+        if k >= n0 {
+            si += phi * x.cos();
+            sq -= phi * x.sin();
+        }
+    }
+    let half = (n1 - n0) as f64 / 2.0;
+    let r = m.response(f_hz);
+    assert!(((si / half - r.re).powi(2) + (sq / half - r.im).powi(2)).sqrt() < 2e-3 * r.norm());
+    assert!(LoopModel::PocketSdr(PocketSdrStage::l1ca(500.0)).check().is_err());
+    assert!(m.to_string().contains("PocketSDR") && m.to_string().contains("b_pll 5 Hz"), "{m}");
+}

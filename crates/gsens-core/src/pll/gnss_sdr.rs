@@ -415,22 +415,8 @@ mod tests {
         for (order, bw, n) in [(2u8, 3.0, 20u32), (3, 3.0, 20), (3, 35.0, 1), (2, 15.0, 1)] {
             let l0 = pll(order, bw, n);
             assert!(l0.is_stable());
-            let t = l0.interval_s();
             let f_hz = 0.9;
-            let mut l = l0;
-            let (mut si, mut sq) = (0.0, 0.0);
-            let k0 = (60.0 / t) as usize;
-            let k1 = k0 + (100.0 / t) as usize;
-            for k in 0..k1 {
-                let x = TAU * f_hz * k as f64 * t;
-                let phi = l.step(cos(x));
-                if k >= k0 {
-                    si += phi * cos(x);
-                    sq -= phi * sin(x);
-                }
-            }
-            let m = (k1 - k0) as f64 / 2.0;
-            let sim = Complex::new(si / m, sq / m);
+            let sim = super::super::simulated_response(l0, f_hz, l0.interval_s(), 60.0, 100.0);
             let model = l0.response(f_hz);
             assert!((sim - model).norm() < 2e-3 * model.norm(), "{order} {bw} {n}: {sim} vs {model}");
         }

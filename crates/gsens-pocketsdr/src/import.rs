@@ -1,0 +1,527 @@
+//! `pocket_trk` `$CH` lines → gsens's tracking schema
+//! (`t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`, docs/conventions.md).
+//!
+//! # Time base
+//!
+//! `pocket_trk` reads the IF file in cycles of N = fs·1 ms samples (fs a
+//! multiple of 1 kHz; `-toff` seconds skipped at the start) and updates each
+//! L1 C/A channel once per cycle, with the block of samples that starts at
+//! cycle k, receiver time k·1 ms. A `$CH` line at `time` = k·1 ms reports
+//! the discriminator output of that single block, whose integration spans
+//! \[k·T, (k + 1)·T), T = 1 ms. The IMU log `gsens simulate --iq` writes and
+//! the IF file share one clock: sample n of the file is at receiver time
+//! n/fs. So each row is stamped at the middle of its integration on the
+//! file's sample time:
+//!
+//! ```text
+//! t_s = time + T/2 + toff
+//! ```
+//!
+//! (what `gsens-gnss-sdr` does with GNSS-SDR's sample counter: (n − Δn/2)/fs).
+//! Every channel logs at the same cycles (`epoch` apart), so all rows of an
+//! epoch share one stamp and no resampling is needed. Until it has decoded
+//! the navigation data, `pocket_trk` logs at the cycles that are multiples of
+//! `epoch`; afterwards at its PVT epochs, which start on a multiple of 20 ms
+//! (and may be moved by multiples of 20 ms to follow the clock). With an
+//! `epoch` that divides 0.02 s the two grids coincide; otherwise (0.025 s) the
+//! grid moves mid-log, and the lines off the grid of most lines are reported
+//! and not used (the tracking schema holds one grid).
+//!
+//! # Phase and sign
+//!
+//! `phase_err_rad` = 2π·`err_phas`: PocketSDR mixes the samples with the
+//! conjugate replica, so atan(Q/I) is θ_signal − θ_replica, the sign of
+//! docs/conventions.md (checked on real runs: the model of
+//! [`gsens_core::pocket_sdr`] driven by the true carrier leaves the thermal
+//! noise with this sign, twice as much with the other). With `-fmt CS8` for
+//! gsens's interleaved int8 I/Q the receiver's Doppler is the simulator's;
+//! `INT8X2` inverts Q (mirrored spectrum, flipped signs).
+//!
+//! # Tracks and what is kept
+//!
+//! A channel's lines form a *track* (one satellite tracked without
+//! interruption) until its PRN or signal changes, its lock time falls (it was
+//! lost and reacquired: `pocket_trk` writes no line for a channel it does
+//! not track) or a line is missing (a gap over 1.5 epochs). Its lines with a
+//! lock time up to the FLL pull-in (1 s) plus the PLL's settling time
+//! ([`ImportSettings::settle_time_s`]) are dropped: PocketSDR runs an FLL for
+//! the first second, and the PLL's start is a transient the estimator does
+//! not model. Only GPS L1 C/A (`L1CA`) is estimated; other signals are
+//! counted and skipped. Every track is reported with what became of it.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::Serialize;
+
+use gsens_core::pocket_sdr::{FLL_PULL_IN_S, PocketSdrPll, PocketSdrStage};
+use gsens_core::{HighPass, LinearLoop};
+use gsens_io::{ImuSeries, TrackingRow};
+
+use crate::error::PocketSdrError;
+use crate::log::{ChRecord, Garbled, PocketSdrLog, read_log};
+use crate::options::{DEFAULT_EPOCH_S, PocketSdrOptions, Setting, SettingSource};
+
+/// The signal gsens estimates from.
+pub const L1CA: &str = "L1CA";
+
+/// How a log is converted.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImportSettings {
+    /// The options `pocket_trk` ran with (its defaults when no file was given).
+    pub options: PocketSdrOptions,
+    /// Time dropped after the FLL pull-in \[s\]; `None`: five time constants
+    /// of the loop's slowest mode ([`ImportSettings::settle_time_s`]).
+    pub settle_s: Option<f64>,
+    /// `pocket_trk`'s `-toff`: seconds of the IF file skipped at its start \[s\].
+    pub toff_s: f64,
+}
+
+impl ImportSettings {
+    /// The settings for a log made with the options file `path` (PocketSDR's
+    /// defaults when `None`).
+    pub fn from_options_file(path: Option<&Path>) -> Result<Self, PocketSdrError> {
+        let options = match path {
+            Some(p) => PocketSdrOptions::read(p)?,
+            None => PocketSdrOptions::default(),
+        };
+        Ok(ImportSettings { options, settle_s: None, toff_s: 0.0 })
+    }
+
+    /// The modelled loop: GPS L1 C/A at `b_pll`.
+    pub fn stage(&self) -> PocketSdrStage {
+        PocketSdrStage::l1ca(self.options.b_pll_hz.value)
+    }
+
+    /// The settling time after the FLL pull-in \[s\]: [`ImportSettings::settle_s`],
+    /// or five time constants τ = T/(−ln ρ) of the loop's slowest mode (ρ the
+    /// largest root modulus of its characteristic polynomial): 5.2 s at
+    /// b_pll = 5 Hz, 2.6 s at 10 Hz, at least 1 s.
+    pub fn settle_time_s(&self) -> f64 {
+        self.settle_s.unwrap_or_else(|| self.stage().settling_time_s(5.0).clamp(1.0, 60.0))
+    }
+
+    /// The estimator warm-up the session needs \[s\], with the estimator's
+    /// high-pass at `highpass_hz`: W = max(S, τ_hp·(5 + ln(τ/τ_hp))), S the
+    /// settling time, τ the loop's slowest time constant, τ_hp = 1/(2π·f_hp).
+    /// The regressor models start at the first kept line in the steady state
+    /// of the specific force there; when the board is already shaken, their
+    /// start-up error d₀·e^(−t/τ) leaves the high-pass with an area d₀·τ that
+    /// decays as e^(−t/τ_hp), below e⁻⁵·d₀ after the second term
+    /// (the reasoning of `gsens-gnss-sdr`'s warm-up). 12.4 s at 5 Hz with
+    /// the default 0.05 Hz high-pass, rounded up to 0.1 s.
+    pub fn warmup_s(&self, highpass_hz: f64) -> f64 {
+        let s = self.settle_time_s();
+        let tau = self.stage().settling_time_s(1.0);
+        if !(highpass_hz > 0.0 && tau.is_finite() && tau > 0.0) {
+            return s;
+        }
+        let tau_hp = 1.0 / (core::f64::consts::TAU * highpass_hz);
+        (s.max(tau_hp * (5.0 + (tau / tau_hp).ln())) * 10.0).ceil() / 10.0
+    }
+
+    /// The warm-up a session starting at `start_s` needs \[s\], computed from
+    /// the IMU log: each axis runs PocketSDR's loop twice, started at
+    /// `start_s` in the steady state of the specific force there (as the
+    /// estimator's models do) and [`ImportSettings::warmup_s`] earlier (a
+    /// reference whose start has died out); both are sampled every
+    /// `log_interval_s` and high-passed from `start_s` on. The warm-up ends
+    /// where their difference stays below e⁻⁵ of the reference's peak, on
+    /// every axis (over two warm-ups): 0 for a board at rest at the start, at
+    /// most [`ImportSettings::warmup_s`]. The reference starts no earlier than
+    /// the IMU log when that covers the IF file from its start (`toff`): the
+    /// receiver's loops cannot remember older motion. Otherwise, when the IMU
+    /// log starts too late for the reference, [`ImportSettings::warmup_s`].
+    pub fn models_warmup_s(&self, imu: &ImuSeries, start_s: f64, log_interval_s: f64, highpass_hz: f64) -> f64 {
+        let w_max = self.warmup_s(highpass_hz);
+        let (Some(&first), Some(&last)) = (imu.t_s.first(), imu.t_s.last()) else { return w_max };
+        let Ok(model) = PocketSdrPll::new(self.stage()) else { return w_max };
+        let t_loop = self.stage().interval_s;
+        // The receiver's loops start with the IF file (time `toff`): an IMU
+        // log that covers the file from its start holds all the motion they
+        // can remember, so the reference may start there.
+        let t_ref = if first <= self.toff_s + 1e-9 { (start_s - w_max).max(first) } else { start_s - w_max };
+        let per_epoch = (log_interval_s / t_loop).round().max(1.0) as usize;
+        if first > t_ref || imu.t_s.len() < 2 || start_s <= t_ref {
+            return w_max;
+        }
+        let accel = |t: f64| -> [f64; 3] {
+            let k = imu.t_s.partition_point(|&x| x <= t).clamp(1, imu.t_s.len() - 1);
+            let (t0, t1) = (imu.t_s[k - 1], imu.t_s[k]);
+            let u = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+            core::array::from_fn(|i| imu.accel_mps2[k - 1][i] + u * (imu.accel_mps2[k][i] - imu.accel_mps2[k - 1][i]))
+        };
+        let (mut reference, mut started) = ([model; 3], [model; 3]);
+        for (l, a) in reference.iter_mut().zip(accel(t_ref)) {
+            l.settle(a);
+        }
+        for (l, a) in started.iter_mut().zip(accel(start_s)) {
+            l.settle(a);
+        }
+        let hp = HighPass::new(highpass_hz, log_interval_s);
+        let (mut hp_ref, mut hp_diff) = ([hp; 3], [hp; 3]);
+        let n_lead = ((start_s - t_ref) / t_loop).round() as usize;
+        let t_end = last.min(start_s + 2.0 * w_max);
+        let (mut peak, mut diffs) = ([0.0f64; 3], Vec::new());
+        for k in 1.. {
+            let t = t_ref + k as f64 * t_loop;
+            if t > t_end {
+                break;
+            }
+            let a = accel(t);
+            let r: [f64; 3] = core::array::from_fn(|i| reference[i].step(a[i]));
+            if k <= n_lead {
+                continue;
+            }
+            let d: [f64; 3] = core::array::from_fn(|i| started[i].step(a[i]) - r[i]);
+            if (k - n_lead).is_multiple_of(per_epoch) {
+                for i in 0..3 {
+                    peak[i] = peak[i].max(hp_ref[i].step(r[i]).abs());
+                }
+                diffs.push(core::array::from_fn::<f64, 3, _>(|i| hp_diff[i].step(d[i]).abs()));
+            }
+        }
+        let bound = peak.map(|p| (-5.0f64).exp() * p);
+        match diffs.iter().rposition(|d| (0..3).any(|i| d[i] > bound[i])) {
+            None => 0.0,
+            Some(j) => (((j + 1) as f64 * log_interval_s * 10.0).ceil() / 10.0).min(w_max),
+        }
+    }
+}
+
+/// What became of one track.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackSummary {
+    /// Receiver channel.
+    pub channel: u32,
+    /// PRN.
+    pub prn: u32,
+    /// Satellite ID.
+    pub sat: String,
+    /// Signal ID.
+    pub sig: String,
+    /// Lines of its first and last `$CH` line.
+    pub lines: [u64; 2],
+    /// Receiver times of its first and last line \[s\].
+    pub time_s: [f64; 2],
+    /// Lock time at its first line \[s\].
+    pub first_lock_s: f64,
+    /// Its `$CH` lines.
+    pub records: usize,
+    /// Rows kept.
+    pub kept: usize,
+    /// Mean C/N0 of its lines \[dB-Hz\].
+    pub mean_cn0_dbhz: f64,
+    /// Whether any row is kept.
+    pub used: bool,
+    /// Why it ends and why rows were dropped or kept.
+    pub reason: String,
+}
+
+/// A converted log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Imported {
+    /// The log.
+    pub file: String,
+    /// `pocket_trk`'s version, from the log's START message.
+    pub version: Option<String>,
+    /// Sampling rate from the START message \[Hz\].
+    pub fs_hz: Option<f64>,
+    /// The kept rows, by time then channel.
+    #[serde(skip)]
+    pub rows: Vec<TrackingRow>,
+    /// Every GPS L1 C/A track.
+    pub tracks: Vec<TrackSummary>,
+    /// The log interval (`epoch`) and where it comes from.
+    pub epoch: Setting,
+    /// The modelled loop.
+    pub stage: PocketSdrStage,
+    /// The settling time used \[s\].
+    pub settle_s: f64,
+    /// Lines per message type.
+    pub messages: BTreeMap<String, u64>,
+    /// `$CH` lines of signals not estimated, per signal.
+    pub other_signals: BTreeMap<String, u64>,
+    /// The first garbled lines (the log's, and lines repeated or off the epoch grid).
+    pub garbled: Vec<Garbled>,
+    /// All garbled lines.
+    pub garbled_count: u64,
+    /// The conversion settings.
+    pub settings: ImportSettings,
+}
+
+impl Imported {
+    /// The log interval \[s\].
+    pub fn interval_s(&self) -> f64 {
+        self.epoch.value
+    }
+}
+
+/// Reads and converts a log file.
+pub fn import_file(path: &Path, settings: &ImportSettings) -> Result<Imported, PocketSdrError> {
+    import_log(read_log(path)?, settings)
+}
+
+fn ms(t_s: f64) -> i64 {
+    (t_s * 1e3).round() as i64
+}
+
+/// Converts a parsed log (module docs).
+pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Imported, PocketSdrError> {
+    if !(settings.toff_s.is_finite() && settings.toff_s >= 0.0) {
+        return Err(PocketSdrError::Setting { name: "toff_s", value: settings.toff_s, expected: "≥ 0 and finite" });
+    }
+    if let Some(v) = settings.settle_s.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+        return Err(PocketSdrError::Setting { name: "settle_s", value: v, expected: "≥ 0 and finite" });
+    }
+    let stage = settings.stage();
+    let t_block = stage.interval_s;
+    let PocketSdrLog { file, records, messages, mut garbled, mut garbled_count, fs_hz, version, .. } = log;
+    let mut other_signals: BTreeMap<String, u64> = BTreeMap::new();
+    let mut l1: Vec<ChRecord> = Vec::new();
+    for r in records {
+        if r.sig == L1CA {
+            l1.push(r);
+        } else {
+            *other_signals.entry(r.sig.clone()).or_default() += 1;
+        }
+    }
+    if l1.is_empty() {
+        let signals = other_signals.iter().map(|(s, n)| format!("{s} ({n})")).collect::<Vec<_>>().join(", ");
+        return Err(PocketSdrError::NoL1ca { file, signals });
+    }
+    let mut garble = |g: Garbled| {
+        garbled_count += 1;
+        if garbled.len() < crate::log::GARBLED_KEPT {
+            garbled.push(g);
+        }
+    };
+    // The log interval: the most common step between a channel's consecutive lines.
+    let mut last_by_ch: BTreeMap<u32, (i64, u64)> = BTreeMap::new();
+    let mut steps: BTreeMap<i64, (u64, u64, u64)> = BTreeMap::new();
+    for r in &l1 {
+        let t = ms(r.time_s);
+        if let Some((t0, line0)) = last_by_ch.insert(r.ch, (t, r.line))
+            && t > t0
+        {
+            steps.entry(t - t0).or_insert((0, line0, r.line)).0 += 1;
+        }
+    }
+    let measured = steps.iter().max_by_key(|(d, (n, _, _))| (*n, -**d)).map(|(d, (_, a, b))| (*d, *a, *b));
+    let epoch = match (&settings.options.epoch_s, measured) {
+        (Some(stated), Some((d, a, b))) => {
+            if ms(stated.value) != d {
+                return Err(PocketSdrError::EpochMismatch {
+                    file,
+                    measured_s: d as f64 * 1e-3,
+                    line_a: a,
+                    line_b: b,
+                    stated_s: stated.value,
+                    source_name: match &stated.source {
+                        SettingSource::File { file, line } => format!("{file}:{line}"),
+                        _ => "the options".into(),
+                    },
+                });
+            }
+            stated.clone()
+        }
+        (Some(stated), None) => stated.clone(),
+        (None, Some((d, _, _))) => Setting { value: d as f64 * 1e-3, source: SettingSource::Log },
+        (None, None) => Setting { value: DEFAULT_EPOCH_S, source: SettingSource::Default },
+    };
+    let step_ms = ms(epoch.value).max(1);
+    // The epoch grid's phase: the most common time modulo the interval.
+    let mut phases: BTreeMap<i64, u64> = BTreeMap::new();
+    for r in &l1 {
+        *phases.entry(ms(r.time_s).rem_euclid(step_ms)).or_default() += 1;
+    }
+    let phase = phases.iter().max_by_key(|(p, n)| (**n, -**p)).map_or(0, |(p, _)| *p);
+    let settle_s = settings.settle_time_s();
+    let keep_after_s = FLL_PULL_IN_S + settle_s;
+    struct Open {
+        summary: TrackSummary,
+        last_t_ms: i64,
+        last_lock_s: f64,
+        cn0_sum: f64,
+    }
+    let mut done: Vec<TrackSummary> = Vec::new();
+    let mut open: BTreeMap<u32, Open> = BTreeMap::new();
+    let mut rows: Vec<TrackingRow> = Vec::new();
+    let close = |o: Open, why: &str, done: &mut Vec<TrackSummary>| {
+        let mut s = o.summary;
+        s.mean_cn0_dbhz = o.cn0_sum / s.records as f64;
+        s.used = s.kept > 0;
+        let span = s.time_s[1] - s.time_s[0];
+        s.reason = if s.used {
+            format!(
+                "{why}; {} of {} lines kept (lock time over the 1 s FLL pull-in + {settle_s:.1} s settling)",
+                s.kept, s.records
+            )
+        } else {
+            format!(
+                "{why}; dropped: its lock time never passed the 1 s FLL pull-in + {settle_s:.1} s settling \
+                 ({span:.2} s tracked)"
+            )
+        };
+        done.push(s);
+    };
+    for r in &l1 {
+        let t = ms(r.time_s);
+        if (t.rem_euclid(step_ms)) != phase {
+            garble(Garbled {
+                line: r.line,
+                field: Some((1, "time")),
+                reason: format!(
+                    "{:.3} s is off the {} s epoch grid of most lines (pocket_trk moves its $CH epochs to its PVT \
+                     epochs, multiples of 20 ms, once it has decoded the navigation data; an epoch dividing 0.02 s \
+                     keeps one grid)",
+                    r.time_s, epoch.value
+                ),
+            });
+            continue;
+        }
+        let mut why_new = None;
+        if let Some(o) = open.get(&r.ch) {
+            if t <= o.last_t_ms {
+                garble(Garbled {
+                    line: r.line,
+                    field: Some((1, "time")),
+                    reason: format!(
+                        "channel {} at {:.3} s again or back in time (its previous line was at {:.3} s)",
+                        r.ch,
+                        r.time_s,
+                        o.last_t_ms as f64 * 1e-3
+                    ),
+                });
+                continue;
+            }
+            if o.summary.prn != r.prn || o.summary.sig != r.sig {
+                why_new = Some(format!("the channel turned to {} PRN {} at line {}", r.sig, r.prn, r.line));
+            } else if r.lock_s + 1e-9 < o.last_lock_s {
+                why_new = Some(format!(
+                    "lost and reacquired (lock time {} s at line {}, after {} s)",
+                    r.lock_s, r.line, o.last_lock_s
+                ));
+            } else if t - o.last_t_ms > step_ms + step_ms / 2 {
+                why_new = Some(format!(
+                    "no line from {:.3} s to {:.3} s (line {}): not tracked between",
+                    o.last_t_ms as f64 * 1e-3,
+                    r.time_s,
+                    r.line
+                ));
+            }
+        }
+        if let Some(why) = why_new {
+            let o = open.remove(&r.ch).expect("open track");
+            close(o, &why, &mut done);
+        }
+        let o = open.entry(r.ch).or_insert_with(|| Open {
+            summary: TrackSummary {
+                channel: r.ch,
+                prn: r.prn,
+                sat: r.sat.clone(),
+                sig: r.sig.clone(),
+                lines: [r.line, r.line],
+                time_s: [r.time_s, r.time_s],
+                first_lock_s: r.lock_s,
+                records: 0,
+                kept: 0,
+                mean_cn0_dbhz: 0.0,
+                used: false,
+                reason: String::new(),
+            },
+            last_t_ms: t,
+            last_lock_s: r.lock_s,
+            cn0_sum: 0.0,
+        });
+        o.summary.records += 1;
+        o.summary.lines[1] = r.line;
+        o.summary.time_s[1] = r.time_s;
+        o.last_t_ms = t;
+        o.last_lock_s = r.lock_s;
+        o.cn0_sum += r.cn0_dbhz;
+        if r.lock_s > keep_after_s + 1e-9 {
+            o.summary.kept += 1;
+            rows.push(TrackingRow {
+                t_s: (t as f64 + 500.0 * t_block) * 1e-3 + settings.toff_s,
+                channel: r.ch,
+                prn: r.prn,
+                cn0_dbhz: r.cn0_dbhz,
+                elev_deg: None,
+                phase_err_rad: core::f64::consts::TAU * r.err_phas_cyc,
+            });
+        }
+    }
+    for (_, o) in std::mem::take(&mut open) {
+        close(o, "tracked to the end of the log", &mut done);
+    }
+    done.sort_by(|a, b| (a.lines[0]).cmp(&b.lines[0]));
+    rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
+    if rows.is_empty() {
+        let why = done.iter().map(|s| format!("ch {} PRN {}: {}", s.channel, s.prn, s.reason)).collect::<Vec<_>>();
+        return Err(PocketSdrError::NoTracks { file, settle_s, why: why.join("; ") });
+    }
+    Ok(Imported {
+        file,
+        version,
+        fs_hz,
+        rows,
+        tracks: done,
+        epoch,
+        stage,
+        settle_s,
+        messages,
+        other_signals,
+        garbled,
+        garbled_count,
+        settings: settings.clone(),
+    })
+}
+
+/// What the conversion did, as text: the loop, the interval, every track,
+/// the skipped signals and the garbled lines.
+pub fn render_summary(imported: &Imported) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let used = imported.tracks.iter().filter(|t| t.used).count();
+    let _ = writeln!(
+        s,
+        "PocketSDR log {} ({}): {} GPS L1 C/A tracks, {} used; $CH every {}; PLL b_pll {}",
+        imported.file,
+        imported.version.as_deref().map_or("version unknown".to_string(), |v| format!("pocket_trk {v}")),
+        imported.tracks.len(),
+        used,
+        imported.epoch.with_unit("s"),
+        imported.settings.options.b_pll_hz.with_unit("Hz")
+    );
+    for t in &imported.tracks {
+        let _ = writeln!(
+            s,
+            "  ch {:>2} {} PRN {:>2}  lines {}–{}  {:.3}–{:.3} s  {:.1} dB-Hz  {}: {}",
+            t.channel,
+            t.sig,
+            t.prn,
+            t.lines[0],
+            t.lines[1],
+            t.time_s[0],
+            t.time_s[1],
+            t.mean_cn0_dbhz,
+            if t.used { "used" } else { "not used" },
+            t.reason
+        );
+    }
+    for (sig, n) in &imported.other_signals {
+        let _ = writeln!(s, "  {sig}: {n} $CH lines skipped (only GPS L1 C/A is estimated)");
+    }
+    if imported.garbled_count > 0 {
+        let _ = writeln!(s, "  {} garbled lines skipped, e.g.:", imported.garbled_count);
+        for g in imported.garbled.iter().take(5) {
+            let _ = writeln!(s, "    {}: {g}", imported.file);
+        }
+    }
+    for (line, what) in &imported.settings.options.ignored {
+        let file = imported.settings.options.file.as_deref().unwrap_or("options");
+        let _ = writeln!(s, "  {file}:{line}: {what}");
+    }
+    s
+}

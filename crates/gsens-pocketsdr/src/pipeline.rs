@@ -1,0 +1,67 @@
+//! The estimate from a `pocket_trk` log with PocketSDR's own loop.
+
+use std::path::Path;
+
+use gsens_calib::{LoopIdentificationMode, Outcome, PipelineSettings, calibrate_logs};
+use gsens_core::{LoggedPhase, LoopModel};
+use gsens_io::{FormatError, TrackingLog};
+
+use crate::error::PocketSdrError;
+use crate::import::{ImportSettings, Imported, import_file};
+
+/// A calibration from a PocketSDR log: the pipeline's outcome and what the
+/// conversion did.
+#[derive(Debug, Clone)]
+pub struct PocketSdrOutcome {
+    /// The calibration.
+    pub outcome: Outcome,
+    /// The conversion of the log.
+    pub imported: Imported,
+}
+
+/// The tracking log of a converted PocketSDR log (every channel already on
+/// the log's common epochs).
+pub fn pocketsdr_tracking_log(imported: &Imported) -> Result<TrackingLog, FormatError> {
+    let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, imported.interval_s());
+    TrackingLog::from_rows(&name, &imported.rows)
+}
+
+/// Calibrates from a `pocket_trk` log and an IMU log with PocketSDR's own
+/// carrier loop modelled exactly ([`gsens_core::pocket_sdr`]): the loop of
+/// `settings` is replaced by PocketSDR's at the options' `b_pll`, each row
+/// is the single 1 ms discriminator output at its epoch
+/// ([`LoggedPhase::Last`]), the loop is tested but not fitted
+/// ([`LoopIdentificationMode::TestOnly`] where the default would fit it), and
+/// the warm-up is at least [`ImportSettings::models_warmup_s`].
+pub fn calibrate_pocketsdr(
+    log: &Path,
+    import: &ImportSettings,
+    imu: &Path,
+    settings: &PipelineSettings,
+) -> Result<PocketSdrOutcome, PocketSdrError> {
+    let imported = import_file(log, import)?;
+    let tracking = pocketsdr_tracking_log(&imported)?;
+    let imu_series = gsens_io::read_imu_file(imu)?;
+    let mut settings = settings.clone();
+    settings.estimate.receiver_loop = LoopModel::PocketSdr(imported.stage);
+    settings.estimate.logged_phase = LoggedPhase::Last;
+    settings.loop_stated = true;
+    // PocketSDR's loop is known exactly from its options: tested, not fitted.
+    if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
+        settings.loop_identification = LoopIdentificationMode::TestOnly;
+    }
+    // The regressor models start at the first kept line, possibly while the
+    // board is shaken: their start-up error, computed from the IMU, is left to
+    // the warm-up (ImportSettings::models_warmup_s).
+    if let Some(start_s) = tracking.epoch_t_s().first() {
+        let w = import.models_warmup_s(&imu_series, *start_s, imported.interval_s(), settings.estimate.highpass_hz);
+        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
+    }
+    let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &settings)?;
+    outcome.inputs =
+        vec![("imu".into(), imu.display().to_string()), ("pocketsdr_log".into(), log.display().to_string())];
+    if let Some(f) = &import.options.file {
+        outcome.inputs.push(("pocketsdr_options".into(), f.clone()));
+    }
+    Ok(PocketSdrOutcome { outcome, imported })
+}
