@@ -6,6 +6,7 @@ use crate::{Calibration, LoopSummary, Warning};
 use gsens_core::LoggedPhase;
 use gsens_core::units::STANDARD_GRAVITY_MPS2;
 use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
+use statrs::distribution::{ContinuousCDF, Normal};
 use std::f64::consts::{PI, TAU};
 
 /// How far the median specific-force magnitude may stray from g₀ before the
@@ -293,7 +294,7 @@ pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
     if tested.len() < 3 {
         return None;
     }
-    let z_crit = -gsens_sim::iq::normal_quantile(CARRIER_GAIN_FALSE_ALARM / tested.len() as f64);
+    let z_crit = Normal::standard().inverse_cdf(1.0 - CARRIER_GAIN_FALSE_ALARM / tested.len() as f64);
     let high: Vec<String> = tested
         .iter()
         .filter(|(_, g, se)| (g - 1.0) / se > z_crit)
