@@ -61,10 +61,30 @@ pub fn render_text(doc: &ResultDocument) -> String {
             Weighting::Cn0 => "C/N0",
         }
     );
+    // Other carriers than GPS L1 C/A: each signal with its scaling to L1, and each channel's signal.
+    let mixed = doc.signals.iter().any(|g| g.signal != "L1CA") || doc.channels.iter().any(|c| c.signal != "L1CA");
+    if mixed {
+        let list: Vec<String> = doc
+            .signals
+            .iter()
+            .map(|g| {
+                format!(
+                    "{} {:.4} MHz ×{:.5}, {} of {} tracks",
+                    g.signal,
+                    g.carrier_hz / 1e6,
+                    g.scale_to_l1,
+                    g.tracks_used,
+                    g.tracks
+                )
+            })
+            .collect();
+        let _ = writeln!(s_, "signals (phase × f_L1/f_c, averaged on L1): {}", list.join("; "));
+    }
     for ch in &doc.channels {
+        let signal = if mixed { format!("  {:<6}", ch.signal) } else { String::new() };
         let _ = writeln!(
             s_,
-            "  ch {:>3}  PRN {:>3}  C/N0 {:>5.1} dB-Hz  {:>7} epochs  {}{}",
+            "  ch {:>3}  PRN {:>3}{signal}  C/N0 {:>5.1} dB-Hz  {:>7} epochs  {}{}",
             ch.channel,
             ch.prn,
             ch.mean_cn0_dbhz,

@@ -222,3 +222,39 @@ fn c_header_compiles_and_round_trips() {
     assert_eq!(f[4], "7");
     assert_eq!(f[5], "2025-01-31");
 }
+
+/// The text names each channel's signal and each signal's scaling to L1 when
+/// the log holds carriers other than GPS L1 C/A, and neither for an L1-only log.
+#[test]
+fn text_lists_signals_only_for_mixed_logs() {
+    let c = session([true, true, true]).calibration;
+    let plain = gsens_report::render_text(&document(&c, None));
+    assert!(!plain.contains("signals (") && !plain.contains("L1CA"), "{plain}");
+    let mut doc = document(&c, None);
+    let g1 = 1_602.5625e6;
+    doc.channels[2].signal = "G1:+1".into();
+    doc.channels[2].carrier_hz = g1;
+    doc.signals = vec![
+        gsens_session::SignalSummary {
+            signal: "L1CA".into(),
+            carrier_hz: gsens_core::units::GPS_L1_HZ,
+            scale_to_l1: 1.0,
+            tracks: 4,
+            tracks_used: 3,
+        },
+        gsens_session::SignalSummary {
+            signal: "G1:+1".into(),
+            carrier_hz: g1,
+            scale_to_l1: gsens_core::units::GPS_L1_HZ / g1,
+            tracks: 1,
+            tracks_used: 1,
+        },
+    ];
+    let text = gsens_report::render_text(&doc);
+    assert!(
+        text.contains("signals (phase × f_L1/f_c, averaged on L1): L1CA 1575.4200 MHz ×1.00000, 3 of 4 tracks; G1:+1 1602.5625 MHz ×0.98306, 1 of 1 tracks"),
+        "{text}"
+    );
+    assert!(text.lines().any(|l| l.contains("PRN   5  G1:+1")), "{text}");
+    assert!(text.lines().any(|l| l.contains("PRN   4  L1CA")), "{text}");
+}
