@@ -62,7 +62,11 @@ pub fn render_text(doc: &ResultDocument) -> String {
         }
     );
     // Other carriers than GPS L1 C/A: each signal with its scaling to L1, and each channel's signal.
-    let mixed = doc.signals.iter().any(|g| g.signal != "L1CA") || doc.channels.iter().any(|c| c.signal != "L1CA");
+    // (A log without carrier columns is GPS L1, unnamed: one signal at L1's carrier.)
+    let l1 = gsens_core::units::GPS_L1_HZ;
+    let mixed = doc.signals.len() > 1
+        || doc.signals.iter().any(|g| g.carrier_hz != l1)
+        || doc.channels.iter().any(|c| c.carrier_hz != l1);
     if mixed {
         let list: Vec<String> = doc
             .signals

@@ -230,6 +230,21 @@ fn text_lists_signals_only_for_mixed_logs() {
     let c = session([true, true, true]).calibration;
     let plain = gsens_report::render_text(&document(&c, None));
     assert!(!plain.contains("signals (") && !plain.contains("L1CA"), "{plain}");
+    // A log without carrier columns: GPS L1, unnamed (one signal summary).
+    let mut unnamed = document(&c, None);
+    let l1 = gsens_core::units::GPS_L1_HZ;
+    unnamed.signals = vec![gsens_session::SignalSummary {
+        signal: "1575.42 MHz".into(),
+        carrier_hz: l1,
+        scale_to_l1: 1.0,
+        tracks: 5,
+        tracks_used: 4,
+    }];
+    for ch in &mut unnamed.channels {
+        ch.signal = "1575.42 MHz".into();
+    }
+    let text = gsens_report::render_text(&unnamed);
+    assert!(!text.contains("signals (") && !text.contains("MHz"), "{text}");
     let mut doc = document(&c, None);
     let g1 = 1_602.5625e6;
     doc.channels[2].signal = "G1:+1".into();
