@@ -34,6 +34,12 @@ pub struct SimulateArgs {
     /// block (the truth a receiver's loop tracks; large).
     #[arg(long, requires = "iq")]
     pub iq_carrier_truth: bool,
+    /// Send the bare C/A code without the LNAV navigation data (as a signal simulator
+    /// with its message off): no bit or frame sync, no decoded time in the receiver.
+    /// For PocketSDR at `epoch` < 0.07 s, whose $CH lines stop once it decodes the week;
+    /// GNSS-SDR needs the data (its bit synchronization starts the 20 ms loop).
+    #[arg(long, requires = "iq")]
+    pub iq_no_data: bool,
 }
 
 /// IF sample formats on the command line.
@@ -75,7 +81,8 @@ fn run_iq(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
         IqFormatArg::GrComplex => IqFormat::GrComplex,
     };
     let bar = crate::progress_bar("generating");
-    let cfg = IqConfig::new(fs_hz, format, scenario);
+    let mut cfg = IqConfig::new(fs_hz, format, scenario);
+    cfg.navigation_data = !args.iq_no_data;
     let session =
         gsens_sim::simulate_iq_to_dir(scenario, args.scenario.seed, &cfg, iq, out, args.iq_carrier_truth, |f| {
             bar.set_position((f * 1000.0) as u64)

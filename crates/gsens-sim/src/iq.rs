@@ -191,6 +191,12 @@ pub struct IqConfig {
     pub noise_sigma: f64,
     /// At most this many satellites (the highest at the start).
     pub max_satellites: u32,
+    /// Modulate the LNAV data (`true`, the default); `false` sends the bare
+    /// C/A code, d ≡ +1, as a simulator with its navigation message switched
+    /// off does: a receiver then never synchronizes to bits or frames nor
+    /// decodes a time (what `pocket_trk` needs to keep logging at `epoch`
+    /// below 0.07 s, docs/conventions.md), while its PLL sees the same carrier.
+    pub navigation_data: bool,
 }
 
 impl IqConfig {
@@ -202,6 +208,7 @@ impl IqConfig {
             format,
             noise_sigma: format.default_noise_sigma(),
             max_satellites: scenario.satellites.max_channels,
+            navigation_data: true,
         }
     }
 
@@ -310,6 +317,8 @@ struct Sat {
     /// The subframe whose bits are cached.
     subframe: i64,
     bits: [u8; SUBFRAME_BITS],
+    /// Whether `bits` modulate the code ([`IqConfig::navigation_data`]).
+    data: bool,
     /// Chip table of the current block (amplitude · code · data).
     table: Vec<f32>,
 }
@@ -333,6 +342,9 @@ impl Sat {
     }
 
     fn data_sign(&mut self, period: i64) -> f32 {
+        if !self.data {
+            return 1.0;
+        }
         let sf = period.div_euclid(PERIODS_PER_SUBFRAME);
         if sf != self.subframe {
             self.subframe = sf;
@@ -560,6 +572,7 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
             next,
             subframe: i64::MIN,
             bits: [0; SUBFRAME_BITS],
+            data: cfg.navigation_data,
             table: Vec::with_capacity(2 * CA_CODE_LENGTH),
         };
         set_segment(&mut sat, los, &next, 0.0, carrier_hz);

@@ -333,7 +333,7 @@ fn iq_errors_keep_their_texts() {
     for ((fs_hz, noise_sigma, max_satellites), text) in
         [(1e5, 1.0, 1), (2e6, 0.0, 1), (2e6, 1.0, 0)].into_iter().zip(expected)
     {
-        let cfg = IqConfig { fs_hz, format: IqFormat::Ishort, noise_sigma, max_satellites };
+        let cfg = IqConfig { fs_hz, format: IqFormat::Ishort, noise_sigma, max_satellites, navigation_data: true };
         let e = generate_iq(&sc, 1, &cfg, Vec::new(), &mut NullSink, |_| {}, |_| {}).unwrap_err();
         assert!(matches!(e, SimError::Iq(_)), "{e:?}");
         assert_eq!(e.to_string(), text);
