@@ -187,7 +187,7 @@ fn without_navigation_data_the_code_is_sent_bare() {
     let blocks = with_data.len() / block;
     assert_eq!(blocks, 1000);
     // 50 bits of 20 ms: ± bits cover at least 10 % of the second each.
-    assert!(same >= 100 && same <= 900, "{same} of {blocks} 1 ms blocks identical");
+    assert!((100..=900).contains(&same), "{same} of {blocks} 1 ms blocks identical");
     // Where they differ, it is the signal's sign: a = n − s against b = n + s
     // correlates below b's energy (s dominates at 60 dB-Hz and 1.2 Msps).
     let (a, b) = (as_complex(&with_data), as_complex(&bare));
