@@ -246,7 +246,7 @@ fn text_lists_signals_only_for_mixed_logs() {
     let text = gsens_report::render_text(&unnamed);
     assert!(!text.contains("signals (") && !text.contains("MHz"), "{text}");
     let mut doc = document(&c, None);
-    let g1 = 1_602.5625e6;
+    let g1 = 1_602.562_5e6;
     doc.channels[2].signal = "G1:+1".into();
     doc.channels[2].carrier_hz = g1;
     doc.signals = vec![
