@@ -36,7 +36,11 @@ pub struct ScreeningConfig {
     /// A track whose gain pooled over all its tested windows is significantly
     /// below this is excluded entirely. Default 0.9.
     pub min_track_gain: f64,
-    /// Rows with |φ| above this are excluded \[rad\]; `None`: no limit. Default π/4.
+    /// Rows with |φ| above this, plus the track's noise margin, are excluded
+    /// \[rad\]; `None`: no limit. Default π/4. The margin is z·σ (σ the
+    /// track's deviation σ, z the normal quantile at a 1 % false-alarm
+    /// probability over its rows): a noisy track's rows are not excluded for
+    /// noise that crosses the limit.
     pub max_abs_phase_rad: Option<f64>,
     /// Rows whose C/N0 is more than this below the track's median are excluded
     /// \[dB\]; `None`: no test. Default 6 dB.
@@ -689,14 +693,16 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             }
         }
     }
-    // Test 4: beyond the linear range on its own: |φ| above the limit while the
-    // common level (the others' median plus the track's offset, φ − d) is well
-    // within it; a log of a single track has no common level to compare with.
+    // Test 4: beyond the linear range on its own: |φ| above the limit by more
+    // than the track's noise explains, while the common level (the others'
+    // median plus the track's offset, φ − d) is well within it; a log of a
+    // single track has no common level (and no σ) to compare with.
     if let Some(limit) = cfg.max_abs_phase_rad {
         for i in 0..n_tracks {
             let range = rows.range(i);
-            // In the discriminator's own units: the phase on L1's scale over f_L1/f_c.
-            let limit = limit * rows.to_l1(i);
+            // In the discriminator's own units: the phase on L1's scale over f_L1/f_c,
+            // plus the noise margin (docs of `phase_range_margin_rad`).
+            let limit = limit * rows.to_l1(i) + phase_range_margin_rad(sigma[i], range.len());
             for r in range.clone() {
                 let p = rows.phase[r];
                 // A start-up row is excluded already, as the pull-in it is.
@@ -822,6 +828,27 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
 
 /// Extends the rows carrying any of `bits` by `guard` epochs on each side
 /// (within the track), setting the same bits there.
+/// The noise margin of the linear-range test \[rad\]: z·σ, σ the track's
+/// deviation σ (its noise, from the comparison with the other tracks) and z
+/// the two-sided normal quantile at [`PHASE_RANGE_FALSE_ALARM`] over the
+/// track's `rows`, z = Φ⁻¹(1 − α/(2n)) (Bonferroni). A single 1 ms Costas
+/// output at 39 dB-Hz has σ ≈ 0.25 rad (1/√(2·C/N0·T)): noise alone would
+/// cross π/4 in one row of 500, and excluding those rows (with their guard)
+/// would select on the noise and on the signal riding under it, biasing Γ̂
+/// towards zero. 0 when σ is unknown (a single track).
+fn phase_range_margin_rad(sigma_rad: f64, rows: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    if !sigma_rad.is_finite() || rows == 0 {
+        return 0.0;
+    }
+    let z = Normal::standard().inverse_cdf(1.0 - PHASE_RANGE_FALSE_ALARM / (2.0 * rows as f64));
+    z * sigma_rad
+}
+
+/// Probability that noise alone flags any row of a track in the linear-range
+/// test (test 4): 1 %.
+pub const PHASE_RANGE_FALSE_ALARM: f64 = 0.01;
+
 fn spread_with_guard(epoch: &[u32], flags: &mut [u8], bits: u8, guard: u32) {
     if guard == 0 || !flags.iter().any(|&f| f & bits != 0) {
         return;

@@ -350,3 +350,57 @@ fn screening_config_serde_and_brief() {
     assert_eq!(s.brief().unwrap(), "screened out 30 rows: 2 slips (1 step), 5 C/N0 drop");
     let _ = PI;
 }
+
+/// Single 1 ms Costas outputs at 39 dB-Hz (σ = 1/√(2·C/N0·T) ≈ 0.25 rad, as
+/// PocketSDR logs them) riding on a common 0.9 Hz signal of 0.5 rad: noise
+/// alone crosses π/4 in about one row of 200 here. The linear-range test must
+/// not exclude those rows (it would select on the noise and on the signal
+/// under it, biasing the average towards zero), and the kept average must
+/// follow the common signal with gain 1 (within 3 standard errors).
+#[test]
+fn noise_crossing_the_linear_range_is_not_an_excursion() {
+    let mut w = TrackingWriter::new(Vec::new()).unwrap();
+    let mut noise = Noise(29);
+    let sigma = 1.0 / (2.0 * 10f64.powf(3.9) * 1e-3).sqrt();
+    let signal = |t: f64| 0.5 * (TAU * 0.9 * t).sin();
+    let epochs = EPOCHS;
+    for k in 0..epochs {
+        let t = k as f64 * T;
+        for ch in 0..4u32 {
+            let row = TrackingRow {
+                t_s: t + 100.0,
+                channel: ch,
+                prn: ch + 1,
+                cn0_dbhz: 39.0,
+                elev_deg: None,
+                phase_err_rad: signal(t) + sigma * noise.normal(),
+            };
+            w.write_row(&row).unwrap();
+        }
+    }
+    let log = read_tracking(w.finish().unwrap().as_slice(), "tracking.csv").unwrap();
+    let s = prepare(&log, ScreeningConfig::default());
+    for c in &s.channels {
+        assert_eq!(c.screening.rows_phase_range, 0, "{:?}", c.screening);
+    }
+    let (mut sxy, mut sxx, mut n) = (0.0, 0.0, 0.0);
+    let mut resid = Vec::new();
+    for (k, p) in s.phase_err_rad.iter().enumerate() {
+        if let Some(p) = p {
+            let x = signal(k as f64 * T);
+            sxy += x * p;
+            sxx += x * x;
+            n += 1.0;
+            resid.push((x, *p));
+        }
+    }
+    assert!(
+        n > 0.95 * epochs as f64,
+        "{n} of {epochs} epochs kept: {:?}",
+        s.channels.iter().map(|c| &c.screening).collect::<Vec<_>>()
+    );
+    let slope = sxy / sxx;
+    // The average of 4 tracks has σ/2.
+    let se = 0.5 * sigma / sxx.sqrt();
+    assert!((slope - 1.0).abs() < 3.0 * se, "slope {slope} ± {se}");
+}
