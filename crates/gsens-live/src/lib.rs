@@ -1,0 +1,35 @@
+//! Live calibration: what `gsens live` runs between its inputs and its screen.
+//!
+//! - [`input`]: the inputs as they arrive, from lines of `imu.csv`,
+//!   `tracking.csv` or one merged stream ([`input::parse_merged_line`],
+//!   format in its docs), with every line that is not data reported as a
+//!   [`Notice`] (garbage, out of order, a logger restarting), never dropped
+//!   silently;
+//! - [`follow`]: a growing file read as it grows (`tail -f`), surviving a
+//!   partial last line and a file truncated by a restarting logger;
+//! - [`motion`]: the shaking seen by the IMU over the last seconds (which
+//!   axis, how hard, how fast);
+//! - [`guidance`]: the one plain instruction for the person holding the board;
+//! - [`session`]: [`LiveSession`] accumulates the received data, schedules the
+//!   batch estimate ([`BatchJob`], the same `gsens_calib::calibrate_logs` as
+//!   `gsens estimate`, runnable in another thread) and answers a
+//!   [`LiveView`] for the screen at any moment.
+//!
+//! The estimate shown is the batch pipeline's on the data received so far:
+//! the final one is, by construction, the batch estimate of the logs that
+//! `gsens live` keeps.
+#![warn(missing_docs)]
+
+pub mod follow;
+pub mod guidance;
+pub mod input;
+pub mod motion;
+pub mod replay;
+pub mod session;
+
+pub use follow::Follower;
+pub use guidance::{Instruction, LoopBand};
+pub use input::{Input, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line};
+pub use motion::{MotionWindow, Shaking};
+pub use replay::read_session_dir;
+pub use session::{AxisProgress, BatchJob, BatchResult, LiveConfig, LiveSession, LiveView};

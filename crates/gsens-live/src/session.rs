@@ -1,0 +1,478 @@
+//! The live session: the data received so far, the batch estimate on it, and
+//! the view the screen draws.
+
+use std::collections::{BTreeMap, VecDeque};
+
+use gsens_calib::{DISCRIMINATOR_LINEAR_RANGE_RAD, Outcome, PipelineSettings, ResultDocument, calibrate_logs};
+use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
+
+use crate::guidance::{Instruction, LoopBand, Situation, instruct};
+use crate::input::{Input, Notice};
+use crate::motion::{MotionWindow, Shaking};
+
+/// How a live session runs.
+#[derive(Debug, Clone)]
+pub struct LiveConfig {
+    /// The batch pipeline's settings (the same as `gsens estimate`'s).
+    pub settings: PipelineSettings,
+    /// The session ends when every axis's σ is at most this \[Hz/(m/s²)\].
+    pub target_sigma_hz_per_mps2: f64,
+    /// Rest wanted at the start \[s\]. Default 5 s: the loop's settling from
+    /// acquisition (a few 1/(ζωn), 0.25 s for the paper's loop) and several
+    /// shaking periods of at-rest level to compare the shaking with.
+    pub rest_s: f64,
+    /// The batch estimate is re-run every this many seconds of data \[s\]. Default 5 s.
+    pub batch_every_s: f64,
+    /// No batch estimate before this much data \[s\]. Default 15 s: the rest
+    /// plus about ten periods of shaking on the first axis.
+    pub min_batch_data_s: f64,
+    /// The motion window: how far back the shaking is judged \[s\]. Default 4 s
+    /// (between three and four periods at the paper's 1.1 s).
+    pub motion_window_s: f64,
+    /// An axis counts as shaken above this RMS \[m/s²\]. Default 0.2 m/s²:
+    /// hand shaking for a calibration is 1–3 m/s² peak, a consumer MEMS
+    /// accelerometer at rest 0.01–0.05 m/s² RMS at 40 Hz. Guidance only: the
+    /// estimate uses every sample.
+    pub shake_threshold_mps2: f64,
+}
+
+impl LiveConfig {
+    /// The defaults with these pipeline settings and target.
+    pub fn new(settings: PipelineSettings, target_sigma_hz_per_mps2: f64) -> Self {
+        LiveConfig {
+            settings,
+            target_sigma_hz_per_mps2,
+            rest_s: 5.0,
+            batch_every_s: 5.0,
+            min_batch_data_s: 15.0,
+            motion_window_s: 4.0,
+            shake_threshold_mps2: 0.2,
+        }
+    }
+}
+
+/// A batch estimate to run, on a copy of the data received so far (in any
+/// thread: the session goes on receiving meanwhile).
+#[derive(Debug, Clone)]
+pub struct BatchJob {
+    rows: Vec<TrackingRow>,
+    imu: ImuSeries,
+    settings: PipelineSettings,
+    data_end_s: f64,
+    shaken_s: [f64; 3],
+}
+
+impl BatchJob {
+    /// Seconds of data the job covers, up to its last IMU sample.
+    pub fn data_end_s(&self) -> f64 {
+        self.data_end_s
+    }
+
+    /// Runs `gsens_calib::calibrate_logs` on the job's data.
+    pub fn run(self) -> BatchResult {
+        let outcome = TrackingLog::from_rows("received tracking rows", &self.rows)
+            .map_err(|e| e.to_string())
+            .and_then(|log| {
+                calibrate_logs(&log, &self.imu, "received IMU samples", &self.settings).map_err(|e| e.to_string())
+            })
+            .map(Box::new);
+        BatchResult { data_end_s: self.data_end_s, shaken_s: self.shaken_s, outcome }
+    }
+}
+
+/// A batch estimate's result.
+#[derive(Debug, Clone)]
+pub struct BatchResult {
+    /// The data it covers \[s\].
+    pub data_end_s: f64,
+    /// Seconds each axis had been shaken at that point.
+    pub shaken_s: [f64; 3],
+    /// The calibration, or why there is none yet.
+    pub outcome: Result<Box<Outcome>, String>,
+}
+
+impl BatchResult {
+    /// The result document of the calibration.
+    pub fn document(&self) -> Option<ResultDocument> {
+        self.outcome.as_ref().ok().map(|o| o.document(None))
+    }
+}
+
+/// One axis's progress.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AxisProgress {
+    /// Seconds the axis has been shaken (alone, above the threshold).
+    pub shaken_s: f64,
+    /// Γ̂ of the latest batch estimate \[Hz/(m/s²)\] (None: none yet, or unobservable).
+    pub gamma_hz_per_mps2: Option<f64>,
+    /// Its σ \[Hz/(m/s²)\].
+    pub sigma_hz_per_mps2: Option<f64>,
+    /// Whether the latest batch found the axis observable.
+    pub observable: bool,
+    /// σ at most the target.
+    pub meets_target: bool,
+    /// Seconds of shaking still needed for the target, from σ ∝ 1/√(shaken time).
+    pub more_s: Option<f64>,
+}
+
+/// A channel as last received.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelStatus {
+    /// Receiver channel.
+    pub channel: u32,
+    /// Satellite PRN.
+    pub prn: u32,
+    /// Latest C/N0 \[dB-Hz\].
+    pub cn0_dbhz: f64,
+    /// Latest phase error \[rad\].
+    pub phase_err_rad: f64,
+    /// Time of its latest row \[s\].
+    pub last_t_s: f64,
+    /// Rows received.
+    pub rows: u64,
+    /// A row within the last second of the tracking stream.
+    pub tracking: bool,
+}
+
+/// Everything the screen shows, at one moment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveView {
+    /// Latest time received on both streams \[s\].
+    pub data_t_s: f64,
+    /// Seconds of data received.
+    pub data_s: f64,
+    /// The instruction.
+    pub instruction: Instruction,
+    /// Per axis.
+    pub axes: [AxisProgress; 3],
+    /// The target σ \[Hz/(m/s²)\].
+    pub target_sigma_hz_per_mps2: f64,
+    /// The shaking now.
+    pub shaking: Shaking,
+    /// The loop's band.
+    pub band: LoopBand,
+    /// Largest |φ| of the channel average over the motion window \[rad\].
+    pub peak_phase_rad: f64,
+    /// The discriminator's linear range \[rad\].
+    pub range_rad: f64,
+    /// The channels.
+    pub channels: Vec<ChannelStatus>,
+    /// The latest batch estimate: data it covers \[s\], trustworthy, its warnings (code: message).
+    pub batch: Option<(f64, bool, Vec<String>)>,
+    /// Why the latest batch estimate failed, if it did.
+    pub batch_error: Option<String>,
+    /// The latest notices, and how many there were in all.
+    pub notices: (Vec<String>, u64),
+    /// IMU samples and tracking rows received.
+    pub received: (u64, u64),
+}
+
+/// The data received so far and what is made of it.
+#[derive(Debug)]
+pub struct LiveSession {
+    config: LiveConfig,
+    band: LoopBand,
+    imu: ImuSeries,
+    rows: Vec<TrackingRow>,
+    channels: BTreeMap<u32, ChannelStatus>,
+    /// Channels seen at the latest tracking time stamp.
+    epoch_channels: Vec<u32>,
+    motion: MotionWindow,
+    /// Channel average φ over the motion window: (t, sum, n) per epoch.
+    phase_window: VecDeque<(f64, f64, u32)>,
+    first_t_s: Option<f64>,
+    shaken_s: [f64; 3],
+    rest_s: f64,
+    rest_done: bool,
+    last_imu_t_s: Option<f64>,
+    last_batch_end_s: f64,
+    batch: Option<BatchResult>,
+    notices: VecDeque<String>,
+    notices_total: u64,
+    /// Records refused in a row per stream (IMU, tracking): one notice per burst.
+    refused: [u64; 2],
+}
+
+impl LiveSession {
+    /// A session with `config`; errors when its receiver loop is invalid.
+    pub fn new(config: LiveConfig) -> Result<Self, gsens_core::LoopError> {
+        let band = LoopBand::of(&config.settings.estimate.receiver_loop)?;
+        let motion = MotionWindow::new(config.motion_window_s, config.shake_threshold_mps2);
+        Ok(LiveSession {
+            config,
+            band,
+            imu: ImuSeries::default(),
+            rows: Vec::new(),
+            channels: BTreeMap::new(),
+            epoch_channels: Vec::new(),
+            motion,
+            phase_window: VecDeque::with_capacity(256),
+            first_t_s: None,
+            shaken_s: [0.0; 3],
+            rest_s: 0.0,
+            rest_done: false,
+            last_imu_t_s: None,
+            last_batch_end_s: f64::NEG_INFINITY,
+            batch: None,
+            notices: VecDeque::with_capacity(8),
+            notices_total: 0,
+            refused: [0; 2],
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &LiveConfig {
+        &self.config
+    }
+
+    /// Records a notice (kept: the latest few for the screen, the count of all).
+    pub fn notice(&mut self, notice: &Notice) {
+        if self.notices.len() == 5 {
+            self.notices.pop_front();
+        }
+        self.notices.push_back(notice.to_string());
+        self.notices_total += 1;
+    }
+
+    /// Takes one record from `source` (line `line`). A record that cannot be
+    /// used (time going back, a channel twice at one time stamp) is refused
+    /// with a notice, once per burst of such records.
+    pub fn push(&mut self, source: &str, line: u64, input: Input) -> Option<Notice> {
+        let refuse = |s: &mut Self, k: usize, message: String| {
+            s.refused[k] += 1;
+            (s.refused[k] == 1).then(|| Notice { source: source.to_string(), line, message })
+        };
+        let end_burst = |s: &mut Self, k: usize| {
+            let n = std::mem::take(&mut s.refused[k]);
+            (n > 1).then(|| Notice {
+                source: source.to_string(),
+                line,
+                message: format!("{} more records refused before this one", n - 1),
+            })
+        };
+        let t = input.t_s();
+        match input {
+            Input::Imu { t_s, accel_mps2 } => {
+                if let Some(last) = self.last_imu_t_s.filter(|&l| t_s <= l) {
+                    let msg = format!(
+                        "IMU time {t_s} s not after the previous sample's {last} s: not used (kept in the raw \
+                         log; a restarted logger needs a new `gsens live`)"
+                    );
+                    return refuse(self, 0, msg);
+                }
+                let dt = self.last_imu_t_s.map_or(0.0, |l| t_s - l);
+                self.last_imu_t_s = Some(t_s);
+                self.imu.t_s.push(t_s);
+                self.imu.accel_mps2.push(accel_mps2);
+                self.motion.push(t_s, accel_mps2);
+                // Shaken time and rest, from the window's judgement at this sample.
+                let shaking = self.motion.shaking();
+                match shaking.axis {
+                    Some(i) if dt < 1.0 => {
+                        self.shaken_s[i] += dt;
+                        self.rest_done = true;
+                    }
+                    None if !shaking.several_axes && dt < 1.0 => self.rest_s += dt,
+                    _ => {}
+                }
+                self.first_t_s.get_or_insert(t);
+                let notice = end_burst(self, 0);
+                self.maybe_notice(notice)
+            }
+            Input::Tracking(row) => {
+                let last_t = self.rows.last().map(|r| r.t_s);
+                if let Some(last) = last_t.filter(|&l| row.t_s < l) {
+                    let msg = format!(
+                        "tracking time {} s before the previous row's {last} s: not used (kept in the raw log)",
+                        row.t_s
+                    );
+                    return refuse(self, 1, msg);
+                }
+                if last_t != Some(row.t_s) {
+                    self.epoch_channels.clear();
+                    self.close_phase_epoch(row.t_s);
+                }
+                if self.epoch_channels.contains(&row.channel) {
+                    let msg = format!("channel {} twice at {} s: the second row is not used", row.channel, row.t_s);
+                    return refuse(self, 1, msg);
+                }
+                self.epoch_channels.push(row.channel);
+                if let Some(back) = self.phase_window.back_mut() {
+                    back.1 += row.phase_err_rad;
+                    back.2 += 1;
+                }
+                let c = self.channels.entry(row.channel).or_insert(ChannelStatus {
+                    channel: row.channel,
+                    prn: row.prn,
+                    cn0_dbhz: row.cn0_dbhz,
+                    phase_err_rad: row.phase_err_rad,
+                    last_t_s: row.t_s,
+                    rows: 0,
+                    tracking: true,
+                });
+                c.prn = row.prn;
+                c.cn0_dbhz = row.cn0_dbhz;
+                c.phase_err_rad = row.phase_err_rad;
+                c.last_t_s = row.t_s;
+                c.rows += 1;
+                self.rows.push(row);
+                self.first_t_s.get_or_insert(t);
+                let notice = end_burst(self, 1);
+                self.maybe_notice(notice)
+            }
+        }
+    }
+
+    fn maybe_notice(&mut self, n: Option<Notice>) -> Option<Notice> {
+        if let Some(n) = &n {
+            self.notice(n);
+        }
+        n
+    }
+
+    /// Starts the channel average of a new tracking epoch at `t_s`; drops
+    /// epochs older than the motion window.
+    fn close_phase_epoch(&mut self, t_s: f64) {
+        self.phase_window.push_back((t_s, 0.0, 0));
+        while let Some(&(t0, _, _)) = self.phase_window.front() {
+            if t_s - t0 > self.config.motion_window_s {
+                self.phase_window.pop_front();
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// The latest time both streams reached \[s\].
+    pub fn data_t_s(&self) -> f64 {
+        match (self.last_imu_t_s, self.rows.last()) {
+            (Some(a), Some(r)) => a.min(r.t_s),
+            _ => f64::NEG_INFINITY,
+        }
+    }
+
+    fn data_s(&self) -> f64 {
+        self.first_t_s.map_or(0.0, |t0| (self.data_t_s() - t0).max(0.0))
+    }
+
+    /// A batch estimate when one is due: `batch_every_s` of data since the
+    /// last, and at least `min_batch_data_s` in all.
+    pub fn batch_due(&mut self) -> Option<BatchJob> {
+        let end = self.data_t_s();
+        if self.data_s() < self.config.min_batch_data_s || end - self.last_batch_end_s < self.config.batch_every_s {
+            return None;
+        }
+        self.last_batch_end_s = end;
+        Some(self.job())
+    }
+
+    /// The batch estimate on everything received (the session's final result).
+    pub fn final_job(&self) -> BatchJob {
+        self.job()
+    }
+
+    fn job(&self) -> BatchJob {
+        let end = self.last_imu_t_s.unwrap_or(f64::NEG_INFINITY);
+        let rows: Vec<TrackingRow> = self.rows.iter().filter(|r| r.t_s <= end).copied().collect();
+        BatchJob {
+            rows,
+            imu: self.imu.clone(),
+            settings: self.config.settings.clone(),
+            data_end_s: end,
+            shaken_s: self.shaken_s,
+        }
+    }
+
+    /// Takes a batch estimate's result (a newer one replaces an older one).
+    pub fn apply(&mut self, result: BatchResult) {
+        if self.batch.as_ref().is_some_and(|b| b.data_end_s > result.data_end_s) {
+            return;
+        }
+        if let Ok(o) = &result.outcome
+            && let Ok(band) = LoopBand::of(&o.calibration.loop_used)
+        {
+            self.band = band;
+        }
+        self.batch = Some(result);
+    }
+
+    /// The latest batch result.
+    pub fn batch(&self) -> Option<&BatchResult> {
+        self.batch.as_ref()
+    }
+
+    /// Every axis meets the target σ in the latest batch estimate.
+    pub fn target_met(&self) -> bool {
+        self.axes().iter().all(|a| a.meets_target)
+    }
+
+    fn axes(&self) -> [AxisProgress; 3] {
+        let target = self.config.target_sigma_hz_per_mps2;
+        let mut axes = [AxisProgress::default(); 3];
+        for i in 0..3 {
+            let a = &mut axes[i];
+            a.shaken_s = self.shaken_s[i];
+            let Some(Ok(o)) = self.batch.as_ref().map(|b| &b.outcome) else { continue };
+            let c = &o.calibration;
+            a.observable = c.observable[i];
+            a.gamma_hz_per_mps2 = c.gamma_hz_per_mps2[i];
+            a.sigma_hz_per_mps2 = c.sigma_hz_per_mps2[i];
+            if let (true, Some(sigma)) = (a.observable, a.sigma_hz_per_mps2) {
+                a.meets_target = sigma <= target;
+                let then = self.batch.as_ref().map_or(0.0, |b| b.shaken_s[i]);
+                // σ ∝ 1/√T: T·(σ/target)² in all, less what was shaken since.
+                let needed = then * ((sigma / target).powi(2) - 1.0) - (a.shaken_s - then);
+                a.more_s = Some(if a.meets_target { 0.0 } else { needed.max(1.0) });
+            }
+        }
+        axes
+    }
+
+    /// The screen's view now.
+    pub fn view(&self) -> LiveView {
+        let shaking = self.motion.shaking();
+        let axes = self.axes();
+        let peak_phase_rad =
+            self.phase_window.iter().filter(|e| e.2 > 0).map(|&(_, s, n)| (s / n as f64).abs()).fold(0.0, f64::max);
+        let rest_more_s = if self.rest_done { 0.0 } else { (self.config.rest_s - self.rest_s).max(0.0) };
+        let situation = Situation {
+            data_s: self.data_s(),
+            rest_more_s,
+            shaken: shaking.axis.map(|a| (a, shaking.frequency_hz)),
+            several_axes: shaking.several_axes,
+            peak_phase_rad,
+            range_rad: DISCRIMINATOR_LINEAR_RANGE_RAD,
+            axes: axes.map(|a| (a.meets_target, a.more_s)),
+        };
+        let latest_trk = self.rows.last().map_or(f64::NEG_INFINITY, |r| r.t_s);
+        let channels =
+            self.channels.values().map(|c| ChannelStatus { tracking: latest_trk - c.last_t_s <= 1.0, ..*c }).collect();
+        let (batch, batch_error) = match &self.batch {
+            None => (None, None),
+            Some(b) => match &b.outcome {
+                Ok(o) => {
+                    let doc = o.document(None);
+                    let warnings = doc.warnings.iter().map(|w| format!("{}: {}", w.code, w.message)).collect();
+                    (Some((b.data_end_s, doc.trustworthy, warnings)), None)
+                }
+                Err(e) => (None, Some(e.clone())),
+            },
+        };
+        LiveView {
+            data_t_s: self.data_t_s(),
+            data_s: situation.data_s,
+            instruction: instruct(&situation, &self.band),
+            axes,
+            target_sigma_hz_per_mps2: self.config.target_sigma_hz_per_mps2,
+            shaking,
+            band: self.band,
+            peak_phase_rad,
+            range_rad: DISCRIMINATOR_LINEAR_RANGE_RAD,
+            channels,
+            batch,
+            batch_error,
+            notices: (self.notices.iter().cloned().collect(), self.notices_total),
+            received: (self.imu.len() as u64, self.rows.len() as u64),
+        }
+    }
+}
