@@ -8,7 +8,9 @@ mod args;
 mod demo;
 mod estimate;
 mod import;
+mod live;
 mod montecarlo;
+mod replay;
 mod report;
 mod response;
 mod simulate;
@@ -48,6 +50,12 @@ enum Command {
     Report(report::ReportArgs),
     /// Convert another receiver's logs to gsens's (GNSS-SDR tracking dumps → tracking.csv).
     Import(import::ImportArgs),
+    /// Calibrate while the board is shaken: live guidance (which axis, how fast, how long),
+    /// Γ̂ converging, the trust checks; ends at the target σ with the report of `gsens report`.
+    Live(live::LiveArgs),
+    /// Stream a recorded session (imu.csv, tracking.csv) as `gsens live` receives one,
+    /// at real time or faster.
+    Replay(replay::ReplayArgs),
     /// Print the default scenario as commented TOML (edit it, pass it with --scenario).
     Scenario,
 }
@@ -104,6 +112,8 @@ fn main() -> ExitCode {
         Command::Montecarlo(args) => montecarlo::run(&args),
         Command::Report(args) => report::run(&args),
         Command::Import(args) => import::run(&args).map(|()| Status::Done),
+        Command::Live(args) => live::run(&args),
+        Command::Replay(args) => replay::run(&args).map(|()| Status::Done),
         Command::Scenario => out(gsens_sim::scenario::Scenario::default_toml()).map(|()| Status::Done),
     };
     match result {

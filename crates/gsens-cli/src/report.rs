@@ -5,8 +5,10 @@
 use crate::estimate::{CalibrationArgs, calibrate};
 use anyhow::Result;
 use clap::Args;
+use gsens_calib::Outcome;
+use gsens_io::TrackingLog;
 use gsens_report::{FigureInputs, write_report_dir};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
@@ -33,9 +35,12 @@ pub struct ReportArgs {
 /// session's `truth.json` when it states one and no loop option is given (an
 /// estimate of a simulated session should model the loop that made its log);
 /// with a note saying which loop is modelled and why.
-fn settings_and_loop_note(args: &ReportArgs) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
-    let mut settings = args.calibration.settings();
-    let Some(path) = &args.truth else { return Ok((settings, None)) };
+pub fn settings_and_loop_note(
+    calibration: &CalibrationArgs,
+    truth: Option<&Path>,
+) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
+    let mut settings = calibration.settings();
+    let Some(path) = truth else { return Ok((settings, None)) };
     let Some(truth) = gsens_sim::read_truth_loop(path)? else {
         let note = format!("receiver loop: from the options ({} states none)", path.display());
         return Ok((settings, Some(note)));
@@ -45,7 +50,7 @@ fn settings_and_loop_note(args: &ReportArgs) -> Result<(gsens_calib::PipelineSet
         gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
     };
     let stated = format!("{}, logged: {}", truth.receiver_loop, logged(truth.logged_phase));
-    let note = if args.calibration.loop_args.stated() {
+    let note = if calibration.loop_args.stated() {
         let same = settings.estimate.receiver_loop == truth.receiver_loop
             && settings.estimate.logged_phase == truth.logged_phase;
         let relation = if same { "the same as" } else { "not" };
@@ -64,7 +69,7 @@ fn settings_and_loop_note(args: &ReportArgs) -> Result<(gsens_calib::PipelineSet
 }
 
 pub fn run(args: &ReportArgs) -> Result<crate::Status> {
-    let (settings, loop_note) = settings_and_loop_note(args)?;
+    let (settings, loop_note) = settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
@@ -75,13 +80,26 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     if let Some(t) = &args.truth {
         outcome.inputs.push(("truth".into(), t.display().to_string()));
     }
-    let doc = outcome.document(truth);
     bar.set_message("reading the tracking log for C/N0");
     let tracking = gsens_io::read_tracking_file(&args.tracking)?;
-    let figure_inputs = FigureInputs::new(&outcome, Some(&tracking), truth)?;
-    let html = write_report_dir(&args.out, &args.title, &doc, &figure_inputs.figures(), |id| {
-        bar.set_message(format!("drawing {id}"))
-    })?;
+    bar.finish_and_clear();
+    write_report(&outcome, &tracking, truth, &args.out, &args.title)
+}
+
+/// Writes the report of `outcome` (estimated from `tracking`) into `out` and
+/// prints its text: report.html, report.json, gsens_gamma.h and figures/.
+pub fn write_report(
+    outcome: &Outcome,
+    tracking: &TrackingLog,
+    truth: Option<[f64; 3]>,
+    out: &Path,
+    title: &str,
+) -> Result<crate::Status> {
+    let bar = crate::spinner();
+    let doc = outcome.document(truth);
+    let figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
+    let html =
+        write_report_dir(out, title, &doc, &figure_inputs.figures(), |id| bar.set_message(format!("drawing {id}")))?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_text(&doc))?;
     crate::out(&format!("\nreport: {} (with report.json, gsens_gamma.h and figures/ beside it)\n", html.display()))?;

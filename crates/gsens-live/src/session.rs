@@ -258,7 +258,8 @@ impl LiveSession {
                         "IMU time {t_s} s not after the previous sample's {last} s: not used (kept in the raw \
                          log; a restarted logger needs a new `gsens live`)"
                     );
-                    return refuse(self, 0, msg);
+                    let n = refuse(self, 0, msg);
+                    return self.maybe_notice(n);
                 }
                 let dt = self.last_imu_t_s.map_or(0.0, |l| t_s - l);
                 self.last_imu_t_s = Some(t_s);
@@ -286,7 +287,8 @@ impl LiveSession {
                         "tracking time {} s before the previous row's {last} s: not used (kept in the raw log)",
                         row.t_s
                     );
-                    return refuse(self, 1, msg);
+                    let n = refuse(self, 1, msg);
+                    return self.maybe_notice(n);
                 }
                 if last_t != Some(row.t_s) {
                     self.epoch_channels.clear();
@@ -294,7 +296,8 @@ impl LiveSession {
                 }
                 if self.epoch_channels.contains(&row.channel) {
                     let msg = format!("channel {} twice at {} s: the second row is not used", row.channel, row.t_s);
-                    return refuse(self, 1, msg);
+                    let n = refuse(self, 1, msg);
+                    return self.maybe_notice(n);
                 }
                 self.epoch_channels.push(row.channel);
                 if let Some(back) = self.phase_window.back_mut() {

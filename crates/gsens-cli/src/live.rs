@@ -1,0 +1,331 @@
+//! `gsens live`: calibrate while the board is shaken, telling the person
+//! holding it what to do next. The inputs are read by one thread each; the
+//! session (`gsens_live::LiveSession`) and the screen run here.
+
+use crate::estimate::CalibrationArgs;
+use anyhow::{Context, Result};
+use clap::Args;
+use gsens_live::{
+    Follower, Input, Instruction, LineKind, LiveConfig, LiveSession, LiveView, Notice, parse_imu_line,
+    parse_merged_line, parse_tracking_line,
+};
+use std::io::{BufRead, LineWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+#[derive(Args, Debug)]
+pub struct LiveArgs {
+    /// Read one merged stream from standard input: lines `imu,t_s,fx_mps2,fy_mps2,fz_mps2`
+    /// and `trk,t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad` (`gsens replay` writes it).
+    #[arg(long, conflicts_with_all = ["follow_imu", "follow_tracking"], required_unless_present = "follow_imu")]
+    pub stdin: bool,
+    /// Follow a growing imu.csv (as `tail -f`), with --follow-tracking.
+    #[arg(long, requires = "follow_tracking")]
+    pub follow_imu: Option<PathBuf>,
+    /// Follow a growing tracking.csv, with --follow-imu.
+    #[arg(long, requires = "follow_imu")]
+    pub follow_tracking: Option<PathBuf>,
+    /// With --follow-*: end when no file has grown for this long [s] (0: only on a key or the target).
+    #[arg(long, default_value_t = 0.0)]
+    pub idle_timeout_s: f64,
+    /// Output directory: the records received (imu.csv, tracking.csv; every line as
+    /// received in received/), and at the end the report of `gsens report`
+    /// (report.html, report.json, gsens_gamma.h, figures/).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// End when every axis's σ is at most this [Hz/(m/s²)].
+    #[arg(long, default_value_t = 1e-3)]
+    pub target_sigma: f64,
+    /// Re-run the estimate every this many seconds of data [s].
+    #[arg(long, default_value_t = 5.0)]
+    pub batch_every_s: f64,
+    /// Plain lines instead of the terminal screen (also when standard output is not a terminal).
+    #[arg(long)]
+    pub plain: bool,
+    /// truth.json of a simulated session: the true Γ in the report, and its loop when none is stated.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Heading of the report.
+    #[arg(long, default_value = "Oscillator g-sensitivity calibration (live)")]
+    pub title: String,
+    #[command(flatten)]
+    pub calibration: CalibrationArgs,
+}
+
+/// What a reader thread sends.
+enum Msg {
+    Line { source: usize, line: u64, text: String },
+    Restarted { source: usize },
+    Ended { source: usize, why: Option<String> },
+}
+
+/// One input: its name and how its lines parse.
+struct Source {
+    name: String,
+    parse: fn(&str) -> Result<LineKind, String>,
+}
+
+fn spawn_stdin(tx: mpsc::Sender<Msg>, source: usize) {
+    std::thread::spawn(move || {
+        let stdin = std::io::stdin();
+        for (i, text) in stdin.lock().lines().enumerate() {
+            let line = i as u64 + 1;
+            match text {
+                Ok(text) => {
+                    if tx.send(Msg::Line { source, line, text }).is_err() {
+                        return;
+                    }
+                }
+                Err(e) => {
+                    let _ = tx.send(Msg::Ended { source, why: Some(e.to_string()) });
+                    return;
+                }
+            }
+        }
+        let _ = tx.send(Msg::Ended { source, why: None });
+    });
+}
+
+/// Polls `path` every 20 ms (well inside the screen's 100 ms budget).
+fn spawn_follow(tx: mpsc::Sender<Msg>, source: usize, path: PathBuf, idle_timeout_s: f64) {
+    std::thread::spawn(move || {
+        let mut f = Follower::new(&path);
+        let mut last_growth = Instant::now();
+        loop {
+            match f.poll() {
+                Ok(p) => {
+                    if p.restarted && tx.send(Msg::Restarted { source }).is_err() {
+                        return;
+                    }
+                    if !p.lines.is_empty() {
+                        last_growth = Instant::now();
+                    }
+                    for (line, text) in p.lines {
+                        if tx.send(Msg::Line { source, line, text }).is_err() {
+                            return;
+                        }
+                    }
+                }
+                Err(e) => {
+                    let _ = tx.send(Msg::Ended { source, why: Some(format!("{}: {e}", path.display())) });
+                    return;
+                }
+            }
+            if idle_timeout_s > 0.0 && last_growth.elapsed().as_secs_f64() > idle_timeout_s {
+                let why = format!("no new line for {idle_timeout_s} s");
+                let _ = tx.send(Msg::Ended { source, why: Some(why) });
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    });
+}
+
+/// The files a session keeps: every line as received, and the records used.
+struct Kept {
+    received: Vec<LineWriter<std::fs::File>>,
+    imu: gsens_io::ImuWriter<LineWriter<std::fs::File>>,
+    tracking: gsens_io::TrackingWriter<LineWriter<std::fs::File>>,
+}
+
+impl Kept {
+    fn create(out: &Path, sources: &[Source]) -> Result<Self> {
+        let received_dir = out.join("received");
+        std::fs::create_dir_all(&received_dir).with_context(|| format!("{}: cannot create", received_dir.display()))?;
+        let file = |p: PathBuf| -> Result<LineWriter<std::fs::File>> {
+            let f = std::fs::File::create(&p).with_context(|| format!("{}: cannot create", p.display()))?;
+            Ok(LineWriter::new(f))
+        };
+        let received = sources
+            .iter()
+            .map(|s| {
+                let name: String =
+                    s.name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect();
+                file(received_dir.join(format!("{name}.txt")))
+            })
+            .collect::<Result<_>>()?;
+        Ok(Kept {
+            received,
+            imu: gsens_io::ImuWriter::new(file(out.join("imu.csv"))?)?,
+            tracking: gsens_io::TrackingWriter::new(file(out.join("tracking.csv"))?)?,
+        })
+    }
+}
+
+/// The plain screen: a line when the instruction changes, one per batch estimate, each notice.
+struct Plain {
+    last: Option<(std::mem::Discriminant<Instruction>, Option<usize>)>,
+}
+
+impl Plain {
+    fn instruction(&mut self, v: &LiveView) -> Result<()> {
+        let key = (std::mem::discriminant(&v.instruction), v.instruction.axis());
+        if self.last != Some(key) {
+            self.last = Some(key);
+            crate::out(&format!("[{:7.2} s] {}\n", v.data_t_s.max(0.0), v.instruction))?;
+        }
+        Ok(())
+    }
+
+    fn batch(&self, v: &LiveView) -> Result<()> {
+        let axes: Vec<String> = ["x", "y", "z"]
+            .iter()
+            .zip(&v.axes)
+            .map(|(name, a)| match (a.gamma_hz_per_mps2, a.sigma_hz_per_mps2) {
+                (Some(g), Some(s)) if a.observable => {
+                    let state = if a.meets_target {
+                        "met".to_string()
+                    } else {
+                        a.more_s.map_or(String::new(), |m| format!("{:.0} s more", m.ceil()))
+                    };
+                    format!("{name} {g:+.5} ± {s:.5} {state}")
+                }
+                _ => format!("{name} unobservable"),
+            })
+            .collect();
+        let trust = match (&v.batch, &v.batch_error) {
+            (Some((_, true, _)), _) => "trustworthy".to_string(),
+            (Some((_, false, w)), _) => format!("not trustworthy ({} warnings)", w.len()),
+            (None, Some(e)) => format!("no estimate: {e}"),
+            (None, None) => String::new(),
+        };
+        let tracking = v.channels.iter().filter(|c| c.tracking).count();
+        crate::out(&format!(
+            "[{:7.2} s] Γ̂ [Hz/(m/s²)] {} | {tracking} channels | {trust}\n",
+            v.data_t_s,
+            axes.join(" · ")
+        ))
+    }
+}
+
+pub fn run(args: &LiveArgs) -> Result<crate::Status> {
+    if !(args.target_sigma.is_finite() && args.target_sigma > 0.0) {
+        anyhow::bail!("--target-sigma {}: must be positive [Hz/(m/s²)]", args.target_sigma);
+    }
+    if !(args.batch_every_s.is_finite() && args.batch_every_s > 0.0) {
+        anyhow::bail!("--batch-every-s {}: must be positive [s]", args.batch_every_s);
+    }
+    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
+    let mut config = LiveConfig::new(settings, args.target_sigma);
+    config.batch_every_s = args.batch_every_s;
+    let mut session = LiveSession::new(config).context("the receiver loop")?;
+
+    let (tx, rx) = mpsc::channel();
+    let mut sources = Vec::new();
+    if args.stdin {
+        sources.push(Source { name: "stdin".into(), parse: parse_merged_line });
+        spawn_stdin(tx.clone(), 0);
+    } else if let (Some(imu), Some(trk)) = (&args.follow_imu, &args.follow_tracking) {
+        sources.push(Source { name: imu.display().to_string(), parse: parse_imu_line });
+        sources.push(Source { name: trk.display().to_string(), parse: parse_tracking_line });
+        spawn_follow(tx.clone(), 0, imu.clone(), args.idle_timeout_s);
+        spawn_follow(tx.clone(), 1, trk.clone(), args.idle_timeout_s);
+    }
+    drop(tx);
+    let mut kept = Kept::create(&args.out, &sources)?;
+    let mut plain = Plain { last: None };
+    if let Some(note) = &loop_note {
+        crate::out(&format!("{note}\n"))?;
+    }
+    crate::out(&format!(
+        "gsens live: target σ {} Hz/(m/s²) per axis; shake at about {:.1} s per cycle (the loop's peak, band {:.2}–{:.2} Hz)\n",
+        args.target_sigma,
+        session.view().band.period_s(),
+        session.view().band.band_hz[0],
+        session.view().band.band_hz[1]
+    ))?;
+    let mut ended = vec![false; sources.len()];
+    let mut end_reason = None;
+    loop {
+        let msg = match rx.recv_timeout(Duration::from_millis(50)) {
+            Ok(m) => Some(m),
+            Err(mpsc::RecvTimeoutError::Timeout) => None,
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+        };
+        match msg {
+            Some(Msg::Line { source, line, text }) => {
+                writeln!(kept.received[source], "{text}")?;
+                let name = &sources[source].name;
+                match (sources[source].parse)(&text) {
+                    Ok(LineKind::Data(x)) => {
+                        if let Some(n) = session.push(name, line, x) {
+                            crate::out(&format!("notice: {n}\n"))?;
+                        } else {
+                            match x {
+                                Input::Imu { t_s, accel_mps2 } => kept.imu.write_sample(t_s, &accel_mps2)?,
+                                Input::Tracking(r) => kept.tracking.write_row(&r)?,
+                            }
+                        }
+                    }
+                    Ok(LineKind::Skip) => {}
+                    Err(e) => {
+                        let n = Notice { source: name.clone(), line, message: format!("{e}: line not used") };
+                        session.notice(&n);
+                        crate::out(&format!("notice: {n}\n"))?;
+                    }
+                }
+            }
+            Some(Msg::Restarted { source }) => {
+                let n = Notice {
+                    source: sources[source].name.clone(),
+                    line: 0,
+                    message: "the file became shorter (a logger restarted?): read again from its start".into(),
+                };
+                session.notice(&n);
+                crate::out(&format!("notice: {n}\n"))?;
+            }
+            Some(Msg::Ended { source, why }) => {
+                ended[source] = true;
+                if let Some(why) = why {
+                    crate::out(&format!("notice: {}: {why}\n", sources[source].name))?;
+                }
+                if ended.iter().all(|&e| e) {
+                    end_reason = Some("the input ended".to_string());
+                    break;
+                }
+            }
+            None => {}
+        }
+        if let Some(job) = session.batch_due() {
+            session.apply(job.run());
+            plain.batch(&session.view())?;
+        }
+        plain.instruction(&session.view())?;
+        if session.target_met() {
+            end_reason = Some("every axis meets the target σ".to_string());
+            break;
+        }
+    }
+    let reason = end_reason.unwrap_or_else(|| "the input ended".into());
+    crate::out(&format!("ended: {reason}; the final estimate on everything received:\n"))?;
+    finish(session, kept, truth, args)
+}
+
+fn finish(session: LiveSession, kept: Kept, truth: Option<[f64; 3]>, args: &LiveArgs) -> Result<crate::Status> {
+    let met = session.target_met();
+    drop(kept.imu.finish()?);
+    drop(kept.tracking.finish()?);
+    let imu_path = args.out.join("imu.csv");
+    let trk_path = args.out.join("tracking.csv");
+    // The final estimate is the batch estimate of the logs kept: read back, as `gsens report` would.
+    let tracking = gsens_io::read_tracking_file(&trk_path)?;
+    let imu = gsens_io::read_imu_file(&imu_path)?;
+    let mut outcome =
+        gsens_calib::calibrate_logs(&tracking, &imu, &imu_path.display().to_string(), &session.config().settings)?;
+    outcome.inputs =
+        vec![("imu".into(), imu_path.display().to_string()), ("tracking".into(), trk_path.display().to_string())];
+    if let Some(t) = &args.truth {
+        outcome.inputs.push(("truth".into(), t.display().to_string()));
+    }
+    let status = crate::report::write_report(&outcome, &tracking, truth, &args.out, &args.title)?;
+    if !met {
+        crate::out(&format!(
+            "the target σ ({} Hz/(m/s²)) was not met on every axis: shake longer, or lower the target\n",
+            args.target_sigma
+        ))?;
+        return Ok(crate::Status::Untrustworthy);
+    }
+    Ok(status)
+}
