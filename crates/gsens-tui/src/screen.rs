@@ -107,6 +107,11 @@ pub fn phase_gauge_is_red(view: &LiveView) -> bool {
     view.peak_phase_rad > GENTLER_FRACTION * view.range_rad
 }
 
+/// `x` as a gauge's fill, in [0, 1] (ratatui panics outside it): NaN as empty.
+fn gauge_ratio(x: f64) -> f64 {
+    if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) }
+}
+
 /// Lines `text` takes when word-wrapped to `width` columns (at least 1).
 fn wrapped_lines(text: &str, width: u16) -> u16 {
     let width = usize::from(width.max(1));
@@ -254,7 +259,7 @@ fn draw_axes(buf: &mut Buffer, area: Rect, view: &LiveView) {
             let label = if a.meets_target { "met".to_string() } else { format!("{:3.0}%", 100.0 * progress) };
             let filled = if a.meets_target { met } else { Style::new().fg(Color::Cyan) };
             let gauge = LineGauge::default()
-                .ratio(progress)
+                .ratio(gauge_ratio(progress))
                 .label(Span::styled(label, if a.meets_target { met } else { Style::new() }))
                 .filled_symbol(symbols::block::FULL)
                 .unfilled_symbol(symbols::shade::LIGHT)
@@ -331,7 +336,7 @@ fn draw_shaking(buf: &mut Buffer, area: Rect, view: &LiveView) {
         return;
     }
     let red = phase_gauge_is_red(view);
-    let ratio = if view.range_rad > 0.0 { (view.peak_phase_rad / view.range_rad).clamp(0.0, 1.0) } else { 0.0 };
+    let ratio = if view.range_rad > 0.0 { gauge_ratio(view.peak_phase_rad / view.range_rad) } else { 0.0 };
     let label = if phase_area.width >= 90 {
         format!("phase error: peak {:.2} rad of the discriminator's {:.2} rad", view.peak_phase_rad, view.range_rad)
     } else {

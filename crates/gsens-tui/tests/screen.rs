@@ -330,3 +330,51 @@ fn small_and_odd_terminals_do_not_panic_and_keep_the_instruction() {
         line_with(&screen, &[" z "]);
     }
 }
+
+#[test]
+fn odd_values_do_not_panic() {
+    let long = "a notice with a very-long-word-that-does-not-fit-on-any-line-of-a-small-terminal-at-all ".repeat(4);
+    let mut many = channels(60.0, Some(3));
+    for k in 0..40 {
+        many.push(ChannelStatus { channel: 100 + k, prn: 200 + k, ..many[0] });
+    }
+    let nan_axis = AxisProgress {
+        shaken_s: f64::NAN,
+        gamma_hz_per_mps2: Some(f64::NAN),
+        sigma_hz_per_mps2: Some(f64::INFINITY),
+        observable: true,
+        meets_target: false,
+        more_s: Some(f64::INFINITY),
+    };
+    let zero_sigma = AxisProgress { sigma_hz_per_mps2: Some(0.0), ..nan_axis };
+    let odd = [
+        LiveView {
+            axes: [nan_axis, zero_sigma, AxisProgress { sigma_hz_per_mps2: None, ..nan_axis }],
+            target_sigma_hz_per_mps2: f64::NAN,
+            shaking: Shaking { frequency_hz: Some(f64::NAN), rms_mps2: [f64::INFINITY; 3], ..mid_session().shaking },
+            peak_phase_rad: f64::NAN,
+            channels: many.clone(),
+            batch: Some((f64::NAN, false, vec![long.clone(); 6])),
+            notices: (vec![long.clone(); 5], u64::MAX),
+            received: (u64::MAX, u64::MAX),
+            ..mid_session()
+        },
+        LiveView {
+            peak_phase_rad: 50.0,
+            range_rad: 0.0,
+            target_sigma_hz_per_mps2: 0.0,
+            shaking: Shaking { frequency_hz: Some(0.0), several_axes: true, axis: None, ..Shaking::default() },
+            channels: many,
+            batch: None,
+            batch_error: Some(long.clone()),
+            ..waiting()
+        },
+    ];
+    for view in &odd {
+        for (w, h) in [(100, 30), (80, 24), (40, 12), (20, 5), (1, 1), (0, 0), (300, 80)] {
+            assert_eq!(render_text(view, w, h).lines().count(), usize::from(h));
+        }
+    }
+    // Forty-odd channels at 80x24: the table says how many it could not show.
+    line_with(&render_text(&odd[0], 80, 24), &["channels:", "not shown"]);
+}
