@@ -9,7 +9,7 @@ use gsens_live::{
     Follower, Input, Instruction, LineKind, LiveConfig, LiveSession, LiveView, Notice, parse_imu_line,
     parse_merged_line, parse_tracking_line,
 };
-use std::io::{BufRead, LineWriter, Write};
+use std::io::{BufRead, IsTerminal, LineWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -225,7 +225,6 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     }
     drop(tx);
     let mut kept = Kept::create(&args.out, &sources)?;
-    let mut plain = Plain { last: None };
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
     }
@@ -236,71 +235,150 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         session.view().band.band_hz[0],
         session.view().band.band_hz[1]
     ))?;
+    let mut screen = if args.plain || !std::io::stdout().is_terminal() {
+        Screen::Plain(Plain { last: None })
+    } else {
+        Screen::Tui { terminal: gsens_tui::Terminal::new()?, last_draw: None, worker: None }
+    };
     let mut ended = vec![false; sources.len()];
-    let mut end_reason = None;
-    loop {
-        let msg = match rx.recv_timeout(Duration::from_millis(50)) {
-            Ok(m) => Some(m),
-            Err(mpsc::RecvTimeoutError::Timeout) => None,
-            Err(mpsc::RecvTimeoutError::Disconnected) => break,
-        };
-        match msg {
-            Some(Msg::Line { source, line, text }) => {
-                writeln!(kept.received[source], "{text}")?;
-                let name = &sources[source].name;
-                match (sources[source].parse)(&text) {
-                    Ok(LineKind::Data(x)) => {
-                        if let Some(n) = session.push(name, line, x) {
-                            crate::out(&format!("notice: {n}\n"))?;
-                        } else {
-                            match x {
-                                Input::Imu { t_s, accel_mps2 } => kept.imu.write_sample(t_s, &accel_mps2)?,
-                                Input::Tracking(r) => kept.tracking.write_row(&r)?,
-                            }
-                        }
-                    }
-                    Ok(LineKind::Skip) => {}
-                    Err(e) => {
-                        let n = Notice { source: name.clone(), line, message: format!("{e}: line not used") };
-                        session.notice(&n);
-                        crate::out(&format!("notice: {n}\n"))?;
-                    }
-                }
-            }
-            Some(Msg::Restarted { source }) => {
-                let n = Notice {
-                    source: sources[source].name.clone(),
-                    line: 0,
-                    message: "the file became shorter (a logger restarted?): read again from its start".into(),
-                };
-                session.notice(&n);
-                crate::out(&format!("notice: {n}\n"))?;
-            }
-            Some(Msg::Ended { source, why }) => {
-                ended[source] = true;
-                if let Some(why) = why {
-                    crate::out(&format!("notice: {}: {why}\n", sources[source].name))?;
-                }
-                if ended.iter().all(|&e| e) {
-                    end_reason = Some("the input ended".to_string());
+    let end_reason = loop {
+        // Every message waiting (the first waited for up to 20 ms), then the estimate and the screen.
+        let mut reason = None;
+        let mut first = Some(rx.recv_timeout(Duration::from_millis(20)));
+        let mut taken = 0;
+        loop {
+            let msg = match first.take() {
+                Some(Ok(m)) => m,
+                Some(Err(mpsc::RecvTimeoutError::Timeout)) => break,
+                Some(Err(mpsc::RecvTimeoutError::Disconnected)) => {
+                    reason = Some("the input ended".to_string());
                     break;
                 }
+                None => match rx.try_recv() {
+                    Ok(m) => m,
+                    Err(_) => break,
+                },
+            };
+            let plain = matches!(screen, Screen::Plain(_));
+            if let Some(r) = handle(msg, &mut session, &mut kept, &sources, &mut ended, plain)? {
+                reason = Some(r);
+                break;
             }
-            None => {}
+            taken += 1;
+            // Keep the screen within its 100 ms while a burst arrives.
+            if taken >= 2000 {
+                break;
+            }
         }
-        if let Some(job) = session.batch_due() {
-            session.apply(job.run());
-            plain.batch(&session.view())?;
+        if let Some(r) = reason {
+            break r;
         }
-        plain.instruction(&session.view())?;
+        match &mut screen {
+            Screen::Plain(plain) => {
+                if let Some(job) = session.batch_due() {
+                    session.apply(job.run());
+                    plain.batch(&session.view())?;
+                }
+                plain.instruction(&session.view())?;
+            }
+            Screen::Tui { terminal, last_draw, worker } => {
+                if worker.as_ref().is_some_and(|w| w.is_finished()) {
+                    let result = worker.take().expect("a worker").join().expect("the estimate does not panic");
+                    session.apply(result);
+                    *last_draw = None;
+                }
+                if worker.is_none()
+                    && let Some(job) = session.batch_due()
+                {
+                    *worker = Some(std::thread::spawn(move || job.run()));
+                }
+                if last_draw.is_none_or(|t| t.elapsed() >= Duration::from_millis(100)) {
+                    terminal.draw(&session.view())?;
+                    *last_draw = Some(Instant::now());
+                }
+                if gsens_tui::poll_quit(Duration::ZERO)? {
+                    break "stopped by a key".to_string();
+                }
+            }
+        }
         if session.target_met() {
-            end_reason = Some("every axis meets the target σ".to_string());
-            break;
+            break "every axis meets the target σ".to_string();
+        }
+    };
+    drop(screen);
+    crate::out(&format!("ended: {end_reason}; the final estimate on everything received:\n"))?;
+    finish(session, kept, truth, args)
+}
+
+/// The screen: plain lines, or the terminal screen with the estimate re-run in a worker thread.
+enum Screen {
+    Plain(Plain),
+    Tui {
+        terminal: gsens_tui::Terminal,
+        last_draw: Option<Instant>,
+        worker: Option<std::thread::JoinHandle<gsens_live::BatchResult>>,
+    },
+}
+
+/// Takes one message: the line parsed and pushed (and kept), a notice said
+/// (printed when `plain`; the screen shows the session's). Returns why the
+/// session ends, if it does.
+fn handle(
+    msg: Msg,
+    session: &mut LiveSession,
+    kept: &mut Kept,
+    sources: &[Source],
+    ended: &mut [bool],
+    plain: bool,
+) -> Result<Option<String>> {
+    let say = |n: &Notice| if plain { crate::out(&format!("notice: {n}\n")) } else { Ok(()) };
+    match msg {
+        Msg::Line { source, line, text } => {
+            writeln!(kept.received[source], "{text}")?;
+            let name = &sources[source].name;
+            match (sources[source].parse)(&text) {
+                Ok(LineKind::Data(x)) => {
+                    let pushed = session.push(name, line, x);
+                    if let Some(n) = &pushed.notice {
+                        say(n)?;
+                    }
+                    if pushed.used {
+                        match x {
+                            Input::Imu { t_s, accel_mps2 } => kept.imu.write_sample(t_s, &accel_mps2)?,
+                            Input::Tracking(r) => kept.tracking.write_row(&r)?,
+                        }
+                    }
+                }
+                Ok(LineKind::Skip) => {}
+                Err(e) => {
+                    let n = Notice { source: name.clone(), line, message: format!("{e}: line not used") };
+                    session.notice(&n);
+                    say(&n)?;
+                }
+            }
+        }
+        Msg::Restarted { source } => {
+            let n = Notice {
+                source: sources[source].name.clone(),
+                line: 0,
+                message: "the file became shorter (a logger restarted?): read again from its start".into(),
+            };
+            session.notice(&n);
+            say(&n)?;
+        }
+        Msg::Ended { source, why } => {
+            ended[source] = true;
+            if let Some(why) = why {
+                let n = Notice { source: sources[source].name.clone(), line: 0, message: why };
+                session.notice(&n);
+                say(&n)?;
+            }
+            if ended.iter().all(|&e| e) {
+                return Ok(Some("the input ended".to_string()));
+            }
         }
     }
-    let reason = end_reason.unwrap_or_else(|| "the input ended".into());
-    crate::out(&format!("ended: {reason}; the final estimate on everything received:\n"))?;
-    finish(session, kept, truth, args)
+    Ok(None)
 }
 
 fn finish(session: LiveSession, kept: Kept, truth: Option<[f64; 3]>, args: &LiveArgs) -> Result<crate::Status> {

@@ -70,3 +70,44 @@ fn live_guides_x_y_z_and_stops_at_the_target_with_the_batch_estimate() {
     }
     assert!(out.join("gsens_gamma.h").exists() && out.join("report.html").exists());
 }
+
+/// The terminal screen of a real session: the default session fed record by
+/// record (the estimate re-run every 5 s of data, in line) up to 60 s, drawn
+/// at 100×32 by `gsens_tui::render_text`, against the committed snapshot
+/// (`UPDATE_SNAPSHOTS=1` rewrites it) that the README shows.
+#[test]
+fn the_screen_of_the_default_session_at_60_s() {
+    use gsens_live::{LiveConfig, LiveSession, read_session_dir};
+    let dir = temp_dir("live-screen");
+    gsens(&["simulate", "--out", dir.to_str().unwrap(), "--seed", "1"]);
+    let truth_loop = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
+    let mut settings = gsens_calib::PipelineSettings::default();
+    settings.estimate.receiver_loop = truth_loop.receiver_loop;
+    settings.estimate.logged_phase = truth_loop.logged_phase;
+    settings.loop_stated = true;
+    let mut live = LiveSession::new(LiveConfig::new(settings, 8e-4)).unwrap();
+    for (k, x) in read_session_dir(&dir).unwrap().iter().enumerate() {
+        if x.t_s() > 60.0 {
+            break;
+        }
+        live.push("stdin", k as u64 + 1, *x);
+        if let Some(job) = live.batch_due() {
+            live.apply(job.run());
+        }
+    }
+    let text = gsens_tui::render_text(&live.view(), 100, 32);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots/live_default_60s.txt");
+    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, &text).unwrap();
+    }
+    let expected = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(text, expected, "the screen changed: UPDATE_SNAPSHOTS=1 rewrites {}", path.display());
+    for what in ["shake y", "x  ", "met", "tracking", "TRUSTWORTHY"] {
+        assert!(text.contains(what), "{what}:\n{text}");
+    }
+    // The README shows this screen.
+    let readme =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
+    assert!(readme.contains(expected.trim_end()), "README.md does not show tests/snapshots/live_default_60s.txt");
+}

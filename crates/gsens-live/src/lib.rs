@@ -32,4 +32,4 @@ pub use guidance::{Instruction, LoopBand};
 pub use input::{Input, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line};
 pub use motion::{MotionWindow, Shaking};
 pub use replay::read_session_dir;
-pub use session::{AxisProgress, BatchJob, BatchResult, LiveConfig, LiveSession, LiveView};
+pub use session::{AxisProgress, BatchJob, BatchResult, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed};

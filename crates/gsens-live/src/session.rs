@@ -98,6 +98,15 @@ impl BatchResult {
     }
 }
 
+/// What became of a record given to [`LiveSession::push`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pushed {
+    /// The record is part of the session's data (else refused).
+    pub used: bool,
+    /// What to tell the user, if anything.
+    pub notice: Option<Notice>,
+}
+
 /// One axis's progress.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct AxisProgress {
@@ -236,8 +245,15 @@ impl LiveSession {
 
     /// Takes one record from `source` (line `line`). A record that cannot be
     /// used (time going back, a channel twice at one time stamp) is refused
-    /// with a notice, once per burst of such records.
-    pub fn push(&mut self, source: &str, line: u64, input: Input) -> Option<Notice> {
+    /// with a notice, once per burst of such records; the first record used
+    /// after a burst brings the burst's count.
+    pub fn push(&mut self, source: &str, line: u64, input: Input) -> Pushed {
+        let used_before = (self.imu.len(), self.rows.len());
+        let notice = self.take(source, line, input);
+        Pushed { used: (self.imu.len(), self.rows.len()) != used_before, notice }
+    }
+
+    fn take(&mut self, source: &str, line: u64, input: Input) -> Option<Notice> {
         let refuse = |s: &mut Self, k: usize, message: String| {
             s.refused[k] += 1;
             (s.refused[k] == 1).then(|| Notice { source: source.to_string(), line, message })

@@ -21,7 +21,7 @@ fn asks_for_x_then_y_then_z_and_stops_at_the_target() {
     let mut said: Vec<(f64, Instruction)> = Vec::new();
     let mut stopped_at = None;
     for (k, x) in inputs.iter().enumerate() {
-        assert!(live.push("replay", k as u64 + 1, *x).is_none());
+        assert_eq!(live.push("replay", k as u64 + 1, *x), gsens_live::Pushed { used: true, notice: None });
         if let Some(job) = live.batch_due() {
             live.apply(job.run());
             if live.target_met() {
