@@ -23,21 +23,23 @@
 //!   tracking dump's record of the same integration. With shorter
 //!   integrations it is the phase of the 20 ms sum (close to the mean of
 //!   the discriminator outputs over the bit).
-//! - `tracking_sample_counter`: the receiver's sample count at the *start*
-//!   of the bit's last code period (the dump's `PRN_start_sample_count` is
-//!   the count at its end, one code period ≈ fs·1 ms later).
+//! - `tracking_sample_counter`: the receiver's sample count at the end of
+//!   the integration, read after the block consumed its last code period:
+//!   the same number as the dump record's `PRN_start_sample_count` (checked
+//!   on a real capture, `tests/monitor_capture.rs`).
 //! - `fs`, `cn0_db_hz`, `prn`, `channel_id`, `system` ("G"), `signal` ("1C").
 //!
 //! # Conversion ([`to_row`])
 //!
 //! ```text
-//! t_s           = (n + fs·1 ms − fs·20 ms/2)/fs    n = tracking_sample_counter: the middle of the 20 ms bit
+//! t_s           = (n − fs·20 ms/2)/fs              n = tracking_sample_counter: the middle of the 20 ms bit
 //! phase_err_rad = atan(prompt_q/prompt_i)          θ_signal − θ_replica, the sign of the dump reader
 //! cn0_dbhz      = cn0_db_hz,  channel = channel_id,  prn = prn,  elev_deg empty
 //! ```
 //!
-//! `t_s` matches the dump reader's (n_end − Δn/2)/fs within the one-sample
-//! difference between a code period and fs·1 ms. Messages that are not GPS
+//! `t_s` matches the dump reader's (n − Δn/2)/fs within half a sample (Δn
+//! there is the counter step, which follows the code Doppler: 40 959 or
+//! 40 960 samples at 2.048 Msps). Messages that are not GPS
 //! L1 C/A, not valid (loss of lock), or hold non-finite or zero correlator
 //! values are skipped and counted by reason ([`SkipReason`]).
 //!
@@ -61,7 +63,7 @@ use serde::Serialize;
 
 use gsens_io::TrackingRow;
 
-/// Samples of the GPS L1 C/A data bit the monitor's prompt spans \[ms\].
+/// Length of the GPS L1 C/A data bit the monitor's prompt spans \[ms\].
 pub const BIT_MS: f64 = 20.0;
 
 /// One tracking output of one channel (GNSS-SDR's `gnss_sdr.GnssSynchro`).
@@ -256,7 +258,7 @@ pub fn to_row(m: &GnssSynchro, fs_hz: Option<f64>) -> Result<MonitorRow, SkipRea
     }
     // Two-quadrant: the Costas discriminator's atan(Q/I), in (−π/2, π/2]; I = 0 gives ±π/2.
     let phase = if i == 0.0 { core::f64::consts::FRAC_PI_2.copysign(q) } else { (q / i).atan() };
-    let t = (m.tracking_sample_counter as f64 + fs * 1e-3 - 0.5 * fs * BIT_MS * 1e-3) / fs;
+    let t = (m.tracking_sample_counter as f64 - 0.5 * fs * BIT_MS * 1e-3) / fs;
     Ok(MonitorRow {
         row: TrackingRow {
             t_s: t,
@@ -634,7 +636,7 @@ mod tests {
         assert_eq!(r.row.channel, 1);
         assert_eq!(r.row.prn, 9);
         assert!((r.row.phase_err_rad - 0.1f64.atan()).abs() < 1e-15);
-        assert!((r.row.t_s - (n as f64 + fs * 1e-3 - fs * 1e-2) / fs).abs() < 1e-12);
+        assert!((r.row.t_s - (n as f64 - fs * 1e-2) / fs).abs() < 1e-12);
         // Sign kept: a negative Q/I gives a negative φ, I < 0 is folded (Costas).
         assert!(to_row(&msg(1, 9, n, -1000.0, 100.0), None).unwrap().row.phase_err_rad < 0.0);
     }
