@@ -8,6 +8,7 @@ mod args;
 mod demo;
 mod estimate;
 mod import;
+mod monitor;
 mod montecarlo;
 mod report;
 mod response;

@@ -63,6 +63,8 @@ use serde::Serialize;
 
 use gsens_io::TrackingRow;
 
+use crate::import::{ImportedRow, resample_rows};
+
 /// Length of the GPS L1 C/A data bit the monitor's prompt spans \[ms\].
 pub const BIT_MS: f64 = 20.0;
 
@@ -353,6 +355,8 @@ impl std::fmt::Display for Notice {
 pub enum MonitorEvent {
     /// A new tracking row.
     Row(MonitorRow),
+    /// A row older than its channel's last one, filling a reported gap (GNSS-SDR re-sent it).
+    Late(MonitorRow),
     /// A notice.
     Notice(Notice),
 }
@@ -366,10 +370,12 @@ pub struct MonitorCounts {
     pub garbage: u64,
     /// Messages decoded.
     pub messages: u64,
-    /// Rows produced.
+    /// Rows produced in order (besides the late ones).
     pub rows: u64,
     /// Messages not newer than their channel's last (GNSS-SDR's re-sends), dropped.
     pub repeated: u64,
+    /// Outputs that arrived after newer ones of their channel and fill a gap (taken).
+    pub late: u64,
     /// Messages skipped, by reason.
     pub skipped: BTreeMap<SkipReason, u64>,
     /// Gaps reported.
@@ -382,8 +388,14 @@ impl MonitorCounts {
     /// One line: datagrams, rows and why the rest gave none.
     pub fn summary(&self) -> String {
         let mut s = format!(
-            "{} datagrams ({} garbage), {} messages: {} rows, {} repeats of earlier outputs dropped",
-            self.datagrams, self.garbage, self.messages, self.rows, self.repeated
+            "{} datagrams ({} garbage), {} messages: {} rows ({} of them late, filling gaps), {} repeats of earlier \
+             outputs dropped",
+            self.datagrams,
+            self.garbage,
+            self.messages,
+            self.rows + self.late,
+            self.late,
+            self.repeated
         );
         for (r, n) in &self.skipped {
             s += &format!(", {n} {}", r.describe());
@@ -401,6 +413,12 @@ struct ChannelState {
     lost: bool,
 }
 
+/// A channel's open gaps (counters strictly between) and the late outputs taken in them.
+type Holes = (Vec<(u64, u64)>, std::collections::BTreeSet<u64>);
+
+/// Gaps kept per channel for outputs that arrive late (re-sent after newer ones).
+const HOLES_KEPT: usize = 256;
+
 /// The monitor stream's state: turns datagrams into new rows and notices
 /// (see the module docs); no socket, so it runs on captures too.
 #[derive(Debug, Clone, Default)]
@@ -410,6 +428,8 @@ pub struct MonitorStream {
     /// `TrackingMonitor.decimation_factor` (one output sent per this many; 1 when unknown).
     pub decimation: u32,
     channels: BTreeMap<u32, ChannelState>,
+    /// Per channel, the open gaps (counters strictly between) and the late outputs already taken.
+    holes: BTreeMap<u32, Holes>,
     /// The counts so far.
     pub counts: MonitorCounts,
 }
@@ -442,9 +462,22 @@ impl MonitorStream {
         self.counts.messages += 1;
         let channel = u32::try_from(m.channel_id).ok();
         // A re-send of an output already seen (or older): the counter is the receiver's, global.
-        if let Some(state) = channel.and_then(|c| self.channels.get(&c))
+        if let Some(c) = channel
+            && let Some(state) = self.channels.get(&c)
             && m.tracking_sample_counter <= state.counter
         {
+            // GNSS-SDR re-sends old outputs: one that fills a gap is taken late, once.
+            let n = m.tracking_sample_counter;
+            if let Some((holes, taken)) = self.holes.get_mut(&c)
+                && holes.iter().any(|&(lo, hi)| lo < n && n < hi)
+                && !taken.contains(&n)
+                && let Ok(row) = to_row(m, self.fs_hz)
+            {
+                taken.insert(n);
+                self.counts.late += 1;
+                out.push(MonitorEvent::Late(row));
+                return;
+            }
             self.counts.repeated += 1;
             return;
         }
@@ -488,6 +521,11 @@ impl MonitorStream {
                 let steps = (row.sample_counter - prev.counter) as f64 / step;
                 if steps > 1.5 {
                     self.counts.gaps += 1;
+                    let (holes, _) = self.holes.entry(c).or_default();
+                    holes.push((prev.counter, row.sample_counter));
+                    if holes.len() > HOLES_KEPT {
+                        holes.remove(0);
+                    }
                     out.push(MonitorEvent::Notice(Notice::Gap {
                         channel: c,
                         prn: row.row.prn,
@@ -502,6 +540,106 @@ impl MonitorStream {
             .insert(c, ChannelState { prn: row.row.prn, counter: row.sample_counter, t_s: row.row.t_s, lost: false });
         self.counts.rows += 1;
         out.push(MonitorEvent::Row(row));
+    }
+}
+
+/// Collects a stream's rows for `tracking.csv`. [`Recorder::finish`] cuts
+/// each channel's rows (in time, late ones included) into tracks where the
+/// PRN changes, a loss of lock lies between, or outputs are still missing;
+/// drops each track's first seconds (the narrow loop's settling); and puts
+/// every track on the common grid of the outputs (20 ms × decimation) by
+/// the dump importer's interpolation.
+#[derive(Debug, Clone, Default)]
+pub struct Recorder {
+    decimation: u32,
+    rows: Vec<TrackingRow>,
+    losses: Vec<(u32, f64)>,
+}
+
+impl Recorder {
+    /// An empty recording of a monitor that sends one output per `decimation`.
+    pub fn new(decimation: u32) -> Self {
+        Recorder { decimation: decimation.max(1), ..Default::default() }
+    }
+
+    /// Takes one datagram's events.
+    pub fn take(&mut self, events: &[MonitorEvent]) {
+        for e in events {
+            match e {
+                MonitorEvent::Notice(Notice::LossOfLock { channel, at_s, .. }) => self.losses.push((*channel, *at_s)),
+                MonitorEvent::Notice(_) => {}
+                MonitorEvent::Row(r) | MonitorEvent::Late(r) => self.rows.push(r.row),
+            }
+        }
+    }
+
+    /// Rows taken so far.
+    pub fn rows(&self) -> &[TrackingRow] {
+        &self.rows
+    }
+
+    /// The grid interval \[s\]: 20 ms × decimation.
+    pub fn interval_s(&self) -> f64 {
+        BIT_MS * 1e-3 * f64::from(self.decimation)
+    }
+
+    /// The tracks: (channel, PRN, first and last time \[s\], rows).
+    pub fn tracks(&self) -> Vec<(u32, u32, f64, f64, usize)> {
+        let mut out = Vec::new();
+        for r in self.segment() {
+            match out.last_mut() {
+                Some((_, _, _, last, n, track)) if *track == r.track => {
+                    *last = r.t_s;
+                    *n += 1;
+                }
+                _ => out.push((r.channel, r.prn, r.t_s, r.t_s, 1usize, r.track)),
+            }
+        }
+        out.into_iter().map(|(c, p, a, b, n, _)| (c, p, a, b, n)).collect()
+    }
+
+    /// The rows by channel then time, each with its track.
+    fn segment(&self) -> Vec<ImportedRow> {
+        let mut rows = self.rows.clone();
+        rows.sort_by(|a, b| a.channel.cmp(&b.channel).then(a.t_s.total_cmp(&b.t_s)));
+        rows.dedup_by(|b, a| a.channel == b.channel && a.t_s == b.t_s);
+        let step = self.interval_s();
+        let mut out: Vec<ImportedRow> = Vec::with_capacity(rows.len());
+        let mut track = 0usize;
+        for (k, r) in rows.iter().enumerate() {
+            if k > 0 {
+                let p = &rows[k - 1];
+                let lost = self.losses.iter().any(|&(c, t)| c == r.channel && t > p.t_s && t < r.t_s + 0.5 * step);
+                if p.channel != r.channel || p.prn != r.prn || r.t_s - p.t_s > 1.5 * step || lost {
+                    track += 1;
+                }
+            }
+            out.push(ImportedRow {
+                t_s: r.t_s,
+                channel: r.channel,
+                prn: r.prn,
+                cn0_dbhz: r.cn0_dbhz,
+                phase_err_rad: r.phase_err_rad,
+                lock_test: f64::NAN,
+                symbols: BIT_MS as u32,
+                track,
+            });
+        }
+        out
+    }
+
+    /// The rows of every track from `settle_s` after its first on, on the
+    /// grid t = j·[`interval_s`](Self::interval_s) (by time, then channel).
+    pub fn finish(&self, settle_s: f64) -> Vec<TrackingRow> {
+        let rows = self.segment();
+        let n_tracks = rows.last().map_or(0, |r| r.track + 1);
+        let mut start = vec![f64::INFINITY; n_tracks];
+        for r in &rows {
+            start[r.track] = start[r.track].min(r.t_s);
+        }
+        let kept: Vec<ImportedRow> =
+            rows.iter().filter(|r| r.t_s >= start[r.track] + settle_s - 1e-9).copied().collect();
+        resample_rows(&kept, self.interval_s())
     }
 }
 
@@ -701,6 +839,11 @@ mod tests {
         // Three outputs lost.
         let ev = s.push(&encode_datagram(&[msg(0, 7, 15 * step, 1.0, 0.1)]));
         assert!(matches!(ev[0], MonitorEvent::Notice(Notice::Gap { missing: 3, .. })), "{ev:?}");
+        // One of the three arrives late (re-sent), once; the others stay missing.
+        let ev = s.push(&encode_datagram(&[msg(0, 7, 13 * step, 1.0, 0.1)]));
+        assert!(matches!(ev[0], MonitorEvent::Late(r) if r.sample_counter == 13 * step), "{ev:?}");
+        assert!(s.push(&encode_datagram(&[msg(0, 7, 13 * step, 1.0, 0.1)])).is_empty());
+        assert_eq!((s.counts.late, s.counts.repeated), (1, 3));
         // Loss of lock, then another satellite.
         let mut lost = msg(0, 7, 16 * step, 0.0, 0.0);
         lost.flag_valid_symbol_output = false;
@@ -715,10 +858,30 @@ mod tests {
             "{ev:?}"
         );
         let ev = s.push(b"");
-        assert!(matches!(ev[0], MonitorEvent::Notice(Notice::Garbage { datagram: 7, .. })));
+        assert!(matches!(ev[0], MonitorEvent::Notice(Notice::Garbage { datagram: 9, .. })));
         assert_eq!(s.counts.rows, 4);
         assert_eq!(s.counts.skipped[&SkipReason::NotValid], 1);
         assert_eq!((s.counts.gaps, s.counts.restarts, s.counts.garbage), (1, 1, 1));
+    }
+
+    #[test]
+    fn recorder_tracks_settle_and_grid() {
+        let step = 40_960u64;
+        let mut s = MonitorStream::new(None, 1);
+        let mut r = Recorder::new(1);
+        for k in 100..200u64 {
+            r.take(&s.push(&encode_datagram(&[msg(0, 7, k * step + 17, 1.0, 0.01 * k as f64)])));
+        }
+        // A gap: a second track on the same channel.
+        for k in 300..400u64 {
+            r.take(&s.push(&encode_datagram(&[msg(0, 7, k * step + 17, 1.0, 0.0)])));
+        }
+        assert_eq!(r.tracks().len(), 2);
+        let g = r.finish(1.0);
+        // 99 intervals per track, less 1 s = 50 rows of settling.
+        assert!(g.iter().all(|x| (x.t_s / 0.02 - (x.t_s / 0.02).round()).abs() < 1e-9));
+        assert_eq!(g.len(), 2 * 49, "{}", g.len());
+        assert!(g[0].t_s >= 100.0 * 0.02 + 1.0 - 0.02);
     }
 
     #[test]

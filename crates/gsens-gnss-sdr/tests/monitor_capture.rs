@@ -24,6 +24,7 @@ fn rows_of(stream: &mut MonitorStream, datagrams: &[&[u8]]) -> Vec<MonitorRow> {
         for e in stream.push(d) {
             match e {
                 MonitorEvent::Row(r) => rows.push(r),
+                MonitorEvent::Late(r) => panic!("unexpected late row on a clean capture: {r:?}"),
                 MonitorEvent::Notice(n) => panic!("unexpected notice on a clean capture: {n}"),
             }
         }
