@@ -21,6 +21,8 @@ pub enum ImportSource {
     /// A PocketSDR pocket_trk log (-log FILE: $CH lines) → tracking.csv.
     #[command(name = "pocketsdr")]
     PocketSdr(ImportPocketSdrArgs),
+    /// GNSS-SDR's tracking monitor (TrackingMonitor.enable_monitor=true), received over UDP → tracking.csv.
+    GnssSdrMonitor(crate::monitor::ImportMonitorArgs),
 }
 
 /// `gsens import pocketsdr`.
@@ -90,6 +92,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     let a = match &args.source {
         ImportSource::GnssSdr(a) => a,
         ImportSource::PocketSdr(a) => return run_pocketsdr(a),
+        ImportSource::GnssSdrMonitor(a) => return crate::monitor::run(a),
     };
     // The dumps first: a missing or empty directory is the first thing to fix,
     // whatever the configuration says.

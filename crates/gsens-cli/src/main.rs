@@ -9,6 +9,7 @@ mod demo;
 mod estimate;
 mod import;
 mod live;
+mod monitor;
 mod montecarlo;
 mod replay;
 mod report;

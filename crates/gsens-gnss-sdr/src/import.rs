@@ -648,8 +648,15 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
 /// Puts every track on the common grid t = j·`interval_s` (module docs): rows
 /// of `tracking.csv` (elevation unknown) by time then channel.
 pub fn resample(imported: &Imported, interval_s: f64) -> Vec<TrackingRow> {
-    let mut by_track: Vec<Vec<&ImportedRow>> = vec![Vec::new(); imported.tracks.len()];
-    for r in &imported.rows {
+    resample_rows(&imported.rows, interval_s)
+}
+
+/// [`resample`] of rows alone (their `track` numbers the tracks; the
+/// tracking monitor's rows have no [`TrackSummary`]).
+pub fn resample_rows(rows: &[ImportedRow], interval_s: f64) -> Vec<TrackingRow> {
+    let n_tracks = rows.iter().map(|r| r.track + 1).max().unwrap_or(0);
+    let mut by_track: Vec<Vec<&ImportedRow>> = vec![Vec::new(); n_tracks];
+    for r in rows {
         by_track[r.track].push(r);
     }
     let mut out = Vec::new();

@@ -15,6 +15,8 @@
 //! - [`import`]: dumps → the `tracking.csv` schema (φ in rad, time at the
 //!   middle of each integration), each track judged by GNSS-SDR's own lock
 //!   detector replayed with the configuration's settings, with a reason;
+//! - [`monitor`]: its tracking monitor (`TrackingMonitor.enable_monitor`),
+//!   protobuf over UDP, received live and converted to the same rows;
 //! - the exact models of its carrier loops live in
 //!   [`gsens_core::gnss_sdr`] (no_std, shared with the estimator).
 #![deny(missing_docs)]
@@ -25,6 +27,7 @@ pub mod error;
 pub mod import;
 #[cfg(feature = "mat")]
 pub mod mat;
+pub mod monitor;
 
 pub use conf::{GnssSdrConf, TrackingConf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
