@@ -331,6 +331,23 @@ pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<Tracking
     TrackingLog::from_rows(&name, &rows)
 }
 
+/// `settings` with GNSS-SDR's own carrier loop of `import` (its configuration)
+/// modelled exactly: the receiver loop is GNSS-SDR's stage, each row holds its
+/// last discriminator output, the loop counts as stated, and it is tested
+/// rather than fitted. For tracking rows that came from GNSS-SDR by another
+/// path than its dumps (its tracking monitor): a Kaplan model of the same
+/// order and bandwidth at its 20 ms integration is not its loop.
+pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) -> PipelineSettings {
+    let mut settings = settings.clone();
+    settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
+    settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
+    settings.loop_stated = true;
+    if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
+        settings.loop_identification = LoopIdentificationMode::TestOnly;
+    }
+    settings
+}
+
 /// Calibrates from GNSS-SDR tracking dumps (`Tracking_1C.dump=true`) and an
 /// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
 /// logged-phase settings of `settings` are replaced by the ones the dumps
@@ -345,14 +362,7 @@ pub fn calibrate_gnss_sdr(
     let imported = import_dir(dumps_dir, import)?;
     let tracking_log = gnss_sdr_tracking_log(dumps_dir, &imported)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
-    let mut settings = settings.clone();
-    settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
-    settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
-    settings.loop_stated = true;
-    // GNSS-SDR's loop is modelled exactly from its own configuration: tested, not fitted.
-    if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
-        settings.loop_identification = LoopIdentificationMode::TestOnly;
-    }
+    let mut settings = with_gnss_sdr_loop(settings, import);
     // The regressor models start at the first kept record, possibly while
     // the board is shaken: their start-up error, computed from the IMU, is
     // left to the warm-up (ImportSettings::models_warmup_s).

@@ -388,7 +388,9 @@ pub struct GnssSdrArgs {
     #[arg(long, requires = "gnss_sdr_conf")]
     pub gnss_sdr: Option<PathBuf>,
     /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
-    #[arg(long, requires = "gnss_sdr")]
+    /// With --tracking instead of --gnss-sdr: rows that came from that GNSS-SDR run another way
+    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop.
+    #[arg(long)]
     pub gnss_sdr_conf: Option<PathBuf>,
     #[command(flatten)]
     pub conversion: ConversionArgs,

@@ -70,7 +70,20 @@ pub fn calibrate(
             outcome.inputs.push(("gnss_sdr_conf".into(), conf));
             Ok(outcome)
         }
-        (None, Some(t)) => Ok(calibrate_files(t, imu, settings)?),
+        (None, Some(t)) => match gnss_sdr.and_then(|g| g.gnss_sdr_conf.as_deref().map(|c| (g, c))) {
+            // Rows from a GNSS-SDR run by another path than its dumps: its loop, from its configuration.
+            Some((g, conf)) => {
+                if settings.loop_stated {
+                    anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
+                }
+                let settings = gsens_calib::with_gnss_sdr_loop(settings, &g.conversion.import_settings(Some(conf))?);
+                let mut outcome = calibrate_files(t, imu, &settings)?;
+                crate::out(&format!("GNSS-SDR loop: {}, modelled exactly\n", outcome.calibration.loop_used))?;
+                outcome.inputs.push(("gnss_sdr_conf".into(), conf.display().to_string()));
+                Ok(outcome)
+            }
+            None => Ok(calibrate_files(t, imu, settings)?),
+        },
         (None, None) => anyhow::bail!("--tracking is required (or --gnss-sdr)"),
     }
 }

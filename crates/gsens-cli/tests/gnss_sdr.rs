@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{fails, gsens, run, s};
+use common::{fails, gsens, gsens_any, json, run, s};
 
 use std::path::{Path, PathBuf};
 
@@ -259,5 +259,46 @@ fn mat_dumps_need_the_mat_feature() {
         assert!(!e.contains("without the `mat` feature"), "{e}");
     } else {
         assert!(e.contains("trk_ch_0.mat: a .mat tracking dump") && e.contains("`mat` feature"), "{e}");
+    }
+}
+
+/// Rows that came from a GNSS-SDR run another way than the estimate's own
+/// reading of its dumps (here `gsens import gnss-sdr`; live, its tracking
+/// monitor): `--tracking … --gnss-sdr-conf` models the run's loop exactly,
+/// within 2 % of the truth; a Kaplan loop stated beside it is refused.
+#[test]
+fn tracking_rows_with_the_gnss_sdr_loop_of_a_conf() {
+    let f = fixtures();
+    let truth = json(&f.join("truth.json"));
+    let d = tmp("tracking-conf");
+    for order in ["order2", "order3"] {
+        let conf = f.join(order).join("gnss-sdr.conf");
+        let csv = d.join(format!("{order}.csv"));
+        gsens(&["import", "gnss-sdr", &s(&f.join(order)), "--conf", &s(&conf), "--out", &s(&csv), "--common-grid"]);
+        let out = d.join(format!("{order}.json"));
+        let imu = f.join("imu.csv");
+        let (text, _) = gsens_any(&[
+            "estimate",
+            "--imu",
+            &s(&imu),
+            "--tracking",
+            &s(&csv),
+            "--gnss-sdr-conf",
+            &s(&conf),
+            "--json",
+            &s(&out),
+        ]);
+        assert!(text.contains("GNSS-SDR loop: GNSS-SDR") && text.contains("modelled exactly"), "{text}");
+        let v = json(&out);
+        assert_eq!(v["loop_used"]["implementation"], "gnss_sdr");
+        for i in 0..3 {
+            let g = v["gamma_hz_per_mps2"][i].as_f64().unwrap();
+            let t = truth["gamma_hz_per_mps2"][i].as_f64().unwrap();
+            assert!(((g - t) / t).abs() < 0.02, "{order} axis {i}: {g} vs {t}");
+        }
+        let refused =
+            run(&["estimate", "--imu", &s(&imu), "--tracking", &s(&csv), "--gnss-sdr-conf", &s(&conf), "--bn-hz", "3"]);
+        assert_eq!(refused.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&refused.stderr).contains("--gnss-sdr-conf states the receiver loop"));
     }
 }
