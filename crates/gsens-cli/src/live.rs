@@ -20,13 +20,22 @@ pub struct LiveArgs {
     /// and `trk,t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad` (`gsens replay` writes it).
     #[arg(long, conflicts_with_all = ["follow_imu", "follow_tracking"], required_unless_present = "follow_imu")]
     pub stdin: bool,
-    /// Follow a growing imu.csv (as `tail -f`), with --follow-tracking.
-    #[arg(long, requires = "follow_tracking")]
+    /// Receive GNSS-SDR's tracking monitor on this address (its TrackingMonitor.client_addresses
+    /// and udp_port, e.g. 127.0.0.1:1234), with --follow-imu and --gnss-sdr-conf.
+    #[arg(long, conflicts_with = "follow_tracking", requires_all = ["follow_imu", "gnss_sdr_conf"])]
+    pub gnss_sdr_monitor: Option<String>,
+    /// The GNSS-SDR configuration of the run sending the monitor: its loop (modelled exactly),
+    /// sampling rate, TrackingMonitor.decimation_factor and settling time.
+    #[arg(long, requires = "gnss_sdr_monitor")]
+    pub gnss_sdr_conf: Option<PathBuf>,
+    /// Follow a growing imu.csv (as `tail -f`), with --follow-tracking or --gnss-sdr-monitor.
+    #[arg(long)]
     pub follow_imu: Option<PathBuf>,
     /// Follow a growing tracking.csv, with --follow-imu.
-    #[arg(long, requires = "follow_imu")]
+    #[arg(long, requires = "follow_imu", required_unless_present_any = ["stdin", "gnss_sdr_monitor"])]
     pub follow_tracking: Option<PathBuf>,
-    /// With --follow-*: end when no file has grown for this long [s] (0: only on a key or the target).
+    /// With --follow-* and --gnss-sdr-monitor: end when no input has grown for this long [s]
+    /// (0: only on a key or the target).
     #[arg(long, default_value_t = 0.0)]
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
@@ -53,11 +62,34 @@ pub struct LiveArgs {
     pub calibration: CalibrationArgs,
 }
 
+/// The screen is redrawn at most this often [ms]: with the followers' 20 ms
+/// polls a record reaches the screen within 70 ms (the budget: 100 ms).
+const DRAW_EVERY_MS: u64 = 50;
+
 /// What a reader thread sends.
 enum Msg {
-    Line { source: usize, line: u64, text: String },
-    Restarted { source: usize },
-    Ended { source: usize, why: Option<String> },
+    Line {
+        source: usize,
+        line: u64,
+        text: String,
+    },
+    /// A record already parsed (a monitor row on the grid), numbered by its datagram.
+    Record {
+        source: usize,
+        line: u64,
+        input: Input,
+    },
+    Notice {
+        source: usize,
+        text: String,
+    },
+    Restarted {
+        source: usize,
+    },
+    Ended {
+        source: usize,
+        why: Option<String>,
+    },
 }
 
 /// One input: its name and how its lines parse.
@@ -122,6 +154,64 @@ fn spawn_follow(tx: mpsc::Sender<Msg>, source: usize, path: PathBuf, idle_timeou
     });
 }
 
+/// Receives GNSS-SDR's tracking monitor: every datagram kept in `raw`
+/// (gsens's capture format), its rows put on the 20 ms grid as they arrive.
+fn spawn_monitor(
+    tx: mpsc::Sender<Msg>,
+    source: usize,
+    mut rx: gsens_gnss_sdr::monitor::MonitorReceiver,
+    mut grid: gsens_gnss_sdr::monitor::LiveGrid,
+    mut raw: std::io::BufWriter<std::fs::File>,
+    idle_timeout_s: f64,
+) {
+    use gsens_gnss_sdr::monitor::{MonitorEvent, Received, write_capture_record};
+    std::thread::spawn(move || {
+        let mut last = Instant::now();
+        let mut datagram = 0u64;
+        loop {
+            let events = match rx.recv() {
+                Ok(Received::Datagram(events)) => events,
+                Ok(Received::Timeout) => {
+                    let _ = raw.flush();
+                    if idle_timeout_s > 0.0 && last.elapsed().as_secs_f64() > idle_timeout_s {
+                        break;
+                    }
+                    continue;
+                }
+                Err(e) => {
+                    let _ = tx.send(Msg::Ended { source, why: Some(e.to_string()) });
+                    return;
+                }
+            };
+            last = Instant::now();
+            datagram += 1;
+            // GNSS-SDR's monitor re-sends its outputs many times over: a datagram that brought
+            // nothing new (a repeat) is not kept, every other one is.
+            if !events.is_empty() {
+                let _ = write_capture_record(&mut raw, rx.last_datagram());
+            }
+            for e in &events {
+                if let MonitorEvent::Notice(n) = e
+                    && tx.send(Msg::Notice { source, text: n.to_string() }).is_err()
+                {
+                    return;
+                }
+                for row in grid.push(e) {
+                    if tx.send(Msg::Record { source, line: datagram, input: Input::Tracking(row) }).is_err() {
+                        return;
+                    }
+                }
+            }
+        }
+        for row in grid.flush() {
+            let _ = tx.send(Msg::Record { source, line: datagram, input: Input::Tracking(row) });
+        }
+        let _ = raw.flush();
+        let why = format!("no datagram for {idle_timeout_s} s; {} rows came too late for the grid", grid.late());
+        let _ = tx.send(Msg::Ended { source, why: Some(why) });
+    });
+}
+
 /// The files a session keeps: every line as received, and the records used.
 struct Kept {
     received: Vec<LineWriter<std::fs::File>>,
@@ -177,7 +267,7 @@ impl Plain {
                     let state = if a.meets_target {
                         "met".to_string()
                     } else {
-                        a.more_s.map_or(String::new(), |m| format!("{:.0} s more", m.ceil()))
+                        a.more_s.map_or(String::new(), gsens_live::guidance::more_text)
                     };
                     format!("{name} {g:+.5} ± {s:.5} {state}")
                 }
@@ -206,7 +296,16 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     if !(args.batch_every_s.is_finite() && args.batch_every_s > 0.0) {
         anyhow::bail!("--batch-every-s {}: must be positive [s]", args.batch_every_s);
     }
-    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    let (mut settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    let monitor_setup =
+        args.gnss_sdr_conf.as_deref().map(|conf| crate::monitor::monitor_setup(Some(conf), None, None)).transpose()?;
+    if let Some(setup) = &monitor_setup {
+        if args.calibration.loop_args.stated() {
+            anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
+        }
+        // The run's own loop, modelled exactly.
+        settings = gsens_calib::with_gnss_sdr_loop(&settings, &setup.import);
+    }
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let mut config = LiveConfig::new(settings, args.target_sigma);
     config.batch_every_s = args.batch_every_s;
@@ -217,6 +316,19 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     if args.stdin {
         sources.push(Source { name: "stdin".into(), parse: parse_merged_line });
         spawn_stdin(tx.clone(), 0);
+    } else if let (Some(imu), Some(addr)) = (&args.follow_imu, &args.gnss_sdr_monitor) {
+        sources.push(Source { name: imu.display().to_string(), parse: parse_imu_line });
+        sources.push(Source { name: format!("udp {addr}"), parse: parse_tracking_line });
+        spawn_follow(tx.clone(), 0, imu.clone(), args.idle_timeout_s);
+        let setup = monitor_setup.as_ref().expect("--gnss-sdr-conf comes with --gnss-sdr-monitor");
+        let stream = gsens_gnss_sdr::monitor::MonitorStream::new(setup.fs_hz, setup.decimation);
+        let rx = gsens_gnss_sdr::monitor::MonitorReceiver::bind(addr.as_str(), stream, Duration::from_millis(100))
+            .with_context(|| format!("{addr}: cannot listen"))?;
+        let grid = gsens_gnss_sdr::monitor::LiveGrid::new(setup.import.interval_s(), setup.import.settle_time_s());
+        std::fs::create_dir_all(args.out.join("received"))?;
+        let raw_path = args.out.join("received").join("monitor-datagrams.bin");
+        let raw = std::fs::File::create(&raw_path).with_context(|| format!("{}: cannot create", raw_path.display()))?;
+        spawn_monitor(tx.clone(), 1, rx, grid, std::io::BufWriter::new(raw), args.idle_timeout_s);
     } else if let (Some(imu), Some(trk)) = (&args.follow_imu, &args.follow_tracking) {
         sources.push(Source { name: imu.display().to_string(), parse: parse_imu_line });
         sources.push(Source { name: trk.display().to_string(), parse: parse_tracking_line });
@@ -292,7 +404,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
                 {
                     *worker = Some(std::thread::spawn(move || job.run()));
                 }
-                if last_draw.is_none_or(|t| t.elapsed() >= Duration::from_millis(100)) {
+                if last_draw.is_none_or(|t| t.elapsed() >= Duration::from_millis(DRAW_EVERY_MS)) {
                     terminal.draw(&session.view())?;
                     *last_draw = Some(Instant::now());
                 }
@@ -356,6 +468,22 @@ fn handle(
                     say(&n)?;
                 }
             }
+        }
+        Msg::Record { source, line, input } => {
+            let pushed = session.push(&sources[source].name, line, input);
+            if let Some(n) = &pushed.notice {
+                say(n)?;
+            }
+            if pushed.used
+                && let Input::Tracking(r) = input
+            {
+                kept.tracking.write_row(&r)?;
+            }
+        }
+        Msg::Notice { source, text } => {
+            let n = Notice { source: sources[source].name.clone(), line: 0, message: text };
+            session.notice(&n);
+            say(&n)?;
         }
         Msg::Restarted { source } => {
             let n = Notice {

@@ -49,23 +49,8 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
     if let Some(fs) = a.fs_hz.filter(|f| !(f.is_finite() && *f > 0.0)) {
         bail!("--fs-hz must be positive, got {fs}");
     }
-    let (tracking, decimation) = match &a.gnss_sdr_conf {
-        Some(p) => {
-            let conf = GnssSdrConf::read(p)?;
-            (conf.tracking()?, conf.get_count("TrackingMonitor.decimation_factor")?.unwrap_or(1))
-        }
-        None => (TrackingConf::defaults(), 1),
-    };
-    let fs_hz = a.fs_hz.or(tracking.fs_hz);
-    if tracking.extend_correlation_symbols != 20 {
-        eprintln!(
-            "note: Tracking_1C.extend_correlation_symbols = {}: the monitor's prompt is the 20 ms data bit's, so φ is \
-             the phase of that sum, not the {} ms discriminator output",
-            tracking.extend_correlation_symbols, tracking.extend_correlation_symbols
-        );
-    }
-    let mut settings = ImportSettings::new(fs_hz.unwrap_or(1.0), tracking);
-    settings.settle_s = a.settle_s;
+    let MonitorSetup { import: settings, decimation, fs_hz } =
+        monitor_setup(a.gnss_sdr_conf.as_deref(), a.fs_hz, a.settle_s)?;
     let settle_s = settings.settle_time_s();
     let stage = settings.stage();
 
@@ -150,4 +135,40 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
         f64::from(stage.symbols) * 1e-3,
     ))?;
     Ok(())
+}
+
+/// What a GNSS-SDR run's configuration says about its monitor stream.
+pub struct MonitorSetup {
+    /// The conversion settings: its loop, sampling rate and settling time.
+    pub import: ImportSettings,
+    /// `TrackingMonitor.decimation_factor`.
+    pub decimation: u32,
+    /// The sampling rate: `fs_hz`, else the configuration's (else each message's own).
+    pub fs_hz: Option<f64>,
+}
+
+/// The monitor setup of the configuration `conf` (GNSS-SDR's defaults without one).
+pub fn monitor_setup(
+    conf: Option<&std::path::Path>,
+    fs_hz: Option<f64>,
+    settle_s: Option<f64>,
+) -> Result<MonitorSetup> {
+    let (tracking, decimation) = match conf {
+        Some(p) => {
+            let conf = GnssSdrConf::read(p)?;
+            (conf.tracking()?, conf.get_count("TrackingMonitor.decimation_factor")?.unwrap_or(1))
+        }
+        None => (TrackingConf::defaults(), 1),
+    };
+    let fs_hz = fs_hz.or(tracking.fs_hz);
+    if tracking.extend_correlation_symbols != 20 {
+        eprintln!(
+            "note: Tracking_1C.extend_correlation_symbols = {}: the monitor's prompt is the 20 ms data bit's, so φ is \
+             the phase of that sum, not the {} ms discriminator output",
+            tracking.extend_correlation_symbols, tracking.extend_correlation_symbols
+        );
+    }
+    let mut import = ImportSettings::new(fs_hz.unwrap_or(1.0), tracking);
+    import.settle_s = settle_s;
+    Ok(MonitorSetup { import, decimation, fs_hz })
 }

@@ -361,6 +361,115 @@ pub enum MonitorEvent {
     Notice(Notice),
 }
 
+/// The monitor's rows put on the common grid t = j·T (T the 20 ms output
+/// interval) as they arrive, for a live session: each channel's phase error
+/// linearly interpolated between its consecutive outputs (as
+/// [`crate::import::resample`] does for a whole recording), the first
+/// `settle_s` of each track left out (its loop's settling), and each grid
+/// epoch released once every channel has had [`LiveGrid::HOLD_EPOCHS`]
+/// epochs to arrive, so rows leave in time order. A row for an epoch already
+/// released is counted in [`LiveGrid::late`] and dropped; no interpolation
+/// spans a gap of more than two outputs.
+#[derive(Debug, Clone)]
+pub struct LiveGrid {
+    interval_s: f64,
+    settle_s: f64,
+    /// Per channel: its last row and the start of its track.
+    last: BTreeMap<u32, (TrackingRow, f64)>,
+    pending: BTreeMap<i64, Vec<TrackingRow>>,
+    released_to: i64,
+    newest: i64,
+    late: u64,
+}
+
+impl LiveGrid {
+    /// Epochs a grid time waits for the channels' rows before it is released
+    /// (60 ms at 20 ms: the monitor's outputs of one epoch arrive within one
+    /// output interval of each other).
+    pub const HOLD_EPOCHS: i64 = 3;
+
+    /// A grid of `interval_s`, leaving out the first `settle_s` of each track.
+    pub fn new(interval_s: f64, settle_s: f64) -> Self {
+        LiveGrid {
+            interval_s,
+            settle_s,
+            last: BTreeMap::new(),
+            pending: BTreeMap::new(),
+            released_to: i64::MIN,
+            newest: i64::MIN,
+            late: 0,
+        }
+    }
+
+    /// Rows dropped because their epoch had been released.
+    pub fn late(&self) -> u64 {
+        self.late
+    }
+
+    /// Takes one event; returns the grid rows released, in time order (channels in order within an epoch).
+    pub fn push(&mut self, event: &MonitorEvent) -> Vec<TrackingRow> {
+        match event {
+            MonitorEvent::Row(r) => self.row(&r.row),
+            MonitorEvent::Late(_) => {}
+            MonitorEvent::Notice(Notice::Restart { channel, .. } | Notice::LossOfLock { channel, .. }) => {
+                self.last.remove(channel);
+            }
+            MonitorEvent::Notice(_) => {}
+        }
+        self.release(self.newest.saturating_sub(Self::HOLD_EPOCHS))
+    }
+
+    /// Every epoch still held (the end of the stream).
+    pub fn flush(&mut self) -> Vec<TrackingRow> {
+        self.release(i64::MAX)
+    }
+
+    fn row(&mut self, r: &TrackingRow) {
+        let t = self.interval_s;
+        let (prev, start) = match self.last.get(&r.channel) {
+            Some((p, start)) if p.prn == r.prn && r.t_s > p.t_s => (Some(*p), *start),
+            Some((p, _)) if p.prn == r.prn => return,
+            _ => (None, r.t_s),
+        };
+        self.last.insert(r.channel, (*r, start));
+        let Some(p) = prev else { return };
+        if r.t_s - p.t_s > 2.5 * t {
+            return;
+        }
+        let first = (p.t_s / t).floor() as i64 + 1;
+        let last = (r.t_s / t).floor() as i64;
+        for j in first..=last {
+            let g = j as f64 * t;
+            if g - start < self.settle_s {
+                continue;
+            }
+            if j <= self.released_to {
+                self.late += 1;
+                continue;
+            }
+            let w = (g - p.t_s) / (r.t_s - p.t_s);
+            let phase_err_rad = p.phase_err_rad + w * (r.phase_err_rad - p.phase_err_rad);
+            self.pending.entry(j).or_default().push(TrackingRow { t_s: g, phase_err_rad, elev_deg: None, ..*r });
+            self.newest = self.newest.max(j);
+        }
+    }
+
+    fn release(&mut self, up_to: i64) -> Vec<TrackingRow> {
+        let mut out = Vec::new();
+        while let Some(entry) = self.pending.first_entry() {
+            if *entry.key() > up_to {
+                break;
+            }
+            let j = *entry.key();
+            let mut rows = entry.remove();
+            rows.sort_by_key(|r| r.channel);
+            out.extend(rows);
+            self.released_to = self.released_to.max(j);
+        }
+        out
+    }
+}
+
 /// Counts over a stream, for the summary.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct MonitorCounts {
@@ -914,5 +1023,42 @@ mod tests {
         assert!(matches!(got[1], MonitorEvent::Notice(Notice::Garbage { .. })));
         assert_eq!(rx.recv().unwrap(), Received::Timeout);
         assert!(rx.last_datagram().is_empty());
+    }
+
+    #[test]
+    fn the_live_grid_interpolates_holds_and_releases_in_time_order() {
+        let row = |t_s: f64, channel: u32, phase_err_rad: f64| {
+            MonitorEvent::Row(MonitorRow {
+                row: TrackingRow { t_s, channel, prn: channel + 10, cn0_dbhz: 45.0, elev_deg: None, phase_err_rad },
+                sample_counter: 0,
+                fs_hz: 1.0,
+            })
+        };
+        let mut g = LiveGrid::new(0.02, 0.05);
+        let mut out = Vec::new();
+        // Two channels at their own phases of the 20 ms outputs, φ = t (so the interpolation is exact).
+        for k in 0..40 {
+            let t0 = 0.013 + 0.02 * k as f64;
+            let t1 = 0.007 + 0.02 * k as f64;
+            out.extend(g.push(&row(t0, 0, t0)));
+            out.extend(g.push(&row(t1, 1, t1)));
+        }
+        out.extend(g.flush());
+        assert!(out.windows(2).all(|w| w[0].t_s <= w[1].t_s), "time order");
+        for r in &out {
+            assert!((r.phase_err_rad - r.t_s).abs() < 1e-12, "{r:?}");
+            assert!(((r.t_s / 0.02).round() * 0.02 - r.t_s).abs() < 1e-12);
+        }
+        // Each track's first 50 ms are its settling: channel 0 starts at 0.013 s, its first row at 0.08 s.
+        assert_eq!(out.iter().find(|r| r.channel == 0).unwrap().t_s, 0.08);
+        assert_eq!(g.late(), 0);
+        // A row for an epoch already released is late.
+        let mut g = LiveGrid::new(0.02, 0.0);
+        for k in 0..10 {
+            g.push(&row(0.013 + 0.02 * k as f64, 0, 0.0));
+        }
+        g.push(&row(0.007, 1, 0.0));
+        g.push(&row(0.027, 1, 0.0));
+        assert_eq!(g.late(), 1);
     }
 }

@@ -108,7 +108,7 @@ impl core::fmt::Display for Instruction {
             Instruction::Shake { axis, period_s, more_s } => {
                 write!(f, "shake {}, about {period_s:.1} s per cycle", AXES[axis])?;
                 match more_s {
-                    Some(s) => write!(f, ", {:.0} s more", s.ceil()),
+                    Some(s) => write!(f, ", {}", more_text(s)),
                     None => Ok(()),
                 }
             }
@@ -122,6 +122,11 @@ impl core::fmt::Display for Instruction {
             Instruction::Done => write!(f, "done: every axis meets the target σ"),
         }
     }
+}
+
+/// "N s more", or "over an hour more" past an hour (a target far out of reach).
+pub fn more_text(more_s: f64) -> String {
+    if more_s > 3600.0 { "over an hour more".to_string() } else { format!("{:.0} s more", more_s.ceil()) }
 }
 
 /// What the instruction is decided from.

@@ -176,8 +176,11 @@ pub struct LiveView {
     pub received: (u64, u64),
 }
 
+/// What the view shows of the latest batch estimate: (data end, trustworthy, warnings), or its error.
+type BatchSummary = (Option<(f64, bool, Vec<String>)>, Option<String>);
+
 /// The data received so far and what is made of it.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct LiveSession {
     config: LiveConfig,
     band: LoopBand,
@@ -196,6 +199,8 @@ pub struct LiveSession {
     last_imu_t_s: Option<f64>,
     last_batch_end_s: f64,
     batch: Option<BatchResult>,
+    /// The latest batch's data end, trustworthiness and warnings, or its error.
+    batch_summary: BatchSummary,
     notices: VecDeque<String>,
     notices_total: u64,
     /// Records refused in a row per stream (IMU, tracking): one notice per burst.
@@ -223,6 +228,7 @@ impl LiveSession {
             last_imu_t_s: None,
             last_batch_end_s: f64::NEG_INFINITY,
             batch: None,
+            batch_summary: (None, None),
             notices: VecDeque::with_capacity(8),
             notices_total: 0,
             refused: [0; 2],
@@ -412,6 +418,15 @@ impl LiveSession {
         {
             self.band = band;
         }
+        // What the screen shows of it, made once (the result document is not cheap).
+        self.batch_summary = match &result.outcome {
+            Ok(o) => {
+                let doc = o.document(None);
+                let warnings = doc.warnings.iter().map(|w| format!("{}: {}", w.code, w.message)).collect();
+                (Some((result.data_end_s, doc.trustworthy, warnings)), None)
+            }
+            Err(e) => (None, Some(e.clone())),
+        };
         self.batch = Some(result);
     }
 
@@ -466,17 +481,7 @@ impl LiveSession {
         let latest_trk = self.rows.last().map_or(f64::NEG_INFINITY, |r| r.t_s);
         let channels =
             self.channels.values().map(|c| ChannelStatus { tracking: latest_trk - c.last_t_s <= 1.0, ..*c }).collect();
-        let (batch, batch_error) = match &self.batch {
-            None => (None, None),
-            Some(b) => match &b.outcome {
-                Ok(o) => {
-                    let doc = o.document(None);
-                    let warnings = doc.warnings.iter().map(|w| format!("{}: {}", w.code, w.message)).collect();
-                    (Some((b.data_end_s, doc.trustworthy, warnings)), None)
-                }
-                Err(e) => (None, Some(e.clone())),
-            },
-        };
+        let (batch, batch_error) = self.batch_summary.clone();
         LiveView {
             data_t_s: self.data_t_s(),
             data_s: situation.data_s,
