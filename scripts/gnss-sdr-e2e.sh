@@ -29,23 +29,11 @@ SEED=${SEED:-7}
 GAMMA=${GAMMA:-[0.09, 0.08, -0.08]}
 mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
-now() { date +%s.%N; }
-elapsed() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }'; }
+. scripts/lib/common.sh
 
-if ! command -v gnss-sdr >/dev/null; then
-    echo "== installing gnss-sdr from Debian"
-    t=$(now)
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gnss-sdr >/dev/null
-    echo "installed in $(elapsed "$t") s"
-fi
-gnss-sdr --version
+ensure_gnss_sdr
 
-if [ -z "${GSENS:-}" ]; then
-    echo "== building gsens"
-    cargo build --release -q -p gsens-cli
-    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
-fi
-G=$GSENS
+gsens_binary
 . scripts/lib/scenario.sh
 
 scenario() { # $1 = loop order

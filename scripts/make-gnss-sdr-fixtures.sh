@@ -34,11 +34,8 @@ WORK=${WORK:-target/gnss-sdr-fixtures}
 SEED=11
 rm -rf "$WORK" && mkdir -p "$WORK"
 WORK=$(cd "$WORK" && pwd)
-if [ -z "${GSENS:-}" ]; then
-    cargo build --release -q -p gsens-cli
-    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
-fi
-G=$GSENS
+. scripts/lib/common.sh
+gsens_binary
 . scripts/lib/scenario.sh
 
 # satellites CHANNELS CN0: that many satellites, all at CN0 dB-Hz.

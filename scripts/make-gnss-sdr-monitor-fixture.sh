@@ -17,11 +17,8 @@ WORK=${WORK:-target/gnss-sdr-monitor-fixture}
 PORT=${PORT:-17234}
 rm -rf "$WORK" && mkdir -p "$WORK"
 WORK=$(cd "$WORK" && pwd)
-if [ -z "${GSENS:-}" ]; then
-    cargo build --release -q -p gsens-cli
-    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
-fi
-G=$GSENS
+. scripts/lib/common.sh
+gsens_binary
 . scripts/lib/scenario.sh
 {
     paper_session 2

@@ -47,8 +47,7 @@ EPOCH_S=${EPOCH_S:-0.02}
 SEED=${SEED:-7}
 mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
-now() { date +%s.%N; }
-elapsed() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }'; }
+. scripts/lib/common.sh
 
 . scripts/lib/scenario.sh
 . scripts/lib/pocketsdr.sh
@@ -56,12 +55,7 @@ t=$(now)
 PT=$(build_pocket_trk "${POCKETSDR_DIR:-${CARGO_TARGET_DIR:-$PWD/target}/pocketsdr}")
 echo "pocket_trk: $PT ($("$PT" -v 2>/dev/null | head -1); ready in $(elapsed "$t") s)"
 
-if [ -z "${GSENS:-}" ]; then
-    echo "== building gsens"
-    cargo build --release -q -p gsens-cli
-    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
-fi
-G=$GSENS
+gsens_binary
 
 scenario() { # $1 = Γ as a TOML array, $2 = the loop's bandwidth for gsens's own simulator
     paper_session 3 | sed -e "s/^gamma_hz_per_mps2 = .*/gamma_hz_per_mps2 = $1/" -e "s/^bn_hz = .*/bn_hz = $2/"

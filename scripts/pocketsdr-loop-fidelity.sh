@@ -22,10 +22,8 @@ mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
 . scripts/lib/pocketsdr.sh
 PT=$(build_pocket_trk "${POCKETSDR_DIR:-${CARGO_TARGET_DIR:-$PWD/target}/pocketsdr}")
-if [ -z "${GSENS:-}" ]; then
-    cargo build --release -q -p gsens-cli
-    GSENS=${CARGO_TARGET_DIR:-$PWD/target}/release/gsens
-fi
+. scripts/lib/common.sh
+gsens_binary
 cargo build --release -q -p gsens-pocketsdr --example loop_fidelity
 FIDELITY=${CARGO_TARGET_DIR:-$PWD/target}/release/examples/loop_fidelity
 

@@ -92,10 +92,15 @@ enum Msg {
     },
 }
 
+/// How one text line of a source parses into a record.
+type LineParser = fn(&str) -> Result<LineKind, String>;
+
 /// One input: its name and how its lines parse.
 struct Source {
     name: String,
-    parse: fn(&str) -> Result<LineKind, String>,
+    /// How its lines parse; `None` for a source that sends records already
+    /// parsed (the monitor: its thread keeps the datagrams it received).
+    parse: Option<LineParser>,
 }
 
 fn spawn_stdin(tx: mpsc::Sender<Msg>, source: usize) {
@@ -214,7 +219,8 @@ fn spawn_monitor(
 
 /// The files a session keeps: every line as received, and the records used.
 struct Kept {
-    received: Vec<LineWriter<std::fs::File>>,
+    /// Per source, every line as received (none for a source of parsed records).
+    received: Vec<Option<LineWriter<std::fs::File>>>,
     imu: gsens_io::ImuWriter<LineWriter<std::fs::File>>,
     tracking: gsens_io::TrackingWriter<LineWriter<std::fs::File>>,
 }
@@ -232,7 +238,7 @@ impl Kept {
             .map(|s| {
                 let name: String =
                     s.name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect();
-                file(received_dir.join(format!("{name}.txt")))
+                s.parse.map(|_| file(received_dir.join(format!("{name}.txt")))).transpose()
             })
             .collect::<Result<_>>()?;
         Ok(Kept {
@@ -314,11 +320,11 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     let (tx, rx) = mpsc::channel();
     let mut sources = Vec::new();
     if args.stdin {
-        sources.push(Source { name: "stdin".into(), parse: parse_merged_line });
+        sources.push(Source { name: "stdin".into(), parse: Some(parse_merged_line) });
         spawn_stdin(tx.clone(), 0);
     } else if let (Some(imu), Some(addr)) = (&args.follow_imu, &args.gnss_sdr_monitor) {
-        sources.push(Source { name: imu.display().to_string(), parse: parse_imu_line });
-        sources.push(Source { name: format!("udp {addr}"), parse: parse_tracking_line });
+        sources.push(Source { name: imu.display().to_string(), parse: Some(parse_imu_line) });
+        sources.push(Source { name: format!("udp {addr}"), parse: None });
         spawn_follow(tx.clone(), 0, imu.clone(), args.idle_timeout_s);
         let setup = monitor_setup.as_ref().expect("--gnss-sdr-conf comes with --gnss-sdr-monitor");
         let stream = gsens_gnss_sdr::monitor::MonitorStream::new(setup.fs_hz, setup.decimation);
@@ -330,8 +336,8 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         let raw = std::fs::File::create(&raw_path).with_context(|| format!("{}: cannot create", raw_path.display()))?;
         spawn_monitor(tx.clone(), 1, rx, grid, std::io::BufWriter::new(raw), args.idle_timeout_s);
     } else if let (Some(imu), Some(trk)) = (&args.follow_imu, &args.follow_tracking) {
-        sources.push(Source { name: imu.display().to_string(), parse: parse_imu_line });
-        sources.push(Source { name: trk.display().to_string(), parse: parse_tracking_line });
+        sources.push(Source { name: imu.display().to_string(), parse: Some(parse_imu_line) });
+        sources.push(Source { name: trk.display().to_string(), parse: Some(parse_tracking_line) });
         spawn_follow(tx.clone(), 0, imu.clone(), args.idle_timeout_s);
         spawn_follow(tx.clone(), 1, trk.clone(), args.idle_timeout_s);
     }
@@ -446,9 +452,13 @@ fn handle(
     let say = |n: &Notice| if plain { crate::out(&format!("notice: {n}\n")) } else { Ok(()) };
     match msg {
         Msg::Line { source, line, text } => {
-            writeln!(kept.received[source], "{text}")?;
+            // Only line sources send lines.
+            let (Some(received), Some(parse)) = (kept.received[source].as_mut(), sources[source].parse) else {
+                return Ok(None);
+            };
+            writeln!(received, "{text}")?;
             let name = &sources[source].name;
-            match (sources[source].parse)(&text) {
+            match parse(&text) {
                 Ok(LineKind::Data(x)) => {
                     let pushed = session.push(name, line, x);
                     if let Some(n) = &pushed.notice {
