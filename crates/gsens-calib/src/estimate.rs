@@ -83,6 +83,36 @@ pub(crate) fn model_input<'a>(accel: &'a [[f64; 3]], model: &RegressorModel) -> 
     std::borrow::Cow::Owned(a)
 }
 
+/// Epochs left out at the start while the model's start-up transient dies
+/// out: ⌈warm-up / log interval⌉.
+pub fn warmup_epochs(settings: &EstimateSettings, log_interval_s: f64) -> u64 {
+    (settings.warmup_s / log_interval_s).ceil().max(0.0) as u64
+}
+
+/// The batch path's estimator streamed, one epoch at a time: the same
+/// regressor model (the receiver loop at the log interval), warm-up, high-pass and batch least
+/// squares, with the interpolation prefilter applied one epoch late
+/// ([`gsens_core::PrefilteredCalibrator`]). Fed the same epoch series it ends
+/// at the batch pass's least-squares Γ̂ (exactly, up to rounding); what it
+/// lacks is what needs the whole series: the screening, the time-offset
+/// search, the noise model and the robust covariance (its covariance is the
+/// white-noise one). Solve it with [`solve_in_observable_axes`].
+pub fn streaming_calibrator(
+    settings: &EstimateSettings,
+    log_interval_s: f64,
+) -> Result<gsens_core::PrefilteredCalibrator<BatchLeastSquares>, CalibError> {
+    settings.validate()?;
+    let model = build_model(log_interval_s, settings)?;
+    let skip = warmup_epochs(settings, log_interval_s);
+    Ok(gsens_core::PrefilteredCalibrator::new(Calibrator::new(
+        model,
+        BatchLeastSquares::new(),
+        skip,
+        settings.highpass_hz,
+        log_interval_s,
+    )))
+}
+
 /// The regressor triad for the receiver loop at this log interval (checked:
 /// a valid, stable loop whose interval divides the log's).
 pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> Result<RegressorModel, CalibError> {
@@ -158,16 +188,45 @@ pub(crate) fn axes_in_solve(
 ) -> [bool; 3] {
     let n = ne.n.max(1) as f64;
     let excited = [0, 1, 2].map(|i| (ne.ata[(i, i)] / n).max(0.0).sqrt() >= criteria.min_excitation_rms);
-    let mut kept = *ne;
-    for i in (0..3).filter(|&i| !excited[i]) {
-        for j in 0..3 {
-            kept.ata[(i, j)] = 0.0;
-            kept.ata[(j, i)] = 0.0;
-        }
-        kept.atb[i] = 0.0;
-    }
+    let kept = only_axes(ne, excited);
     let obs = gsens_core::assess(&kept, &kept.solve(), criteria);
     [0, 1, 2].map(|i| excited[i] && obs.observable[i])
+}
+
+/// The normal equations with the columns of the axes not `kept` removed
+/// (as if their specific force were zero: the model and the high-pass are
+/// linear, so a zero input gives a zero column of φ_a).
+fn only_axes(ne: &gsens_core::NormalEquations, kept: [bool; 3]) -> gsens_core::NormalEquations {
+    let mut out = *ne;
+    for i in (0..3).filter(|&i| !kept[i]) {
+        for j in 0..3 {
+            out.ata[(i, j)] = 0.0;
+            out.ata[(j, i)] = 0.0;
+        }
+        out.atb[i] = 0.0;
+    }
+    out
+}
+
+/// The least-squares estimate from accumulated normal equations over the
+/// axes the batch path keeps in its solve (see [`calibrate`]): an axis not
+/// shaken leaves the solve (Γ̂ 0, variance +∞) instead of taking a share of
+/// the shaken axes' information through its small, correlated column. The
+/// streamed estimate's solve ([`streaming_calibrator`]); returns the axes kept.
+pub fn solve_in_observable_axes(
+    ne: &gsens_core::NormalEquations,
+    criteria: &gsens_core::ObservabilityCriteria,
+) -> (GammaEstimate, [bool; 3]) {
+    let kept = axes_in_solve(ne, criteria);
+    let mut estimate = only_axes(ne, kept).solve();
+    for i in (0..3).filter(|&i| !kept[i]) {
+        estimate.gamma_hz_per_mps2[i] = 0.0;
+        for j in 0..3 {
+            estimate.covariance[i][j] = if i == j { f64::INFINITY } else { 0.0 };
+            estimate.covariance[j][i] = if i == j { f64::INFINITY } else { 0.0 };
+        }
+    }
+    (estimate, kept)
 }
 
 /// [`calibrate`] with every axis in the solve, and the batch pass's normal
@@ -190,7 +249,7 @@ fn calibrate_all_axes(
     // The model is fed the specific force compensated for its interpolation between epochs.
     let accel = model_input(series.accel_mps2, &model);
     let model_series = EpochSeries { accel_mps2: &accel, ..*series };
-    let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
+    let skip = warmup_epochs(settings, series.log_interval_s);
     let (hp, t) = (settings.highpass_hz, series.log_interval_s);
     let (estimate, fed, batch, history) = match settings.method {
         Method::Batch | Method::Gls => {

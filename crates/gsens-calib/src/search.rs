@@ -27,7 +27,7 @@ pub(crate) fn batch_pass(
 ) -> Result<(Vec<FedEpoch>, NormalEquations), CalibError> {
     let model = build_model(series.log_interval_s, settings)?;
     let accel = model_input(series.accel_mps2, &model);
-    let skip = (settings.warmup_s / series.log_interval_s).ceil().max(0.0) as u64;
+    let skip = crate::estimate::warmup_epochs(settings, series.log_interval_s);
     let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, series.log_interval_s);
     let fed: Vec<FedEpoch> = accel.iter().zip(series.phase_err_rad).map(|(a, p)| cal.feed(a, *p)).collect();
     Ok((fed, *cal.estimator().normal_equations()))

@@ -66,6 +66,11 @@ pub struct LiveArgs {
 /// polls a record reaches the screen within 70 ms (the budget: 100 ms).
 const DRAW_EVERY_MS: u64 = 50;
 
+/// With plain lines, the instruction and the batch estimate are looked at
+/// every this many seconds of data \[s\] (a tenth of the guidance's 1 s
+/// resolution; a view costs microseconds).
+const PLAIN_STEP_S: f64 = 0.1;
+
 /// What a reader thread sends.
 enum Msg {
     Line {
@@ -255,6 +260,15 @@ struct Plain {
 }
 
 impl Plain {
+    /// The batch estimate when due (in line), then the instruction.
+    fn step(&mut self, session: &mut LiveSession) -> Result<()> {
+        if let Some(job) = session.batch_due() {
+            session.apply(job.run());
+            self.batch(&session.view())?;
+        }
+        self.instruction(&session.view())
+    }
+
     fn instruction(&mut self, v: &LiveView) -> Result<()> {
         let key = (std::mem::discriminant(&v.instruction), v.instruction.axis());
         if self.last != Some(key) {
@@ -359,6 +373,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         Screen::Tui { terminal: gsens_tui::Terminal::new()?, last_draw: None, worker: None }
     };
     let mut ended = vec![false; sources.len()];
+    let mut next_plain_t_s = f64::NEG_INFINITY;
     let end_reason = loop {
         // Every message waiting (the first waited for up to 20 ms), then the estimate and the screen.
         let mut reason = None;
@@ -382,6 +397,17 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
                 reason = Some(r);
                 break;
             }
+            // Plain lines follow the data's time, not the wall clock's: the
+            // same input gives the same lines however fast it arrives.
+            if let Screen::Plain(plain) = &mut screen
+                && session.data_t_s() >= next_plain_t_s
+            {
+                next_plain_t_s = session.data_t_s() + PLAIN_STEP_S;
+                plain.step(&mut session)?;
+                if session.target_met() {
+                    break;
+                }
+            }
             taken += 1;
             // Keep the screen within its 100 ms while a burst arrives.
             if taken >= 2000 {
@@ -392,13 +418,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
             break r;
         }
         match &mut screen {
-            Screen::Plain(plain) => {
-                if let Some(job) = session.batch_due() {
-                    session.apply(job.run());
-                    plain.batch(&session.view())?;
-                }
-                plain.instruction(&session.view())?;
-            }
+            Screen::Plain(plain) => plain.step(&mut session)?,
             Screen::Tui { terminal, last_draw, worker } => {
                 if worker.as_ref().is_some_and(|w| w.is_finished()) {
                     let result = worker.take().expect("a worker").join().expect("the estimate does not panic");

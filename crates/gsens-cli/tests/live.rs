@@ -28,6 +28,51 @@ fn live_guides_x_y_z_and_stops_at_the_target_with_the_batch_estimate() {
     let _ = replay.wait();
     let text = String::from_utf8(live.stdout).unwrap();
     assert!(live.status.success(), "{text}\n{}", String::from_utf8_lossy(&live.stderr));
+    check_the_run(&text, &dir, &sim, &out);
+    assert!(out.join("received/stdin.txt").exists());
+}
+
+/// The same through growing files: `gsens replay --out` appends to
+/// imu.csv and tracking.csv at 20× real time while `gsens live
+/// --follow-imu --follow-tracking` reads them as they grow.
+#[test]
+fn live_follows_growing_files() {
+    let dir = temp_dir("live-follow");
+    let sim = dir.join("sim");
+    let grow = dir.join("grow");
+    let out = dir.join("live");
+    gsens(&["simulate", "--out", sim.to_str().unwrap(), "--seed", "1"]);
+    let truth = sim.join("truth.json");
+    let mut replay = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["replay", sim.to_str().unwrap(), "--speed", "20", "--out", grow.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let (imu, trk) = (grow.join("imu.csv"), grow.join("tracking.csv"));
+    let started = std::time::Instant::now();
+    while !(imu.exists() && trk.exists()) {
+        assert!(started.elapsed().as_secs() < 30, "gsens replay made no files");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["live", "--plain", "--target-sigma", "8e-4", "--idle-timeout-s", "5"])
+        .args(["--follow-imu", imu.to_str().unwrap(), "--follow-tracking", trk.to_str().unwrap()])
+        .args(["--out", out.to_str().unwrap(), "--truth", truth.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let _ = replay.kill();
+    let _ = replay.wait();
+    let text = String::from_utf8(live.stdout).unwrap();
+    assert!(live.status.success(), "{text}\n{}", String::from_utf8_lossy(&live.stderr));
+    check_the_run(&text, &dir, &sim, &out);
+    assert!(out.join("received").read_dir().unwrap().count() == 2);
+}
+
+/// The guidance sequence, the stop at the target before the data end, the
+/// kept logs a prefix of the replayed ones, and the final Γ̂ that of `gsens
+/// report` on the kept logs.
+fn check_the_run(text: &str, dir: &std::path::Path, sim: &std::path::Path, out: &std::path::Path) {
+    let truth = sim.join("truth.json");
     // The instructions in order.
     let said: Vec<&str> = text.lines().filter(|l| l.starts_with('[') && !l.contains("Γ̂")).collect();
     let first = |what: &str| said.iter().position(|l| l.contains(what));
@@ -46,7 +91,6 @@ fn live_guides_x_y_z_and_stops_at_the_target_with_the_batch_estimate() {
         let all = std::fs::read_to_string(sim.join(name)).unwrap();
         assert!(all.starts_with(&kept) && kept.len() < all.len(), "{name}");
     }
-    assert!(out.join("received/stdin.txt").exists());
     // `gsens report` on the kept logs: the same Γ̂ within 0.1σ.
     let batch = dir.join("batch");
     let (imu, trk) = (out.join("imu.csv"), out.join("tracking.csv"));

@@ -25,6 +25,26 @@ pub struct ImuSeries {
 }
 
 impl ImuSeries {
+    /// The specific force at stamp `tau_s` by linear interpolation between
+    /// the samples around it (the sample itself at its own stamp; the last
+    /// sample past the end). `tau_s` must lie within the series' span (no
+    /// extrapolation is meant); `cursor` keeps the search's place, so calls
+    /// with non-decreasing `tau_s` cost O(1) each.
+    pub fn interpolate_at(&self, tau_s: f64, cursor: &mut usize) -> [f64; 3] {
+        let t = &self.t_s;
+        let mut j = (*cursor).min(t.len().saturating_sub(1));
+        while j + 1 < t.len() && t[j + 1] <= tau_s {
+            j += 1;
+        }
+        *cursor = j;
+        if t[j] == tau_s || j + 1 == t.len() {
+            return self.accel_mps2[j];
+        }
+        let f = (tau_s - t[j]) / (t[j + 1] - t[j]);
+        let (a, b) = (self.accel_mps2[j], self.accel_mps2[j + 1]);
+        [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f]
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.t_s.len()

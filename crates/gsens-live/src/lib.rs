@@ -10,14 +10,17 @@
 //! - [`motion`]: the shaking seen by the IMU over the last seconds (which
 //!   axis, how hard, how fast);
 //! - [`guidance`]: the one plain instruction for the person holding the board;
+//! - [`stream`]: the estimate at every epoch ([`StreamEstimate`], the batch
+//!   path's least squares streamed on the channel average of each epoch);
 //! - [`session`]: [`LiveSession`] accumulates the received data, schedules the
 //!   batch estimate ([`BatchJob`], the same `gsens_calib::calibrate_logs` as
 //!   `gsens estimate`, runnable in another thread) and answers a
 //!   [`LiveView`] for the screen at any moment.
 //!
-//! The estimate shown is the batch pipeline's on the data received so far:
-//! the final one is, by construction, the batch estimate of the logs that
-//! `gsens live` keeps.
+//! The screen shows two estimates: the streamed one, new at every epoch, and
+//! the batch pipeline's on the data received so far, with its checks, which
+//! decides when the target is met. The final one is, by construction, the
+//! batch estimate of the logs that `gsens live` keeps.
 #![warn(missing_docs)]
 
 pub mod follow;
@@ -26,6 +29,7 @@ pub mod input;
 pub mod motion;
 pub mod replay;
 pub mod session;
+pub mod stream;
 
 pub use follow::Follower;
 pub use guidance::{Instruction, LoopBand};
@@ -33,3 +37,4 @@ pub use input::{Input, LineKind, Notice, merged_line, parse_imu_line, parse_merg
 pub use motion::{MotionWindow, Shaking};
 pub use replay::read_session_dir;
 pub use session::{AxisProgress, BatchJob, BatchResult, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed};
+pub use stream::{Epoch, EpochAverager, StreamEstimate};

@@ -9,6 +9,7 @@ use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 use crate::guidance::{Instruction, LoopBand, Situation, instruct};
 use crate::input::{Input, Notice};
 use crate::motion::{MotionWindow, Shaking};
+use crate::stream::{Epoch, EpochAverager, StreamEstimate};
 
 /// How a live session runs.
 #[derive(Debug, Clone)]
@@ -60,6 +61,7 @@ pub struct BatchJob {
     settings: PipelineSettings,
     data_end_s: f64,
     shaken_s: [f64; 3],
+    epochs: Vec<Epoch>,
 }
 
 impl BatchJob {
@@ -68,7 +70,10 @@ impl BatchJob {
         self.data_end_s
     }
 
-    /// Runs `gsens_calib::calibrate_logs` on the job's data.
+    /// Runs `gsens_calib::calibrate_logs` on the job's data, then streams
+    /// the job's epochs again under the loop and IMU time offset the
+    /// estimate settled on (the session catches that stream up to its
+    /// newest epoch in [`LiveSession::apply`]).
     pub fn run(self) -> BatchResult {
         let outcome = TrackingLog::from_rows("received tracking rows", &self.rows)
             .map_err(|e| e.to_string())
@@ -76,7 +81,12 @@ impl BatchJob {
                 calibrate_logs(&log, &self.imu, "received IMU samples", &self.settings).map_err(|e| e.to_string())
             })
             .map(Box::new);
-        BatchResult { data_end_s: self.data_end_s, shaken_s: self.shaken_s, outcome }
+        let stream = outcome.as_ref().ok().map(|o| {
+            let mut stream = StreamEstimate::new(o.calibration.settings, o.session.imu_time_offset_s);
+            stream.advance(&self.epochs, &self.imu);
+            stream
+        });
+        BatchResult { data_end_s: self.data_end_s, shaken_s: self.shaken_s, outcome, stream }
     }
 }
 
@@ -89,6 +99,8 @@ pub struct BatchResult {
     pub shaken_s: [f64; 3],
     /// The calibration, or why there is none yet.
     pub outcome: Result<Box<Outcome>, String>,
+    /// The job's epochs streamed under the estimate's loop and time offset.
+    pub stream: Option<StreamEstimate>,
 }
 
 impl BatchResult {
@@ -118,6 +130,13 @@ pub struct AxisProgress {
     pub sigma_hz_per_mps2: Option<f64>,
     /// Whether the latest batch found the axis observable.
     pub observable: bool,
+    /// Γ̂ of the streamed estimate, at the newest epoch \[Hz/(m/s²)\] (None:
+    /// no estimate yet, or the axis not in its solve: not shaken enough).
+    pub now_gamma_hz_per_mps2: Option<f64>,
+    /// Its σ \[Hz/(m/s²)\]: the stream's white-noise σ scaled by the latest
+    /// batch estimate's ratio of its σ to its white-noise σ on the axis (the
+    /// residuals' colour, which the stream cannot see), unscaled before.
+    pub now_sigma_hz_per_mps2: Option<f64>,
     /// σ at most the target.
     pub meets_target: bool,
     /// Seconds of shaking still needed for the target, from σ ∝ 1/√(shaken time).
@@ -205,6 +224,10 @@ pub struct LiveSession {
     notices_total: u64,
     /// Records refused in a row per stream (IMU, tracking): one notice per burst.
     refused: [u64; 2],
+    averager: EpochAverager,
+    /// The channel average of every completed tracking epoch.
+    epochs: Vec<Epoch>,
+    stream: StreamEstimate,
 }
 
 impl LiveSession {
@@ -212,6 +235,13 @@ impl LiveSession {
     pub fn new(config: LiveConfig) -> Result<Self, gsens_core::LoopError> {
         let band = LoopBand::of(&config.settings.estimate.receiver_loop)?;
         let motion = MotionWindow::new(config.motion_window_s, config.shake_threshold_mps2);
+        let selection = &config.settings.selection;
+        let averager = EpochAverager::new(selection.max_channels, selection.min_cn0_dbhz);
+        let offset_s = match config.settings.time_offset {
+            gsens_calib::TimeOffset::Fixed { imu_time_offset_s } => imu_time_offset_s,
+            gsens_calib::TimeOffset::Auto { .. } => 0.0,
+        };
+        let stream = StreamEstimate::new(config.settings.estimate, offset_s);
         Ok(LiveSession {
             config,
             band,
@@ -232,6 +262,9 @@ impl LiveSession {
             notices: VecDeque::with_capacity(8),
             notices_total: 0,
             refused: [0; 2],
+            averager,
+            epochs: Vec::with_capacity(4096),
+            stream,
         })
     }
 
@@ -288,6 +321,7 @@ impl LiveSession {
                 self.imu.t_s.push(t_s);
                 self.imu.accel_mps2.push(accel_mps2);
                 self.motion.push(t_s, accel_mps2);
+                self.stream.advance(&self.epochs, &self.imu);
                 // Shaken time and rest, from the window's judgement at this sample.
                 let shaking = self.motion.shaking();
                 match shaking.axis {
@@ -340,6 +374,10 @@ impl LiveSession {
                 c.phase_err_rad = row.phase_err_rad;
                 c.last_t_s = row.t_s;
                 c.rows += 1;
+                if let Some(epoch) = self.averager.row(&row) {
+                    self.epochs.push(epoch);
+                    self.stream.advance(&self.epochs, &self.imu);
+                }
                 self.rows.push(row);
                 self.first_t_s.get_or_insert(t);
                 let notice = end_burst(self, 1);
@@ -399,7 +437,9 @@ impl LiveSession {
     fn job(&self) -> BatchJob {
         let end = self.last_imu_t_s.unwrap_or(f64::NEG_INFINITY);
         let rows: Vec<TrackingRow> = self.rows.iter().filter(|r| r.t_s <= end).copied().collect();
+        let epochs = self.epochs.iter().take_while(|e| e.0 <= end).copied().collect();
         BatchJob {
+            epochs,
             rows,
             imu: self.imu.clone(),
             settings: self.config.settings.clone(),
@@ -418,6 +458,11 @@ impl LiveSession {
         {
             self.band = band;
         }
+        let mut result = result;
+        if let Some(mut stream) = result.stream.take() {
+            stream.advance(&self.epochs, &self.imu);
+            self.stream = stream;
+        }
         // What the screen shows of it, made once (the result document is not cheap).
         self.batch_summary = match &result.outcome {
             Ok(o) => {
@@ -428,6 +473,16 @@ impl LiveSession {
             Err(e) => (None, Some(e.clone())),
         };
         self.batch = Some(result);
+    }
+
+    /// The channels the streamed estimate averages now.
+    pub fn stream_channels(&self) -> &[u32] {
+        self.averager.channels()
+    }
+
+    /// The streamed estimate at the newest epoch.
+    pub fn stream_estimate(&self) -> Option<gsens_core::GammaEstimate> {
+        self.stream.estimate()
     }
 
     /// The latest batch result.
@@ -457,6 +512,21 @@ impl LiveSession {
                 // σ ∝ 1/√T: T·(σ/target)² in all, less what was shaken since.
                 let needed = then * ((sigma / target).powi(2) - 1.0) - (a.shaken_s - then);
                 a.more_s = Some(if a.meets_target { 0.0 } else { needed.max(1.0) });
+            }
+        }
+        if let Some(now) = self.stream.estimate() {
+            let sigma_white = now.sigma_hz_per_mps2();
+            let calibration = self.batch.as_ref().and_then(|b| b.outcome.as_ref().ok()).map(|o| &o.calibration);
+            for (i, a) in axes.iter_mut().enumerate() {
+                if !sigma_white[i].is_finite() || now.epochs == 0 {
+                    continue;
+                }
+                let colour = calibration
+                    .and_then(|c| Some(c.sigma_hz_per_mps2[i]? / c.sigma_white_hz_per_mps2[i]?))
+                    .filter(|r| r.is_finite() && *r > 0.0)
+                    .unwrap_or(1.0);
+                a.now_gamma_hz_per_mps2 = Some(now.gamma_hz_per_mps2[i]);
+                a.now_sigma_hz_per_mps2 = Some(sigma_white[i] * colour);
             }
         }
         axes

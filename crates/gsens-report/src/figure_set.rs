@@ -107,7 +107,7 @@ impl<'a> FigureInputs<'a> {
                 .into_iter()
                 .unzip();
         // The spectrum over the longest gap-free run after the warm-up.
-        let skip = (calibration.settings.warmup_s / session.log_interval_s).ceil() as usize;
+        let skip = gsens_calib::warmup_epochs(&calibration.settings, session.log_interval_s) as usize;
         let (mut best, mut start) = (0..0, None);
         for k in skip..=after.len() {
             match (start, after.get(k).copied().flatten()) {

@@ -559,7 +559,7 @@ pub fn prepare_session(
             weights.push(w);
         }
         phase_err_rad.push(average_phase_rad(&phases, &weights));
-        accel_mps2.push(interpolate(imu, t + imu_time_offset_s, &mut cursor));
+        accel_mps2.push(imu.interpolate_at(t + imu_time_offset_s, &mut cursor));
     }
 
     let mut summaries = screened.summaries;
@@ -666,7 +666,7 @@ pub fn reinterpolate_imu(session: &mut PreparedSession, imu: &ImuSeries, imu_tim
         if tau < first || tau > last {
             session.phase_err_rad[k] = None;
         }
-        session.accel_mps2[k] = interpolate(imu, tau.clamp(first, last), &mut cursor);
+        session.accel_mps2[k] = imu.interpolate_at(tau.clamp(first, last), &mut cursor);
     }
     session.imu_time_offset_s = imu_time_offset_s;
 }
@@ -767,24 +767,6 @@ fn partition_point(mut lo: u64, mut hi: u64, pred: impl Fn(u64) -> bool) -> u64 
         if pred(mid) { lo = mid + 1 } else { hi = mid }
     }
     lo
-}
-
-/// Linear interpolation of the IMU at stamp `tau` (within the IMU's span), moving
-/// `cursor` forward (calls must come with non-decreasing `tau`). A `tau` equal to
-/// a stamp returns that sample exactly.
-fn interpolate(imu: &ImuSeries, tau: f64, cursor: &mut usize) -> [f64; 3] {
-    let t = &imu.t_s;
-    let mut j = *cursor;
-    while j + 1 < t.len() && t[j + 1] <= tau {
-        j += 1;
-    }
-    *cursor = j;
-    if t[j] == tau || j + 1 == t.len() {
-        return imu.accel_mps2[j];
-    }
-    let f = (tau - t[j]) / (t[j + 1] - t[j]);
-    let (a, b) = (imu.accel_mps2[j], imu.accel_mps2[j + 1]);
-    [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f]
 }
 
 /// Least-squares constant offsets `c` of the additive model `φ_i(k) = s(k) + c_i`

@@ -175,23 +175,24 @@ fn render(buf: &mut Buffer, area: Rect, widget: impl ratatui::widgets::Widget) {
     widget.render(area, buf);
 }
 
-/// Γ̂ ± σ as text: "—" before any estimate, "unobservable" when the latest
-/// estimate found the axis so.
-fn gamma_text(view: &LiveView, axis: &AxisProgress) -> String {
-    if view.batch.is_none() {
-        return "—".into();
-    }
-    if !axis.observable {
-        return "unobservable".into();
-    }
-    match (axis.gamma_hz_per_mps2, axis.sigma_hz_per_mps2) {
+/// Γ̂ ± σ as text.
+fn estimate_text(gamma: Option<f64>, sigma: Option<f64>) -> Option<String> {
+    match (gamma, sigma) {
         (Some(g), Some(s)) => {
             let d = decimals_for(s);
-            format!("{g:+.d$} ± {s:.d$}")
+            Some(format!("{g:+.d$} ± {s:.d$}"))
         }
-        (Some(g), None) => format!("{g:+.5} ± ?"),
-        _ => "—".into(),
+        (Some(g), None) => Some(format!("{g:+.5} ± ?")),
+        _ => None,
     }
+}
+
+/// The streamed Γ̂ ± σ, new at every epoch: "unobservable" when the axis
+/// has no stream estimate and the latest batch estimate found it so, "—"
+/// before any estimate.
+fn gamma_text(view: &LiveView, axis: &AxisProgress) -> String {
+    estimate_text(axis.now_gamma_hz_per_mps2, axis.now_sigma_hz_per_mps2)
+        .unwrap_or_else(|| if view.batch.is_some() && !axis.observable { "unobservable".into() } else { "—".into() })
 }
 
 fn more_text(axis: &AxisProgress) -> String {
@@ -219,7 +220,7 @@ fn draw_axes(buf: &mut Buffer, area: Rect, view: &LiveView) {
         vec![
             Constraint::Length(4),
             Constraint::Length(10),
-            Constraint::Length(22),
+            Constraint::Length(24),
             Constraint::Fill(1),
             Constraint::Length(12),
         ]
@@ -232,7 +233,7 @@ fn draw_axes(buf: &mut Buffer, area: Rect, view: &LiveView) {
         let Some(row) = rows.next() else { return };
         let cells = Layout::horizontal(columns.clone()).spacing(1).split(row);
         let header = if full {
-            vec!["axis", "shaken [s]", "Γ̂ ± 1σ [Hz/(m/s²)]", "progress to the target σ", "more [s]"]
+            vec!["axis", "shaken [s]", "Γ̂ ± 1σ now [Hz/(m/s²)]", "progress to the target σ", "more [s]"]
         } else {
             vec!["", "[s]", "Γ̂ ± 1σ [Hz/(m/s²)]", ""]
         };
@@ -439,8 +440,8 @@ fn draw_batch(buf: &mut Buffer, area: Rect, view: &LiveView) {
         return;
     }
     let title = match &view.batch {
-        Some((data_s, _, _)) => format!(" estimate on data to {data_s:.1} s "),
-        None => " latest estimate ".to_string(),
+        Some((data_s, _, _)) => format!(" checked estimate on data to {data_s:.1} s "),
+        None => " checked estimate ".to_string(),
     };
     let block = Block::bordered().title(title);
     let mut lines = Vec::new();
@@ -452,6 +453,13 @@ fn draw_batch(buf: &mut Buffer, area: Rect, view: &LiveView) {
                 Span::styled("NOT TRUSTWORTHY", Style::new().fg(Color::Red).add_modifier(Modifier::BOLD))
             };
             lines.push(Line::from(verdict));
+            for (name, a) in AXES.iter().zip(&view.axes) {
+                let text = match estimate_text(a.gamma_hz_per_mps2, a.sigma_hz_per_mps2) {
+                    Some(t) if a.observable => t,
+                    _ => "unobservable".into(),
+                };
+                lines.push(Line::from(format!("{name} {text}")));
+            }
             if warnings.is_empty() {
                 lines.push(Line::from("no warnings"));
             }

@@ -51,6 +51,9 @@ fn axis(shaken_s: f64, then_s: f64, gamma: f64, sigma: f64) -> AxisProgress {
         observable: true,
         meets_target,
         more_s: Some(if meets_target { 0.0 } else { needed.max(1.0) }),
+        // The streamed estimate a little ahead of the batch's.
+        now_gamma_hz_per_mps2: Some(gamma + 0.1 * sigma),
+        now_sigma_hz_per_mps2: Some(sigma * 0.98),
     }
 }
 
@@ -250,16 +253,23 @@ fn the_screen_shows_the_instruction_axes_and_channels() {
             assert!(screen.contains(&instruction), "{name} {w}x{h}: no {instruction:?} in\n{screen}");
             for (i, a) in view.axes.iter().enumerate() {
                 let x = ["x", "y", "z"][i];
-                let gamma = match (view.batch.is_some(), a.observable, a.gamma_hz_per_mps2) {
-                    (false, _, _) => "—".to_string(),
-                    (true, false, _) => "unobservable".to_string(),
-                    (true, true, g) => {
-                        // Γ̂ to σ's second significant digit, as the screen shows it.
-                        let sigma = a.sigma_hz_per_mps2.expect("an observable axis has σ");
-                        let d = (1.0 - sigma.log10().floor()) as usize;
-                        format!("{:+.d$}", g.expect("an observable axis has Γ̂"))
-                    }
+                // Γ̂ to σ's second significant digit, as the screen shows it.
+                let shown = |g: f64, sigma: f64| {
+                    let d = (1.0 - sigma.log10().floor()) as usize;
+                    format!("{g:+.d$}")
                 };
+                // The axes' rows show the streamed estimate …
+                let gamma = match (a.now_gamma_hz_per_mps2, a.now_sigma_hz_per_mps2) {
+                    (Some(g), Some(s)) => shown(g, s),
+                    _ if view.batch.is_some() && !a.observable => "unobservable".to_string(),
+                    _ => "—".to_string(),
+                };
+                // … the checked panel the batch's (where it has the room: 30 lines).
+                if view.batch.is_some() && a.observable && h >= 30 {
+                    let g = a.gamma_hz_per_mps2.expect("an observable axis has Γ̂");
+                    let sigma = a.sigma_hz_per_mps2.expect("an observable axis has σ");
+                    line_with(&screen, &[&format!("{x} {}", shown(g, sigma))]);
+                }
                 line_with(&screen, &[&format!(" {x} "), &format!("{:.1}", a.shaken_s), &gamma]);
             }
             for c in &view.channels {
@@ -345,6 +355,8 @@ fn odd_values_do_not_panic() {
         observable: true,
         meets_target: false,
         more_s: Some(f64::INFINITY),
+        now_gamma_hz_per_mps2: Some(f64::NAN),
+        now_sigma_hz_per_mps2: Some(f64::NEG_INFINITY),
     };
     let zero_sigma = AxisProgress { sigma_hz_per_mps2: Some(0.0), ..nan_axis };
     let odd = [
