@@ -96,7 +96,7 @@ pub fn warmup_epochs(settings: &EstimateSettings, log_interval_s: f64) -> u64 {
 /// at the batch pass's least-squares Γ̂ (exactly, up to rounding); what it
 /// lacks is what needs the whole series: the screening, the time-offset
 /// search, the noise model and the robust covariance (its covariance is the
-/// white-noise one). Solve it with [`solve_in_observable_axes`].
+/// white-noise one). Solve it with [`gsens_core::solve_in_observable_axes`].
 pub fn streaming_calibrator(
     settings: &EstimateSettings,
     log_interval_s: f64,
@@ -137,7 +137,7 @@ pub(crate) fn build_model(log_interval_s: f64, settings: &EstimateSettings) -> R
 /// pass.
 pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Calibration, CalibError> {
     let (all, ne) = calibrate_all_axes(series, settings)?;
-    let in_solve = axes_in_solve(&ne, &settings.criteria);
+    let in_solve = gsens_core::axes_in_solve(&ne, &settings.criteria);
     let unobservable: Vec<usize> = (0..3).filter(|&i| !in_solve[i]).collect();
     if unobservable.is_empty() || unobservable.len() == 3 {
         return Ok(all);
@@ -174,59 +174,6 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
     }
     c.condition_number = all.condition_number;
     Ok(c)
-}
-
-/// The axes that stay in the solve: first those whose own excitation, the
-/// RMS of their φ_a column √(AᵀA_ii/n), reaches the observability floor
-/// (an axis never shaken has almost none, and its small column, correlated
-/// with a shaken one, would make the shaken one look unobservable too), then
-/// of those the ones [`gsens_core::assess`] finds observable with only them
-/// in the normal equations.
-pub(crate) fn axes_in_solve(
-    ne: &gsens_core::NormalEquations,
-    criteria: &gsens_core::ObservabilityCriteria,
-) -> [bool; 3] {
-    let n = ne.n.max(1) as f64;
-    let excited = [0, 1, 2].map(|i| (ne.ata[(i, i)] / n).max(0.0).sqrt() >= criteria.min_excitation_rms);
-    let kept = only_axes(ne, excited);
-    let obs = gsens_core::assess(&kept, &kept.solve(), criteria);
-    [0, 1, 2].map(|i| excited[i] && obs.observable[i])
-}
-
-/// The normal equations with the columns of the axes not `kept` removed
-/// (as if their specific force were zero: the model and the high-pass are
-/// linear, so a zero input gives a zero column of φ_a).
-fn only_axes(ne: &gsens_core::NormalEquations, kept: [bool; 3]) -> gsens_core::NormalEquations {
-    let mut out = *ne;
-    for i in (0..3).filter(|&i| !kept[i]) {
-        for j in 0..3 {
-            out.ata[(i, j)] = 0.0;
-            out.ata[(j, i)] = 0.0;
-        }
-        out.atb[i] = 0.0;
-    }
-    out
-}
-
-/// The least-squares estimate from accumulated normal equations over the
-/// axes the batch path keeps in its solve (see [`calibrate`]): an axis not
-/// shaken leaves the solve (Γ̂ 0, variance +∞) instead of taking a share of
-/// the shaken axes' information through its small, correlated column. The
-/// streamed estimate's solve ([`streaming_calibrator`]); returns the axes kept.
-pub fn solve_in_observable_axes(
-    ne: &gsens_core::NormalEquations,
-    criteria: &gsens_core::ObservabilityCriteria,
-) -> (GammaEstimate, [bool; 3]) {
-    let kept = axes_in_solve(ne, criteria);
-    let mut estimate = only_axes(ne, kept).solve();
-    for i in (0..3).filter(|&i| !kept[i]) {
-        estimate.gamma_hz_per_mps2[i] = 0.0;
-        for j in 0..3 {
-            estimate.covariance[i][j] = if i == j { f64::INFINITY } else { 0.0 };
-            estimate.covariance[j][i] = if i == j { f64::INFINITY } else { 0.0 };
-        }
-    }
-    (estimate, kept)
 }
 
 /// [`calibrate`] with every axis in the solve, and the batch pass's normal

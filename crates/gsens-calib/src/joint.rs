@@ -148,7 +148,7 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
     // The stated loop's pass: it decides the axes and starts the fit.
     let (fed0, ne) = batch_pass(series, settings)?;
-    let in_solve = crate::estimate::axes_in_solve(&ne, &settings.criteria);
+    let in_solve = gsens_core::axes_in_solve(&ne, &settings.criteria);
     let axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
     if axes.is_empty() || axes.len() == 3 {
         return joint_fit_axes(series, settings, spec, &[0, 1, 2], fed0);

@@ -70,7 +70,7 @@ pub use document::{
 pub use error::CalibError;
 pub use estimate::{
     CompensatedEpoch, EpochSeries, HISTORY_INTERVAL_S, calibrate, compensation_series, imu_systematic_sigma,
-    regressors, solve_in_observable_axes, streaming_calibrator, warmup_epochs,
+    regressors, streaming_calibrator, warmup_epochs,
 };
 pub use joint::{
     ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,

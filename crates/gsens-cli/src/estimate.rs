@@ -17,6 +17,11 @@ pub struct EstimateArgs {
     /// Write the result document (JSON) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write the estimator's input here as CSV: per epoch t_s, the channel-averaged
+    /// phase_err_rad and the specific force interpolated onto the epoch (what a receiver
+    /// feeds the C API's calibrator; examples/c/calibrate.c reads it).
+    #[arg(long)]
+    pub epochs_out: Option<PathBuf>,
     #[command(flatten)]
     pub calibration: CalibrationArgs,
     #[command(flatten)]
@@ -113,6 +118,12 @@ pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {
         doc.write_json_file(path).with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    if let Some(path) = &args.epochs_out {
+        let s = outcome.series();
+        std::fs::File::create(path)
+            .and_then(|f| gsens_io::write_epochs_csv(f, s.t_s, s.phase_err_rad, s.accel_mps2))
+            .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(crate::Status::of(&doc))
 }

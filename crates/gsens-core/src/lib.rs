@@ -39,7 +39,7 @@ pub use estimator::{
 };
 pub use filter::HighPass;
 pub use loop_model::{LoopModel, LoopPeak};
-pub use observability::{Observability, ObservabilityCriteria, assess};
+pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
 pub use pll::{
     CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopError, LoopFilter, LoopFilterCoeffs,
     LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,

@@ -59,3 +59,51 @@ pub fn assess(normal: &NormalEquations, estimate: &GammaEstimate, criteria: &Obs
     }
     Observability { excitation_rms, condition_number, observable }
 }
+
+/// The axes that stay in the solve: first those whose own excitation, the
+/// RMS of their φ_a column √(AᵀA_ii/n), reaches the observability floor
+/// (an axis never shaken has almost none, and its small column, correlated
+/// with a shaken one, would make the shaken one look unobservable too), then
+/// of those the ones [`assess`] finds observable with only them
+/// in the normal equations.
+pub fn axes_in_solve(ne: &NormalEquations, criteria: &ObservabilityCriteria) -> [bool; 3] {
+    let n = ne.n.max(1) as f64;
+    let excited = [0, 1, 2].map(|i| sqrt((ne.ata[(i, i)] / n).max(0.0)) >= criteria.min_excitation_rms);
+    let kept = only_axes(ne, excited);
+    let obs = assess(&kept, &kept.solve(), criteria);
+    [0, 1, 2].map(|i| excited[i] && obs.observable[i])
+}
+
+/// The normal equations with the columns of the axes not `kept` removed
+/// (as if their specific force were zero: the model and the high-pass are
+/// linear, so a zero input gives a zero column of φ_a).
+fn only_axes(ne: &NormalEquations, kept: [bool; 3]) -> NormalEquations {
+    let mut out = *ne;
+    for i in (0..3).filter(|&i| !kept[i]) {
+        for j in 0..3 {
+            out.ata[(i, j)] = 0.0;
+            out.ata[(j, i)] = 0.0;
+        }
+        out.atb[i] = 0.0;
+    }
+    out
+}
+
+/// The least-squares estimate from accumulated normal equations over the
+/// axes the batch path keeps in its solve ([`axes_in_solve`]; `gsens_calib::calibrate`): an axis not
+/// shaken leaves the solve (Γ̂ 0, variance +∞) instead of taking a share of
+/// the shaken axes' information through its small, correlated column. The
+/// streamed estimate's solve (`gsens_calib::streaming_calibrator`, the C
+/// API's calibrator); returns the axes kept.
+pub fn solve_in_observable_axes(ne: &NormalEquations, criteria: &ObservabilityCriteria) -> (GammaEstimate, [bool; 3]) {
+    let kept = axes_in_solve(ne, criteria);
+    let mut estimate = only_axes(ne, kept).solve();
+    for i in (0..3).filter(|&i| !kept[i]) {
+        estimate.gamma_hz_per_mps2[i] = 0.0;
+        for j in 0..3 {
+            estimate.covariance[i][j] = if i == j { f64::INFINITY } else { 0.0 };
+            estimate.covariance[j][i] = if i == j { f64::INFINITY } else { 0.0 };
+        }
+    }
+    (estimate, kept)
+}

@@ -39,4 +39,7 @@ pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
-pub use writers::{ImuWriter, TrackingRow, TrackingWriter, write_imu_csv, write_tracking_csv, write_tracking_csv_on};
+pub use writers::{
+    EPOCH_COLUMNS, ImuWriter, TrackingRow, TrackingWriter, write_epochs_csv, write_imu_csv, write_tracking_csv,
+    write_tracking_csv_on,
+};

@@ -269,6 +269,50 @@ impl<W: Write> TrackingWriter<W> {
     }
 }
 
+/// Header of an epoch series file ([`write_epochs_csv`]).
+pub const EPOCH_COLUMNS: [&str; 5] = ["t_s", "phase_err_rad", "fx_mps2", "fy_mps2", "fz_mps2"];
+
+/// Writes the estimator's input on the epoch grid to `w`: per epoch its time
+/// \[s\], the channel-averaged phase error \[rad\] (empty where no channel had
+/// one) and the specific force interpolated onto it \[m/s²\], under the header
+/// [`EPOCH_COLUMNS`]. What a receiver would feed its calibrator epoch by
+/// epoch (the C example `examples/c/calibrate.c` reads it).
+///
+/// Errors: I/O errors of `w`; `InvalidInput` when the three series differ in
+/// length or a time or specific force is not finite.
+pub fn write_epochs_csv<W: Write>(
+    w: W,
+    t_s: &[f64],
+    phase_err_rad: &[Option<f64>],
+    accel_mps2: &[[f64; 3]],
+) -> io::Result<()> {
+    if phase_err_rad.len() != t_s.len() || accel_mps2.len() != t_s.len() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "epoch series of {} times, {} phases and {} samples",
+                t_s.len(),
+                phase_err_rad.len(),
+                accel_mps2.len()
+            ),
+        ));
+    }
+    let mut w = BufWriter::new(w);
+    writeln!(w, "{}", EPOCH_COLUMNS.join(","))?;
+    for (k, ((t, p), a)) in t_s.iter().zip(phase_err_rad).zip(accel_mps2).enumerate() {
+        let row = k as u64 + 1;
+        check("t_s", *t, row)?;
+        for (name, x) in ["fx_mps2", "fy_mps2", "fz_mps2"].iter().zip(a) {
+            check(name, *x, row)?;
+        }
+        match p.filter(|p| p.is_finite()) {
+            Some(p) => writeln!(w, "{t},{p},{},{},{}", a[0], a[1], a[2])?,
+            None => writeln!(w, "{t},,{},{},{}", a[0], a[1], a[2])?,
+        }
+    }
+    w.flush()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -397,5 +441,26 @@ mod tests {
             assert!(TrackingWriter::with_extra_columns(Vec::new(), &[bad]).is_err(), "{bad:?}");
         }
         assert!(TrackingWriter::with_extra_columns(Vec::new(), &["x", "x"]).is_err());
+    }
+
+    /// The epoch series: header, shortest round-trip numbers, a gap as an empty phase.
+    #[test]
+    fn epochs_csv_round_trips_and_marks_gaps() {
+        let t = [0.025, 0.05];
+        let p = [Some(0.1 + 0.2), None];
+        let a = [[1.0 / 3.0, -2.5, 9.81], [0.0, 1e-300, -0.0]];
+        let mut out = Vec::new();
+        write_epochs_csv(&mut out, &t, &p, &a).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "t_s,phase_err_rad,fx_mps2,fy_mps2,fz_mps2");
+        let f: Vec<&str> = lines[1].split(',').collect();
+        assert_eq!(f[1].parse::<f64>().unwrap(), 0.1 + 0.2);
+        assert_eq!(f[2].parse::<f64>().unwrap(), 1.0 / 3.0);
+        assert_eq!(lines[2].split(',').nth(1), Some(""));
+        assert_eq!(lines[2].split(',').nth(3).unwrap().parse::<f64>().unwrap(), 1e-300);
+        let bad = [[f64::NAN, 0.0, 0.0], [0.0; 3]];
+        assert_eq!(write_epochs_csv(Vec::new(), &t, &p, &bad).unwrap_err().kind(), io::ErrorKind::InvalidInput);
+        assert!(write_epochs_csv(Vec::new(), &t[..1], &p, &a).is_err());
     }
 }

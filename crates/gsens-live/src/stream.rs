@@ -10,7 +10,8 @@
 //! to the newest epoch ([`StreamEstimate::advance`]). The difference to the
 //! batch estimate on the same data is measured in the crate's tests.
 
-use gsens_calib::{EstimateSettings, solve_in_observable_axes, streaming_calibrator};
+use gsens_calib::{EstimateSettings, streaming_calibrator};
+use gsens_core::solve_in_observable_axes;
 use gsens_core::{BatchLeastSquares, GammaEstimate, PrefilteredCalibrator};
 use gsens_io::{ImuSeries, TrackingRow};
 
