@@ -308,8 +308,14 @@ fn calibrate_all_axes(
     });
     let ppb = |x: Option<f64>| x.map(|v| hz_per_mps2_to_ppb_per_g(v, settings.carrier_hz));
     let loop_used = settings.loop_at(series.log_interval_s);
-    let axes =
-        verdict::axis_verdicts(series.accel_mps2, series.log_interval_s, &loop_used, observable, obs.excitation_rms);
+    let axes = verdict::axis_verdicts(
+        series.accel_mps2,
+        series.log_interval_s,
+        &loop_used,
+        observable,
+        obs.excitation_rms,
+        settings.criteria.min_excitation_rms,
+    );
     let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
     let normal = *batch.normal_equations();
     let calibration = Calibration {

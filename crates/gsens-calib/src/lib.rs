@@ -56,6 +56,7 @@ pub mod gls;
 mod joint;
 pub mod montecarlo;
 mod pipeline;
+pub mod predict;
 mod response_check;
 mod result;
 mod robust;

@@ -62,6 +62,7 @@ pub fn axis_verdicts(
     receiver_loop: &LoopModel,
     observable: [bool; 3],
     excitation_rms: [f64; 3],
+    min_excitation_rms: f64,
 ) -> [AxisVerdict; 3] {
     // The loop's peak sensitivity; a loop without one (unstable) gets no fraction.
     let (peak_hz, peak) = receiver_loop.peak().map_or((f64::NAN, f64::NAN), |p| (p.f_hz, p.rad_per_hz));
@@ -90,6 +91,13 @@ pub fn axis_verdicts(
                 ),
                 _ => format!("{}: observable, excitation RMS {:.2}", names[i], excitation_rms[i]),
             }
+        } else if excitation_rms[i] >= min_excitation_rms {
+            // Excited enough, yet σ above the ceiling: the phase error is too noisy for this much shaking.
+            format!(
+                "{}: too noisy — excitation RMS {:.2} is enough, but σ stays above the observability ceiling: shake \
+                 longer along {}, or harder within the discriminator's range",
+                names[i], excitation_rms[i], names[i]
+            )
         } else {
             format!(
                 "{}: too little excitation — shake harder along {} or closer to {peak_hz:.2} Hz (period {:.1} s)",
@@ -122,7 +130,7 @@ mod tests {
             })
             .collect();
         let l = LoopModel::kaplan(gsens_core::LoopSpec::PAPER, Some(t));
-        let v = axis_verdicts(&a, t, &l, [true, true, false], [1.0, 0.1, 0.0]);
+        let v = axis_verdicts(&a, t, &l, [true, true, false], [1.0, 0.1, 0.0], 0.05);
         assert!((v[0].shaking_frequency_hz.unwrap() - 0.9).abs() < 0.02, "{:?}", v[0]);
         assert!(v[0].fraction_of_peak_sensitivity.unwrap() > 0.95);
         assert!((v[1].shaking_frequency_hz.unwrap() - 0.2).abs() < 0.01, "{:?}", v[1]);
@@ -131,5 +139,8 @@ mod tests {
         assert!(v[1].text.contains("closer to"), "{}", v[1].text);
         assert!(v[2].shaking_frequency_hz.is_none());
         assert!(v[2].text.starts_with("z: too little excitation"), "{}", v[2].text);
+        // Excited above the floor but not observable: σ is the reason, not the shaking's size.
+        let v = axis_verdicts(&a, t, &l, [false, true, false], [1.0, 0.1, 0.0], 0.05);
+        assert!(v[0].text.starts_with("x: too noisy"), "{}", v[0].text);
     }
 }

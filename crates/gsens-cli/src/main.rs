@@ -11,10 +11,12 @@ mod import;
 mod live;
 mod monitor;
 mod montecarlo;
+mod predict;
 mod replay;
 mod report;
 mod response;
 mod simulate;
+mod validate;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -57,6 +59,12 @@ enum Command {
     /// Stream a recorded session (imu.csv, tracking.csv) as `gsens live` receives one,
     /// at real time or faster.
     Replay(replay::ReplayArgs),
+    /// Compensation proven in the loop: the same session without and with −aᵀΓ̂ fed into the
+    /// carrier NCOs, at several loop bandwidths (g-induced phase error, slips, losses of lock).
+    Validate(validate::ValidateArgs),
+    /// What compensation buys under vibration: the phase jitter without and with −aᵀΓ̂ in the
+    /// NCO, the lock margin and the narrowest loop that keeps lock, from Γ̂ and its covariance.
+    Predict(predict::PredictArgs),
     /// Print the default scenario as commented TOML (edit it, pass it with --scenario).
     Scenario,
 }
@@ -115,6 +123,8 @@ fn main() -> ExitCode {
         Command::Import(args) => import::run(&args).map(|()| Status::Done),
         Command::Live(args) => live::run(&args),
         Command::Replay(args) => replay::run(&args).map(|()| Status::Done),
+        Command::Validate(args) => validate::run(&args),
+        Command::Predict(args) => predict::run(&args),
         Command::Scenario => out(gsens_sim::scenario::Scenario::default_toml()).map(|()| Status::Done),
     };
     match result {

@@ -8,11 +8,23 @@ use std::process::Command;
 
 use gsens_core::{LoggedPhase, LoopModel, LoopSpec};
 
-/// The static library cargo built beside this test (target/<profile>/).
+/// The static library, built by cargo into a target directory of its own
+/// beside this test's (`cargo test` builds the crate as an rlib only, and a
+/// nested build in the same directory would wait for the outer one's lock).
 fn static_library() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
-    let profile_dir = exe.parent().and_then(Path::parent).unwrap();
-    let lib = profile_dir.join("libgsens_ffi.a");
+    // target/<profile>/deps/<test> → target/
+    let target = exe.parent().and_then(Path::parent).and_then(Path::parent).unwrap();
+    let dir = target.join("ffi-c-example");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(&cargo)
+        .args(["build", "-p", "gsens-ffi", "--lib", "--locked", "--target-dir"])
+        .arg(&dir)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run {cargo}: {e}"));
+    assert!(status.success(), "cargo build -p gsens-ffi failed");
+    let lib = dir.join("debug/libgsens_ffi.a");
     assert!(lib.exists(), "{} not built", lib.display());
     lib
 }

@@ -115,6 +115,20 @@ pub enum FormatError {
         /// What the cell should hold.
         expected: &'static str,
     },
+    /// A number outside what the column allows.
+    #[error("{file}: line {line}, {column}: {value} is out of range: expected {expected}")]
+    OutOfRange {
+        /// Source name.
+        file: String,
+        /// 1-based line number.
+        line: u64,
+        /// The column.
+        column: Column,
+        /// The value.
+        value: f64,
+        /// What the column allows.
+        expected: &'static str,
+    },
     /// A cell holds NaN or an infinity.
     #[error("{file}: line {line}, {column}: `{value}` is not a finite number (NaN and infinities are not allowed)")]
     NonFinite {

@@ -33,12 +33,14 @@ pub mod imu;
 mod parse;
 pub mod signal;
 pub mod tracking;
+pub mod vibration;
 pub mod writers;
 
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
+pub use vibration::{VIBRATION_COLUMNS, read_vibration_psd, read_vibration_psd_file};
 pub use writers::{
     EPOCH_COLUMNS, ImuWriter, TrackingRow, TrackingWriter, write_epochs_csv, write_imu_csv, write_tracking_csv,
     write_tracking_csv_on,

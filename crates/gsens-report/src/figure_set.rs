@@ -4,9 +4,9 @@
 
 use crate::FigureBlock;
 use crate::figures::{
-    AllanData, Cn0Track, CompensationData, DEFAULT_SIZE, EstimationData, Format, Image, MeasuredResponseData,
-    RenderError, ResponseData, SpectrumData, fig_allan, fig_cn0, fig_compensation, fig_estimation,
-    fig_measured_response, fig_residual_spectrum, fig_response,
+    AllanData, Cn0Track, CompensationData, CompensationKind, DEFAULT_SIZE, EstimationData, Format, Image,
+    MeasuredResponseData, RenderError, ResponseData, SpectrumData, fig_allan, fig_cn0, fig_compensation,
+    fig_estimation, fig_measured_response, fig_residual_spectrum, fig_response,
 };
 use gsens_calib::{CalibError, Calibration, Outcome, compensation_series};
 use gsens_io::TrackingLog;
@@ -219,7 +219,12 @@ impl<'a> FigureInputs<'a> {
                 c.rms_after_rad
             ),
             render: Box::new(move |f| {
-                let d = CompensationData { t_s: &s.t_s, before_rad: &self.before, after_rad: &self.after };
+                let d = CompensationData {
+                    t_s: &s.t_s,
+                    before_rad: &self.before,
+                    after_rad: &self.after,
+                    kind: CompensationKind::PostProcessing,
+                };
                 fig_compensation(&d, f, (DEFAULT_SIZE.0, 520))
             }),
         });

@@ -998,6 +998,19 @@ pub struct CompensationData<'a> {
     pub before_rad: &'a [Option<f64>],
     /// φ − φ_aᵀΓ̂ \[rad\]; `None` in gaps.
     pub after_rad: &'a [Option<f64>],
+    /// Which compensation the two series compare.
+    pub kind: CompensationKind,
+}
+
+/// What a [`CompensationData`] figure compares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CompensationKind {
+    /// The paper's Fig. 5: φ and φ − φ_aᵀΓ̂, after the fact.
+    #[default]
+    PostProcessing,
+    /// In the loop: the g-induced phase error of a receiver without and with
+    /// −aᵀΓ̂ fed into its NCOs (`gsens validate`).
+    InTheLoop,
 }
 
 fn rms(v: impl Iterator<Item = f64>) -> f64 {
@@ -1007,12 +1020,22 @@ fn rms(v: impl Iterator<Item = f64>) -> f64 {
 
 impl Plot for CompensationData<'_> {
     fn plot<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, st: &Style) -> DrawResult<DB> {
-        let area = titled(root, "Effect of g-sensitivity compensation on the phase tracking error", st)?;
+        let (title, before, after) = match self.kind {
+            CompensationKind::PostProcessing => (
+                "Effect of g-sensitivity compensation on the phase tracking error",
+                "before compensation: φ",
+                "after compensation: φ minus the modelled g-induced part",
+            ),
+            CompensationKind::InTheLoop => (
+                "g-induced phase tracking error without and with compensation in the loop",
+                "without compensation",
+                "with the IMU's a·Γ estimate fed out of the NCO",
+            ),
+        };
+        let area = titled(root, title, st)?;
         let y_area = st.i(78.0);
-        let series: [(&[Option<f64>], RGBAColor, &str); 2] = [
-            (self.before_rad, BEFORE_COLOR.mix(0.75), "before compensation: φ"),
-            (self.after_rad, AFTER_COLOR.mix(0.95), "after compensation: φ minus the modelled g-induced part"),
-        ];
+        let series: [(&[Option<f64>], RGBAColor, &str); 2] =
+            [(self.before_rad, BEFORE_COLOR.mix(0.75), before), (self.after_rad, AFTER_COLOR.mix(0.95), after)];
         let entries: Vec<(String, Mark)> = series
             .iter()
             .map(|(d, c, name)| {

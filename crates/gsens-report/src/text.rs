@@ -167,7 +167,6 @@ pub fn render_text(doc: &ResultDocument) -> String {
     }
     let head = if truth.is_some() { "      truth       error" } else { "" };
     let _ = writeln!(s_, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
-    let advice = doc.loop_summary.peak_hz.map(|f| format!(" or closer to {f:.2} Hz")).unwrap_or_default();
     for i in 0..3 {
         match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i]) {
             (Some(g), Some(sg)) => {
@@ -180,10 +179,13 @@ pub fn render_text(doc: &ResultDocument) -> String {
                 let _ = writeln!(s_);
             }
             _ => {
+                // The verdict's reason ("x: too little excitation — …"), without its axis.
+                let text = &c.axes[i].text;
+                let reason = text.split_once(": ").map_or(text.as_str(), |(_, r)| r);
                 let _ = write!(
                     s_,
-                    "  {}  unobservable: too little excitation (RMS {:.3} rad per Hz/(m/s²)) — shake harder along {}{advice}",
-                    AXES[i], c.excitation_rms[i], AXES[i]
+                    "  {}  unobservable: {reason} (excitation RMS {:.3} rad per Hz/(m/s²))",
+                    AXES[i], c.excitation_rms[i]
                 );
                 if let Some(t) = truth {
                     let _ = write!(s_, "  [truth {:+.5}]", t[i]);
@@ -192,10 +194,19 @@ pub fn render_text(doc: &ResultDocument) -> String {
             }
         }
     }
+    // |Γ̂ − Γ| over the axes with an estimate (none: no number to show).
     if let Some(t) = truth {
-        let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
-        let err: f64 = (0..3).filter_map(|i| c.gamma_hz_per_mps2[i].map(|g| (g - t[i]).powi(2))).sum::<f64>().sqrt();
-        let _ = writeln!(s_, "  |Γ̂ − Γ| = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|", 100.0 * err / norm);
+        let axes: Vec<usize> = (0..3).filter(|&i| c.gamma_hz_per_mps2[i].is_some()).collect();
+        let err = axes.iter().map(|&i| (c.gamma_hz_per_mps2[i].unwrap_or(0.0) - t[i]).powi(2)).sum::<f64>().sqrt();
+        let norm = axes.iter().map(|&i| t[i] * t[i]).sum::<f64>().sqrt();
+        let over = if axes.len() == 3 {
+            String::new()
+        } else {
+            format!(" (over {})", axes.iter().map(|&i| AXES[i]).collect::<Vec<_>>().join(", "))
+        };
+        if !axes.is_empty() && norm > 0.0 {
+            let _ = writeln!(s_, "  |Γ̂ − Γ|{over} = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|{over}", 100.0 * err / norm);
+        }
     }
     let _ = writeln!(s_, "\nshaking:");
     for v in &c.axes {

@@ -103,7 +103,7 @@ fn fig5_compensation() {
         .zip(&s.phi_a)
         .map(|(p, a)| p.map(|p| p - (0..3).map(|i| a[i] * g[i]).sum::<f64>()))
         .collect();
-    let d = CompensationData { t_s: &s.t_s, before_rad: &s.phase_err_rad, after_rad: &after };
+    let d = CompensationData { t_s: &s.t_s, before_rad: &s.phase_err_rad, after_rad: &after, kind: Default::default() };
     check(
         "fig5_compensation",
         (1000, 500),
@@ -169,7 +169,12 @@ fn bad_input_is_an_error_not_a_panic() {
     assert!(matches!(fig_response(&d, Format::Png, (10, 10)), Err(RenderError::Size(10, 10))));
     let empty = ResponseData { frequency_hz: vec![], magnitude_rad_per_hz: vec![], phase_deg: vec![], ..d };
     assert!(matches!(fig_response(&empty, Format::Svg, (800, 600)), Err(RenderError::NoData(_))));
-    let d = CompensationData { t_s: &[0.0, 1.0], before_rad: &[None, None], after_rad: &[None, None] };
+    let d = CompensationData {
+        t_s: &[0.0, 1.0],
+        before_rad: &[None, None],
+        after_rad: &[None, None],
+        kind: Default::default(),
+    };
     assert!(matches!(fig_compensation(&d, Format::Svg, (800, 600)), Err(RenderError::NoData(_))));
     assert!(fig_cn0(&[], Format::Png, (800, 600)).is_err());
     let d = SpectrumData { interval_s: 0.025, residual_rad: &[0.0; 4], before_rad: None, marker_hz: None };

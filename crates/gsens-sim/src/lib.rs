@@ -20,6 +20,8 @@
 #![deny(missing_docs)]
 
 pub mod channel;
+pub mod compensation;
+pub mod compensation_trial;
 pub mod error;
 pub mod imu;
 pub mod iq;

@@ -81,6 +81,9 @@ pub struct Scenario {
     /// `[satellites]`: mask, channels, C/N0 model.
     #[serde(default)]
     pub satellites: SatellitesSection,
+    /// `[compensation]`: Γ̂ fed forward into the carrier NCOs (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compensation: Option<crate::compensation::CompensationSection>,
 }
 
 impl Default for Scenario {
@@ -94,6 +97,7 @@ impl Default for Scenario {
             imu: ImuSection::default(),
             motion: MotionConfig::paper_default(),
             satellites: SatellitesSection::default(),
+            compensation: None,
         }
     }
 }
@@ -138,6 +142,16 @@ pub enum OscillatorKind {
 }
 
 impl OscillatorKind {
+    /// The preset's name in a scenario file, e.g. `tcxo`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            OscillatorKind::Ocxo => "ocxo",
+            OscillatorKind::Tcxo => "tcxo",
+            OscillatorKind::TcxoLowQuality => "tcxo_low_quality",
+            OscillatorKind::Ideal => "ideal",
+        }
+    }
+
     /// The preset in words, e.g. `OCXO preset`.
     pub fn description(&self) -> &'static str {
         match self {
@@ -640,6 +654,19 @@ impl Scenario {
             key: "satellites.signals".into(),
             message: format!("{} signals for {} channels (one per channel at most)", s.signals.len(), s.max_channels),
         })?;
+        // [compensation]
+        if let Some(c) = &self.compensation {
+            for (i, g) in c.gamma_hz_per_mps2.iter().enumerate() {
+                range(
+                    g.is_finite() && g.abs() <= 100.0,
+                    &format!("compensation.gamma_hz_per_mps2[{i}]"),
+                    *g,
+                    "finite and within ±100 Hz/(m/s²)",
+                )?;
+            }
+            let l = c.latency_s;
+            range(l.is_finite() && (0.0..=10.0).contains(&l), "compensation.latency_s", l, "within [0, 10] s")?;
+        }
         Ok(())
     }
 }

@@ -415,6 +415,9 @@ pub fn simulate<S: SessionSink + ?Sized>(
     let mut force_a = force_at(0.0);
     let mut force_b = force_at(force_h_s);
 
+    // The receiver's feed-forward of Γ̂ into its NCOs, from its IMU's samples.
+    let mut feed_forward = sc.compensation.as_ref().map(crate::compensation::FeedForward::new);
+
     let mut tracks: Vec<Track> = Vec::with_capacity(max_channels as usize);
     let mut done: Vec<ChannelSummary> = Vec::new();
     let mut next_imu = 0u64;
@@ -422,6 +425,23 @@ pub fn simulate<S: SessionSink + ?Sized>(
 
     for k in 0..=n_steps {
         let t = k as f64 / updates_per_s;
+
+        // IMU samples whose stamp has been reached (first: the feed-forward
+        // uses the newest sample at this very step).
+        loop {
+            let stamp = imu.stamp_s(next_imu);
+            if stamp > t || stamp > duration_s + 1e-9 {
+                break;
+            }
+            let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
+            let m = imu.measure(f_true, &mut imu_rng);
+            sink.imu(stamp, m).map_err(sink_err)?;
+            if let Some(f) = &mut feed_forward {
+                // In the receiver's hands once it is both stamped and measured.
+                f.sample(stamp.max(imu.true_time_s(next_imu)), m);
+            }
+            next_imu += 1;
+        }
 
         // Shared per-step inputs: oscillator and specific force → Δf.
         let y = osc.next_y();
@@ -441,7 +461,9 @@ pub fn simulate<S: SessionSink + ?Sized>(
             force_a[1] + w * (force_b[1] - force_a[1]),
             force_a[2] + w * (force_b[2] - force_a[2]),
         ];
-        let delta_f_hz = carrier_hz * y + a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2];
+        // What reaches the NCOs: the oscillator's error, less the feed-forward's correction.
+        let correction_hz = feed_forward.as_mut().map_or(0.0, |f| f.correction_hz(t));
+        let delta_f_hz = carrier_hz * y + a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2] + correction_hz;
 
         // Satellite geometry, risings and settings, once per second.
         if k % geo_steps == 0 {
@@ -487,18 +509,6 @@ pub fn simulate<S: SessionSink + ?Sized>(
             let delta_f_c_hz = delta_f_hz * tr.carrier_ratio;
             let bias = if aiding { delta_f_c_hz + f_sig } else { delta_f_c_hz };
             tr.ch.step(f_sig, bias);
-        }
-
-        // IMU samples whose stamp has been reached.
-        loop {
-            let stamp = imu.stamp_s(next_imu);
-            if stamp > t || stamp > duration_s + 1e-9 {
-                break;
-            }
-            let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
-            let m = imu.measure(f_true, &mut imu_rng);
-            sink.imu(stamp, m).map_err(sink_err)?;
-            next_imu += 1;
         }
 
         // Tracking rows.

@@ -1,0 +1,268 @@
+//! `gsens predict`: what compensation buys under vibration. From Γ̂ and its
+//! covariance, a vibration environment, the oscillator and the loop: the
+//! carrier phase jitter without and with −aᵀΓ̂ in the NCO, the lock margin by
+//! the 3σ rule, and the narrowest loop that keeps lock in each case
+//! (`gsens_calib::predict`).
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use gsens_calib::predict::{FrequencyNoise, PredictionInput, Vibration, jitter, narrowest_bn_hz, second_order_loop};
+use gsens_sim::oscillator::OscillatorConfig;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum OscillatorArg {
+    /// The simulator's OCXO preset (the paper's class).
+    Ocxo,
+    /// The simulator's TCXO preset.
+    Tcxo,
+    /// The simulator's low-quality TCXO preset.
+    TcxoLowQuality,
+    /// No oscillator noise (the vibration and thermal parts alone).
+    None,
+}
+
+#[derive(Args, Debug)]
+pub struct PredictArgs {
+    /// Γ̂ and its covariance from a result document (`gsens estimate --json`, `report.json`).
+    #[arg(long, required_unless_present = "gamma", conflicts_with_all = ["gamma", "sigma"])]
+    pub from: Option<PathBuf>,
+    /// Γ̂ [Hz/(m/s²)] as gx,gy,gz (with --sigma).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, requires = "sigma")]
+    pub gamma: Option<Vec<f64>>,
+    /// 1σ of Γ̂ [Hz/(m/s²)] as sx,sy,sz (axes uncorrelated).
+    #[arg(long, value_delimiter = ',')]
+    pub sigma: Option<Vec<f64>>,
+    /// Random vibration: vibration.csv (f_hz,psd_x,psd_y,psd_z in (m/s²)²/Hz).
+    #[arg(long, required_unless_present = "tone")]
+    pub psd: Option<PathBuf>,
+    /// Sine vibration: a tone as F_HZ:AX,AY,AZ (peak m/s² per axis, in phase); repeatable.
+    #[arg(long, conflicts_with = "psd")]
+    pub tone: Vec<String>,
+    /// Vibration levels to predict at, as factors on the amplitudes (PSD × level²).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub levels: Vec<f64>,
+    /// The oscillator's noise.
+    #[arg(long, value_enum, default_value = "ocxo")]
+    pub oscillator: OscillatorArg,
+    /// Carrier [Hz] (GPS L1 by default).
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ)]
+    pub carrier_hz: f64,
+    /// C/N0 for the thermal noise [dB-Hz].
+    #[arg(long, default_value_t = 45.0)]
+    pub cn0_dbhz: f64,
+    /// The loop (2nd order): noise bandwidth [Hz].
+    #[arg(long, default_value_t = 3.0)]
+    pub bn_hz: f64,
+    /// Damping ratio ζ.
+    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2)]
+    pub zeta: f64,
+    /// Loop update interval [s].
+    #[arg(long, default_value_t = 0.001)]
+    pub loop_interval_s: f64,
+    /// The feed-forward: IMU sample rate [Hz] (its hold delays by half a sample).
+    #[arg(long, default_value_t = 40.0)]
+    pub imu_rate_hz: f64,
+    /// The feed-forward: latency on top of the hold [s].
+    #[arg(long, default_value_t = 0.0)]
+    pub latency_s: f64,
+    /// The IMU's white noise density [m/s²/√Hz].
+    #[arg(long, default_value_t = 0.0)]
+    pub imu_noise_mps2_per_rthz: f64,
+    /// The line-of-sight Doppler rate the loop must follow [Hz/s] (its dynamic stress
+    /// error enters the lock rule; a static receiver sees up to about 0.9 Hz/s at L1).
+    #[arg(long, default_value_t = 0.9)]
+    pub doppler_rate_hz_per_s: f64,
+    /// Write the predictions as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// A tone `F:AX,AY,AZ`.
+fn parse_tone(text: &str) -> Result<(f64, [f64; 3])> {
+    let err = || format!("--tone {text}: expected F_HZ:AX,AY,AZ (e.g. 0.91:3,0,0)");
+    let (f, a) = text.split_once(':').with_context(err)?;
+    let f: f64 = f.trim().parse().ok().filter(|f: &f64| f.is_finite() && *f > 0.0).with_context(err)?;
+    let a: Vec<f64> = a.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().ok().with_context(err)?;
+    if a.len() != 3 || a.iter().any(|x| !x.is_finite()) {
+        anyhow::bail!(err());
+    }
+    Ok((f, [a[0], a[1], a[2]]))
+}
+
+/// Γ̂ and its covariance from a result document.
+fn from_document(path: &std::path::Path) -> Result<([f64; 3], [[f64; 3]; 3])> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a JSON result document", path.display()))?;
+    let number = |v: &serde_json::Value, what: &str| {
+        v.as_f64()
+            .with_context(|| format!("{}: {what} is {v}: the axis is unobservable, nothing to predict", path.display()))
+    };
+    let g = doc["gamma_hz_per_mps2"]
+        .as_array()
+        .filter(|g| g.len() == 3)
+        .with_context(|| format!("{}: no gamma_hz_per_mps2 (write one with gsens estimate --json)", path.display()))?;
+    let c = doc["covariance_hz_per_mps2_sq"]
+        .as_array()
+        .filter(|c| c.len() == 3)
+        .with_context(|| format!("{}: no covariance_hz_per_mps2_sq", path.display()))?;
+    let mut gamma = [0.0; 3];
+    let mut cov = [[0.0; 3]; 3];
+    for i in 0..3 {
+        gamma[i] = number(&g[i], &format!("gamma_hz_per_mps2[{i}]"))?;
+        for j in 0..3 {
+            cov[i][j] = number(&c[i][j], &format!("covariance_hz_per_mps2_sq[{i}][{j}]"))?;
+        }
+    }
+    Ok((gamma, cov))
+}
+
+pub fn run(args: &PredictArgs) -> Result<crate::Status> {
+    let (gamma, covariance) = match (&args.from, &args.gamma, &args.sigma) {
+        (Some(path), _, _) => from_document(path)?,
+        (None, Some(g), Some(s)) => {
+            if g.len() != 3 || s.len() != 3 {
+                anyhow::bail!("--gamma and --sigma take three values each, as x,y,z");
+            }
+            if g.iter().chain(s).any(|x| !x.is_finite()) || s.iter().any(|x| *x < 0.0) {
+                anyhow::bail!("--gamma and --sigma must be finite, --sigma ≥ 0");
+            }
+            let mut c = [[0.0; 3]; 3];
+            for i in 0..3 {
+                c[i][i] = s[i] * s[i];
+            }
+            ([g[0], g[1], g[2]], c)
+        }
+        _ => anyhow::bail!("give --from report.json, or --gamma with --sigma"),
+    };
+    let base = match &args.psd {
+        Some(path) => Vibration::Spectrum(gsens_io::read_vibration_psd_file(path)?),
+        None => Vibration::Tones(args.tone.iter().map(|t| parse_tone(t)).collect::<Result<_>>()?),
+    };
+    for (name, x, positive) in [
+        ("--carrier-hz", args.carrier_hz, true),
+        ("--bn-hz", args.bn_hz, true),
+        ("--zeta", args.zeta, true),
+        ("--loop-interval-s", args.loop_interval_s, true),
+        ("--imu-rate-hz", args.imu_rate_hz, true),
+        ("--latency-s", args.latency_s, false),
+        ("--imu-noise-mps2-per-rthz", args.imu_noise_mps2_per_rthz, false),
+        ("--cn0-dbhz", args.cn0_dbhz, false),
+        ("--doppler-rate-hz-per-s", args.doppler_rate_hz_per_s, false),
+    ] {
+        if !x.is_finite() || x < 0.0 || (positive && x == 0.0) {
+            anyhow::bail!("{name} {x}: must be finite and {}", if positive { "> 0" } else { "≥ 0" });
+        }
+    }
+    let oscillator = match args.oscillator {
+        OscillatorArg::Ocxo => Some(OscillatorConfig::ocxo()),
+        OscillatorArg::Tcxo => Some(OscillatorConfig::tcxo()),
+        OscillatorArg::TcxoLowQuality => Some(OscillatorConfig::tcxo_low_quality()),
+        OscillatorArg::None => None,
+    }
+    .map(|o| FrequencyNoise {
+        h2: o.h2,
+        h0: o.h0,
+        h_neg1: o.h_neg1,
+        h_neg2: o.h_neg2,
+        carrier_hz: args.carrier_hz,
+    });
+    let receiver_loop = second_order_loop(args.bn_hz, args.zeta, args.loop_interval_s);
+    receiver_loop.check().with_context(|| format!("the loop (Bn {} Hz, T {} s)", args.bn_hz, args.loop_interval_s))?;
+    let delay_s = args.latency_s + 0.5 / args.imu_rate_hz;
+    let bn_grid: Vec<f64> = (1..=200).map(|k| 0.1 * k as f64).collect();
+    crate::out(&format!(
+        "loop: 2nd order, Bn {} Hz, ζ {:.3}, T {} s; oscillator {:?}; C/N0 {} dB-Hz; feed-forward delay {:.4} s \
+         (latency {} s + half the IMU's {} Hz sample); lock while 3σ + θe ≤ 45°, θe the dynamic stress of a {} Hz/s \
+         Doppler rate\n\n",
+        args.bn_hz,
+        args.zeta,
+        args.loop_interval_s,
+        args.oscillator,
+        args.cn0_dbhz,
+        delay_s,
+        args.latency_s,
+        args.imu_rate_hz,
+        args.doppler_rate_hz_per_s
+    ))?;
+    crate::out(
+        "  level  vibration RMS [m/s²]     1σ [rad]: thermal  oscillator  vibration without → with   total without → with   \
+         lock without/with   narrowest Bn without/with [Hz]\n",
+    )?;
+    let mut rows = Vec::new();
+    for &level in &args.levels {
+        if !(level.is_finite() && level >= 0.0) {
+            anyhow::bail!("--levels {level}: must be finite and ≥ 0");
+        }
+        let vibration = match &base {
+            Vibration::Spectrum(p) => {
+                Vibration::Spectrum(p.iter().map(|(f, s)| (*f, s.map(|v| v * level * level))).collect())
+            }
+            Vibration::Tones(t) => Vibration::Tones(t.iter().map(|(f, a)| (*f, a.map(|v| v * level))).collect()),
+        };
+        let input = PredictionInput {
+            gamma_hz_per_mps2: gamma,
+            covariance,
+            vibration: vibration.clone(),
+            oscillator,
+            cn0_dbhz: Some(args.cn0_dbhz),
+            delay_s,
+            imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
+            doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
+        };
+        let j = jitter(&receiver_loop, args.bn_hz, args.loop_interval_s, &input);
+        let narrowest = narrowest_bn_hz(args.zeta, args.loop_interval_s, &input, &bn_grid);
+        let rms = vibration.rms_mps2();
+        let yes = |b: bool| if b { "yes" } else { "NO" };
+        let bn = |b: Option<f64>| match b {
+            None => "none ≤ 20".to_string(),
+            Some(b) if b <= bn_grid[0] => format!("≤ {b:.1}"),
+            Some(b) => format!("{b:.1}"),
+        };
+        crate::out(&format!(
+            "  {level:5.2}  {:5.2} {:5.2} {:5.2}        {:7.4}     {:7.4}     {:7.4} → {:7.4}       {:6.4} → {:6.4}       \
+             {:>3} / {:<3}          {} / {}\n",
+            rms[0],
+            rms[1],
+            rms[2],
+            j.thermal_rad,
+            j.oscillator_rad,
+            j.vibration_rad[0],
+            j.vibration_rad[1],
+            j.total_rad[0],
+            j.total_rad[1],
+            yes(j.keeps_lock[0]),
+            yes(j.keeps_lock[1]),
+            bn(narrowest[0]),
+            bn(narrowest[1]),
+        ))?;
+        rows.push(serde_json::json!({
+            "level": level,
+            "vibration_rms_mps2": rms,
+            "thermal_rad": j.thermal_rad,
+            "oscillator_rad": j.oscillator_rad,
+            "vibration_rad": j.vibration_rad,
+            "total_rad": j.total_rad,
+            "dynamic_stress_rad": j.dynamic_stress_rad,
+            "keeps_lock": j.keeps_lock,
+            "p_beyond_linear_range": j.p_beyond_range,
+            "narrowest_bn_hz": narrowest,
+        }));
+    }
+    crate::out(
+        "\nwithout: Δf = aᵀΓ̂ reaches the loop; with: what Γ̂'s covariance and the feed-forward's delay leave of it \
+         (docs: gsens_calib::predict)\n",
+    )?;
+    if let Some(path) = &args.json {
+        let doc = serde_json::json!({
+            "gamma_hz_per_mps2": gamma,
+            "covariance_hz_per_mps2_sq": covariance,
+            "bn_hz": args.bn_hz,
+            "predictions": rows,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    Ok(crate::Status::Done)
+}
