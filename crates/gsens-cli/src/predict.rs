@@ -7,6 +7,7 @@
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use gsens_calib::predict::{FrequencyNoise, PredictionInput, Vibration, jitter, narrowest_bn_hz, second_order_loop};
+use gsens_report::figures::{DEFAULT_SIZE, Format, LockMarginData, fig_lock_margin};
 use gsens_sim::oscillator::OscillatorConfig;
 use std::path::PathBuf;
 
@@ -76,6 +77,10 @@ pub struct PredictArgs {
     /// Write the predictions as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Draw the lock margin (3σ + θe without and with compensation) over the loop bandwidth
+    /// at the last level here (.png or .svg).
+    #[arg(long)]
+    pub figure: Option<PathBuf>,
 }
 
 /// A tone `F:AX,AY,AZ`.
@@ -191,6 +196,7 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
          lock without/with   narrowest Bn without/with [Hz]\n",
     )?;
     let mut rows = Vec::new();
+    let mut last_input = None;
     for &level in &args.levels {
         if !(level.is_finite() && level >= 0.0) {
             anyhow::bail!("--levels {level}: must be finite and ≥ 0");
@@ -211,8 +217,9 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
             imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
             doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
         };
-        let j = jitter(&receiver_loop, args.bn_hz, args.loop_interval_s, &input);
         let narrowest = narrowest_bn_hz(args.zeta, args.loop_interval_s, &input, &bn_grid);
+        let j = jitter(&receiver_loop, args.bn_hz, args.loop_interval_s, &input);
+        last_input = Some((level, input));
         let rms = vibration.rms_mps2();
         let yes = |b: bool| if b { "yes" } else { "NO" };
         let bn = |b: Option<f64>| match b {
@@ -254,6 +261,31 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
         "\nwithout: Δf = aᵀΓ̂ reaches the loop; with: what Γ̂'s covariance and the feed-forward's delay leave of it \
          (docs: gsens_calib::predict)\n",
     )?;
+    if let (Some(path), Some((level, input))) = (&args.figure, &last_input) {
+        let (mut bns, mut without, mut with) = (Vec::new(), Vec::new(), Vec::new());
+        for &bn in &bn_grid {
+            let l = second_order_loop(bn, args.zeta, args.loop_interval_s);
+            if l.check().is_err() {
+                continue;
+            }
+            let j = jitter(&l, bn, args.loop_interval_s, input);
+            bns.push(bn);
+            without.push(3.0 * j.total_rad[0] + j.dynamic_stress_rad);
+            with.push(3.0 * j.total_rad[1] + j.dynamic_stress_rad);
+        }
+        let label = format!("vibration level {level}, {:?} oscillator, C/N0 {} dB-Hz", args.oscillator, args.cn0_dbhz);
+        let data = LockMarginData {
+            bn_hz: &bns,
+            without_rad: &without,
+            with_rad: &with,
+            threshold_rad: gsens_calib::DISCRIMINATOR_LINEAR_RANGE_RAD,
+            label: &label,
+        };
+        let svg = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+        fig_lock_margin(&data, if svg { Format::Svg } else { Format::Png }, DEFAULT_SIZE)?
+            .write_to(path)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
     if let Some(path) = &args.json {
         let doc = serde_json::json!({
             "gamma_hz_per_mps2": gamma,

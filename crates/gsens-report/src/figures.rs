@@ -1292,6 +1292,70 @@ pub fn fig_allan(data: &AllanData, format: Format, size: (u32, u32)) -> Result<I
     render(data, format, size)
 }
 
+// ---------------------------------------------------------------- lock margin
+
+/// The lock margin over the loop's bandwidth (`gsens predict --figure`).
+#[derive(Debug, Clone, Copy)]
+pub struct LockMarginData<'a> {
+    /// Noise bandwidths \[Hz\], increasing.
+    pub bn_hz: &'a [f64],
+    /// 3σ + θₑ without compensation \[rad\].
+    pub without_rad: &'a [f64],
+    /// 3σ + θₑ with compensation \[rad\].
+    pub with_rad: &'a [f64],
+    /// The lock threshold \[rad\] (π/4).
+    pub threshold_rad: f64,
+    /// The case in words (vibration level, oscillator), drawn in the title.
+    pub label: &'a str,
+}
+
+impl Plot for LockMarginData<'_> {
+    fn plot<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, st: &Style) -> DrawResult<DB> {
+        let title = format!("Lock margin over the loop bandwidth ({})", self.label);
+        let area = titled(root, &title, st)?;
+        let y_area = st.i(78.0);
+        let keep = |v: &[f64]| -> Vec<(f64, f64)> {
+            self.bn_hz
+                .iter()
+                .cloned()
+                .zip(v.iter().cloned())
+                .filter(|(b, s)| *b > 0.0 && *s > 0.0 && s.is_finite())
+                .collect()
+        };
+        let (without, with) = (keep(self.without_rad), keep(self.with_rad));
+        let (wc, cc, tc) = (BEFORE_COLOR.mix(0.9), AFTER_COLOR.mix(1.0), RGBColor(60, 60, 60).mix(1.0));
+        let entries = vec![
+            ("without compensation: 3σ + dynamic stress".to_string(), Mark::Line(wc, 3)),
+            ("with compensation".to_string(), Mark::Line(cc, 3)),
+            (format!("lock threshold {:.2} rad (45°)", self.threshold_rad), Mark::Dashed(tc)),
+        ];
+        let area = legend_strip(&area, &entries, y_area + st.i(10.0), st)?;
+        let xr = log_range(without.iter().chain(&with).map(|p| p.0)).unwrap_or(0.1..20.0);
+        let yr = log_range(without.iter().chain(&with).map(|p| p.1).chain([self.threshold_rad])).unwrap_or(0.01..10.0);
+        let descs = ("loop noise bandwidth Bn [Hz]", "3σ + θe [rad]");
+        let mut chart = loglog_chart(&area, st, y_area, descs, xr.clone(), yr)?;
+        let line = [(xr.start, self.threshold_rad), (xr.end, self.threshold_rad)];
+        chart.draw_series(DashedLineSeries::new(line, st.i(10.0).max(3), st.i(6.0).max(2), tc.stroke_width(2)))?;
+        chart.draw_series(LineSeries::new(without, wc.stroke_width(st.i(2.0).max(1) as u32)))?;
+        chart.draw_series(LineSeries::new(with, cc.stroke_width(st.i(2.0).max(1) as u32)))?;
+        Ok(())
+    }
+}
+
+/// 3σ + θₑ of the phase error over the loop's bandwidth without and with
+/// compensation, against the lock threshold, log-log: where each curve lies
+/// below the threshold the loop keeps lock.
+pub fn fig_lock_margin(data: &LockMarginData, format: Format, size: (u32, u32)) -> Result<Image, RenderError> {
+    check_size(data.bn_hz.len(), "the bandwidth list")?;
+    if data.without_rad.len() != data.bn_hz.len() || data.with_rad.len() != data.bn_hz.len() {
+        return Err(RenderError::NoData("bandwidths, without and with differ in length".into()));
+    }
+    if !(data.threshold_rad.is_finite() && data.threshold_rad > 0.0) {
+        return Err(RenderError::NoData("the lock threshold is not positive".into()));
+    }
+    render(data, format, size)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -517,6 +517,15 @@ fn check(ok: bool, err: impl FnOnce() -> ConfigError) -> Result<(), ConfigError>
     if ok { Ok(()) } else { Err(err()) }
 }
 
+/// Each component of a Γ at `key` finite and within ±100 Hz/(m/s²) (far
+/// beyond any crystal's: such a value is a typo or a unit mix-up).
+fn gamma_in_range(key: &str, gamma: &[f64; 3]) -> Result<(), ConfigError> {
+    for (i, g) in gamma.iter().enumerate() {
+        range(g.is_finite() && g.abs() <= 100.0, &format!("{key}[{i}]"), *g, "finite and within ±100 Hz/(m/s²)")?;
+    }
+    Ok(())
+}
+
 /// `Ok` if `ok`, else [`ConfigError::OutOfRange`] of `key`.
 fn range(ok: bool, key: &str, value: f64, allowed: &str) -> Result<(), ConfigError> {
     check(ok, || ConfigError::out_of_range(key, value, allowed))
@@ -578,14 +587,7 @@ impl Scenario {
         // [oscillator]
         let o = &self.oscillator;
         self.oscillator.config().validate()?;
-        for (i, g) in o.gamma_hz_per_mps2.iter().enumerate() {
-            range(
-                g.is_finite() && g.abs() <= 100.0,
-                &format!("oscillator.gamma_hz_per_mps2[{i}]"),
-                *g,
-                "finite and within ±100 Hz/(m/s²)",
-            )?;
-        }
+        gamma_in_range("oscillator.gamma_hz_per_mps2", &o.gamma_hz_per_mps2)?;
         let c = o.carrier_hz;
         range(c.is_finite() && (1e8..=1e11).contains(&c), "oscillator.carrier_hz", c, "within [1e8, 1e11] Hz")?;
         // [loop]
@@ -656,14 +658,7 @@ impl Scenario {
         })?;
         // [compensation]
         if let Some(c) = &self.compensation {
-            for (i, g) in c.gamma_hz_per_mps2.iter().enumerate() {
-                range(
-                    g.is_finite() && g.abs() <= 100.0,
-                    &format!("compensation.gamma_hz_per_mps2[{i}]"),
-                    *g,
-                    "finite and within ±100 Hz/(m/s²)",
-                )?;
-            }
+            gamma_in_range("compensation.gamma_hz_per_mps2", &c.gamma_hz_per_mps2)?;
             let l = c.latency_s;
             range(l.is_finite() && (0.0..=10.0).contains(&l), "compensation.latency_s", l, "within [0, 10] s")?;
         }
