@@ -340,7 +340,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
             message: format!(
                 "the data reject the stated loop ({}): its natural frequency fits at {f:.4} ± {:.4} Hz instead of \
                  {f0:.4} Hz (z = {:+.1}, beyond ±{:.2}, a {} % false-alarm test). Γ̂ is given under the fitted loop \
-                 ({}); under the stated loop it would be {:+.5}, {:+.5}, {:+.5}. Check the receiver's loop settings \
+                 ({}); under the stated loop it would be {}. Check the receiver's loop settings \
                  (bandwidth, order, update interval, what its log holds) and state them",
                 j.stated_loop,
                 j.sigma_natural_frequency_hz.unwrap_or(f64::NAN),
@@ -348,9 +348,15 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
                 j.loop_test_threshold_z,
                 j.loop_test_false_alarm * 100.0,
                 j.fitted_loop,
-                j.gamma_stated_loop_hz_per_mps2[0],
-                j.gamma_stated_loop_hz_per_mps2[1],
-                j.gamma_stated_loop_hz_per_mps2[2],
+                // Only the observable axes have a number to show.
+                (0..3)
+                    .map(|i| if c.observable[i] {
+                        format!("{:+.5}", j.gamma_stated_loop_hz_per_mps2[i])
+                    } else {
+                        format!("unobservable ({})", ["x", "y", "z"][i])
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", "),
             ),
         });
     }
