@@ -241,6 +241,18 @@ pub fn calibrate_logs(
     let flat_runs = find_flat_runs(imu);
     let imu = &despiked;
     let mut session = prepare_session(tracking, imu, imu_name, &settings.selection, assumed)?;
+    // An offset beyond half the log's span leaves no overlap to compare (and
+    // an absurd bound would size the search's grid without limit).
+    if let (Some(max), Some((t0, t1))) = (max_abs_s, session.t_s.first().zip(session.t_s.last()))
+        && max > 0.5 * (t1 - t0)
+    {
+        return Err(CalibError::Setting {
+            name: "time_offset.max_abs_s",
+            value: max,
+            expected: "at most half the log's span (beyond it no overlap of IMU and tracking is left to compare)",
+        }
+        .into());
+    }
     // A stuck or clipped stretch would enter every regressor: its epochs become gaps before any search.
     let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;

@@ -124,16 +124,16 @@ pub struct EstimatorArgs {
     #[arg(long, default_value_t = 1.0)]
     pub lambda: f64,
     /// Seconds at the start that only drive the loop models (their start-up transient).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = finite_non_negative)]
     pub warmup_s: f64,
     /// 1σ scale-factor error of the IMU [ppm] (from its datasheet), added to Γ̂'s uncertainty.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = finite_non_negative)]
     pub imu_scale_sigma_ppm: f64,
     /// 1σ axis misalignment of the IMU [mrad], added to Γ̂'s uncertainty.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = finite_non_negative)]
     pub imu_misalignment_sigma_mrad: f64,
     /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = finite_non_negative)]
     pub highpass_hz: f64,
     /// Robust estimation against outlying epochs: `huber` (IRLS; batch method only) or `none`.
     #[arg(long, value_enum, default_value_t = RobustArg::None)]
@@ -197,10 +197,10 @@ pub struct SelectionArgs {
     #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
     pub screening: bool,
     /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
-    #[arg(long, default_value_t = 6.0)]
+    #[arg(long, default_value_t = 6.0, value_parser = finite_non_negative)]
     pub cn0_drop_db: f64,
     /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default π/4).
-    #[arg(long, default_value_t = std::f64::consts::FRAC_PI_4)]
+    #[arg(long, default_value_t = std::f64::consts::FRAC_PI_4, value_parser = finite_non_negative)]
     pub max_abs_phase_rad: f64,
 }
 
@@ -241,7 +241,7 @@ pub struct SystematicArgs {
     #[arg(long, default_value = "auto", allow_hyphen_values = true)]
     pub time_offset: TimeOffset,
     /// Search range ± of `--time-offset auto` [s].
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = 0.25, value_parser = finite_non_negative)]
     pub time_offset_max_s: f64,
     /// Test the stated loop against the data: its natural frequency is estimated jointly with Γ and the time offset, a
     /// stated loop the data reject is flagged, and Γ̂ is given under the fitted loop with the loop's uncertainty in its
@@ -444,4 +444,11 @@ pub struct PocketSdrArgs {
     pub pocketsdr: Option<PathBuf>,
     #[command(flatten)]
     pub conversion: PocketSdrConversionArgs,
+}
+
+/// A number option that must be finite and ≥ 0 (clap's parser: the error
+/// names the option and the value).
+fn finite_non_negative(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if x.is_finite() && x >= 0.0 { Ok(x) } else { Err(format!("{x} is not a finite number ≥ 0")) }
 }

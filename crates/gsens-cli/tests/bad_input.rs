@@ -126,3 +126,28 @@ fn missing_file() {
     // The OS's reason is said once, not once per level of the error chain.
     assert_eq!(stderr.matches("os error").count(), 1, "{stderr}");
 }
+
+/// Issue 16's hand-found cases: an absurd offset bound hung (its search grid
+/// grew without limit), a NaN C/N0 drop switched the test off, a negative
+/// warm-up was taken. Each is now an error naming the setting and its range.
+/// (A high-pass above the log's Nyquist frequency is not refused here: it is
+/// what time stamps in milliseconds make of the default, which the
+/// `time_units` check names; the estimate is then not trustworthy.)
+#[test]
+fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
+    let dir = std::env::temp_dir().join(format!("gsens-bad-options-{}", std::process::id()));
+    let sim = Command::new(env!("CARGO_BIN_EXE_gsens")).args(["simulate", "--out"]).arg(&dir).output().unwrap();
+    assert!(sim.status.success());
+    let (imu, trk) = (dir.join("imu.csv"), dir.join("tracking.csv"));
+    for (args, said) in [
+        (&["--time-offset-max-s", "1e18"][..], "time_offset.max_abs_s"),
+        (&["--cn0-drop-db", "nan"][..], "--cn0-drop-db"),
+        (&["--warmup-s=-1"][..], "--warmup-s"),
+    ] {
+        let started = std::time::Instant::now();
+        let (code, stderr) = estimate(&imu, &trk, args);
+        assert_eq!(code, 2, "{args:?}: {stderr}");
+        assert!(stderr.contains(said), "{args:?}: {stderr}");
+        assert!(started.elapsed().as_secs() < 60, "{args:?} took {:?}", started.elapsed());
+    }
+}
