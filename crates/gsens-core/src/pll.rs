@@ -236,7 +236,8 @@ impl LoopFilterCoeffs {
         }
         let (c0, c1, c2) = (self.c0_per_s, self.c1_per_s2, self.c2_per_s3);
         let k = 2.0 / t_s;
-        let inside = |z: &Complex<f64>| z.norm_sqr() < 1.0 - 1e-12;
+        // Every root strictly inside the unit circle (a matrix whose Schur iteration fails: unstable).
+        let inside = |rho: Option<f64>| rho.is_some_and(|r| r * r < 1.0 - 1e-12);
         if c2 != 0.0 {
             let a = c0 + c1 * t_s + c2 * t_s * t_s;
             let b = -2.0 * c0 - c1 * t_s;
@@ -248,7 +249,7 @@ impl LoopFilterCoeffs {
                 0.0, 1.0, 0.0, 0.0, //
                 0.0, 0.0, 1.0, 0.0,
             );
-            m.complex_eigenvalues().iter().all(inside)
+            inside(crate::math::SpectralRadius::spectral_radius(m))
         } else if c1 != 0.0 {
             // k·z(z−1)² + (z+1)((c0 + c1·T) z − c0), divided by k.
             let a = c0 + c1 * t_s;
@@ -258,12 +259,12 @@ impl LoopFilterCoeffs {
                 1.0, 0.0, 0.0, //
                 0.0, 1.0, 0.0,
             );
-            m.complex_eigenvalues().iter().all(inside)
+            inside(crate::math::SpectralRadius::spectral_radius(m))
         } else {
             // k·z(z−1) + c0·(z+1), divided by k.
             let p = [(-k + c0) / k, c0 / k];
             let m = nalgebra::Matrix2::new(-p[0], -p[1], 1.0, 0.0);
-            m.complex_eigenvalues().iter().all(inside)
+            inside(crate::math::SpectralRadius::spectral_radius(m))
         }
     }
 }

@@ -65,7 +65,7 @@
 use nalgebra::{Complex, Matrix4, Vector4};
 
 use super::{LinearLoop, LoopError};
-use crate::math::{PI, TAU, cos, sin, sqrt};
+use crate::math::{PI, TAU, cos, sin};
 
 /// Length of one C/A code period, the unit of GNSS-SDR's integrations \[s\].
 pub const SYMBOL_S: f64 = 1e-3;
@@ -298,7 +298,7 @@ impl GnssSdrPll {
     /// one-record state transition strictly inside the unit circle.
     pub fn is_stable(&self) -> bool {
         let (a, _, _, _) = self.state_space();
-        a.complex_eigenvalues().iter().all(|z| z.norm_sqr() < 1.0 - 1e-12)
+        crate::math::SpectralRadius::spectral_radius(a).is_some_and(|r| r * r < 1.0 - 1e-12)
     }
 
     /// Time for the loop's slowest natural mode to decay by e⁻ⁿ \[s\]:
@@ -308,7 +308,7 @@ impl GnssSdrPll {
     /// 0.2 Hz), of its 2nd-order one 1.3 s.
     pub fn settling_time_s(&self, time_constants: f64) -> f64 {
         let (a, _, _, _) = self.state_space();
-        let rho = a.complex_eigenvalues().iter().map(|z| sqrt(z.norm_sqr())).fold(0.0, f64::max);
+        let Some(rho) = crate::math::SpectralRadius::spectral_radius(a) else { return f64::INFINITY };
         if rho >= 1.0 {
             return f64::INFINITY;
         }

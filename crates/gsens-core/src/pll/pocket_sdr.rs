@@ -61,7 +61,7 @@
 use nalgebra::{Complex, Matrix4};
 
 use super::{LinearLoop, LoopError, LoopFilterCoeffs};
-use crate::math::{PI, TAU, cos, sin, sqrt};
+use crate::math::{PI, TAU, cos, sin};
 
 /// `b_pll` when neither the options file nor the command line sets it
 /// (PocketSDR's `B_PLL`) \[Hz\].
@@ -141,7 +141,8 @@ impl PocketSdrStage {
         for i in 0..4 {
             m[(i, 3)] = -p[i] / p[4];
         }
-        m.complex_eigenvalues().iter().map(|z| sqrt(z.norm_sqr())).fold(0.0, f64::max)
+        // A matrix the Schur iteration cannot handle counts as unstable (radius +∞).
+        crate::math::SpectralRadius::spectral_radius(m).unwrap_or(f64::INFINITY)
     }
 
     /// Whether the loop is stable: every root of its characteristic
