@@ -84,9 +84,9 @@ pub(crate) fn model_input<'a>(accel: &'a [[f64; 3]], model: &RegressorModel) -> 
 }
 
 /// Epochs left out at the start while the model's start-up transient dies
-/// out: ⌈warm-up / log interval⌉.
+/// out: ⌈warm-up / log interval⌉ ([`gsens_core::warmup_epochs`]).
 pub fn warmup_epochs(settings: &EstimateSettings, log_interval_s: f64) -> u64 {
-    (settings.warmup_s / log_interval_s).ceil().max(0.0) as u64
+    gsens_core::warmup_epochs(settings.warmup_s, log_interval_s)
 }
 
 /// The batch path's estimator streamed, one epoch at a time: the same

@@ -95,37 +95,9 @@ fn parse_tone(text: &str) -> Result<(f64, [f64; 3])> {
     Ok((f, [a[0], a[1], a[2]]))
 }
 
-/// Γ̂ and its covariance from a result document.
-fn from_document(path: &std::path::Path) -> Result<([f64; 3], [[f64; 3]; 3])> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a JSON result document", path.display()))?;
-    let number = |v: &serde_json::Value, what: &str| {
-        v.as_f64()
-            .with_context(|| format!("{}: {what} is {v}: the axis is unobservable, nothing to predict", path.display()))
-    };
-    let g = doc["gamma_hz_per_mps2"]
-        .as_array()
-        .filter(|g| g.len() == 3)
-        .with_context(|| format!("{}: no gamma_hz_per_mps2 (write one with gsens estimate --json)", path.display()))?;
-    let c = doc["covariance_hz_per_mps2_sq"]
-        .as_array()
-        .filter(|c| c.len() == 3)
-        .with_context(|| format!("{}: no covariance_hz_per_mps2_sq", path.display()))?;
-    let mut gamma = [0.0; 3];
-    let mut cov = [[0.0; 3]; 3];
-    for i in 0..3 {
-        gamma[i] = number(&g[i], &format!("gamma_hz_per_mps2[{i}]"))?;
-        for j in 0..3 {
-            cov[i][j] = number(&c[i][j], &format!("covariance_hz_per_mps2_sq[{i}][{j}]"))?;
-        }
-    }
-    Ok((gamma, cov))
-}
-
 pub fn run(args: &PredictArgs) -> Result<crate::Status> {
     let (gamma, covariance) = match (&args.from, &args.gamma, &args.sigma) {
-        (Some(path), _, _) => from_document(path)?,
+        (Some(path), _, _) => crate::estimate::gamma_of_document(path)?,
         (None, Some(g), Some(s)) => {
             if g.len() != 3 || s.len() != 3 {
                 anyhow::bail!("--gamma and --sigma take three values each, as x,y,z");
@@ -281,8 +253,7 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
             threshold_rad: gsens_calib::DISCRIMINATOR_LINEAR_RANGE_RAD,
             label: &label,
         };
-        let svg = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-        fig_lock_margin(&data, if svg { Format::Svg } else { Format::Png }, DEFAULT_SIZE)?
+        fig_lock_margin(&data, Format::of_path(path).unwrap_or(Format::Png), DEFAULT_SIZE)?
             .write_to(path)
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }

@@ -62,10 +62,8 @@ pub fn run(args: &ResponseArgs) -> Result<()> {
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     if let Some(path) = &args.plot {
-        let format = match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
-            Some("png") => Format::Png,
-            Some("svg") => Format::Svg,
-            _ => anyhow::bail!("{}: the figure's name must end in .png or .svg", path.display()),
+        let Some(format) = Format::of_path(path) else {
+            anyhow::bail!("{}: the figure's name must end in .png or .svg", path.display())
         };
         let plot = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, 300, model.to_string())?;
         fig_response(&plot, format, DEFAULT_SIZE)?

@@ -40,33 +40,13 @@ pub struct ValidateArgs {
     pub figure: Option<PathBuf>,
 }
 
-/// Γ̂ from a result document's `gamma_hz_per_mps2` (an unobservable axis is refused).
-fn gamma_from_document(path: &std::path::Path) -> Result<[f64; 3]> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a JSON result document", path.display()))?;
-    let g = doc.get("gamma_hz_per_mps2").and_then(|g| g.as_array()).filter(|g| g.len() == 3).with_context(|| {
-        format!("{}: no gamma_hz_per_mps2 of three values (write it with gsens estimate --json)", path.display())
-    })?;
-    let mut out = [0.0; 3];
-    for (i, v) in g.iter().enumerate() {
-        out[i] = v.as_f64().with_context(|| {
-            format!(
-                "{}: gamma_hz_per_mps2[{i}] is {v}: the axis was not observable, nothing to compensate",
-                path.display()
-            )
-        })?;
-    }
-    Ok(out)
-}
-
 pub fn run(args: &ValidateArgs) -> Result<crate::Status> {
     let scenario = args.scenario.load()?;
     let seed = args.scenario.seed;
     let gamma_hat = match (&args.gamma, &args.from) {
         (Some(g), _) if g.len() == 3 => [g[0], g[1], g[2]],
         (Some(g), _) => anyhow::bail!("--gamma takes three values, as gx,gy,gz (got {})", g.len()),
-        (None, Some(path)) => gamma_from_document(path)?,
+        (None, Some(path)) => crate::estimate::gamma_of_document(path)?.0,
         (None, None) => {
             crate::out(&format!("calibrating on the scenario's session (seed {seed}) …\n"))?;
             let logs = simulate_logs(&scenario, seed)?;
@@ -146,8 +126,7 @@ pub fn run(args: &ValidateArgs) -> Result<crate::Status> {
         let trace = trials.first().and_then(|t| t.trace.as_ref()).context("no channel to draw")?;
         let before: Vec<Option<f64>> = trace.uncompensated_rad.iter().map(|&v| Some(v)).collect();
         let after: Vec<Option<f64>> = trace.compensated_rad.iter().map(|&v| Some(v)).collect();
-        let svg = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-        let format = if svg { Format::Svg } else { Format::Png };
+        let format = Format::of_path(path).unwrap_or(Format::Png);
         let data = CompensationData {
             t_s: &trace.t_s,
             before_rad: &before,

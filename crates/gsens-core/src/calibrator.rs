@@ -21,6 +21,12 @@ pub fn average_phase_rad(phase_err_rad: &[f64], weights: &[f64]) -> Option<f64> 
     if wsum > 0.0 { Some(sum / wsum) } else { None }
 }
 
+/// Epochs to leave out at the start of a log while the model's start-up
+/// transient dies out: ⌈warm-up / log interval⌉ (0 for a warm-up ≤ 0).
+pub fn warmup_epochs(warmup_s: f64, log_interval_s: f64) -> u64 {
+    libm::ceil(warmup_s / log_interval_s).max(0.0) as u64
+}
+
 /// What the calibrator made of one epoch.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FedEpoch {

@@ -31,7 +31,7 @@ pub mod units;
 pub use pll::gnss_sdr;
 pub use pll::pocket_sdr;
 
-pub use calibrator::{Calibrator, FedEpoch, PrefilteredCalibrator, average_phase_rad};
+pub use calibrator::{Calibrator, FedEpoch, PrefilteredCalibrator, average_phase_rad, warmup_epochs};
 pub use compensate::{Compensator, compensated_phase_rad};
 pub use estimator::{
     BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, NormalEquations, RANK_TOL,

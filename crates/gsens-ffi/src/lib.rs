@@ -344,8 +344,7 @@ fn build(config: &GsensCalibratorConfig) -> Result<GsensCalibrator, GsensStatus>
     };
     let model = RegressorModel::with_loop(model_loop, config.loop_interval_s, config.log_interval_s, logged)
         .map_err(|_| GsensStatus::InvalidConfig)?;
-    // ⌈warm-up / log interval⌉, as the batch pipeline (gsens_calib::warmup_epochs).
-    let skip = libm::ceil(config.warmup_s / config.log_interval_s) as u64;
+    let skip = gsens_core::warmup_epochs(config.warmup_s, config.log_interval_s);
     let inner = Calibrator::new(model, BatchLeastSquares::new(), skip, config.highpass_hz, config.log_interval_s);
     Ok(GsensCalibrator {
         calibrator: PrefilteredCalibrator::new(inner),

@@ -475,16 +475,6 @@ impl LiveSession {
         self.batch = Some(result);
     }
 
-    /// The channels the streamed estimate averages now.
-    pub fn stream_channels(&self) -> &[u32] {
-        self.averager.channels()
-    }
-
-    /// The streamed estimate at the newest epoch.
-    pub fn stream_estimate(&self) -> Option<gsens_core::GammaEstimate> {
-        self.stream.estimate()
-    }
-
     /// The latest batch result.
     pub fn batch(&self) -> Option<&BatchResult> {
         self.batch.as_ref()

@@ -59,6 +59,16 @@ pub enum Format {
 }
 
 impl Format {
+    /// The format a file name asks for by its extension (`.png` or `.svg`,
+    /// any case); None for another or no extension.
+    pub fn of_path(path: &Path) -> Option<Format> {
+        match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+            Some("png") => Some(Format::Png),
+            Some("svg") => Some(Format::Svg),
+            _ => None,
+        }
+    }
+
     /// The file-name extension: `png` or `svg`.
     pub fn extension(self) -> &'static str {
         match self {
