@@ -55,6 +55,7 @@ mod estimate;
 pub mod gls;
 mod joint;
 pub mod montecarlo;
+mod options;
 mod pipeline;
 pub mod predict;
 mod response_check;
@@ -77,6 +78,7 @@ pub use joint::{
     ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,
     joint_fit,
 };
+pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
 pub use pipeline::{
     LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, RESPONSE_CHECK_FALSE_ALARM,
     TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_logs, gnss_sdr_tracking_log, series_of,

@@ -1,14 +1,16 @@
 //! The command-line options shared by the commands, and the one place where
-//! they become library objects (`gsens_calib::PipelineSettings`,
-//! `gsens_gnss_sdr::ImportSettings`, `gsens_pocketsdr::ImportSettings`).
+//! they become library objects: a calibration's options become
+//! `gsens_calib::CalibrationOptions` (the names the Python module takes too,
+//! which build `gsens_calib::PipelineSettings`); the converters' become
+//! `gsens_gnss_sdr::ImportSettings` and `gsens_pocketsdr::ImportSettings`.
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
-use gsens_calib::{EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
+use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffsetOption};
 use gsens_core::LoopModel;
-use gsens_core::{KAPLAN_A3, KAPLAN_B3, LoopSpec};
+use gsens_core::{KAPLAN_A3, KAPLAN_B3};
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
-use gsens_session::{SelectionConfig, Weighting};
+use gsens_session::Weighting;
 use std::path::{Path, PathBuf};
 
 /// Estimator choice.
@@ -22,6 +24,18 @@ pub enum MethodArg {
     Batch,
     /// Generalized least squares: batch prewhitened by an AR model of the residual noise.
     Gls,
+}
+
+impl MethodArg {
+    /// The library's name of the method.
+    pub fn name(self) -> MethodName {
+        match self {
+            MethodArg::Gradient => MethodName::Gradient,
+            MethodArg::Rls => MethodName::Rls,
+            MethodArg::Batch => MethodName::Batch,
+            MethodArg::Gls => MethodName::Gls,
+        }
+    }
 }
 
 /// The simulated scenario and its seed (`demo`, `simulate`, `montecarlo`).
@@ -79,28 +93,35 @@ pub enum LoggedArg {
 }
 
 impl LoopArgs {
+    /// Sets the loop's options.
+    pub fn apply(&self, o: &mut CalibrationOptions) {
+        o.order = self.order;
+        o.bn_hz = self.bn_hz;
+        o.zeta = self.zeta;
+        o.a3 = self.a3;
+        o.b3 = self.b3;
+        o.loop_interval_s = self.loop_interval_s;
+        o.logged_phase = self.logged_phase.map(|l| match l {
+            LoggedArg::Last => gsens_core::LoggedPhase::Last,
+            LoggedArg::Mean => gsens_core::LoggedPhase::Mean,
+        });
+    }
+
+    fn options(&self) -> CalibrationOptions {
+        let mut o = CalibrationOptions::default();
+        self.apply(&mut o);
+        o
+    }
+
     /// The loop as the library models it.
     pub fn loop_model(&self) -> LoopModel {
-        let bn_hz = self.bn_hz.unwrap_or(3.0);
-        let spec = match self.order {
-            Some(3) => LoopSpec::ThirdOrder { bn_hz, a3: self.a3, b3: self.b3 },
-            _ => LoopSpec::SecondOrder { bn_hz, zeta: self.zeta },
-        };
-        LoopModel::kaplan(spec, self.loop_interval_s)
+        self.options().loop_model()
     }
 
     /// Whether any of the loop's order, bandwidth, update interval or
     /// logged phase was given (otherwise the data choose the loop).
     pub fn stated(&self) -> bool {
-        self.order.is_some() || self.bn_hz.is_some() || self.loop_interval_s.is_some() || self.logged_phase.is_some()
-    }
-
-    /// What a log row holds.
-    pub fn logged(&self) -> gsens_core::LoggedPhase {
-        match self.logged_phase {
-            Some(LoggedArg::Mean) => gsens_core::LoggedPhase::Mean,
-            _ => gsens_core::LoggedPhase::Last,
-        }
+        self.options().loop_stated()
     }
 }
 
@@ -150,30 +171,18 @@ pub enum RobustArg {
 }
 
 impl EstimatorArgs {
-    /// The method of `m` with this group's gain and forgetting factor.
-    pub fn method(&self, m: MethodArg) -> Method {
-        match m {
-            MethodArg::Batch => Method::Batch,
-            MethodArg::Gls => Method::Gls,
-            MethodArg::Rls => Method::Rls { lambda: self.lambda },
-            MethodArg::Gradient => Method::Gradient { gain_k: self.gain_k },
-        }
-    }
-
-    /// The estimation settings for `method` (checked by the library), the
-    /// loop left at its default for the caller to set.
-    pub fn settings(&self, method: MethodArg) -> EstimateSettings {
-        let mut s = EstimateSettings::default();
-        s.method = self.method(method);
-        s.warmup_s = self.warmup_s;
-        s.imu_scale_sigma = self.imu_scale_sigma_ppm * 1e-6;
-        s.imu_misalignment_sigma_rad = self.imu_misalignment_sigma_mrad * 1e-3;
-        s.highpass_hz = self.highpass_hz;
-        s.robust = match self.robust {
+    /// Sets the estimator's options (the method's parameters, the error model).
+    pub fn apply(&self, o: &mut CalibrationOptions) {
+        o.gain_k = self.gain_k;
+        o.lambda = self.lambda;
+        o.warmup_s = self.warmup_s;
+        o.imu_scale_sigma_ppm = self.imu_scale_sigma_ppm;
+        o.imu_misalignment_sigma_mrad = self.imu_misalignment_sigma_mrad;
+        o.highpass_hz = self.highpass_hz;
+        o.robust = match self.robust {
             RobustArg::None => Robust::None,
             RobustArg::Huber => Robust::Huber,
         };
-        s
     }
 }
 
@@ -214,22 +223,18 @@ pub enum WeightsArg {
 }
 
 impl SelectionArgs {
-    /// The selection settings.
-    pub fn selection(&self) -> SelectionConfig {
-        let mut s = SelectionConfig {
-            max_channels: (self.channels > 0).then_some(self.channels),
-            min_cn0_dbhz: self.min_cn0_dbhz,
-            elevation_mask_deg: self.elevation_mask_deg,
-            weighting: match self.weights {
-                WeightsArg::Equal => Weighting::Equal,
-                WeightsArg::Cn0 => Weighting::Cn0,
-            },
-            ..SelectionConfig::default()
+    /// Sets the channel selection's options.
+    pub fn apply(&self, o: &mut CalibrationOptions) {
+        o.channels = self.channels;
+        o.min_cn0_dbhz = self.min_cn0_dbhz;
+        o.elevation_mask_deg = self.elevation_mask_deg;
+        o.weights = match self.weights {
+            WeightsArg::Equal => Weighting::Equal,
+            WeightsArg::Cn0 => Weighting::Cn0,
         };
-        s.screening.enabled = self.screening;
-        s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);
-        s.screening.max_abs_phase_rad = (self.max_abs_phase_rad > 0.0).then_some(self.max_abs_phase_rad);
-        s
+        o.screening = self.screening;
+        o.cn0_drop_db = self.cn0_drop_db;
+        o.max_abs_phase_rad = self.max_abs_phase_rad;
     }
 }
 
@@ -273,38 +278,29 @@ pub struct AnalysisArgs {
     pub systematic: SystematicArgs,
 }
 
-impl AnalysisArgs {
-    /// The estimation settings with the loop at its default.
-    pub fn estimate_settings(&self) -> EstimateSettings {
-        self.estimator.settings(self.method.method)
-    }
-
-    /// The pipeline settings around `estimate`.
-    pub fn pipeline_settings(&self, estimate: EstimateSettings) -> PipelineSettings {
-        pipeline_settings(estimate, &self.selection, &self.systematic)
+impl SystematicArgs {
+    /// Sets the options of the systematic errors.
+    pub fn apply(&self, o: &mut CalibrationOptions) {
+        o.time_offset = match self.time_offset {
+            TimeOffset::Auto { .. } => TimeOffsetOption::Word("auto".into()),
+            TimeOffset::Fixed { imu_time_offset_s } => TimeOffsetOption::Seconds(imu_time_offset_s),
+        };
+        o.time_offset_max_s = self.time_offset_max_s;
+        o.loop_check = self.loop_check || self.identify_loop;
+        o.identify_damping = self.identify_damping;
+        o.imu_despike = self.imu_despike;
     }
 }
 
-/// The whole pipeline's settings from the option groups.
-pub fn pipeline_settings(
-    estimate: EstimateSettings,
-    selection: &SelectionArgs,
-    systematic: &SystematicArgs,
-) -> PipelineSettings {
-    let mut p = PipelineSettings::default();
-    p.estimate = estimate;
-    p.selection = selection.selection();
-    p.time_offset = match systematic.time_offset {
-        TimeOffset::Auto { .. } => TimeOffset::Auto { max_abs_s: systematic.time_offset_max_s },
-        fixed => fixed,
-    };
-    p.despike_imu = systematic.imu_despike;
-    p.loop_identification = match (systematic.loop_check || systematic.identify_loop, systematic.identify_damping) {
-        (false, _) => LoopIdentificationMode::Off,
-        (true, false) => LoopIdentificationMode::NaturalFrequency,
-        (true, true) => LoopIdentificationMode::NaturalFrequencyAndDamping,
-    };
-    p
+impl AnalysisArgs {
+    /// The options of a calibration with the loop at its default.
+    pub fn options(&self) -> CalibrationOptions {
+        let mut o = CalibrationOptions { method: self.method.method.name(), ..CalibrationOptions::default() };
+        self.estimator.apply(&mut o);
+        self.selection.apply(&mut o);
+        self.systematic.apply(&mut o);
+        o
+    }
 }
 
 /// How GNSS-SDR dump records are selected.

@@ -41,8 +41,8 @@ pub fn run(args: &DemoArgs) -> Result<crate::Status> {
         dir.display()
     ))?;
     let truth = simulate_to_dir(&scenario, args.scenario.seed, &dir)?;
-    let base = args.analysis.estimate_settings();
-    let settings = args.analysis.pipeline_settings(scenario_settings(&scenario, &base)?);
+    let options = args.analysis.options();
+    let settings = options.pipeline_settings_around(scenario_settings(&scenario, &options.estimate_settings())?)?;
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
     let outcome = calibrate_files(&tracking, &imu, &settings)?;

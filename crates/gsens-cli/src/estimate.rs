@@ -43,15 +43,17 @@ pub struct CalibrationArgs {
 }
 
 impl CalibrationArgs {
-    /// The pipeline settings.
-    pub fn settings(&self) -> PipelineSettings {
-        let mut estimate = self.analysis.estimate_settings();
-        estimate.receiver_loop = self.loop_args.loop_model();
-        estimate.logged_phase = self.loop_args.logged();
-        estimate.carrier_hz = self.carrier_hz;
-        let mut p = self.analysis.pipeline_settings(estimate);
-        p.loop_stated = self.loop_args.stated();
-        p
+    /// The options by name.
+    pub fn options(&self) -> gsens_calib::CalibrationOptions {
+        let mut o = self.analysis.options();
+        self.loop_args.apply(&mut o);
+        o.carrier_hz = self.carrier_hz;
+        o
+    }
+
+    /// The pipeline settings (every value checked).
+    pub fn settings(&self) -> Result<PipelineSettings> {
+        Ok(self.options().pipeline_settings()?)
     }
 }
 
@@ -104,7 +106,7 @@ fn calibrate_pocketsdr(imu: &Path, log: &Path, args: &PocketSdrArgs, settings: &
 }
 
 pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
-    let settings = args.calibration.settings();
+    let settings = args.calibration.settings()?;
     let outcome = match &args.pocketsdr.pocketsdr {
         Some(log) => calibrate_pocketsdr(&args.imu, log, &args.pocketsdr, &settings)?,
         None => {
@@ -154,4 +156,35 @@ pub fn gamma_of_document(path: &Path) -> Result<([f64; 3], [[f64; 3]; 3])> {
         }
     }
     Ok((gamma, cov))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CalibrationArgs;
+    use clap::Parser;
+    use gsens_calib::{CalibrationOptions, TimeOffsetOption};
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        calibration: CalibrationArgs,
+    }
+
+    /// The flags' defaults are the library's: one vocabulary for the CLI and Python.
+    #[test]
+    fn no_flags_give_the_library_defaults() {
+        let cli = Cli::try_parse_from(["gsens"]).unwrap();
+        assert_eq!(cli.calibration.options(), CalibrationOptions::default());
+    }
+
+    #[test]
+    fn flags_map_to_the_options_of_the_same_name() {
+        let args = ["gsens", "--bn-hz", "2.5", "--order", "3", "--time-offset", "-0.01", "--weights", "cn0"];
+        let o = Cli::try_parse_from(args).unwrap().calibration.options();
+        assert_eq!(o.bn_hz, Some(2.5));
+        assert_eq!(o.order, Some(3));
+        assert_eq!(o.time_offset, TimeOffsetOption::Seconds(-0.01));
+        assert_eq!(o.weights, gsens_session::Weighting::Cn0);
+        assert!(o.loop_stated());
+    }
 }

@@ -2,7 +2,7 @@
 //! compare each method's spread with the Cramér–Rao bound
 //! (`gsens_calib::montecarlo`).
 
-use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs, pipeline_settings};
+use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::montecarlo::{monte_carlo, scenario_settings};
@@ -36,15 +36,18 @@ pub struct MonteCarloArgs {
 
 pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
     let scenario = args.scenario.load()?;
-    let base = args.estimator.settings(MethodArg::Batch);
+    let mut options = gsens_calib::CalibrationOptions::default();
+    args.estimator.apply(&mut options);
+    args.selection.apply(&mut options);
+    args.systematic.apply(&mut options);
     let methods = args
         .methods
         .iter()
         .map(|&m| {
-            let mut s = scenario_settings(&scenario, &base)?;
-            s.method = args.estimator.method(m);
+            let o = gsens_calib::CalibrationOptions { method: m.name(), ..options.clone() };
+            let mut s = scenario_settings(&scenario, &o.estimate_settings())?;
             s.receiver_loop = s.receiver_loop.with_bn_scaled(args.stated_bn_scale);
-            Ok(pipeline_settings(s, &args.selection, &args.systematic))
+            Ok(o.pipeline_settings_around(s)?)
         })
         .collect::<Result<Vec<_>>>()?;
     let bar = ProgressBar::new(args.runs);

@@ -39,7 +39,7 @@ pub fn settings_and_loop_note(
     calibration: &CalibrationArgs,
     truth: Option<&Path>,
 ) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
-    let mut settings = calibration.settings();
+    let mut settings = calibration.settings()?;
     let Some(path) = truth else { return Ok((settings, None)) };
     let Some(truth) = gsens_sim::read_truth_loop(path)? else {
         let note = format!("receiver loop: from the options ({} states none)", path.display());

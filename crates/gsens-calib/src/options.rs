@@ -1,0 +1,263 @@
+//! The options of a calibration by name: the one vocabulary of the command
+//! line's flags (`--bn-hz` is `bn_hz`) and of the Python module's keyword
+//! arguments, and the one place where those names become
+//! [`PipelineSettings`].
+
+use crate::settings::check_range;
+use crate::{CalibError, EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
+use gsens_core::{KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopModel, LoopSpec};
+use gsens_session::{SelectionConfig, Weighting};
+use serde::{Deserialize, Serialize};
+
+/// The estimator, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MethodName {
+    /// The paper's gradient observer (constant gain [`CalibrationOptions::gain_k`]).
+    Gradient,
+    /// Recursive least squares (forgetting factor [`CalibrationOptions::lambda`]).
+    Rls,
+    /// Batch least squares over the whole log.
+    #[default]
+    Batch,
+    /// Batch least squares prewhitened by an AR model of the residual noise.
+    Gls,
+}
+
+/// The IMU time offset by name: `"auto"` (searched within
+/// ±[`CalibrationOptions::time_offset_max_s`]), `"none"` (0) or a number of
+/// seconds (IMU time stamp minus true time).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum TimeOffsetOption {
+    /// A fixed offset \[s\].
+    Seconds(f64),
+    /// `auto` or `none`.
+    Word(String),
+}
+
+impl Default for TimeOffsetOption {
+    fn default() -> Self {
+        TimeOffsetOption::Word("auto".into())
+    }
+}
+
+/// Every option of a calibration from logs, named as the command line names
+/// its flags (with `_` for `-`), with the command line's defaults.
+///
+/// Deserializes from a map of those names (unknown names are an error that
+/// lists the known ones), so that a Python call
+/// `estimate(..., bn_hz=3, time_offset="none")` and
+/// `gsens estimate --bn-hz 3 --time-offset none` mean the same thing;
+/// [`CalibrationOptions::pipeline_settings`] checks the values and builds the
+/// library's settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CalibrationOptions {
+    /// Carrier frequency \[Hz\] for ppb/g (default GPS L1).
+    pub carrier_hz: f64,
+    /// Order of the receiver's carrier PLL (2 or 3; `None`: 2, and the loop not stated).
+    pub order: Option<u8>,
+    /// One-sided noise bandwidth Bn of the receiver's PLL \[Hz\] (`None`: 3, and the loop not stated).
+    pub bn_hz: Option<f64>,
+    /// Damping ratio ζ of a 2nd-order loop.
+    pub zeta: f64,
+    /// a3 of a 3rd-order loop (Kaplan: 1.1).
+    pub a3: f64,
+    /// b3 of a 3rd-order loop (Kaplan: 2.4).
+    pub b3: f64,
+    /// The loop's update interval \[s\] (`None`: the log interval).
+    pub loop_interval_s: Option<f64>,
+    /// What a log row holds when the loop runs faster than the log (`None`: the last output).
+    pub logged_phase: Option<LoggedPhase>,
+    /// The estimator.
+    pub method: MethodName,
+    /// Gain k of the gradient observer.
+    pub gain_k: f64,
+    /// Forgetting factor λ of the RLS estimator (1 = none).
+    pub lambda: f64,
+    /// Seconds at the start that only drive the loop models.
+    pub warmup_s: f64,
+    /// 1σ scale-factor error of the IMU \[ppm\], added to Γ̂'s uncertainty.
+    pub imu_scale_sigma_ppm: f64,
+    /// 1σ axis misalignment of the IMU \[mrad\], added to Γ̂'s uncertainty.
+    pub imu_misalignment_sigma_mrad: f64,
+    /// Corner of the identical high-pass on φ and φ_a \[Hz\] (0 = off).
+    pub highpass_hz: f64,
+    /// Robust estimation against outlying epochs.
+    pub robust: Robust,
+    /// Average the N channels with the highest mean C/N0 (0 = all that pass the masks).
+    pub channels: usize,
+    /// Drop rows below this C/N0 \[dB-Hz\].
+    pub min_cn0_dbhz: Option<f64>,
+    /// Drop rows below this elevation \[deg\].
+    pub elevation_mask_deg: Option<f64>,
+    /// Weights of the per-epoch channel average.
+    pub weights: Weighting,
+    /// Per-channel screening before averaging.
+    pub screening: bool,
+    /// Screening: rows more than this below the channel's median C/N0 \[dB\] (0 = no test).
+    pub cn0_drop_db: f64,
+    /// Screening: rows with |phase error| beyond this \[rad\] (0 = no limit).
+    pub max_abs_phase_rad: f64,
+    /// The IMU time offset.
+    pub time_offset: TimeOffsetOption,
+    /// Search range ± of `time_offset = "auto"` \[s\].
+    pub time_offset_max_s: f64,
+    /// Test the stated loop against the data (natural frequency fitted jointly with Γ).
+    pub loop_check: bool,
+    /// With the loop check: fit a 2nd-order loop's damping too.
+    pub identify_damping: bool,
+    /// Replace isolated IMU spikes by their neighbours' mean.
+    pub imu_despike: bool,
+}
+
+impl Default for CalibrationOptions {
+    fn default() -> Self {
+        CalibrationOptions {
+            carrier_hz: gsens_core::units::GPS_L1_HZ,
+            order: None,
+            bn_hz: None,
+            zeta: core::f64::consts::FRAC_1_SQRT_2,
+            a3: KAPLAN_A3,
+            b3: KAPLAN_B3,
+            loop_interval_s: None,
+            logged_phase: None,
+            method: MethodName::Batch,
+            gain_k: 0.5,
+            lambda: 1.0,
+            warmup_s: 2.0,
+            imu_scale_sigma_ppm: 0.0,
+            imu_misalignment_sigma_mrad: 0.0,
+            highpass_hz: 0.05,
+            robust: Robust::None,
+            channels: 4,
+            min_cn0_dbhz: None,
+            elevation_mask_deg: None,
+            weights: Weighting::Equal,
+            screening: true,
+            cn0_drop_db: 6.0,
+            max_abs_phase_rad: core::f64::consts::FRAC_PI_4,
+            time_offset: TimeOffsetOption::default(),
+            time_offset_max_s: 0.25,
+            loop_check: true,
+            identify_damping: false,
+            imu_despike: true,
+        }
+    }
+}
+
+impl CalibrationOptions {
+    /// The receiver loop: Kaplan's loop of [`order`](Self::order) (2 unless
+    /// 3) and [`bn_hz`](Self::bn_hz) (3 Hz unless given).
+    pub fn loop_model(&self) -> LoopModel {
+        let bn_hz = self.bn_hz.unwrap_or(3.0);
+        let spec = match self.order {
+            Some(3) => LoopSpec::ThirdOrder { bn_hz, a3: self.a3, b3: self.b3 },
+            _ => LoopSpec::SecondOrder { bn_hz, zeta: self.zeta },
+        };
+        LoopModel::kaplan(spec, self.loop_interval_s)
+    }
+
+    /// Whether the loop was stated (its order, bandwidth, update interval or
+    /// logged phase given); otherwise the data choose it ([`crate::choose_loop`]).
+    pub fn loop_stated(&self) -> bool {
+        self.order.is_some() || self.bn_hz.is_some() || self.loop_interval_s.is_some() || self.logged_phase.is_some()
+    }
+
+    /// The estimator with its parameter.
+    pub fn method(&self) -> Method {
+        match self.method {
+            MethodName::Batch => Method::Batch,
+            MethodName::Gls => Method::Gls,
+            MethodName::Rls => Method::Rls { lambda: self.lambda },
+            MethodName::Gradient => Method::Gradient { gain_k: self.gain_k },
+        }
+    }
+
+    /// The estimation stage's settings (the loop included).
+    pub fn estimate_settings(&self) -> EstimateSettings {
+        let mut s = EstimateSettings::default();
+        s.receiver_loop = self.loop_model();
+        s.logged_phase = self.logged_phase.unwrap_or(LoggedPhase::Last);
+        s.carrier_hz = self.carrier_hz;
+        s.method = self.method();
+        s.warmup_s = self.warmup_s;
+        s.imu_scale_sigma = self.imu_scale_sigma_ppm * 1e-6;
+        s.imu_misalignment_sigma_rad = self.imu_misalignment_sigma_mrad * 1e-3;
+        s.highpass_hz = self.highpass_hz;
+        s.robust = self.robust;
+        s
+    }
+
+    /// The channel selection (a 0 of `channels`, `cn0_drop_db` or
+    /// `max_abs_phase_rad` switches that limit off).
+    pub fn selection(&self) -> SelectionConfig {
+        let mut s = SelectionConfig {
+            max_channels: (self.channels > 0).then_some(self.channels),
+            min_cn0_dbhz: self.min_cn0_dbhz,
+            elevation_mask_deg: self.elevation_mask_deg,
+            weighting: self.weights,
+            ..SelectionConfig::default()
+        };
+        s.screening.enabled = self.screening;
+        s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);
+        s.screening.max_abs_phase_rad = (self.max_abs_phase_rad > 0.0).then_some(self.max_abs_phase_rad);
+        s
+    }
+
+    /// The pipeline's settings around `estimate` (the estimation stage's,
+    /// which a caller may have adapted: a simulated scenario's loop, say):
+    /// selection, time offset, loop identification, despiking. The loop of
+    /// `estimate` counts as stated.
+    pub fn pipeline_settings_around(&self, estimate: EstimateSettings) -> Result<PipelineSettings, CalibError> {
+        for (name, value) in [
+            ("warmup_s", self.warmup_s),
+            ("imu_scale_sigma_ppm", self.imu_scale_sigma_ppm),
+            ("imu_misalignment_sigma_mrad", self.imu_misalignment_sigma_mrad),
+            ("highpass_hz", self.highpass_hz),
+            ("cn0_drop_db", self.cn0_drop_db),
+            ("max_abs_phase_rad", self.max_abs_phase_rad),
+            ("time_offset_max_s", self.time_offset_max_s),
+        ] {
+            check_range(name, value, false)?;
+        }
+        if let Some(order) = self.order.filter(|o| !(2..=3).contains(o)) {
+            return Err(CalibError::Setting { name: "order", value: f64::from(order), expected: "2 or 3" });
+        }
+        let mut p = PipelineSettings::default();
+        p.estimate = estimate;
+        p.selection = self.selection();
+        p.time_offset = match &self.time_offset {
+            TimeOffsetOption::Seconds(s) if s.is_finite() => TimeOffset::Fixed { imu_time_offset_s: *s },
+            TimeOffsetOption::Seconds(s) => {
+                return Err(CalibError::Setting { name: "time_offset", value: *s, expected: "finite" });
+            }
+            TimeOffsetOption::Word(w) => match w.parse::<TimeOffset>() {
+                Ok(TimeOffset::Auto { .. }) => TimeOffset::Auto { max_abs_s: self.time_offset_max_s },
+                Ok(fixed) => fixed,
+                Err(_) => {
+                    let (name, expected) = ("time_offset", "auto, none or a number of seconds");
+                    return Err(CalibError::Word { name, value: w.clone(), expected });
+                }
+            },
+        };
+        p.despike_imu = self.imu_despike;
+        p.loop_identification = match (self.loop_check, self.identify_damping) {
+            (false, _) => LoopIdentificationMode::Off,
+            (true, false) => LoopIdentificationMode::NaturalFrequency,
+            (true, true) => LoopIdentificationMode::NaturalFrequencyAndDamping,
+        };
+        Ok(p)
+    }
+
+    /// The whole pipeline's settings, every value checked (the loop stated
+    /// when [`loop_stated`](Self::loop_stated)).
+    pub fn pipeline_settings(&self) -> Result<PipelineSettings, CalibError> {
+        let estimate = self.estimate_settings();
+        estimate.validate()?;
+        let mut p = self.pipeline_settings_around(estimate)?;
+        p.loop_stated = self.loop_stated();
+        Ok(p)
+    }
+}
