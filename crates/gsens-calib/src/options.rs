@@ -177,17 +177,18 @@ impl CalibrationOptions {
 
     /// The estimation stage's settings (the loop included).
     pub fn estimate_settings(&self) -> EstimateSettings {
-        let mut s = EstimateSettings::default();
-        s.receiver_loop = self.loop_model();
-        s.logged_phase = self.logged_phase.unwrap_or(LoggedPhase::Last);
-        s.carrier_hz = self.carrier_hz;
-        s.method = self.method();
-        s.warmup_s = self.warmup_s;
-        s.imu_scale_sigma = self.imu_scale_sigma_ppm * 1e-6;
-        s.imu_misalignment_sigma_rad = self.imu_misalignment_sigma_mrad * 1e-3;
-        s.highpass_hz = self.highpass_hz;
-        s.robust = self.robust;
-        s
+        EstimateSettings {
+            receiver_loop: self.loop_model(),
+            logged_phase: self.logged_phase.unwrap_or(LoggedPhase::Last),
+            carrier_hz: self.carrier_hz,
+            method: self.method(),
+            warmup_s: self.warmup_s,
+            imu_scale_sigma: self.imu_scale_sigma_ppm * 1e-6,
+            imu_misalignment_sigma_rad: self.imu_misalignment_sigma_mrad * 1e-3,
+            highpass_hz: self.highpass_hz,
+            robust: self.robust,
+            ..EstimateSettings::default()
+        }
     }
 
     /// The channel selection (a 0 of `channels`, `cn0_drop_db` or
@@ -225,10 +226,7 @@ impl CalibrationOptions {
         if let Some(order) = self.order.filter(|o| !(2..=3).contains(o)) {
             return Err(CalibError::Setting { name: "order", value: f64::from(order), expected: "2 or 3" });
         }
-        let mut p = PipelineSettings::default();
-        p.estimate = estimate;
-        p.selection = self.selection();
-        p.time_offset = match &self.time_offset {
+        let time_offset = match &self.time_offset {
             TimeOffsetOption::Seconds(s) if s.is_finite() => TimeOffset::Fixed { imu_time_offset_s: *s },
             TimeOffsetOption::Seconds(s) => {
                 return Err(CalibError::Setting { name: "time_offset", value: *s, expected: "finite" });
@@ -242,13 +240,19 @@ impl CalibrationOptions {
                 }
             },
         };
-        p.despike_imu = self.imu_despike;
-        p.loop_identification = match (self.loop_check, self.identify_damping) {
+        let loop_identification = match (self.loop_check, self.identify_damping) {
             (false, _) => LoopIdentificationMode::Off,
             (true, false) => LoopIdentificationMode::NaturalFrequency,
             (true, true) => LoopIdentificationMode::NaturalFrequencyAndDamping,
         };
-        Ok(p)
+        Ok(PipelineSettings {
+            estimate,
+            selection: self.selection(),
+            time_offset,
+            despike_imu: self.imu_despike,
+            loop_identification,
+            ..PipelineSettings::default()
+        })
     }
 
     /// The whole pipeline's settings, every value checked (the loop stated
