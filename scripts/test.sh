@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The repository's test command: the Rust workspace's tests, then the Python
+# module's. Builds the gsens wheel (maturin) into a virtual environment under
+# target/ (made here with what it needs from PyPI), installs it and runs
+# python/tests with pytest against the `gsens` binary cargo test built.
+#
+#   scripts/test.sh              all tests
+#   GSENS_SKIP_PYTHON=1 scripts/test.sh   the Rust tests only
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+echo "== cargo test --workspace"
+cargo test --workspace --locked
+
+if [ "${GSENS_SKIP_PYTHON:-0}" = 1 ]; then
+  exit 0
+fi
+
+python=${PYTHON:-python3}
+venv=target/py-venv
+if [ ! -x "$venv/bin/python" ]; then
+  echo "== a virtual environment for the Python tests ($venv)"
+  if ! "$python" -m venv "$venv" 2>/dev/null; then
+    # Debian's python3 lacks the venv module until python3-venv is installed.
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+      apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv python3-pip >/dev/null
+      rm -rf "$venv" && "$python" -m venv "$venv"
+    else
+      echo "$python cannot make a virtual environment: install python3-venv" >&2
+      exit 1
+    fi
+  fi
+fi
+"$venv/bin/python" -m pip install -q --upgrade pip
+"$venv/bin/python" -m pip install -q "maturin>=1.16,<2" "numpy>=1.21" scipy pandas pytest matplotlib
+
+echo "== the wheel (maturin build; the dev profile reuses what cargo test built)"
+rm -rf target/wheels
+"$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out target/wheels
+"$venv/bin/python" -m pip install -q --force-reinstall --no-deps target/wheels/gsens-*.whl
+
+echo "== pytest python/tests"
+# Run from outside the source tree so that `import gsens` is the installed wheel.
+GSENS_BIN="$PWD/target/debug/gsens" "$venv/bin/python" -m pytest -q "$PWD/python/tests" --rootdir "$PWD/python" -p no:cacheprovider
