@@ -89,6 +89,11 @@ def test_every_form_of_a_log_gives_the_same_estimate(tmp_path, session):
             np.column_stack([session.tracking[c] for c in gsens.TRACKING_COLUMNS]),
         ),
         ({k: list(v) for k, v in session.imu.items()}, pandas.DataFrame(session.tracking)),
+        # Strided views (copied) and contiguous float64 arrays (read in place).
+        (
+            {k: np.repeat(np.asarray(v, dtype=np.float64), 2)[::2] for k, v in session.imu.items()},
+            {k: np.asarray(v, dtype=np.float64) for k, v in session.tracking.items()},
+        ),
     ]
     for imu, tracking in forms:
         e = gsens.estimate(imu, tracking, **settings)

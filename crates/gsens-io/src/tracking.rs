@@ -36,6 +36,7 @@
 //! receiver that moves a channel to another signal changes its PRN or channel
 //! number, which starts a new track).
 
+use std::borrow::Borrow;
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
@@ -307,9 +308,12 @@ impl TrackingLog {
     /// other carriers). Errors name `source_name` and the line each row would
     /// have in `tracking.csv` as [`crate::TrackingWriter`] writes it (row i on
     /// line i + 2, columns in [`TRACKING_COLUMNS`] order).
-    pub fn from_rows<'a>(
+    ///
+    /// The rows may be borrowed or owned (an iterator that makes them, so that
+    /// no row table need exist beside the caller's columns).
+    pub fn from_rows<R: Borrow<TrackingRow>>(
         source_name: &str,
-        rows: impl IntoIterator<Item = &'a TrackingRow>,
+        rows: impl IntoIterator<Item = R>,
     ) -> Result<TrackingLog, FormatError> {
         Self::build(source_name, rows.into_iter().map(|r| (r, Carrier::GPS_L1)), false)
     }
@@ -318,16 +322,16 @@ impl TrackingLog {
     /// checks the carrier columns (within the GNSS bands, one carrier per
     /// track); errors name the `carrier_hz` column as
     /// [`crate::TrackingWriter::with_carriers`] writes it (column 8).
-    pub fn from_rows_on<'a>(
+    pub fn from_rows_on<R: Borrow<TrackingRow>>(
         source_name: &str,
-        rows: impl IntoIterator<Item = (&'a TrackingRow, Carrier)>,
+        rows: impl IntoIterator<Item = (R, Carrier)>,
     ) -> Result<TrackingLog, FormatError> {
         Self::build(source_name, rows, true)
     }
 
-    fn build<'a>(
+    fn build<R: Borrow<TrackingRow>>(
         source_name: &str,
-        rows: impl IntoIterator<Item = (&'a TrackingRow, Carrier)>,
+        rows: impl IntoIterator<Item = (R, Carrier)>,
         carrier_columns: bool,
     ) -> Result<TrackingLog, FormatError> {
         let column = |i: usize| Column { index: i + 1, name: TRACKING_COLUMNS[i].to_owned() };
@@ -335,6 +339,7 @@ impl TrackingLog {
         let mut b =
             Builder::new(source_name.to_owned(), column(0), column(1), carrier_columns.then(|| carrier_column.clone()));
         for (i, (row, carrier)) in rows.into_iter().enumerate() {
+            let row = row.borrow();
             let line = i as u64 + 2;
             let finite = |v: f64, col: usize| {
                 if v.is_finite() {
@@ -663,7 +668,7 @@ mod tests {
         }
         let csv = w.finish().unwrap();
         let from_file = read_tracking(csv.as_slice(), "sim").unwrap();
-        let from_rows = TrackingLog::from_rows("sim", &rows).unwrap();
+        let from_rows = TrackingLog::from_rows("sim", rows).unwrap();
         assert_eq!(from_rows.tracks().len(), 3);
         assert_eq!(from_rows.tracks()[1].elev_deg[0].to_bits(), from_file.tracks()[1].elev_deg[0].to_bits());
         // NaN ≠ NaN: compare with the unknown elevation blanked out.
@@ -676,16 +681,16 @@ mod tests {
 
     #[test]
     fn rows_in_memory_are_checked_like_a_file() {
-        let e = TrackingLog::from_rows("sim", &[row(0.0, 1, 5, None, 0.1), row(0.0, 1, 6, None, 0.1)]);
+        let e = TrackingLog::from_rows("sim", [row(0.0, 1, 5, None, 0.1), row(0.0, 1, 6, None, 0.1)]);
         let m = e.unwrap_err().to_string();
         assert!(m.starts_with("sim: line 3, column 2 (`channel`)") && m.contains("channel 1 appears twice"), "{m}");
-        let e = TrackingLog::from_rows("sim", &[row(0.05, 1, 5, None, 0.1), row(0.025, 2, 6, None, 0.1)]);
+        let e = TrackingLog::from_rows("sim", [row(0.05, 1, 5, None, 0.1), row(0.025, 2, 6, None, 0.1)]);
         let m = e.unwrap_err().to_string();
         assert!(m.contains("line 3, column 1 (`t_s`)") && m.contains("goes backwards"), "{m}");
-        let e = TrackingLog::from_rows("sim", &[row(0.0, 1, 5, Some(f64::NAN), 0.1)]);
+        let e = TrackingLog::from_rows("sim", [row(0.0, 1, 5, Some(f64::NAN), 0.1)]);
         let m = e.unwrap_err().to_string();
         assert!(m.contains("line 2, column 5 (`elev_deg`)") && m.contains("not a finite number"), "{m}");
-        let m = TrackingLog::from_rows("sim", &[]).unwrap_err().to_string();
+        let m = TrackingLog::from_rows("sim", [] as [TrackingRow; 0]).unwrap_err().to_string();
         assert!(m.contains("no data rows"), "{m}");
     }
 

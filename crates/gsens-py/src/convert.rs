@@ -11,16 +11,35 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// A log as the caller gave it: a file, or named columns.
-pub(crate) enum LogSource {
+pub(crate) enum LogSource<'py> {
     /// A CSV file (`imu.csv`, `tracking.csv`).
     Path(PathBuf),
     /// Columns by name (the CSV header's names), each a 1-D array of float64.
-    Columns(HashMap<String, Vec<f64>>),
+    Columns(HashMap<String, ColumnData<'py>>),
 }
 
-impl LogSource {
+/// One column: the caller's contiguous float64 array, read in place, or a
+/// copy of anything else (a strided view, a list).
+pub(crate) enum ColumnData<'py> {
+    /// A contiguous numpy array, borrowed read-only.
+    Borrowed(PyReadonlyArray1<'py, f64>),
+    /// The values copied.
+    Owned(Vec<f64>),
+}
+
+impl ColumnData<'_> {
+    fn as_slice(&self) -> &[f64] {
+        match self {
+            // Contiguity was checked when the column was taken.
+            ColumnData::Borrowed(a) => a.as_slice().unwrap_or_default(),
+            ColumnData::Owned(v) => v,
+        }
+    }
+}
+
+impl<'py> LogSource<'py> {
     /// A path (str or os.PathLike) or a dict of 1-D arrays.
-    pub(crate) fn extract(obj: &Bound<'_, PyAny>, role: &str) -> PyResult<Self> {
+    pub(crate) fn extract(obj: &Bound<'py, PyAny>, role: &str) -> PyResult<Self> {
         if let Ok(dict) = obj.cast::<PyDict>() {
             let mut columns = HashMap::new();
             for (k, v) in dict.iter() {
@@ -40,21 +59,22 @@ impl LogSource {
     }
 }
 
-/// A 1-D float array (any numpy array castable to float64, or a sequence).
-fn array_1d(v: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-    if let Ok(a) = v.extract::<PyReadonlyArray1<'_, f64>>() {
-        return Ok(match a.as_slice() {
-            Ok(s) => s.to_vec(),
-            Err(_) => a.as_array().iter().copied().collect(),
-        });
+/// A 1-D float array (a float64 numpy array, read in place when contiguous,
+/// or a sequence of numbers).
+fn array_1d<'py>(v: &Bound<'py, PyAny>) -> PyResult<ColumnData<'py>> {
+    if let Ok(a) = v.extract::<PyReadonlyArray1<'py, f64>>() {
+        if a.as_slice().is_ok() {
+            return Ok(ColumnData::Borrowed(a));
+        }
+        return Ok(ColumnData::Owned(a.as_array().iter().copied().collect()));
     }
-    v.extract::<Vec<f64>>()
+    v.extract::<Vec<f64>>().map(ColumnData::Owned)
 }
 
 /// The columns `names` of `columns`, all of one length; a missing one is an
 /// error naming it and the columns the log needs.
 fn take<'a>(
-    columns: &'a HashMap<String, Vec<f64>>,
+    columns: &'a HashMap<String, ColumnData<'_>>,
     role: &str,
     names: &[&str],
     required: &[&str],
@@ -62,7 +82,7 @@ fn take<'a>(
     let mut out = Vec::new();
     let mut len = None;
     for &name in names {
-        let col = columns.get(name).map(Vec::as_slice);
+        let col = columns.get(name).map(ColumnData::as_slice);
         if col.is_none() && required.contains(&name) {
             return Err(GsensError::new_err(format!(
                 "{role}: missing column `{name}` (the columns are {})",
@@ -87,7 +107,7 @@ fn take<'a>(
 }
 
 /// The IMU series of columns `t_s, fx_mps2, fy_mps2, fz_mps2`, checked as the reader checks a file.
-pub(crate) fn imu_series(columns: &HashMap<String, Vec<f64>>, name: &str) -> PyResult<ImuSeries> {
+pub(crate) fn imu_series(columns: &HashMap<String, ColumnData<'_>>, name: &str) -> PyResult<ImuSeries> {
     let c = take(columns, name, &IMU_COLUMNS, &IMU_COLUMNS)?;
     let [t, x, y, z] = [0, 1, 2, 3].map(|i| c[i].unwrap_or_default());
     let imu =
@@ -100,7 +120,7 @@ pub(crate) fn imu_series(columns: &HashMap<String, Vec<f64>>, name: &str) -> PyR
 /// phase_err_rad` (`elev_deg` may be left out: unknown), checked as the
 /// reader checks a file; errors name row i as line i + 2, as in the
 /// `tracking.csv` these columns would make.
-pub(crate) fn tracking_log(columns: &HashMap<String, Vec<f64>>, name: &str) -> PyResult<TrackingLog> {
+pub(crate) fn tracking_log(columns: &HashMap<String, ColumnData<'_>>, name: &str) -> PyResult<TrackingLog> {
     let required = ["t_s", "channel", "prn", "cn0_dbhz", "phase_err_rad"];
     let c = take(columns, name, &TRACKING_COLUMNS, &required)?;
     let n = c[0].map_or(0, <[f64]>::len);
@@ -117,18 +137,30 @@ pub(crate) fn tracking_log(columns: &HashMap<String, Vec<f64>>, name: &str) -> P
             )))
         }
     };
-    let mut rows = Vec::with_capacity(n);
-    for i in 0..n {
-        rows.push(TrackingRow {
+    // Rows stream into the log's builder: no row table beside the columns.
+    let mut bad = None;
+    let rows = (0..n).map_while(|i| {
+        let (channel, prn) = match (integer(1, i), integer(2, i)) {
+            (Ok(c), Ok(p)) => (c, p),
+            (Err(e), _) | (_, Err(e)) => {
+                bad = Some(e);
+                return None;
+            }
+        };
+        Some(TrackingRow {
             t_s: c[0].unwrap_or_default()[i],
-            channel: integer(1, i)?,
-            prn: integer(2, i)?,
+            channel,
+            prn,
             cn0_dbhz: c[3].unwrap_or_default()[i],
             elev_deg: c[4].map(|e| e[i]).filter(|e| !e.is_nan()),
             phase_err_rad: c[5].unwrap_or_default()[i],
-        });
+        })
+    });
+    let log = TrackingLog::from_rows(name, rows).map_err(crate::error);
+    match bad {
+        Some(e) => Err(e),
+        None => log,
     }
-    TrackingLog::from_rows(name, &rows).map_err(crate::error)
 }
 
 /// A keyword argument's value as JSON (None, bool, int, float, str, or a
