@@ -16,8 +16,10 @@ if [ "${GSENS_SKIP_PYTHON:-0}" = 1 ]; then
   exit 0
 fi
 
+# Where cargo puts its builds (and the binary the tests compare with).
+target_dir=${CARGO_TARGET_DIR:-$PWD/target}
 python=${PYTHON:-python3}
-venv=target/py-venv
+venv=$target_dir/py-venv
 if [ ! -x "$venv/bin/python" ]; then
   echo "== a virtual environment for the Python tests ($venv)"
   if ! "$python" -m venv "$venv" 2>/dev/null; then
@@ -35,10 +37,10 @@ fi
 "$venv/bin/python" -m pip install -q "maturin>=1.16,<2" "numpy>=1.21" scipy pandas pytest matplotlib
 
 echo "== the wheel (maturin build; the dev profile reuses what cargo test built)"
-rm -rf target/wheels
-"$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out target/wheels
-"$venv/bin/python" -m pip install -q --force-reinstall --no-deps target/wheels/gsens-*.whl
+rm -rf "$target_dir/wheels"
+"$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out "$target_dir/wheels"
+"$venv/bin/python" -m pip install -q --force-reinstall --no-deps "$target_dir"/wheels/gsens-*.whl
 
 echo "== pytest python/tests"
 # Run from outside the source tree so that `import gsens` is the installed wheel.
-GSENS_BIN="$PWD/target/debug/gsens" "$venv/bin/python" -m pytest -q "$PWD/python/tests" --rootdir "$PWD/python" -p no:cacheprovider
+GSENS_BIN="$target_dir/debug/gsens" "$venv/bin/python" -m pytest -q "$PWD/python/tests" --rootdir "$PWD/python" -p no:cacheprovider
