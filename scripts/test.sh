@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The repository's test command: the Rust workspace's tests, then the Python
 # module's. Builds the gsens wheel (maturin) into a virtual environment under
-# target/ (made here with what it needs from PyPI), installs it and runs
+# the cargo target directory (made here with what it needs from PyPI), installs it and runs
 # python/tests with pytest against the `gsens` binary cargo test built.
 #
 #   scripts/test.sh              all tests

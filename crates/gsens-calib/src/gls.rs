@@ -340,10 +340,9 @@ pub fn covariance_middle_columns(
     columns: &[Vec<f64>],
     segments: &[Range<usize>],
 ) -> nalgebra::DMatrix<f64> {
-    use rustfft::FftPlanner;
+    use rayon::prelude::*;
     use rustfft::num_complex::Complex;
     let p = columns.len();
-    let mut planner = FftPlanner::<f64>::new();
     let mut m = nalgebra::DMatrix::<f64>::zeros(p, p);
     for seg in segments {
         let len = seg.len();
@@ -351,9 +350,10 @@ pub fn covariance_middle_columns(
             continue;
         }
         let n = (2 * len).next_power_of_two().max(2 * (model.order() + 1));
-        let fft = planner.plan_fft_forward(n);
+        let fft = crate::fft::forward(n);
+        // The columns' transforms are independent: one per core.
         let x: Vec<Vec<Complex<f64>>> = columns
-            .iter()
+            .par_iter()
             .map(|c| {
                 let mut v = vec![Complex::new(0.0, 0.0); n];
                 for (k, a) in c[seg.clone()].iter().enumerate() {

@@ -217,7 +217,9 @@ fn joint_fit_axes(
         }
         let mut columns: Vec<Vec<f64>> = axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
         let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
-            let (fl, fh) = (triad_pass(series, settings, lo)?, triad_pass(series, settings, hi)?);
+            // Two independent passes over the log: one per core.
+            let (fl, fh) = rayon::join(|| triad_pass(series, settings, lo), || triad_pass(series, settings, hi));
+            let (fl, fh) = (fl?, fh?);
             let (pl, ph) = (phi_a_of(&fl), phi_a_of(&fh));
             Ok(used
                 .iter()
@@ -321,11 +323,13 @@ fn joint_fit_axes(
         .collect();
     let middle = gls::covariance_middle_columns(&noise, &full_columns, &segments);
     let jtj_inv = (jac.transpose() * &jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
-    let cov = &jtj_inv * middle * &jtj_inv;
+    let cov = &jtj_inv * &middle * &jtj_inv;
     // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
     let a3 = jac.columns(0, na).into_owned();
     let a3_inv = (a3.transpose() * &a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(na, na));
-    let middle3 = gls::covariance_middle_columns(&noise, &full_columns[..na], &segments);
+    // Entry (i, j) of the middle depends on columns i and j alone: the Γ
+    // columns' middle is the leading block of the joint one.
+    let middle3 = middle.view((0, 0), (na, na)).into_owned();
     let cov3 = &a3_inv * middle3 * &a3_inv;
     // Row/column of axis i in the fit (None: left out as unobservable).
     let at = |i: usize| axes.iter().position(|&a| a == i);

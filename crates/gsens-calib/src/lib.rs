@@ -52,6 +52,7 @@ mod checks;
 mod document;
 mod error;
 mod estimate;
+mod fft;
 pub mod gls;
 mod joint;
 pub mod montecarlo;

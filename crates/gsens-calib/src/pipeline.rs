@@ -324,8 +324,11 @@ pub fn calibrate_logs(
 
 /// [`calibrate_logs`] on files: `imu.csv` and `tracking.csv`.
 pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings) -> Result<Outcome, PipelineError> {
-    let tracking_log = gsens_io::read_tracking_file(tracking)?;
-    let imu_series = gsens_io::read_imu_file(imu)?;
+    // The two files are read at once (the IMU log on the second core); a bad
+    // tracking log is still the error reported first.
+    let (tracking_log, imu_series) =
+        rayon::join(|| gsens_io::read_tracking_file(tracking), || gsens_io::read_imu_file(imu));
+    let (tracking_log, imu_series) = (tracking_log?, imu_series?);
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), settings)?;
     outcome.inputs = vec![input("imu", imu), input("tracking", tracking)];
     Ok(outcome)

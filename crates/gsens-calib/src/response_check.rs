@@ -110,7 +110,6 @@
 use crate::search::batch_pass;
 use crate::{CalibError, EpochSeries, EstimateSettings};
 use gsens_core::{Complex, HighPass, LoggedPhase, LoopModel};
-use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -389,7 +388,7 @@ pub fn measure_response_with(
 
     // Welch sums over the segments, bins 1 … below Nyquist.
     let n_bins = (n_seg - 1) / 2;
-    let fft = FftPlanner::<f64>::new().plan_fft_forward(n_seg);
+    let fft = crate::fft::forward(n_seg);
     let spectrum = |x: &[f64], s: usize| -> Vec<Complex64> {
         let seg = &x[s..s + n_seg];
         let mean = seg.iter().sum::<f64>() / n_seg as f64;

@@ -82,19 +82,20 @@ fn golden(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f6
 }
 
 /// Grid search then golden-section refinement of `f` on \[lo, hi\]; returns the
-/// minimizer.
-fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+/// minimizer. The grid's points are evaluated in parallel (each is a pass
+/// over the log); the first smallest wins, as in a sequential scan.
+fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, f: impl Fn(f64) -> f64 + Sync) -> f64 {
+    use rayon::prelude::*;
     let step = (hi - lo) / grid as f64;
+    let values: Vec<f64> = (0..=grid).into_par_iter().map(|i| f(lo + i as f64 * step)).collect();
     let (mut best_x, mut best_f) = (lo, f64::INFINITY);
-    for i in 0..=grid {
-        let x = lo + i as f64 * step;
-        let v = f(x);
+    for (i, v) in values.into_iter().enumerate() {
         if v < best_f {
             best_f = v;
-            best_x = x;
+            best_x = lo + i as f64 * step;
         }
     }
-    golden((best_x - step).max(lo), (best_x + step).min(hi), tol, &mut f)
+    golden((best_x - step).max(lo), (best_x + step).min(hi), tol, &f)
 }
 
 /// The profile of the RSS over the time-offset correction δτ for one batch pass.

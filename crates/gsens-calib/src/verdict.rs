@@ -7,7 +7,6 @@
 //! range (the Costas rule of thumb: 3σ of the phase error below 45°).
 
 use gsens_core::LoopModel;
-use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
@@ -46,7 +45,7 @@ fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
         .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
         .take(len)
         .collect();
-    FftPlanner::new().plan_fft_forward(len).process(&mut buf);
+    crate::fft::forward(len).process(&mut buf);
     let df = 1.0 / (len as f64 * interval_s);
     let nyquist = 0.5 / interval_s;
     let (lo, hi) = (0.1f64, 5.0f64.min(0.9 * nyquist));

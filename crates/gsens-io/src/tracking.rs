@@ -157,6 +157,42 @@ struct ChannelState {
     track: usize,
 }
 
+/// The reader state of every channel seen: receivers number their channels
+/// from 0, so the usual numbers index a vector (a hash per row cost more than
+/// the row's other bookkeeping); any other number goes to a map.
+#[derive(Default)]
+struct ChannelTable {
+    dense: Vec<Option<ChannelState>>,
+    sparse: HashMap<u32, ChannelState>,
+}
+
+impl ChannelTable {
+    /// Channel numbers below this are indexed directly.
+    const DENSE: u32 = 4096;
+
+    #[inline]
+    fn get(&self, channel: u32) -> Option<&ChannelState> {
+        if channel < Self::DENSE {
+            self.dense.get(channel as usize).and_then(Option::as_ref)
+        } else {
+            self.sparse.get(&channel)
+        }
+    }
+
+    #[inline]
+    fn set(&mut self, channel: u32, state: ChannelState) {
+        if channel < Self::DENSE {
+            let i = channel as usize;
+            if i >= self.dense.len() {
+                self.dense.resize_with(i + 1, || None);
+            }
+            self.dense[i] = Some(state);
+        } else {
+            self.sparse.insert(channel, state);
+        }
+    }
+}
+
 /// One row's values, as parsed.
 struct RowValues {
     t_s: f64,
@@ -182,7 +218,7 @@ struct Builder {
     /// The latest line of each track.
     track_line: Vec<u64>,
     track_of: HashMap<(u32, u32), usize>,
-    channels: HashMap<u32, ChannelState>,
+    channels: ChannelTable,
     epoch_t_s: Vec<f64>,
     epoch_line: Vec<u64>,
     rows: usize,
@@ -199,7 +235,7 @@ impl Builder {
             tracks: Vec::new(),
             track_line: Vec::new(),
             track_of: HashMap::new(),
-            channels: HashMap::new(),
+            channels: ChannelTable::default(),
             epoch_t_s: Vec::new(),
             epoch_line: Vec::new(),
             rows: 0,
@@ -240,7 +276,7 @@ impl Builder {
         self.prev = Some((t, line));
 
         let (channel, prn) = (r.channel, r.prn);
-        let track = match self.channels.get(&channel) {
+        let track = match self.channels.get(channel) {
             Some(state) => {
                 // Time stamps are non-decreasing overall, so equality is the only
                 // way this channel can fail to be strictly increasing.
@@ -275,7 +311,7 @@ impl Builder {
             });
         }
         self.track_line[track] = line;
-        self.channels.insert(channel, ChannelState { last_t_s: t, last_line: line, track });
+        self.channels.set(channel, ChannelState { last_t_s: t, last_line: line, track });
         let tr = &mut self.tracks[track];
         tr.t_s.push(t);
         tr.phase_err_rad.push(r.phase_err_rad);
@@ -639,6 +675,18 @@ mod tests {
         // Even with another PRN: a channel tracks one satellite at a time.
         let m = err("0,1,5,45,30,0.01\n0,1,6,45,30,0.01\n");
         assert!(m.contains("channel 1 appears twice"), "{m}");
+    }
+
+    #[test]
+    fn channel_numbers_beyond_the_dense_table_are_tracked_alike() {
+        // 4095 is the dense table's last index, 4096 and u32::MAX go to its map.
+        let log =
+            read("0,4095,5,45,30,0.01\n0,4096,6,45,30,0.02\n0,4294967295,7,45,30,0.03\n0.025,4096,6,45,30,0.04\n")
+                .unwrap();
+        let rows: Vec<(u32, usize)> = log.tracks().iter().map(|t| (t.channel, t.t_s.len())).collect();
+        assert_eq!(rows, [(4095, 1), (4096, 2), (4294967295, 1)]);
+        let m = err("0,4096,5,45,30,0.01\n0,4096,6,45,30,0.01\n");
+        assert!(m.contains("line 3, column 2 (`channel`)") && m.contains("channel 4096 appears twice"), "{m}");
     }
 
     #[test]
