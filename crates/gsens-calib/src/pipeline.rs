@@ -210,6 +210,43 @@ pub fn calibrate_logs(
     imu_name: &str,
     settings: &PipelineSettings,
 ) -> Result<Outcome, PipelineError> {
+    calibrate_tracking(TrackingSource::Borrowed(tracking), imu, imu_name, settings)
+}
+
+/// [`calibrate_logs`] on a tracking log it may free once the session is
+/// prepared from it: the log (tens of MB for an hour of 12 channels) is then
+/// not held through the estimation.
+pub fn calibrate_owned_logs(
+    tracking: TrackingLog,
+    imu: &ImuSeries,
+    imu_name: &str,
+    settings: &PipelineSettings,
+) -> Result<Outcome, PipelineError> {
+    calibrate_tracking(TrackingSource::Owned(tracking), imu, imu_name, settings)
+}
+
+/// A tracking log lent or given to the pipeline.
+enum TrackingSource<'a> {
+    Borrowed(&'a TrackingLog),
+    Owned(TrackingLog),
+}
+
+impl std::ops::Deref for TrackingSource<'_> {
+    type Target = TrackingLog;
+    fn deref(&self) -> &TrackingLog {
+        match self {
+            TrackingSource::Borrowed(t) => t,
+            TrackingSource::Owned(t) => t,
+        }
+    }
+}
+
+fn calibrate_tracking(
+    tracking: TrackingSource<'_>,
+    imu: &ImuSeries,
+    imu_name: &str,
+    settings: &PipelineSettings,
+) -> Result<Outcome, PipelineError> {
     settings.estimate.validate()?;
     let (assumed, max_abs_s) = match settings.time_offset {
         TimeOffset::Fixed { imu_time_offset_s } => {
@@ -240,7 +277,9 @@ pub fn calibrate_logs(
     let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
     let flat_runs = find_flat_runs(imu);
     let imu = &despiked;
-    let mut session = prepare_session(tracking, imu, imu_name, &settings.selection, assumed)?;
+    let mut session = prepare_session(&tracking, imu, imu_name, &settings.selection, assumed)?;
+    // The session holds what the estimate needs of the log.
+    drop(tracking);
     // An offset beyond half the log's span leaves no overlap to compare (and
     // an absurd bound would size the search's grid without limit).
     if let (Some(max), Some((t0, t1))) = (max_abs_s, session.t_s.first().zip(session.t_s.last()))
@@ -329,7 +368,7 @@ pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings)
     let (tracking_log, imu_series) =
         rayon::join(|| gsens_io::read_tracking_file(tracking), || gsens_io::read_imu_file(imu));
     let (tracking_log, imu_series) = (tracking_log?, imu_series?);
-    let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), settings)?;
+    let mut outcome = calibrate_owned_logs(tracking_log, &imu_series, &imu.display().to_string(), settings)?;
     outcome.inputs = vec![input("imu", imu), input("tracking", tracking)];
     Ok(outcome)
 }

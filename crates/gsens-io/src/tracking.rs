@@ -321,6 +321,29 @@ impl Builder {
         Ok(())
     }
 
+    /// Reserves every track's columns for the rest of a source of
+    /// `total_bytes`, `bytes_read` of it read: each track's share of the rows
+    /// so far, of the rows the remaining bytes hold at the average row length
+    /// so far (2 % spare). Growing by doubling instead would leave up to half
+    /// of each column unused and copy it on every growth.
+    fn reserve_for(&mut self, bytes_read: u64, total_bytes: u64) {
+        if self.rows == 0 || bytes_read == 0 || total_bytes <= bytes_read {
+            return;
+        }
+        let rows_left = (total_bytes - bytes_read) as f64 * self.rows as f64 / bytes_read as f64;
+        for tr in &mut self.tracks {
+            let share = tr.t_s.len() as f64 / self.rows as f64;
+            let extra = (1.02 * share * rows_left) as usize + 16;
+            tr.t_s.reserve_exact(extra);
+            tr.phase_err_rad.reserve_exact(extra);
+            tr.cn0_dbhz.reserve_exact(extra);
+            tr.elev_deg.reserve_exact(extra);
+        }
+        let epochs_left = (rows_left * self.epoch_t_s.len() as f64 / self.rows as f64) as usize + 16;
+        self.epoch_t_s.reserve_exact(epochs_left);
+        self.epoch_line.reserve_exact(epochs_left);
+    }
+
     fn finish(self) -> Result<TrackingLog, FormatError> {
         if self.rows == 0 {
             return Err(FormatError::NoData { file: self.file });
@@ -527,6 +550,19 @@ impl CarrierCells {
 /// Reads a `tracking.csv` stream. `source_name` names the source in error
 /// messages (typically the file name).
 pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog, FormatError> {
+    read_tracking_sized(input, source_name, None)
+}
+
+/// Rows read before the columns are reserved for the rest of a source of known size.
+const ROWS_BEFORE_RESERVE: usize = 4096;
+
+/// [`read_tracking`] of a source of `total_bytes` (a file's length): the
+/// columns are sized for the whole source after its first rows.
+fn read_tracking_sized<R: Read>(
+    input: R,
+    source_name: &str,
+    total_bytes: Option<u64>,
+) -> Result<TrackingLog, FormatError> {
     let (mut src, cols) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
     let mut carriers = CarrierCells::find(&src)?;
@@ -558,6 +594,9 @@ pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog
             carrier: carriers.carrier(&src)?,
         };
         b.push(&values, src.line())?;
+        if let Some(total) = total_bytes.filter(|_| b.rows == ROWS_BEFORE_RESERVE) {
+            b.reserve_for(src.record.position().map_or(0, |p| p.byte()), total);
+        }
     }
     b.finish()
 }
@@ -567,7 +606,8 @@ pub fn read_tracking_file(path: impl AsRef<Path>) -> Result<TrackingLog, FormatE
     let path = path.as_ref();
     let name = path_name(path);
     let file = std::fs::File::open(path).map_err(|e| FormatError::io(&name, e))?;
-    read_tracking(file, &name)
+    let total_bytes = file.metadata().ok().map(|m| m.len());
+    read_tracking_sized(file, &name, total_bytes)
 }
 
 #[cfg(test)]

@@ -94,8 +94,9 @@ fn calibrate_sources(
         LogSource::Path(p) => gsens_io::read_tracking_file(p).map_err(error)?,
         LogSource::Columns(c) => tracking_log(c, "tracking")?,
     };
-    let mut outcome =
-        py.detach(|| gsens_calib::calibrate_logs(&tracking_log, &imu_series, &imu_name, settings)).map_err(error)?;
+    let mut outcome = py
+        .detach(|| gsens_calib::calibrate_owned_logs(tracking_log, &imu_series, &imu_name, settings))
+        .map_err(error)?;
     let name = |s: &LogSource, fallback: &str| match s {
         LogSource::Path(p) => p.display().to_string(),
         LogSource::Columns(_) => fallback.to_string(),

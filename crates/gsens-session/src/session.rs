@@ -390,6 +390,11 @@ pub fn prepare_session(
     // The rows passing the masks of every track that has some (the candidates), screened.
     let mut candidate_of: Vec<Option<usize>> = vec![None; tracks.len()];
     let mut rows = Rows { track_start: vec![0], ..Rows::default() };
+    // The masks' counts size the row table exactly (no doubling slack).
+    let n_rows: usize = stats.iter().map(|s| s.passing).sum();
+    rows.epoch.reserve_exact(n_rows);
+    rows.phase.reserve_exact(n_rows);
+    rows.cn0.reserve_exact(n_rows);
     for (i, tr) in tracks.iter().enumerate() {
         if stats[i].passing == 0 {
             continue;
