@@ -149,7 +149,9 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
             _ => None,
         })
         .collect();
-    let n = ok.len().max(1) as f64;
+    // No run with an estimate of every axis: every statistic is NaN (null in
+    // JSON), not a 0 that reads as a perfect estimator.
+    let n = ok.len() as f64;
     type PerRun<'a> = &'a dyn Fn(&Run, &MethodRun, usize) -> f64;
     let mean = |f: PerRun| [0, 1, 2].map(|i| ok.iter().map(|(r, m)| f(r, m, i)).sum::<f64>() / n);
     let rms = |f: PerRun| [0, 1, 2].map(|i| (ok.iter().map(|(r, m)| f(r, m, i).powi(2)).sum::<f64>() / n).sqrt());
@@ -168,7 +170,7 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
             *warning_counts.entry(*w).or_insert(0) += 1;
         }
     }
-    let untrustworthy = produced.iter().filter(|m| !m.trustworthy).count() as f64 / produced.len().max(1) as f64;
+    let untrustworthy = produced.iter().filter(|m| !m.trustworthy).count() as f64 / produced.len() as f64;
     let rmse = rms(&err);
     let crlb_rms = rms(&crlb);
     let collect = |f: &dyn Fn(&MethodRun) -> Option<f64>| -> Vec<f64> { ok.iter().filter_map(|(_, m)| f(m)).collect() };
@@ -358,4 +360,27 @@ pub fn monte_carlo(
         methods: stats,
         per_run,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_run_with_an_estimate_gives_no_statistics_not_zeros() {
+        let failed = |seed| Run {
+            seed,
+            gamma_hz_per_mps2: [0.09, 0.08, -0.08],
+            gamma_imu_axes_hz_per_mps2: [0.09, 0.08, -0.08],
+            methods: vec![MethodOutcome { method: "batch", result: None, error: Some("too short".into()) }],
+        };
+        let st = method_stats(&[failed(1), failed(2)], 0);
+        assert_eq!((st.runs, st.failures), (0, 2));
+        for v in [st.bias, st.rmse, st.crlb, st.rmse_over_crlb, st.within_1sigma, st.z_rms, st.rmse_body] {
+            assert!(v.iter().all(|x| x.is_nan()), "{v:?}");
+        }
+        assert!(st.untrustworthy.is_nan());
+        let json = serde_json::to_value(&st).unwrap();
+        assert_eq!(json["bias"], serde_json::json!([null, null, null]));
+    }
 }

@@ -29,6 +29,14 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         "method    axis      bias        RMSE        CRLB   RMSE/CRLB  |e|≤1σ  |e|≤2σ  |e|≤3σ   z RMS   RMSE vs body Γ"
     );
     for (name, st) in stats {
+        if st.runs == 0 {
+            let _ = writeln!(
+                s_,
+                "{name:<9}      no statistics: none of the {} runs gave an estimate of every axis",
+                mc.runs
+            );
+            continue;
+        }
         for i in 0..3 {
             let _ = writeln!(
                 s_,
@@ -56,7 +64,7 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         let worst = st.rmse_over_crlb.iter().fold(0.0f64, |a, &x| a.max(x));
         let _ = writeln!(s_, "\nbest: {b} (largest RMSE/CRLB over the axes {worst:.3})");
     }
-    for (name, st) in stats {
+    for (name, st) in stats.iter().filter(|(_, st)| st.untrustworthy.is_finite()) {
         let codes: Vec<String> = st.warning_counts.iter().map(|(c, n)| format!("{c} ×{n}")).collect();
         let _ = writeln!(
             s_,
