@@ -36,7 +36,7 @@ fi
 "$venv/bin/python" -m pip install -q --upgrade pip
 "$venv/bin/python" -m pip install -q "maturin>=1.16,<2" "numpy>=1.21" scipy pandas pytest matplotlib
 
-echo "== the wheel (maturin build; the dev profile reuses what cargo test built)"
+echo "== the wheel (maturin build, dev profile: optimized like the tests)"
 rm -rf "$target_dir/wheels"
 "$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out "$target_dir/wheels"
 "$venv/bin/python" -m pip install -q --force-reinstall --no-deps "$target_dir"/wheels/gsens-*.whl

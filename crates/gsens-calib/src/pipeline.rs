@@ -9,9 +9,10 @@ use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resampl
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
     FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session,
-    reinterpolate_imu,
+    prepare_session_owned, reinterpolate_imu,
 };
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::path::Path;
 
 /// How the IMU/tracking time offset (IMU time stamp minus true time) is handled.
@@ -210,39 +211,23 @@ pub fn calibrate_logs(
     imu_name: &str,
     settings: &PipelineSettings,
 ) -> Result<Outcome, PipelineError> {
-    calibrate_tracking(TrackingSource::Borrowed(tracking), imu, imu_name, settings)
+    calibrate_tracking(Cow::Borrowed(tracking), imu, imu_name, settings)
 }
 
-/// [`calibrate_logs`] on a tracking log it may free once the session is
-/// prepared from it: the log (tens of MB for an hour of 12 channels) is then
-/// not held through the estimation.
+/// [`calibrate_logs`] on a tracking log it frees once the session has its
+/// rows (before the screening): the log (tens of MB for an hour of 12
+/// channels) is not held through the screening and the estimation.
 pub fn calibrate_owned_logs(
     tracking: TrackingLog,
     imu: &ImuSeries,
     imu_name: &str,
     settings: &PipelineSettings,
 ) -> Result<Outcome, PipelineError> {
-    calibrate_tracking(TrackingSource::Owned(tracking), imu, imu_name, settings)
-}
-
-/// A tracking log lent or given to the pipeline.
-enum TrackingSource<'a> {
-    Borrowed(&'a TrackingLog),
-    Owned(TrackingLog),
-}
-
-impl std::ops::Deref for TrackingSource<'_> {
-    type Target = TrackingLog;
-    fn deref(&self) -> &TrackingLog {
-        match self {
-            TrackingSource::Borrowed(t) => t,
-            TrackingSource::Owned(t) => t,
-        }
-    }
+    calibrate_tracking(Cow::Owned(tracking), imu, imu_name, settings)
 }
 
 fn calibrate_tracking(
-    tracking: TrackingSource<'_>,
+    tracking: Cow<'_, TrackingLog>,
     imu: &ImuSeries,
     imu_name: &str,
     settings: &PipelineSettings,
@@ -277,9 +262,12 @@ fn calibrate_tracking(
     let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
     let flat_runs = find_flat_runs(imu);
     let imu = &despiked;
-    let mut session = prepare_session(&tracking, imu, imu_name, &settings.selection, assumed)?;
-    // The session holds what the estimate needs of the log.
-    drop(tracking);
+    // The session holds what the estimate needs of the log; a log given to
+    // the pipeline is freed as soon as its rows are taken.
+    let mut session = match tracking {
+        Cow::Borrowed(t) => prepare_session(t, imu, imu_name, &settings.selection, assumed)?,
+        Cow::Owned(t) => prepare_session_owned(t, imu, imu_name, &settings.selection, assumed)?,
+    };
     // An offset beyond half the log's span leaves no overlap to compare (and
     // an absurd bound would size the search's grid without limit).
     if let (Some(max), Some((t0, t1))) = (max_abs_s, session.t_s.first().zip(session.t_s.last()))

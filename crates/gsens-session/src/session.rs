@@ -2,6 +2,7 @@
 //! IMU interpolation (documented at the crate root).
 
 use nalgebra::{DMatrix, DVector};
+use std::borrow::Cow;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -314,11 +315,45 @@ pub fn prepare_session(
     selection: &SelectionConfig,
     imu_time_offset_s: f64,
 ) -> Result<PreparedSession, SessionError> {
-    let file = tracking.source_name();
+    prepare(Cow::Borrowed(tracking), imu, imu_name, selection, imu_time_offset_s)
+}
+
+/// [`prepare_session`] on a log it frees once the rows that pass the masks
+/// are copied out, before the screening: the log and the screening's per-row
+/// arrays are then never held at once (the peak memory of an estimate).
+pub fn prepare_session_owned(
+    tracking: TrackingLog,
+    imu: &ImuSeries,
+    imu_name: &str,
+    selection: &SelectionConfig,
+    imu_time_offset_s: f64,
+) -> Result<PreparedSession, SessionError> {
+    prepare(Cow::Owned(tracking), imu, imu_name, selection, imu_time_offset_s)
+}
+
+/// What the selection needs of a track once its rows are copied out.
+struct TrackMeta {
+    channel: u32,
+    prn: u32,
+    carrier: gsens_io::Carrier,
+    mean_cn0_dbhz: f64,
+}
+
+fn prepare(
+    tracking: Cow<'_, TrackingLog>,
+    imu: &ImuSeries,
+    imu_name: &str,
+    selection: &SelectionConfig,
+    imu_time_offset_s: f64,
+) -> Result<PreparedSession, SessionError> {
+    let file_name = tracking.source_name().to_owned();
+    let file = file_name.as_str();
     check_settings(file, selection, imu_time_offset_s)?;
     imu.validate(imu_name)?;
-    let stamps = tracking.epoch_t_s();
-    let grid = Grid::new(tracking)?;
+    // The epoch stamps outlive the log (1 % of its size).
+    let stamps_of_log = tracking.epoch_t_s().to_vec();
+    let stamps = stamps_of_log.as_slice();
+    let grid = Grid::new(&tracking)?;
     let k_last = *grid.k_of_stamp.last().expect("at least two stamps");
 
     // Usable span: the grid epochs whose IMU read time lies in the IMU's span.
@@ -416,6 +451,13 @@ pub fn prepare_session(
         }
         rows.track_start.push(rows.epoch.len());
     }
+    let tracks: Vec<TrackMeta> = tracks
+        .iter()
+        .map(|t| TrackMeta { channel: t.channel, prn: t.prn, carrier: t.carrier, mean_cn0_dbhz: t.mean_cn0_dbhz() })
+        .collect();
+    drop(track_ks);
+    // An owned log is freed here; a borrowed one stays with its owner.
+    drop(tracking);
     let screened = if selection.screening.enabled {
         screening::screen(&rows, n_epochs, grid.log_interval_s, &selection.screening)
     } else {
@@ -442,7 +484,7 @@ pub fn prepare_session(
         } else if s.in_span > 0 {
             s.cn0_sum_span / s.in_span as f64
         } else {
-            tracks[i].mean_cn0_dbhz()
+            tracks[i].mean_cn0_dbhz
         }
     };
     let mut ranked: Vec<usize> = (0..tracks.len()).filter(|&i| kept_of(i).0 > 0).collect();
