@@ -8,8 +8,8 @@ use gsens_core::LoopModel;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
-    FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session,
-    prepare_session_owned, reinterpolate_imu,
+    FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session_from,
+    reinterpolate_imu,
 };
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -264,10 +264,7 @@ fn calibrate_tracking(
     let imu = &despiked;
     // The session holds what the estimate needs of the log; a log given to
     // the pipeline is freed as soon as its rows are taken.
-    let mut session = match tracking {
-        Cow::Borrowed(t) => prepare_session(t, imu, imu_name, &settings.selection, assumed)?,
-        Cow::Owned(t) => prepare_session_owned(t, imu, imu_name, &settings.selection, assumed)?,
-    };
+    let mut session = prepare_session_from(tracking, imu, imu_name, &settings.selection, assumed)?;
     // An offset beyond half the log's span leaves no overlap to compare (and
     // an absurd bound would size the search's grid without limit).
     if let (Some(max), Some((t0, t1))) = (max_abs_s, session.t_s.first().zip(session.t_s.last()))

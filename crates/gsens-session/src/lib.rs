@@ -236,5 +236,5 @@ pub use imu_screening::{
 pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
     ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, SignalSummary, Weighting,
-    overlap_hint, prepare_session, prepare_session_files, prepare_session_owned, reinterpolate_imu,
+    overlap_hint, prepare_session, prepare_session_files, prepare_session_from, reinterpolate_imu,
 };

@@ -315,20 +315,7 @@ pub fn prepare_session(
     selection: &SelectionConfig,
     imu_time_offset_s: f64,
 ) -> Result<PreparedSession, SessionError> {
-    prepare(Cow::Borrowed(tracking), imu, imu_name, selection, imu_time_offset_s)
-}
-
-/// [`prepare_session`] on a log it frees once the rows that pass the masks
-/// are copied out, before the screening: the log and the screening's per-row
-/// arrays are then never held at once (the peak memory of an estimate).
-pub fn prepare_session_owned(
-    tracking: TrackingLog,
-    imu: &ImuSeries,
-    imu_name: &str,
-    selection: &SelectionConfig,
-    imu_time_offset_s: f64,
-) -> Result<PreparedSession, SessionError> {
-    prepare(Cow::Owned(tracking), imu, imu_name, selection, imu_time_offset_s)
+    prepare_session_from(Cow::Borrowed(tracking), imu, imu_name, selection, imu_time_offset_s)
 }
 
 /// What the selection needs of a track once its rows are copied out.
@@ -339,7 +326,11 @@ struct TrackMeta {
     mean_cn0_dbhz: f64,
 }
 
-fn prepare(
+/// [`prepare_session`] on a log lent or given: a given log is freed once the
+/// rows that pass the masks are copied out, before the screening, so that the
+/// log and the screening's per-row arrays are never held at once (the peak
+/// memory of an estimate).
+pub fn prepare_session_from(
     tracking: Cow<'_, TrackingLog>,
     imu: &ImuSeries,
     imu_name: &str,
