@@ -186,6 +186,7 @@ pub fn burg(segments: &[&[f64]], max_order: usize) -> Vec<ArModel> {
     let mut models = vec![ArModel::white(if total > 0 { energy / total as f64 } else { 0.0 })];
     let mut fwd: Vec<Vec<f64>> = segments.iter().map(|s| s.to_vec()).collect();
     let mut bwd = fwd.clone();
+    let mut bwd_next = fwd.clone();
     // Order 1's sums (forward and backward errors of order 0 are the data).
     let (mut num, mut den) = (0.0, 0.0);
     for s in segments {
@@ -208,31 +209,72 @@ pub fn burg(segments: &[&[f64]], max_order: usize) -> Vec<ArModel> {
         a.push(kappa);
         var *= 1.0 - kappa * kappa;
         models.push(ArModel { coeffs: a.clone(), innovation_variance: var });
-        // Update the errors to order m and, in the same pass, sum order m + 1's
-        // f_k·b_{k−1} and f_k² + b_{k−1}² (k ≥ m + 1).
+        // Update the errors to order m (k ≥ m) and sum order m + 1's
+        // f_k·b_{k−1} and f_k² + b_{k−1}² (k ≥ m + 1). Each step reads only
+        // the previous order's backward errors, so the new ones go to a
+        // second buffer, and a long segment is done in two halves at once
+        // (each half's three arrays then stay in its core's cache).
         (num, den) = (0.0, 0.0);
-        for (f, b) in fwd.iter_mut().zip(bwd.iter_mut()) {
+        for ((f, b), b_next) in fwd.iter_mut().zip(bwd.iter_mut()).zip(bwd_next.iter_mut()) {
             if f.len() <= m {
                 continue;
             }
-            let mut b_old_prev = b[m - 1];
-            let mut b_new_prev = 0.0;
-            for k in m..f.len() {
-                let (fk, bk) = (f[k], b[k]);
-                let f_new = fk + kappa * b_old_prev;
-                let b_new = b_old_prev + kappa * fk;
-                f[k] = f_new;
-                b[k] = b_new;
-                if k > m {
-                    num += f_new * b_new_prev;
-                    den += f_new * f_new + b_new_prev * b_new_prev;
-                }
-                b_new_prev = b_new;
-                b_old_prev = bk;
-            }
+            let len = f.len();
+            let (nu, de) = if len - m >= PARALLEL_BURG_SAMPLES {
+                let mid = m + (len - m) / 2;
+                let (f_lo, f_hi) = f[m..].split_at_mut(mid - m);
+                let (n_lo, n_hi) = b_next[m..].split_at_mut(mid - m);
+                let (p_lo, p_hi) = b[m - 1..len - 1].split_at(mid - m);
+                let ((nu_lo, de_lo), (nu_hi, de_hi)) =
+                    rayon::join(|| burg_step(f_lo, n_lo, p_lo, kappa), || burg_step(f_hi, n_hi, p_hi, kappa));
+                // The pair that straddles the halves.
+                let (fk, bk) = (f[mid], b_next[mid - 1]);
+                (nu_lo + nu_hi + fk * bk, de_lo + de_hi + fk * fk + bk * bk)
+            } else {
+                burg_step(&mut f[m..], &mut b_next[m..], &b[m - 1..len - 1], kappa)
+            };
+            std::mem::swap(b, b_next);
+            num += nu;
+            den += de;
         }
     }
     models
+}
+
+/// Segments at least this long have each Burg step done in two halves on
+/// two threads (below it the threads' hand-off costs more than it saves).
+const PARALLEL_BURG_SAMPLES: usize = 32_768;
+
+/// One Burg step on a run of samples k = lo … hi − 1: given the previous
+/// order's forward errors `f` (updated in place) and backward errors
+/// `b_prev` at k − 1, writes f_k + κ·b_{k−1} to `f` and b_{k−1} + κ·f_k to
+/// `b_next`; returns Σ f_k·b_{k−1} and Σ f_k² + b_{k−1}² of the new errors
+/// over the pairs inside the run (k = lo + 1 … hi − 1), in four lanes (one
+/// running total cannot vectorize).
+fn burg_step(f: &mut [f64], b_next: &mut [f64], b_prev: &[f64], kappa: f64) -> (f64, f64) {
+    for ((fk, bn), &bp) in f.iter_mut().zip(b_next.iter_mut()).zip(b_prev) {
+        let f_old = *fk;
+        *fk = f_old + kappa * bp;
+        *bn = bp + kappa * f_old;
+    }
+    if f.len() < 2 {
+        return (0.0, 0.0);
+    }
+    let (f, b) = (&f[1..], &b_next[..b_next.len() - 1]);
+    let (mut num, mut den) = ([0.0; 4], [0.0; 4]);
+    let (fc, bc) = (f.chunks_exact(4), b.chunks_exact(4));
+    let (fr, br) = (fc.remainder(), bc.remainder());
+    for (f4, b4) in fc.zip(bc) {
+        for l in 0..4 {
+            num[l] += f4[l] * b4[l];
+            den[l] += f4[l] * f4[l] + b4[l] * b4[l];
+        }
+    }
+    for (x, y) in fr.iter().zip(br) {
+        num[0] += x * y;
+        den[0] += x * x + y * y;
+    }
+    ((num[0] + num[1]) + (num[2] + num[3]), (den[0] + den[1]) + (den[2] + den[3]))
 }
 
 /// The AR model of the segments by Burg's method, its order (≤ `max_order`)
@@ -350,31 +392,41 @@ pub fn covariance_middle_columns(
             continue;
         }
         let n = (2 * len).next_power_of_two().max(2 * (model.order() + 1));
-        let fft = crate::fft::forward(n);
+        let fft = crate::fft::real_forward(n);
+        let transform = |input: &mut Vec<f64>| {
+            let mut out = fft.make_output_vec();
+            fft.process(input, &mut out).expect("buffers sized by the plan");
+            out
+        };
         // The columns' transforms are independent: one per core.
         let x: Vec<Vec<Complex<f64>>> = columns
             .par_iter()
             .map(|c| {
-                let mut v = vec![Complex::new(0.0, 0.0); n];
-                for (k, a) in c[seg.clone()].iter().enumerate() {
-                    v[k].re = *a;
-                }
-                fft.process(&mut v);
-                v
+                let mut v = fft.make_input_vec();
+                v[..len].copy_from_slice(&c[seg.clone()]);
+                transform(&mut v)
             })
             .collect();
-        let mut a = vec![Complex::new(0.0, 0.0); n];
-        a[0].re = 1.0;
-        for (j, c) in model.coeffs.iter().enumerate() {
-            a[j + 1].re = *c;
-        }
-        fft.process(&mut a);
-        for f in 0..n {
-            let s = model.innovation_variance / a[f].norm_sqr();
+        let mut a = fft.make_input_vec();
+        a[0] = 1.0;
+        a[1..=model.order()].copy_from_slice(&model.coeffs);
+        let a = transform(&mut a);
+        // Real series: bin n − f is the conjugate of bin f and S(f) is even, so
+        // the sum over all n bins is bins 0 and n/2 once and 1 … n/2 − 1 twice.
+        let mut acc = vec![0.0; p * p];
+        for (f, af) in a.iter().enumerate() {
+            let weight = if f == 0 || f == n / 2 { 1.0 } else { 2.0 };
+            let s = weight * model.innovation_variance / af.norm_sqr();
             for i in 0..p {
+                let xi = x[i][f];
                 for j in i..p {
-                    m[(i, j)] += s * (x[i][f] * x[j][f].conj()).re / n as f64;
+                    acc[i * p + j] += s * (xi * x[j][f].conj()).re;
                 }
+            }
+        }
+        for i in 0..p {
+            for j in i..p {
+                m[(i, j)] += acc[i * p + j] / n as f64;
             }
         }
     }
@@ -526,7 +578,8 @@ mod tests {
 
     #[test]
     fn burg_matches_its_definition_over_segments() {
-        let x = ar_series(&[-1.6, 0.8], 3000, 1);
+        // The last segment is long enough for the two-thread steps.
+        let x = ar_series(&[-1.6, 0.8], 3000 + PARALLEL_BURG_SAMPLES + 7, 1);
         let segs: Vec<&[f64]> = vec![&x[..700], &x[710..715], &x[720..2500], &x[2600..]];
         let fast = burg(&segs, 12);
         let slow = naive_burg(&segs, 12);

@@ -344,6 +344,56 @@ impl Builder {
         self.epoch_line.reserve_exact(epochs_left);
     }
 
+    /// Appends the rows of `next`, the builder of the rows that follow this
+    /// one's in the same file (its lines counted from 1 at its first byte,
+    /// `line_offset` lines into the file), with the checks that span the
+    /// two: `None` when one fails (the one-thread reader then finds it).
+    /// The joined builder is only to be finished (its per-channel state is
+    /// this one's).
+    fn join(mut self, next: Builder, line_offset: u64) -> Option<Builder> {
+        let (Some((last_t, _)), Some(&next_t)) = (self.prev, next.epoch_t_s.first()) else {
+            return if next.rows == 0 { Some(self) } else { None };
+        };
+        if next_t < last_t {
+            return None;
+        }
+        // A channel's first row in `next` must be at a later epoch than its
+        // last one here; each channel's first track in `next` holds it.
+        let mut seen = HashMap::new();
+        for tr in &next.tracks {
+            if seen.insert(tr.channel, ()).is_none()
+                && self.channels.get(tr.channel).is_some_and(|s| s.last_t_s == tr.t_s[0])
+            {
+                return None;
+            }
+            if let Some(&k) = self.track_of.get(&(tr.channel, tr.prn))
+                && self.tracks[k].carrier != tr.carrier
+            {
+                return None;
+            }
+        }
+        let skip = usize::from(next_t == last_t);
+        self.epoch_t_s.extend_from_slice(&next.epoch_t_s[skip..]);
+        self.epoch_line.extend(next.epoch_line[skip..].iter().map(|l| l + line_offset));
+        self.rows += next.rows;
+        for tr in next.tracks {
+            match self.track_of.get(&(tr.channel, tr.prn)) {
+                Some(&k) => {
+                    let to = &mut self.tracks[k];
+                    to.t_s.extend_from_slice(&tr.t_s);
+                    to.phase_err_rad.extend_from_slice(&tr.phase_err_rad);
+                    to.cn0_dbhz.extend_from_slice(&tr.cn0_dbhz);
+                    to.elev_deg.extend_from_slice(&tr.elev_deg);
+                }
+                None => {
+                    self.track_of.insert((tr.channel, tr.prn), self.tracks.len());
+                    self.tracks.push(tr);
+                }
+            }
+        }
+        Some(self)
+    }
+
     fn finish(self) -> Result<TrackingLog, FormatError> {
         if self.rows == 0 {
             return Err(FormatError::NoData { file: self.file });
@@ -564,10 +614,29 @@ fn read_tracking_sized<R: Read>(
     total_bytes: Option<u64>,
 ) -> Result<TrackingLog, FormatError> {
     let (mut src, cols) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
+    let mut b = builder_for(&src, &cols)?;
+    read_rows(&mut src, &cols, &mut b, total_bytes)?;
+    b.finish()
+}
+
+/// An empty builder for the rows of `src` (its header read; `cols` the
+/// positions of [`TRACKING_COLUMNS`] in it).
+fn builder_for<R: Read>(src: &CsvSource<R>, cols: &[usize]) -> Result<Builder, FormatError> {
+    let carrier_column = CarrierCells::find(src)?.main_column().map(|c| src.column(c));
+    Ok(Builder::new(src.file.clone(), src.column(cols[0]), src.column(cols[1]), carrier_column))
+}
+
+/// Reads every remaining record of `src` into `b` (columns `cols`, in the
+/// order of [`TRACKING_COLUMNS`]); `total_bytes` sizes the columns after the
+/// first rows (the rest of the source at the average row length so far).
+fn read_rows<R: Read>(
+    src: &mut CsvSource<R>,
+    cols: &[usize],
+    b: &mut Builder,
+    total_bytes: Option<u64>,
+) -> Result<(), FormatError> {
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
-    let mut carriers = CarrierCells::find(&src)?;
-    let carrier_column = carriers.main_column().map(|c| src.column(c));
-    let mut b = Builder::new(src.file.clone(), src.column(ct), src.column(cch), carrier_column);
+    let mut carriers = CarrierCells::find(src)?;
     // The rows of one epoch share the text of their time stamp: parse it once.
     let mut prev_t_text: Vec<u8> = Vec::new();
     let mut prev_t: Option<f64> = None;
@@ -591,23 +660,94 @@ fn read_tracking_sized<R: Read>(
             cn0_dbhz: src.f64_at(ccn0)?,
             elev_deg: src.opt_f64_at(celev)?.unwrap_or(f64::NAN),
             phase_err_rad: src.f64_at(cphase)?,
-            carrier: carriers.carrier(&src)?,
+            carrier: carriers.carrier(src)?,
         };
         b.push(&values, src.line())?;
         if let Some(total) = total_bytes.filter(|_| b.rows == ROWS_BEFORE_RESERVE) {
             b.reserve_for(src.record.position().map_or(0, |p| p.byte()), total);
         }
     }
-    b.finish()
+    Ok(())
 }
 
+/// Files at least this long are parsed in two halves at once (one per core);
+/// below it a second thread costs more than it saves.
+const TWO_HALVES_BYTES: u64 = 4 << 20;
+
 /// Opens and reads a `tracking.csv` file; errors name the file by its path.
+///
+/// A long file is parsed in two halves at once, split at the first line end
+/// after its middle, and the halves joined with the checks that span them
+/// (time stamps non-decreasing, one row per channel per epoch, one carrier
+/// per track). The result is the log the reader gives on one thread; when
+/// anything stops the halves (an error in either, a quote character that
+/// could hide a line end, a check across the halves failing) the file is
+/// read again on one thread, so the error reported is the first in the file.
 pub fn read_tracking_file(path: impl AsRef<Path>) -> Result<TrackingLog, FormatError> {
     let path = path.as_ref();
     let name = path_name(path);
     let file = std::fs::File::open(path).map_err(|e| FormatError::io(&name, e))?;
     let total_bytes = file.metadata().ok().map(|m| m.len());
+    if let Some(total) = total_bytes.filter(|&t| t >= TWO_HALVES_BYTES)
+        && let Some(log) = read_in_halves(path, &name, total)
+    {
+        return Ok(log);
+    }
     read_tracking_sized(file, &name, total_bytes)
+}
+
+/// The bytes of a source as they are read: how many line ends, and whether
+/// any quote character, went by.
+struct Scanned<R> {
+    inner: R,
+    newlines: u64,
+    quoted: bool,
+}
+
+impl<R: Read> Read for Scanned<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let bytes = &buf[..n];
+        self.newlines += memchr::memchr_iter(b'\n', bytes).count() as u64;
+        self.quoted |= memchr::memchr(b'"', bytes).is_some();
+        Ok(n)
+    }
+}
+
+/// The file read as two halves on two threads, `None` when it must be read
+/// on one (see [`read_tracking_file`]).
+fn read_in_halves(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
+    use std::io::{Seek, SeekFrom};
+    // The split: just after the first line end past the middle.
+    let mut probe = std::fs::File::open(path).ok()?;
+    probe.seek(SeekFrom::Start(total / 2)).ok()?;
+    let mut window = vec![0u8; 1 << 16];
+    let got = probe.read(&mut window).ok()?;
+    let split = total / 2 + memchr::memchr(b'\n', &window[..got])? as u64 + 1;
+    if split >= total {
+        return None;
+    }
+    let first = Scanned { inner: std::fs::File::open(path).ok()?.take(split), newlines: 0, quoted: false };
+    let mut second_file = std::fs::File::open(path).ok()?;
+    second_file.seek(SeekFrom::Start(split)).ok()?;
+    let second = Scanned { inner: second_file.take(total - split), newlines: 0, quoted: false };
+
+    let (mut src1, cols) = CsvSource::open(first, name, &TRACKING_COLUMNS).ok()?;
+    let mut src2 = CsvSource::with_header(second, name, src1.header.clone());
+    let (mut b1, mut b2) = (builder_for(&src1, &cols).ok()?, builder_for(&src2, &cols).ok()?);
+    let (r1, r2) = std::thread::scope(|scope| {
+        let second = scope.spawn(|| read_rows(&mut src2, &cols, &mut b2, Some(total - split)));
+        // The first half's columns are sized for the whole file: the second's rows join them.
+        let r1 = read_rows(&mut src1, &cols, &mut b1, Some(total));
+        (r1, second.join())
+    });
+    r1.ok()?;
+    r2.ok()?.ok()?;
+    let (s1, s2) = (src1.into_inner(), src2.into_inner());
+    if s1.quoted || s2.quoted {
+        return None;
+    }
+    b1.join(b2, s1.newlines)?.finish().ok()
 }
 
 #[cfg(test)]
@@ -897,5 +1037,115 @@ mod tests {
     fn wrong_field_count() {
         let m = err("0,1,5,45,30,0.01\n0.025,1,5,45,0.01\n");
         assert!(m.contains("line 3") && m.contains("expected 6 fields") && m.contains("found 5"), "{m}");
+    }
+
+    /// A file in the system's temporary directory, removed when dropped.
+    struct TempFile(std::path::PathBuf);
+
+    impl TempFile {
+        fn new(name: &str, text: &str) -> Self {
+            let path = std::env::temp_dir().join(format!("gsens-io-{}-{name}", std::process::id()));
+            std::fs::write(&path, text).unwrap();
+            TempFile(path)
+        }
+    }
+
+    impl Drop for TempFile {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_file(&self.0);
+        }
+    }
+
+    /// A log of `epochs` epochs of channels 0..`channels` (channel 1 moves to
+    /// PRN 30 from epoch `reassign_at`; a channel 9 joins at epoch `join_at`).
+    fn log_text(header: &str, epochs: usize, channels: u32, reassign_at: usize, join_at: usize) -> String {
+        let mut text = String::from(header);
+        for k in 0..epochs {
+            let t = k as f64 * 0.025;
+            let mut chans: Vec<u32> = (0..channels).collect();
+            if k >= join_at {
+                chans.push(9);
+            }
+            for c in chans {
+                let prn = if c == 1 && k >= reassign_at { 30 } else { c + 1 };
+                let phase = ((k as f64) * 0.37 + f64::from(c)).sin() * 0.05;
+                text.push_str(&format!(
+                    "{t:.3},{c},{prn},{:.1},{:.1},{phase:.6}\n",
+                    40.0 + f64::from(c),
+                    30.0 + f64::from(c)
+                ));
+            }
+        }
+        text
+    }
+
+    /// Read in two halves (wherever the split falls in an epoch), a file
+    /// gives the log the one-thread reader gives: tracks, rows, epochs and
+    /// their lines, a channel re-assigned and a channel joining in the
+    /// second half.
+    #[test]
+    fn two_halves_give_the_one_thread_log() {
+        for epochs in 40..52 {
+            let text = log_text(HEADER, epochs, 3, epochs * 2 / 3, epochs * 3 / 4);
+            let f = TempFile::new(&format!("halves-{epochs}.csv"), &text);
+            let serial = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
+            let total = text.len() as u64;
+            let halves = read_in_halves(&f.0, &path_name(&f.0), total).expect("a clean file is read in halves");
+            assert_eq!(halves, serial, "{epochs} epochs");
+        }
+        // Large enough for read_tracking_file to take the two halves itself.
+        let text = log_text(HEADER, 120_000, 3, 100_000, 110_000);
+        assert!(text.len() as u64 >= TWO_HALVES_BYTES);
+        let f = TempFile::new("halves-large.csv", &text);
+        assert_eq!(read_tracking_file(&f.0).unwrap(), read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
+    }
+
+    /// What the halves cannot decide alone is read again on one thread: the
+    /// error is the first in the file, with its line.
+    #[test]
+    fn two_halves_leave_errors_to_the_one_thread_reader() {
+        let base = log_text(HEADER, 40, 3, 1000, 1000);
+        let lines: Vec<&str> = base.lines().collect();
+        let mid = lines.len() / 2;
+        let cases = [
+            // Time backwards just after the middle.
+            (mid + 1, "0.000,0,1,40.0,30.0,0.01"),
+            // A channel repeated in an epoch that straddles the split.
+            (mid + 1, lines[mid]),
+            // A bad cell in the second half.
+            (lines.len() - 2, "0.975,2,3,40.0,x,0.01"),
+            // A quoted field (it could hide a line end).
+            (mid + 3, "\"0.500\",7,8,40.0,30.0,0.01"),
+        ];
+        for (at, line) in cases {
+            let mut edited: Vec<&str> = lines.clone();
+            edited.insert(at, line);
+            let text = edited.join("\n") + "\n";
+            let f = TempFile::new("halves-bad.csv", &text);
+            assert!(read_in_halves(&f.0, &path_name(&f.0), text.len() as u64).is_none(), "{line}");
+            let serial = read_tracking(text.as_bytes(), &path_name(&f.0));
+            match (read_tracking_file(&f.0), serial) {
+                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                (Ok(a), Ok(b)) => assert_eq!(a, b),
+                (a, b) => panic!("{line}: {a:?} vs {b:?}"),
+            }
+        }
+        // A carrier changed near the split, on either side of it or across.
+        let h = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,signal\n";
+        for change in 15..26 {
+            let mut text = String::from(h);
+            for k in 0..40 {
+                let sig = if k < change { "L1CA" } else { "L5I" };
+                text.push_str(&format!("{:.3},1,5,45,30,0.01,{sig}\n", k as f64 * 0.025));
+            }
+            let f = TempFile::new("halves-carrier.csv", &text);
+            assert!(read_in_halves(&f.0, &path_name(&f.0), text.len() as u64).is_none());
+            let m = read_tracking_file(&f.0).unwrap_err().to_string();
+            let (line, previous) = (change + 2, change + 1);
+            assert!(
+                m.contains(&format!("line {line},")) && m.contains(&format!("was on L1CA (line {previous})")),
+                "{m}"
+            );
+        }
     }
 }
