@@ -198,9 +198,9 @@ fn joint_fit_axes(
     let (jac, resid, gamma, gamma_stated) = loop {
         iterations += 1;
         let center = if ln_s == 0.0 && zeta == zeta0 {
-            fed0.clone()
+            std::borrow::Cow::Borrowed(fed0.as_slice())
         } else {
-            triad_pass(series, settings, &loop_at(ln_s, zeta))?
+            std::borrow::Cow::Owned(triad_pass(series, settings, &loop_at(ln_s, zeta))?)
         };
         let pa_c = phi_a_of(&center);
         let a: Vec<[f64; 3]> = used.iter().map(|&k| shifted(&center, &pa_c, k, dtau, t)).collect();

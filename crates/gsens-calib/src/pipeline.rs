@@ -310,20 +310,19 @@ fn calibrate_tracking(
         estimate.receiver_loop = fit.fitted(&estimate.loop_at(session.log_interval_s));
         joint = Some(fit);
     }
-    let mut calibration = calibrate(&series_of(&session), &estimate)?;
-    // The response check tests the loop, not the estimator: it is measured
-    // against the least-squares Γ̂ (a gradient observer's noisier Γ̂ would
-    // show as a loop mismatch).
-    let gamma_ls = match &joint {
-        Some(fit) => fit.gamma_hz_per_mps2,
-        None => crate::search::batch_pass(&series_of(&session), &calibration.settings)?.1.solve().gamma_hz_per_mps2,
-    };
-    if let Some(fit) = joint {
-        calibration.include_nuisance(&fit);
-    }
-    let response_settings = crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
-    let loop_response =
-        crate::measure_response_with(&series_of(&session), &calibration.settings, &gamma_ls, &response_settings)
+    // The estimate and the response check need only the loop and the
+    // offset fixed above: they run at once. The response check tests the
+    // loop, not the estimator: it is measured against the least-squares Γ̂
+    // (a gradient observer's noisier Γ̂ would show as a loop mismatch).
+    let series = series_of(&session);
+    let response_check = || -> Result<Result<crate::ResponseCheck, String>, CalibError> {
+        let gamma_ls = match &joint {
+            Some(fit) => fit.gamma_hz_per_mps2,
+            None => crate::search::batch_pass(&series, &estimate)?.1.solve().gamma_hz_per_mps2,
+        };
+        let response_settings =
+            crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
+        Ok(crate::measure_response_with(&series, &estimate, &gamma_ls, &response_settings)
             .map_err(|e| e.to_string())
             .and_then(|c| {
                 if c.bins_tested == 0 {
@@ -331,7 +330,13 @@ fn calibrate_tracking(
                 } else {
                     Ok(c)
                 }
-            });
+            }))
+    };
+    let (calibration, loop_response) = rayon::join(|| calibrate(&series, &estimate), response_check);
+    let (mut calibration, loop_response) = (calibration?, loop_response?);
+    if let Some(fit) = joint {
+        calibration.include_nuisance(&fit);
+    }
     Ok(Outcome {
         session,
         calibration,
