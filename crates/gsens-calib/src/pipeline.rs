@@ -133,12 +133,14 @@ pub enum PipelineError {
     #[error(transparent)]
     GnssSdr(#[from] GnssSdrError),
     /// A stage of the estimation failed.
-    #[error("{stage}: {source}")]
+    // The cause is in the message, not a `source` as well: a chain printed in
+    // full (anyhow's `{:#}`) would say it twice.
+    #[error("{stage}: {error}")]
     Stage {
         /// What was being done.
         stage: &'static str,
         /// Why it failed.
-        source: CalibError,
+        error: CalibError,
     },
     /// The estimation failed.
     #[error(transparent)]
@@ -288,14 +290,14 @@ fn calibrate_tracking(
     let mut chosen_loop = None;
     if !settings.loop_stated {
         let chosen = crate::choose_loop(&series_of(&session), &estimate, max_abs_s)
-            .map_err(|source| PipelineError::Stage { stage: "choosing the receiver loop", source })?;
+            .map_err(|error| PipelineError::Stage { stage: "choosing the receiver loop", error })?;
         estimate.receiver_loop = chosen.model;
         estimate.logged_phase = chosen.logged_phase;
         chosen_loop = Some(chosen);
     }
     let mut joint = None;
     if spec.natural_frequency || spec.offset_max_abs_s.is_some() {
-        let stage = |source| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", source };
+        let stage = |error| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", error };
         let mut fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
         if settings.loop_identification == LoopIdentificationMode::TestOnly && !fit.stated_loop_rejected {
             // The loop passed its test and is known: Γ̂ and the offset under it.

@@ -104,6 +104,16 @@ impl Default for EstimateSettings {
     }
 }
 
+/// The shortest carrier-loop update interval \[s\]: one 1 ms code period
+/// (GPS L1 C/A, L5, GLONASS, BeiDou B1I; Galileo E1's is 4 ms), less a
+/// rounding margin.
+pub(crate) const MIN_LOOP_INTERVAL_S: f64 = 1e-3 * (1.0 - 1e-9);
+
+/// `x` within `[lo, hi]`, else an error naming the setting and `expected`.
+fn within(name: &'static str, x: f64, lo: f64, hi: f64, expected: &'static str) -> Result<(), CalibError> {
+    if x >= lo && x <= hi { Ok(()) } else { Err(CalibError::Setting { name, value: x, expected }) }
+}
+
 /// `x` finite and ≥ 0 (or > 0 with `strict`), else an error naming the setting.
 pub(crate) fn check_range(name: &'static str, x: f64, strict: bool) -> Result<(), CalibError> {
     let ok = x.is_finite() && if strict { x > 0.0 } else { x >= 0.0 };
@@ -155,8 +165,23 @@ impl EstimateSettings {
         check_range("highpass_hz", self.highpass_hz, false)?;
         check_range("hac_lag_s", self.hac_lag_s, false)?;
         check_range("carrier_hz", self.carrier_hz, true)?;
+        within(
+            "carrier_hz",
+            self.carrier_hz,
+            1e8,
+            1e11,
+            "a radio carrier, 1e8 to 1e11 Hz (GNSS carriers are 1.1–1.7 GHz)",
+        )?;
         check_range("imu_scale_sigma", self.imu_scale_sigma, false)?;
+        within("imu_scale_sigma", self.imu_scale_sigma, 0.0, 1.0, "at most 1 (a scale factor error of 100 %)")?;
         check_range("imu_misalignment_sigma_rad", self.imu_misalignment_sigma_rad, false)?;
+        let quarter_turn = core::f64::consts::FRAC_PI_2;
+        within("imu_misalignment_sigma_rad", self.imu_misalignment_sigma_rad, 0.0, quarter_turn, "at most π/2 rad")?;
+        // No GNSS open signal's code is shorter than 1 ms: no carrier loop integrates less.
+        if let Some(t) = self.receiver_loop.interval_s() {
+            let expected = "at least 0.001 s (one code period of GPS L1 C/A, the shortest of the GNSS open signals)";
+            within("loop_interval_s", t, MIN_LOOP_INTERVAL_S, f64::INFINITY, expected)?;
+        }
         if self.robust == Robust::Huber && self.method != Method::Batch {
             // The recursive estimators have no second pass; GLS would need a
             // robust AR fit and IRLS on the prewhitened series (an outlier

@@ -143,6 +143,11 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
         (&["--time-offset-max-s", "1e18"][..], "time_offset.max_abs_s"),
         (&["--cn0-drop-db", "nan"][..], "--cn0-drop-db"),
         (&["--warmup-s=-1"][..], "--warmup-s"),
+        // Found by fuzzing (issue 16): a loop updated every nanosecond ran for minutes; the
+        // others were accepted.
+        (&["--loop-interval-s", "1e-9"][..], "loop_interval_s = 1e-9 is out of range: expected at least 0.001 s"),
+        (&["--carrier-hz", "1e300"][..], "carrier_hz = 1e300 is out of range"),
+        (&["--imu-scale-sigma-ppm", "1e300"][..], "imu_scale_sigma = 1e294 is out of range"),
     ] {
         let started = std::time::Instant::now();
         let (code, stderr) = estimate(&imu, &trk, args);
@@ -150,4 +155,11 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
         assert!(stderr.contains(said), "{args:?}: {stderr}");
         assert!(started.elapsed().as_secs() < 60, "{args:?} took {:?}", started.elapsed());
     }
+    // A stage's error says its cause once (it was printed twice, as message and as source).
+    let (code, stderr) = estimate(&imu, &trk, &["--order", "2", "--bn-hz", "3", "--warmup-s", "1e300"]);
+    assert_eq!(code, 2, "{stderr}");
+    let cause = "the log is too short to search a time offset";
+    assert!(stderr.contains("fitting the loop and the IMU time offset: ") && stderr.contains(cause), "{stderr}");
+    assert_eq!(stderr.matches(cause).count(), 1, "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -379,6 +379,27 @@ impl GnssSdrConf {
         let symbols = self.get_f64("Tracking_1C.extend_correlation_symbols")?.unwrap_or(1.0);
         // GNSS-SDR clamps to [1, 20] with a warning; so do we.
         let extend_correlation_symbols = if symbols.is_finite() { symbols.round().clamp(1.0, 20.0) as u32 } else { 1 };
+        // A loop updated every T cannot have a noise bandwidth beyond 1/(2T)
+        // (the discrete loop is unstable long before): 500 Hz at the C/A
+        // code's 1 ms, less once the integration is extended.
+        let stages = [
+            ("Tracking_1C.pll_bw_hz", pll_bw_hz, 1.0),
+            ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz, f64::from(extend_correlation_symbols)),
+        ];
+        for (key, v, symbols) in stages {
+            let t_s = 1e-3 * symbols;
+            if v * t_s > 0.5 {
+                return fail(
+                    key,
+                    format!(
+                        "{key} = {v}: above 1/(2T) = {} Hz for a loop updated every T = {} ms (no carrier loop is \
+                         that wide)",
+                        0.5 / t_s,
+                        t_s * 1e3
+                    ),
+                );
+            }
+        }
         let enable_fll_pull_in = self.get_bool("Tracking_1C.enable_fll_pull_in")?.unwrap_or(false);
         let enable_fll_steady_state = self.get_bool("Tracking_1C.enable_fll_steady_state")?.unwrap_or(false);
         if enable_fll_steady_state {
@@ -667,6 +688,21 @@ mod tests {
         let e =
             GnssSdrConf::parse("Tracking_1C.enable_fll_steady_state=true\n", "f.conf").unwrap().tracking().unwrap_err();
         assert!(e.to_string().contains("FLL"), "{e}");
+        // Bandwidths no loop at its update interval can have (1e200 once sent the
+        // importer's eigenvalue search into a long loop; found by fuzzing).
+        for (conf, want) in [
+            ("Tracking_1C.pll_bw_narrow_hz=1e200\nTracking_1C.extend_correlation_symbols=20\n", "25 Hz"),
+            ("Tracking_1C.pll_bw_narrow_hz=30\nTracking_1C.extend_correlation_symbols=20\n", "25 Hz"),
+            ("Tracking_1C.pll_bw_hz=501\n", "500 Hz"),
+        ] {
+            let e = GnssSdrConf::parse(conf, "w.conf").unwrap().tracking().unwrap_err().to_string();
+            assert!(e.contains("above 1/(2T)") && e.contains(want), "{e}");
+        }
+        let t = GnssSdrConf::parse(
+            "Tracking_1C.pll_bw_narrow_hz=25\nTracking_1C.extend_correlation_symbols=20\n",
+            "ok.conf",
+        );
+        assert!(t.unwrap().tracking().is_ok());
     }
 
     #[test]

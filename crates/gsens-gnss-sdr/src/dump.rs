@@ -755,6 +755,15 @@ pub fn channel_from_name(file: &str) -> Option<u32> {
     digits.chars().rev().collect::<String>().parse().ok()
 }
 
+/// Whether a file's stem ends in a digit (a channel number, in range or not).
+fn ends_in_digits(file: &str) -> bool {
+    Path::new(file)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .and_then(|s| s.chars().last())
+        .is_some_and(|c| c.is_ascii_digit())
+}
+
 /// The dumps in `dir`: files `<prefix><channel>.dat` (any prefix when `None`),
 /// and `<prefix><channel>.mat` for the channels without a `.dat` (GNSS-SDR
 /// writes the `.mat` from the `.dat`), sorted by channel. Errors when there is none.
@@ -776,6 +785,13 @@ pub fn find_dumps(dir: &Path, prefix: Option<&str>) -> Result<Vec<(u32, PathBuf)
         }
         if let Some(ch) = channel_from_name(fname) {
             out.push((ch, p));
+        } else if ends_in_digits(fname) {
+            let stem = Path::new(fname).file_stem().and_then(|s| s.to_str()).unwrap_or(fname);
+            let digits: String = stem.chars().rev().take_while(char::is_ascii_digit).collect();
+            return Err(GnssSdrError::ChannelNumberOutOfRange {
+                file: p.display().to_string(),
+                digits: digits.chars().rev().collect(),
+            });
         }
     }
     // A .mat only where its channel has no .dat (the same records, read without HDF5).

@@ -164,6 +164,30 @@ pub enum GnssSdrError {
         /// The `.mat` file.
         file: String,
     },
+    /// A dump's file name ends in a channel number beyond any receiver's.
+    #[error("{file}: the channel number its name ends in ({digits}) is beyond 4294967295: not a tracking dump's name")]
+    ChannelNumberOutOfRange {
+        /// The dump.
+        file: String,
+        /// The digits at the end of its name.
+        digits: String,
+    },
+    /// Two dumps track one satellite at the same time: a receiver gives a
+    /// signal of a satellite one channel at a time, so one is a copy.
+    #[error(
+        "{first} and {second} both track PRN {prn} at sample {sample}: a receiver tracks a satellite on one channel \
+         at a time (is one a copy of the other?)"
+    )]
+    SameSatelliteTwice {
+        /// The first dump.
+        first: String,
+        /// The second dump.
+        second: String,
+        /// The satellite.
+        prn: u32,
+        /// A sample counter both hold it at.
+        sample: u64,
+    },
     /// A dump directory holds no `*.dat` dump.
     #[error("{dir}: no tracking dump (files named <prefix><channel>.dat or .mat, e.g. trk_ch_0.dat) found")]
     NoDumps {

@@ -617,8 +617,11 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
     };
     let mut rows = Vec::new();
     let mut tracks = Vec::new();
+    // Each dump's runs of one PRN: (PRN, first and last sample counter, file).
+    let mut runs: Vec<(u32, u64, u64, String)> = Vec::new();
     for (_, path) in &files {
         let dump = read_dump(path, settings.layout.as_ref())?;
+        check_one_channel_per_satellite(&dump, &mut runs)?;
         if !dump.modelled {
             return Err(GnssSdrError::NotModelled {
                 file: dump.file,
@@ -643,6 +646,36 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
     }
     rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
     Ok(Imported { rows, tracks, interval_s: settings.interval_s() })
+}
+
+/// Adds the runs of one PRN of `dump` to `runs` (those of the dumps read
+/// before it), refusing a run that overlaps another dump's run of the same
+/// PRN in time: a receiver tracks a satellite's signal on one channel at a
+/// time, so two such dumps are copies (or not of one receiver run).
+fn check_one_channel_per_satellite(
+    dump: &TrackingDump,
+    runs: &mut Vec<(u32, u64, u64, String)>,
+) -> Result<(), GnssSdrError> {
+    let mut own: Vec<(u32, u64, u64)> = Vec::new();
+    for r in &dump.records {
+        let s = r.prn_start_sample_count;
+        match own.last_mut() {
+            Some((prn, _, last)) if *prn == r.prn => *last = (*last).max(s),
+            _ => own.push((r.prn, s, s)),
+        }
+    }
+    for &(prn, first, last) in &own {
+        if let Some((_, f, l, file)) = runs.iter().find(|(p, f, l, _)| *p == prn && first <= *l && *f <= last) {
+            return Err(GnssSdrError::SameSatelliteTwice {
+                first: file.clone(),
+                second: dump.file.clone(),
+                prn,
+                sample: first.max(*f).min(last.min(*l)),
+            });
+        }
+    }
+    runs.extend(own.into_iter().map(|(p, f, l)| (p, f, l, dump.file.clone())));
+    Ok(())
 }
 
 /// Puts every track on the common grid t = j·`interval_s` (module docs): rows

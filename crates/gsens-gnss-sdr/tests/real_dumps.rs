@@ -341,3 +341,48 @@ fn a_real_kalman_tracker_dump_is_recognised_and_not_modelled() {
     assert!(e.contains("trk_kf_ch_0.dat: a tracking dump of layout gnss-sdr-kf-cc"), "{e}");
     assert!(e.contains("gsens models only the carrier loop of dll_pll_veml_tracking"), "{e}");
 }
+
+/// A copy of the order-2 fixture directory in the system's temporary directory, removed when dropped.
+struct DirCopy(PathBuf);
+
+impl DirCopy {
+    fn new(name: &str) -> Self {
+        let to = std::env::temp_dir().join(format!("gsens-gnss-sdr-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&to);
+        std::fs::create_dir_all(&to).unwrap();
+        for f in ["gnss-sdr.conf", "trk_ch_0.dat", "trk_ch_1.dat"] {
+            std::fs::copy(fixtures().join("order2").join(f), to.join(f)).unwrap();
+        }
+        DirCopy(to)
+    }
+}
+
+impl Drop for DirCopy {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Found by fuzzing (issue 16): a dump named beyond any channel number was
+/// silently skipped, and copies of one dump were taken as as many channels.
+#[test]
+fn odd_dump_names_and_copies_are_errors() {
+    let tc = GnssSdrConf::read(fixtures().join("order2/gnss-sdr.conf")).unwrap().tracking().unwrap();
+    let settings = ImportSettings::new(tc.fs_hz.unwrap(), tc);
+    let dir = DirCopy::new("big-channel");
+    std::fs::copy(dir.0.join("trk_ch_0.dat"), dir.0.join("trk_ch_4294967296.dat")).unwrap();
+    let e = import_dir(&dir.0, &settings).unwrap_err().to_string();
+    assert!(e.contains("trk_ch_4294967296.dat") && e.contains("(4294967296) is beyond 4294967295"), "{e}");
+
+    let dir = DirCopy::new("copies");
+    for ch in [2, 3] {
+        std::fs::copy(dir.0.join("trk_ch_0.dat"), dir.0.join(format!("trk_ch_{ch}.dat"))).unwrap();
+    }
+    let e = import_dir(&dir.0, &settings).unwrap_err().to_string();
+    let prn = read_dump(dir.0.join("trk_ch_0.dat"), None).unwrap().records[0].prn;
+    assert!(e.contains("trk_ch_0.dat and ") && e.contains("trk_ch_2.dat both track PRN"), "{e}");
+    assert!(e.contains(&format!("PRN {prn} at sample")), "{e}");
+    // The two real channels (different satellites at the same time) are not copies.
+    let dir = DirCopy::new("real");
+    assert!(import_dir(&dir.0, &settings).is_ok());
+}

@@ -22,7 +22,7 @@ use gsens_core::units::GPS_L1_HZ;
 use gsens_core::{LoopFilterCoeffs, LoopSpec};
 use serde::{Deserialize, Serialize};
 
-use crate::channel::{DATA_BIT_S, Discriminator};
+use crate::channel::{CODE_PERIOD_S, DATA_BIT_S, Discriminator};
 use crate::error::{ConfigError, UtcError};
 use crate::imu::{ImuConfig, ImuPreset};
 use crate::motion::MotionConfig;
@@ -501,7 +501,7 @@ pub fn parse_utc_to_gps_s(s: &str) -> Result<f64, UtcError> {
     let fields = [
         ("year", (1980..=2200).contains(&year)),
         ("month", (1..=12).contains(&month)),
-        ("day", (1..=31).contains(&day)),
+        ("day", (1..=days_in_month(year, month)).contains(&day)),
         ("hour", hour < 24),
         ("minute", minute < 60),
         ("second", (0.0..61.0).contains(&second)),
@@ -510,6 +510,20 @@ pub fn parse_utc_to_gps_s(s: &str) -> Result<f64, UtcError> {
         return Err(UtcError::OutOfRange { input: s.to_owned(), field });
     }
     Ok(gps_seconds_from_utc(year, month, day, hour, minute, second))
+}
+
+/// Days in `month` (1–12) of `year` in the Gregorian calendar (0 for a
+/// month out of range): February has 29 in years divisible by 4, except
+/// centuries not divisible by 400.
+fn days_in_month(year: i32, month: u32) -> u32 {
+    let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+    match month {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        2 if leap => 29,
+        2 => 28,
+        _ => 0,
+    }
 }
 
 /// `Ok` if `ok`, else the error `err` makes.
@@ -594,15 +608,19 @@ impl Scenario {
         let l = &self.tracking_loop;
         range(l.order == 2 || l.order == 3, "loop.order", f64::from(l.order), "2 or 3")?;
         range(l.bn_hz.is_finite() && l.bn_hz > 0.0, "loop.bn_hz", l.bn_hz, "> 0")?;
-        if l.order == 2 {
-            range(l.zeta.is_finite() && l.zeta > 0.0, "loop.zeta", l.zeta, "> 0")?;
-        } else {
-            range(l.a3.is_finite() && l.a3 > 0.0, "loop.a3", l.a3, "> 0")?;
-            range(l.b3.is_finite() && l.b3 > 0.0, "loop.b3", l.b3, "> 0")?;
+        // All three are checked whatever the order: a value the order does
+        // not use is still a value the file states.
+        range(l.zeta.is_finite() && l.zeta > 0.0, "loop.zeta", l.zeta, "> 0")?;
+        range(l.a3.is_finite() && l.a3 > 0.0, "loop.a3", l.a3, "> 0")?;
+        range(l.b3.is_finite() && l.b3 > 0.0, "loop.b3", l.b3, "> 0")?;
+        if l.order == 3 {
             check(l.a3 * l.b3 > 1.0, || ConfigError::ThirdOrderUnstable { a3: l.a3, b3: l.b3 })?;
         }
         let t = l.interval_s;
-        range(t.is_finite() && t > 0.0 && t <= DATA_BIT_S + 1e-12, "loop.interval_s", t, "in (0, 0.02] s")?;
+        // A carrier loop on C/A code integrates at least one code period.
+        let allowed = "in [0.001, 0.02] s (at least one 1 ms C/A code period, at most one 20 ms data bit)";
+        let span = CODE_PERIOD_S - 1e-12..=DATA_BIT_S + 1e-12;
+        range(span.contains(&t), "loop.interval_s", t, allowed)?;
         let per_bit = DATA_BIT_S / t;
         check((per_bit - per_bit.round()).abs() < 1e-6 * per_bit, || ConfigError::LoopIntervalNotInDataBit {
             interval_s: t,
@@ -612,7 +630,10 @@ impl Scenario {
         // loop at this interval is checked by its poles.
         check(coeffs.is_stable_at(t), || ConfigError::DiscreteLoopUnstable { bn_hz: l.bn_hz, interval_s: t })?;
         let f = l.initial_freq_err_hz;
-        range(f.is_finite() && f >= 0.0, "loop.initial_freq_err_hz", f, ">= 0")?;
+        // Beyond ±1/(2T) the loop's phase steps alias: no loop updated every T can pull it in.
+        let f_max = 0.5 / t;
+        let allowed = format!("within [0, {f_max}] Hz (1/(2·loop.interval_s): a larger error aliases in the loop)");
+        range(f.is_finite() && (0.0..=f_max).contains(&f), "loop.initial_freq_err_hz", f, &allowed)?;
         let th = l.lock_threshold;
         range(th > 0.0 && th < 1.0, "loop.lock_threshold", th, "in (0, 1)")?;
         range(l.lock_tau_s.is_finite() && l.lock_tau_s > 0.0, "loop.lock_tau_s", l.lock_tau_s, "> 0")?;
@@ -717,6 +738,17 @@ mod tests {
             ("[satellites]\nmax_channels = 0\n", "satellites.max_channels"),
             ("[satellites.cn0]\nzenith_cn0_dbhz = 99.0\n", "satellites.cn0.zenith_cn0_dbhz"),
             ("[session]\nstart_utc = \"yesterday\"\n", "session.start_utc"),
+            // Found by fuzzing (issue 16): each was accepted, or ran for minutes.
+            ("[session]\nstart_utc = \"2024-02-30T12:00:00Z\"\n", "session.start_utc"),
+            ("[session]\nstart_utc = \"2023-02-29T12:00:00Z\"\n", "session.start_utc"),
+            ("[session]\nstart_utc = \"2024-04-31T12:00:00Z\"\n", "session.start_utc"),
+            ("[loop]\ninterval_s = 1e-9\n", "loop.interval_s"),
+            ("[loop]\ninterval_s = 0.0005\n", "loop.interval_s"),
+            ("[loop]\na3 = nan\n", "loop.a3"),
+            ("[loop]\nb3 = nan\n", "loop.b3"),
+            ("[loop]\nzeta = nan\n", "loop.zeta"),
+            ("[loop]\ninitial_freq_err_hz = 1e308\n", "loop.initial_freq_err_hz"),
+            ("[loop]\ninitial_freq_err_hz = 501.0\n", "loop.initial_freq_err_hz"),
             (
                 "[[motion.segments]]\nkind = \"shake\"\naxis = \"x\"\nduration_s = 1\nperiod_s = 1\namplitude_mps2 = -1\n",
                 "motion.segments[0].amplitude_mps2",
@@ -759,5 +791,12 @@ mod tests {
         // GPS week 2300 starts 2024-02-04 00:00:00 GPS = 2024-02-03T23:59:42 UTC.
         let w = parse_utc_to_gps_s("2024-02-03T23:59:42Z").unwrap();
         assert!((w - 2300.0 * 604_800.0).abs() < 1e-6);
+        // Leap days: 2024 and 2000 have one, 1900 (not in range) and 2100 do not.
+        assert!(parse_utc_to_gps_s("2024-02-29T00:00:00Z").is_ok());
+        assert!(parse_utc_to_gps_s("2000-02-29T00:00:00Z").is_ok());
+        assert!(parse_utc_to_gps_s("2100-02-29T00:00:00Z").is_err());
+        let feb_end = parse_utc_to_gps_s("2024-02-29T00:00:00Z").unwrap();
+        let mar_1 = parse_utc_to_gps_s("2024-03-01T00:00:00Z").unwrap();
+        assert!((mar_1 - feb_end - 86_400.0).abs() < 1e-9);
     }
 }

@@ -85,7 +85,11 @@ const CASES: &[(&str, &str)] = &[
         "[loop]\norder = 3\na3 = 0.5\nb3 = 1.5\n",
         "invalid scenario: loop.a3 * loop.b3 must be > 1 for a stable loop (got 0.75)",
     ),
-    ("[loop]\ninterval_s = 0.03\n", "invalid scenario: loop.interval_s must be in (0, 0.02] s (got 0.03)"),
+    (
+        "[loop]\ninterval_s = 0.03\n",
+        "invalid scenario: loop.interval_s must be in [0.001, 0.02] s (at least one 1 ms C/A code period, at most one 20 \
+         ms data bit) (got 0.03)",
+    ),
     (
         "[loop]\ninterval_s = 0.003\n",
         "invalid scenario: loop.interval_s must divide the 20 ms data bit (1, 2, 4, 5, 10 or 20 ms, …) (got 0.003)",
@@ -94,7 +98,10 @@ const CASES: &[(&str, &str)] = &[
         "[loop]\nbn_hz = 600.0\n",
         "invalid scenario: loop.bn_hz = 600 is too wide for loop.interval_s = 0.001: the discrete loop is unstable",
     ),
-    ("[loop]\ninitial_freq_err_hz = -0.5\n", "invalid scenario: loop.initial_freq_err_hz must be >= 0 (got -0.5)"),
+    (
+        "[loop]\ninitial_freq_err_hz = -0.5\n",
+        "invalid scenario: loop.initial_freq_err_hz must be within [0, 500] Hz (1/(2·loop.interval_s): a larger error aliases in the loop) (got -0.5)",
+    ),
     ("[loop]\nlock_threshold = 1.0\n", "invalid scenario: loop.lock_threshold must be in (0, 1) (got 1)"),
     ("[loop]\nlock_tau_s = 0.0\n", "invalid scenario: loop.lock_tau_s must be > 0 (got 0)"),
     ("[log]\ninterval_s = 0.0\n", "invalid scenario: log.interval_s must be in (0, 10] s (got 0)"),
@@ -309,12 +316,12 @@ fn model_errors_keep_their_texts() {
 #[test]
 fn utc_errors() {
     assert_eq!(
-        parse_utc_to_gps_s("2024-02-30T25:00:00Z"),
-        Err(UtcError::OutOfRange { input: "2024-02-30T25:00:00Z".into(), field: "hour" })
+        parse_utc_to_gps_s("2024-02-10T25:00:00Z"),
+        Err(UtcError::OutOfRange { input: "2024-02-10T25:00:00Z".into(), field: "hour" })
     );
     assert_eq!(
-        parse_utc_to_gps_s("2024-02-30T25:00:00Z").unwrap_err().to_string(),
-        "the hour of the UTC time \"2024-02-30T25:00:00Z\" is out of range"
+        parse_utc_to_gps_s("2024-02-10T25:00:00Z").unwrap_err().to_string(),
+        "the hour of the UTC time \"2024-02-10T25:00:00Z\" is out of range"
     );
     let e = parse_utc_to_gps_s("yesterday").unwrap_err();
     assert_eq!(e, UtcError::Malformed { input: "yesterday".into() });

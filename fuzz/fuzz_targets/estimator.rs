@@ -1,0 +1,190 @@
+//! The estimator's numeric path, structure-aware: a session of a few
+//! channels (a shaken IMU, phase errors of a loop's response plus arbitrary
+//! noise, including non-finite values) and every option of the command line
+//! (`gsens_calib::CalibrationOptions`) at a default, a sane, a raw or a
+//! special value, through the whole pipeline. It must end (libFuzzer's
+//! `-timeout`) with an error or a result, never a panic, and a result never
+//! reports a non-finite number as Γ̂ or σ.
+#![no_main]
+use arbitrary::Arbitrary;
+use gsens_calib::{CalibrationOptions, MethodName, TimeOffsetOption, calibrate_logs};
+use gsens_core::LoggedPhase;
+use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
+use libfuzzer_sys::fuzz_target;
+
+/// A number as a user might give it.
+#[derive(Arbitrary, Debug, Clone, Copy)]
+enum Value {
+    Default,
+    /// A few hundredths to a few hundreds.
+    Sane(u16),
+    Raw(f64),
+    Special(u8),
+}
+
+impl Value {
+    fn or(self, default: f64) -> f64 {
+        match self {
+            Value::Default => default,
+            Value::Sane(v) => f64::from(v) / 100.0,
+            Value::Raw(v) => v,
+            Value::Special(k) => {
+                [f64::NAN, f64::INFINITY, -f64::INFINITY, 0.0, -0.0, -1.0, 1e300, 1e-300, f64::MIN_POSITIVE]
+                    [k as usize % 9]
+            }
+        }
+    }
+
+    fn opt(self, default: Option<f64>) -> Option<f64> {
+        match self {
+            Value::Default => default,
+            v => Some(v.or(0.0)),
+        }
+    }
+}
+
+#[derive(Arbitrary, Debug)]
+struct Options {
+    carrier_hz: Value,
+    order: Option<u8>,
+    bn_hz: Value,
+    zeta: Value,
+    a3: Value,
+    b3: Value,
+    loop_interval_s: Value,
+    logged_phase: Option<bool>,
+    method: u8,
+    gain_k: Value,
+    lambda: Value,
+    warmup_s: Value,
+    imu_scale_sigma_ppm: Value,
+    imu_misalignment_sigma_mrad: Value,
+    highpass_hz: Value,
+    huber: bool,
+    channels: u8,
+    min_cn0_dbhz: Value,
+    elevation_mask_deg: Value,
+    cn0_weights: bool,
+    screening: bool,
+    cn0_drop_db: Value,
+    max_abs_phase_rad: Value,
+    time_offset: Option<Value>,
+    time_offset_max_s: Value,
+    loop_check: bool,
+    identify_damping: bool,
+    imu_despike: bool,
+}
+
+impl Options {
+    fn calibration_options(&self) -> CalibrationOptions {
+        let d = CalibrationOptions::default();
+        CalibrationOptions {
+            carrier_hz: self.carrier_hz.or(d.carrier_hz),
+            order: self.order,
+            bn_hz: self.bn_hz.opt(d.bn_hz),
+            zeta: self.zeta.or(d.zeta),
+            a3: self.a3.or(d.a3),
+            b3: self.b3.or(d.b3),
+            loop_interval_s: self.loop_interval_s.opt(d.loop_interval_s),
+            logged_phase: self.logged_phase.map(|l| if l { LoggedPhase::Last } else { LoggedPhase::Mean }),
+            method: [MethodName::Batch, MethodName::Gls, MethodName::Rls, MethodName::Gradient]
+                [self.method as usize % 4],
+            gain_k: self.gain_k.or(d.gain_k),
+            lambda: self.lambda.or(d.lambda),
+            warmup_s: self.warmup_s.or(d.warmup_s),
+            imu_scale_sigma_ppm: self.imu_scale_sigma_ppm.or(d.imu_scale_sigma_ppm),
+            imu_misalignment_sigma_mrad: self.imu_misalignment_sigma_mrad.or(d.imu_misalignment_sigma_mrad),
+            highpass_hz: self.highpass_hz.or(d.highpass_hz),
+            robust: if self.huber { gsens_calib::Robust::Huber } else { gsens_calib::Robust::None },
+            channels: usize::from(self.channels % 16),
+            min_cn0_dbhz: self.min_cn0_dbhz.opt(d.min_cn0_dbhz),
+            elevation_mask_deg: self.elevation_mask_deg.opt(d.elevation_mask_deg),
+            weights: if self.cn0_weights { gsens_session::Weighting::Cn0 } else { gsens_session::Weighting::Equal },
+            screening: self.screening,
+            cn0_drop_db: self.cn0_drop_db.or(d.cn0_drop_db),
+            max_abs_phase_rad: self.max_abs_phase_rad.or(d.max_abs_phase_rad),
+            time_offset: match self.time_offset {
+                None => d.time_offset,
+                Some(Value::Default) => TimeOffsetOption::Word("none".into()),
+                Some(v) => TimeOffsetOption::Seconds(v.or(0.0)),
+            },
+            time_offset_max_s: self.time_offset_max_s.or(d.time_offset_max_s),
+            loop_check: self.loop_check,
+            identify_damping: self.identify_damping,
+            imu_despike: self.imu_despike,
+        }
+    }
+}
+
+#[derive(Arbitrary, Debug)]
+struct Session {
+    /// Epochs (at most 2400: a minute at 40 Hz).
+    epochs: u16,
+    channels: u8,
+    /// Log interval: one of the usual ones.
+    interval: u8,
+    /// Shaking per axis: amplitude [m/s²] and frequency [Hz], in hundredths.
+    shake: [(u16, u16); 3],
+    gamma_milli_hz_per_mps2: [i16; 3],
+    /// Phase noise samples [rad], cycled; may hold any f64.
+    noise: Vec<f64>,
+    /// IMU samples per log epoch (1–4) and a clock offset [ms].
+    imu_per_epoch: u8,
+    imu_offset_ms: i16,
+    options: Options,
+}
+
+fuzz_target!(|s: Session| {
+    let n = usize::from(s.epochs % 2401);
+    let t = [0.005, 0.01, 0.02, 0.025, 0.05, 0.1][usize::from(s.interval % 6)];
+    let channels = u32::from(s.channels % 8) + 1;
+    let per = usize::from(s.imu_per_epoch % 4) + 1;
+    let gamma = s.gamma_milli_hz_per_mps2.map(|g| f64::from(g) * 1e-3);
+    let accel = |tk: f64| -> [f64; 3] {
+        let mut a = [0.0, 0.0, 9.81];
+        for (i, &(amp, f)) in s.shake.iter().enumerate() {
+            a[i] += f64::from(amp) / 100.0 * (std::f64::consts::TAU * f64::from(f) / 100.0 * tk).sin();
+        }
+        a
+    };
+    let dt = t / per as f64;
+    let offset_s = f64::from(s.imu_offset_ms) * 1e-3;
+    let imu_n = n * per + 2 * per;
+    let imu = ImuSeries {
+        t_s: (0..imu_n).map(|j| -t + j as f64 * dt + offset_s).collect(),
+        accel_mps2: (0..imu_n).map(|j| accel(-t + j as f64 * dt)).collect(),
+    };
+    let mut rows = Vec::with_capacity(n * channels as usize);
+    for k in 0..n {
+        let tk = k as f64 * t;
+        let a = accel(tk);
+        // A crude stand-in for the loop's response: the g-induced Δf scaled, plus noise.
+        let df = a[0] * gamma[0] + a[1] * gamma[1] + (a[2] - 9.81) * gamma[2];
+        for c in 0..channels {
+            let j = k * channels as usize + c as usize;
+            let noise = if s.noise.is_empty() { 0.0 } else { s.noise[j % s.noise.len()] };
+            rows.push(TrackingRow {
+                t_s: tk,
+                channel: c,
+                prn: c + 1,
+                cn0_dbhz: 40.0 + f64::from(c),
+                elev_deg: Some(30.0),
+                phase_err_rad: 0.05 * df + noise,
+            });
+        }
+    }
+    let Ok(log) = TrackingLog::from_rows("fuzz", &rows) else { return };
+    let Ok(settings) = s.options.calibration_options().pipeline_settings() else { return };
+    let Ok(outcome) = calibrate_logs(&log, &imu, "imu", &settings) else { return };
+    let c = &outcome.calibration;
+    for i in 0..3 {
+        if let Some(g) = c.gamma_hz_per_mps2[i] {
+            assert!(g.is_finite(), "Γ̂[{i}] = {g}");
+        }
+        if let Some(sd) = c.sigma_hz_per_mps2[i] {
+            assert!(sd.is_finite() && sd >= 0.0, "σ[{i}] = {sd}");
+        }
+    }
+    // Every output serializes the one document; it must too.
+    let _ = serde_json::to_string(&outcome.document(None)).expect("the result document serializes");
+});
