@@ -25,10 +25,15 @@ mkdir -p fuzz/logs
 for t in "${targets[@]}"; do
     mkdir -p "fuzz/corpus/$t" "fuzz/seeds/$t"
     echo "fuzz: $t for ${seconds} s"
-    # -timeout: an input running longer than 10 s is a hang; -rss_limit_mb:
-    # more than 2 GB is a reader allocating without limit.
+    # -timeout: an input running longer than this is a hang (a reader: 10 s;
+    # the estimator, a whole calibration of up to a few minutes of log under
+    # the sanitizer and the coverage counters, some 20 times slower than a
+    # release build: 60 s); -rss_limit_mb: more than 2 GB is a reader
+    # allocating without limit.
+    timeout_s=10
+    if [ "$t" = estimator ]; then timeout_s=60; fi
     cargo fuzz run -O "$t" "fuzz/corpus/$t" "fuzz/seeds/$t" -- \
-        -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
+        -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb=2048 -max_len=16384 \
         -print_final_stats=1 > "fuzz/logs/$t.log" 2>&1 || {
         echo "fuzz: $t FAILED (see fuzz/logs/$t.log and fuzz/artifacts/$t)"
         tail -40 "fuzz/logs/$t.log"

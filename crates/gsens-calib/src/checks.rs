@@ -53,6 +53,9 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 ///   (it replaces `log_rate` for the tracking log).
 /// - `imu_rate`: the IMU too must sample the loop's peak 4 times a period:
 ///   its specific force is interpolated linearly onto the epochs.
+/// - `highpass`: the high-pass corner at or above the top of the loop's
+///   half-power band (or the log's Nyquist frequency, 1/(2T)): nothing of
+///   the g-induced phase error is left to estimate from.
 /// - `phase_units`: [`phase_units`].
 /// - `carrier_gain`: [`carrier_gain`].
 /// - `imu_stuck`, `imu_clipped`: the runs of identical IMU samples
@@ -112,6 +115,26 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
                  resolved; log at least every {longest_s:.3} s",
                 c.log_interval_s,
+            ),
+        });
+    }
+    // A high-pass above the loop's band (or the log's Nyquist frequency)
+    // removes the g-induced phase error with the drift it is meant for.
+    let highpass_hz = outcome.settings.estimate.highpass_hz;
+    let nyquist_hz = 0.5 / c.log_interval_s;
+    let band_top_hz = loop_summary.half_power_band_hz.map_or(nyquist_hz, |b| b[1].min(nyquist_hz));
+    if highpass_hz >= band_top_hz {
+        let limit = if band_top_hz < nyquist_hz {
+            format!("the top of the loop's half-power band, {band_top_hz:.2} Hz")
+        } else {
+            format!("the log's Nyquist frequency 1/(2T), {nyquist_hz:.2} Hz")
+        };
+        w.push(Warning {
+            code: "highpass",
+            message: format!(
+                "the high-pass at {highpass_hz} Hz is at or above {limit}: it removes the g-induced phase error \
+                 along with the drift it is meant for; use a corner well below the loop's band (the default is \
+                 0.05 Hz, --highpass-hz)"
             ),
         });
     }

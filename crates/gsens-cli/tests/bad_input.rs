@@ -155,6 +155,24 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
         assert!(stderr.contains(said), "{args:?}: {stderr}");
         assert!(started.elapsed().as_secs() < 60, "{args:?} took {:?}", started.elapsed());
     }
+    // A high-pass above the loop's band leaves nothing to estimate: the verdict names it (it was
+    // "unobservable: shake harder" with exit 0, found by fuzzing, issue 16).
+    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["estimate", "--order", "2", "--bn-hz", "3", "--loop-interval-s", "0.001", "--highpass-hz", "25"])
+        .arg("--imu")
+        .arg(&imu)
+        .arg("--tracking")
+        .arg(&trk)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(3), "{stdout}");
+    assert!(
+        stdout.contains(
+            "warning [highpass]: the high-pass at 25 Hz is at or above the top of the loop's half-power band"
+        ),
+        "{stdout}"
+    );
     // A stage's error says its cause once (it was printed twice, as message and as source).
     let (code, stderr) = estimate(&imu, &trk, &["--order", "2", "--bn-hz", "3", "--warmup-s", "1e300"]);
     assert_eq!(code, 2, "{stderr}");
