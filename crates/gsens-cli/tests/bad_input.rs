@@ -181,3 +181,31 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
     assert_eq!(stderr.matches(cause).count(), 1, "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A file given as a configuration that is too large to be one (a log in its
+/// place) is refused before it is read: scenario, GNSS-SDR and PocketSDR options.
+#[test]
+fn configuration_files_beyond_a_megabyte_are_refused() {
+    let case = Case::new("big-config", IMU_OK, TRK_OK);
+    let big = case.path("big.toml");
+    std::fs::File::create(&big).unwrap().set_len(2 << 20).unwrap();
+    for args in [
+        vec!["simulate".to_string(), "--scenario".into(), big.display().to_string(), "--out".into()],
+        vec!["estimate".to_string(), "--gnss-sdr".into(), case.dir.display().to_string(), "--gnss-sdr-conf".into()],
+    ] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_gsens"));
+        cmd.args(&args);
+        if args[0] == "simulate" {
+            cmd.arg(case.path("out"));
+        } else {
+            cmd.arg(&big).arg("--imu").arg(case.path("imu.csv"));
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("big.toml") && stderr.contains("2097152 bytes is not a configuration file"),
+            "{stderr}"
+        );
+    }
+}

@@ -273,7 +273,7 @@ impl GnssSdrConf {
     pub fn read(path: impl AsRef<Path>) -> Result<Self, GnssSdrError> {
         let path = path.as_ref();
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| GnssSdrError::Io { file: name.clone(), error: e })?;
+        let text = gsens_io::read_config_text(path).map_err(|e| GnssSdrError::Io { file: name.clone(), error: e })?;
         Self::parse(&text, &name)
     }
 

@@ -28,6 +28,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod config;
 pub mod error;
 pub mod imu;
 mod parse;
@@ -36,6 +37,7 @@ pub mod tracking;
 pub mod vibration;
 pub mod writers;
 
+pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};

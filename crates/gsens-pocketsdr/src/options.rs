@@ -120,7 +120,8 @@ impl PocketSdrOptions {
     /// Reads an options file.
     pub fn read(path: &Path) -> Result<Self, PocketSdrError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| PocketSdrError::Io { file: name.clone(), error })?;
+        let text =
+            gsens_io::read_config_text(path).map_err(|error| PocketSdrError::Io { file: name.clone(), error })?;
         Self::parse(&text, &name)
     }
 

@@ -23,7 +23,7 @@ fn scenario_with(path: Option<&PathBuf>, overrides: serde_json::Map<String, serd
         None => ("the default scenario".to_string(), Scenario::default_toml().to_string()),
         Some(p) => (
             p.display().to_string(),
-            std::fs::read_to_string(p)
+            gsens_io::read_config_text(p)
                 .map_err(|e| GsensError::new_err(format!("{}: cannot read: {e}", p.display())))?,
         ),
     };

@@ -35,8 +35,8 @@ pub fn load_scenario(path: Option<&Path>) -> Result<Scenario, LoadError> {
     match path {
         None => Ok(Scenario::from_toml_str(Scenario::default_toml())?),
         Some(p) => {
-            let text =
-                std::fs::read_to_string(p).map_err(|error| LoadError::Io { path: p.display().to_string(), error })?;
+            let text = gsens_io::read_config_text(p)
+                .map_err(|error| LoadError::Io { path: p.display().to_string(), error })?;
             Scenario::from_toml_str(&text).map_err(|error| LoadError::Scenario { path: p.display().to_string(), error })
         }
     }
