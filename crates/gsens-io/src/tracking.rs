@@ -696,6 +696,15 @@ pub fn read_tracking_file(path: impl AsRef<Path>) -> Result<TrackingLog, FormatE
     read_tracking_sized(file, &name, total_bytes)
 }
 
+/// The file read in two halves whatever its size, `None` where
+/// [`read_tracking_file`] would read it on one thread: for the differential
+/// fuzz target (the halves must give the one-thread log), not for use.
+#[doc(hidden)]
+pub fn read_tracking_file_in_halves(path: &Path) -> Option<TrackingLog> {
+    let total = std::fs::metadata(path).ok()?.len();
+    read_in_halves(path, &path_name(path), total)
+}
+
 /// The bytes of a source as they are read: how many line ends, and whether
 /// any quote character, went by.
 struct Scanned<R> {
