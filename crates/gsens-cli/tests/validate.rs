@@ -13,8 +13,10 @@
 mod common;
 use common::*;
 
-fn trials(args: &[&str]) -> Vec<serde_json::Value> {
-    let dir = temp_dir("validate");
+/// The trials of `gsens validate` with `args`, written to a directory of
+/// their own (`name`: the tests run at once in one process).
+fn trials(name: &str, args: &[&str]) -> Vec<serde_json::Value> {
+    let dir = temp_dir(&format!("validate-{name}"));
     let out = dir.join("trials.json");
     let figure = dir.join("in_the_loop.png");
     let mut all: Vec<&str> = args.to_vec();
@@ -33,7 +35,7 @@ fn slips(t: &serde_json::Value) -> [u64; 3] {
 
 #[test]
 fn compensation_cuts_the_g_induced_error_tenfold_and_stops_the_slips() {
-    let t = trials(&["validate", "--bn-hz", "3,1"]);
+    let t = trials("default", &["validate", "--bn-hz", "3,1"]);
     let (at3, at1) = (&t[0], &t[1]);
     let suppression = at3["suppression"].as_f64().unwrap();
     assert!(suppression >= 10.0, "×{suppression} at 3 Hz");
@@ -46,7 +48,7 @@ fn compensation_cuts_the_g_induced_error_tenfold_and_stops_the_slips() {
 #[test]
 fn a_tcxo_receiver_slips_at_3_hz_without_compensation_only() {
     let scenario = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/scenarios/tcxo.toml");
-    let t = trials(&["validate", "--scenario", scenario, "--bn-hz", "3"]);
+    let t = trials("tcxo", &["validate", "--scenario", scenario, "--bn-hz", "3"]);
     let [reference, without, with] = slips(&t[0]);
     assert!(without > 0, "{:?}", slips(&t[0]));
     assert_eq!((reference, with), (0, 0), "{:?}", slips(&t[0]));
