@@ -104,10 +104,9 @@ impl Default for EstimateSettings {
     }
 }
 
-/// The shortest carrier-loop update interval \[s\]: one 1 ms code period
-/// (GPS L1 C/A, L5, GLONASS, BeiDou B1I; Galileo E1's is 4 ms), less a
-/// rounding margin.
-pub(crate) const MIN_LOOP_INTERVAL_S: f64 = 1e-3 * (1.0 - 1e-9);
+/// The shortest carrier-loop update interval \[s\]: one code period
+/// ([`gsens_core::units::L1CA_CODE_PERIOD_S`]), less a rounding margin.
+pub(crate) const MIN_LOOP_INTERVAL_S: f64 = gsens_core::units::L1CA_CODE_PERIOD_S * (1.0 - 1e-9);
 
 /// `x` within `[lo, hi]`, else an error naming the setting and `expected`.
 fn within(name: &'static str, x: f64, lo: f64, hi: f64, expected: &'static str) -> Result<(), CalibError> {

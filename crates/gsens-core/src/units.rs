@@ -6,6 +6,12 @@ pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
 /// GPS L1 carrier frequency \[Hz\] (IS-GPS-200).
 pub const GPS_L1_HZ: f64 = 1_575.42e6;
 
+/// GPS L1 C/A code period \[s\] (1023 chips at 1.023 Mchip/s): the
+/// shortest coherent integration of a carrier loop on it, and of any GNSS
+/// open signal (L5, GLONASS and BeiDou B1I codes are 1 ms too; Galileo E1's
+/// is 4 ms).
+pub const L1CA_CODE_PERIOD_S: f64 = 1e-3;
+
 /// Speed of light in vacuum \[m/s\].
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 

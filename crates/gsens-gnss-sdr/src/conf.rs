@@ -387,7 +387,7 @@ impl GnssSdrConf {
             ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz, f64::from(extend_correlation_symbols)),
         ];
         for (key, v, symbols) in stages {
-            let t_s = 1e-3 * symbols;
+            let t_s = gsens_core::units::L1CA_CODE_PERIOD_S * symbols;
             if v * t_s > 0.5 {
                 return fail(
                     key,

@@ -747,21 +747,14 @@ pub fn read_dump(path: impl AsRef<Path>, layout: Option<&DumpLayout>) -> Result<
 
 /// The channel number at the end of a dump's file stem (`trk_ch_12.dat` → 12).
 pub fn channel_from_name(file: &str) -> Option<u32> {
-    let stem = Path::new(file).file_stem()?.to_str()?;
-    let digits: String = stem.chars().rev().take_while(char::is_ascii_digit).collect();
-    if digits.is_empty() {
-        return None;
-    }
-    digits.chars().rev().collect::<String>().parse().ok()
+    trailing_digits(file)?.parse().ok()
 }
 
-/// Whether a file's stem ends in a digit (a channel number, in range or not).
-fn ends_in_digits(file: &str) -> bool {
-    Path::new(file)
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .and_then(|s| s.chars().last())
-        .is_some_and(|c| c.is_ascii_digit())
+/// The digits a file's stem ends in (`trk_ch_12.dat` → `12`), `None` without any.
+fn trailing_digits(file: &str) -> Option<&str> {
+    let stem = Path::new(file).file_stem()?.to_str()?;
+    let digits = stem.trim_end_matches(|c: char| c.is_ascii_digit());
+    (digits.len() < stem.len()).then(|| &stem[digits.len()..])
 }
 
 /// The dumps in `dir`: files `<prefix><channel>.dat` (any prefix when `None`),
@@ -785,13 +778,9 @@ pub fn find_dumps(dir: &Path, prefix: Option<&str>) -> Result<Vec<(u32, PathBuf)
         }
         if let Some(ch) = channel_from_name(fname) {
             out.push((ch, p));
-        } else if ends_in_digits(fname) {
-            let stem = Path::new(fname).file_stem().and_then(|s| s.to_str()).unwrap_or(fname);
-            let digits: String = stem.chars().rev().take_while(char::is_ascii_digit).collect();
-            return Err(GnssSdrError::ChannelNumberOutOfRange {
-                file: p.display().to_string(),
-                digits: digits.chars().rev().collect(),
-            });
+        } else if let Some(digits) = trailing_digits(fname) {
+            // Digits beyond u32: no receiver's channel number.
+            return Err(GnssSdrError::ChannelNumberOutOfRange { file: p.display().to_string(), digits: digits.into() });
         }
     }
     // A .mat only where its channel has no .dat (the same records, read without HDF5).

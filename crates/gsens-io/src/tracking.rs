@@ -359,11 +359,9 @@ impl Builder {
         }
         // A channel's first row in `next` must be at a later epoch than its
         // last one here; each channel's first track in `next` holds it.
-        let mut seen = HashMap::new();
+        let mut seen = std::collections::HashSet::new();
         for tr in &next.tracks {
-            if seen.insert(tr.channel, ()).is_none()
-                && self.channels.get(tr.channel).is_some_and(|s| s.last_t_s == tr.t_s[0])
-            {
+            if seen.insert(tr.channel) && self.channels.get(tr.channel).is_some_and(|s| s.last_t_s == tr.t_s[0]) {
                 return None;
             }
             if let Some(&k) = self.track_of.get(&(tr.channel, tr.prn))

@@ -86,10 +86,6 @@ use serde::{Deserialize, Serialize};
 /// Duration of a GPS L1 C/A navigation data bit \[s\] (50 bit/s).
 pub const DATA_BIT_S: f64 = 0.020;
 
-/// Period of the GPS L1 C/A code \[s\] (1023 chips at 1.023 Mchip/s): the
-/// shortest coherent integration a carrier loop on it can use.
-pub const CODE_PERIOD_S: f64 = 0.001;
-
 /// The carrier phase discriminator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

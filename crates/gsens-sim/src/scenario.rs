@@ -18,11 +18,11 @@
 use core::f64::consts::FRAC_1_SQRT_2;
 
 use gsens_core::LoggedPhase;
-use gsens_core::units::GPS_L1_HZ;
+use gsens_core::units::{GPS_L1_HZ, L1CA_CODE_PERIOD_S};
 use gsens_core::{LoopFilterCoeffs, LoopSpec};
 use serde::{Deserialize, Serialize};
 
-use crate::channel::{CODE_PERIOD_S, DATA_BIT_S, Discriminator};
+use crate::channel::{DATA_BIT_S, Discriminator};
 use crate::error::{ConfigError, UtcError};
 use crate::imu::{ImuConfig, ImuPreset};
 use crate::motion::MotionConfig;
@@ -619,7 +619,7 @@ impl Scenario {
         let t = l.interval_s;
         // A carrier loop on C/A code integrates at least one code period.
         let allowed = "in [0.001, 0.02] s (at least one 1 ms C/A code period, at most one 20 ms data bit)";
-        let span = CODE_PERIOD_S - 1e-12..=DATA_BIT_S + 1e-12;
+        let span = L1CA_CODE_PERIOD_S - 1e-12..=DATA_BIT_S + 1e-12;
         range(span.contains(&t), "loop.interval_s", t, allowed)?;
         let per_bit = DATA_BIT_S / t;
         check((per_bit - per_bit.round()).abs() < 1e-6 * per_bit, || ConfigError::LoopIntervalNotInDataBit {

@@ -76,7 +76,7 @@ pub const B3: f64 = 2.4;
 /// (`T_FPULLIN`) \[s\].
 pub const FLL_PULL_IN_S: f64 = 1.0;
 /// GPS L1 C/A code period: PocketSDR's update interval for that signal \[s\].
-pub const L1CA_CODE_PERIOD_S: f64 = 1e-3;
+pub use crate::units::L1CA_CODE_PERIOD_S;
 
 /// PocketSDR's carrier loop for one signal: bandwidth and update interval.
 #[derive(Debug, Clone, Copy, PartialEq)]
