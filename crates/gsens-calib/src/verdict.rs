@@ -7,7 +7,6 @@
 //! range (the Costas rule of thumb: 3σ of the phase error below 45°).
 
 use gsens_core::LoopModel;
-use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
 /// The linear range assumed for the discriminator \[rad\]: π/4.
@@ -39,13 +38,16 @@ fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
     }
     let mean = x.iter().sum::<f64>() / n as f64;
     let len = (2 * n).next_power_of_two();
-    let mut buf: Vec<Complex<f64>> = x
-        .iter()
-        .map(|v| Complex::new(v - mean, 0.0))
-        .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
-        .take(len)
-        .collect();
-    crate::fft::forward(len).process(&mut buf);
+    // A real series: the real-input transform's bins 0 … len/2 are all the
+    // periodogram has (half the memory and work of a complex one).
+    let fft = crate::fft::real_forward(len);
+    let mut input = fft.make_input_vec();
+    for (slot, v) in input.iter_mut().zip(x) {
+        *slot = v - mean;
+    }
+    let mut buf = fft.make_output_vec();
+    fft.process(&mut input, &mut buf).ok()?;
+    drop(input);
     let df = 1.0 / (len as f64 * interval_s);
     let nyquist = 0.5 / interval_s;
     let (lo, hi) = (0.1f64, 5.0f64.min(0.9 * nyquist));

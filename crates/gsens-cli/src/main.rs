@@ -111,7 +111,26 @@ pub fn spinner() -> ProgressBar {
     bar
 }
 
+/// glibc's malloc gives each thread that allocates an arena of its own and
+/// keeps what is freed in it for that thread: the estimate's stages allocate
+/// large buffers on both cores in turn, so with an arena per thread the freed
+/// buffers of one core's stage are not reused by the other's and the peak RSS
+/// of a 1-hour log grows by some 25 MB over its largest live heap (and every
+/// fresh page is a page fault). One arena for the process: its few large
+/// allocations do not contend for the lock (BENCHMARKS.md, issue 15).
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn one_malloc_arena() {
+    // SAFETY: mallopt only sets a malloc parameter; called before any thread starts.
+    unsafe {
+        libc::mallopt(libc::M_ARENA_MAX, 1);
+    }
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn one_malloc_arena() {}
+
 fn main() -> ExitCode {
+    one_malloc_arena();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),

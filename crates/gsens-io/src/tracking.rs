@@ -148,6 +148,12 @@ impl TrackingLog {
     pub fn t_column(&self) -> &Column {
         &self.t_column
     }
+
+    /// The tracks, given up by the log (so that a consumer can free each as
+    /// it is done with it).
+    pub fn into_tracks(self) -> Vec<ChannelTrack> {
+        self.tracks
+    }
 }
 
 /// Per-channel reader state: the latest row and the current track.

@@ -375,20 +375,9 @@ const MAX_AT_EPOCH: usize = 64;
 
 /// The deviations of every row from the median of the other tracks at its
 /// epoch (NaN where fewer than two others), with the tracks' offsets `c`
-/// removed, and that median; rows with `flags & mask != 0` do not enter the
-/// medians, and the values entering them are less `shift` (the tracks' levels,
+/// removed; rows with `flags & mask != 0` do not enter the medians, and the values entering them are less `shift` (the tracks' levels,
 /// steps included), if given.
-#[allow(clippy::too_many_arguments)]
-fn deviations(
-    rows: &Rows,
-    n_epochs: usize,
-    flags: &[u8],
-    mask: u8,
-    c: &[f64],
-    shift: Option<&[f64]>,
-    d: &mut [f64],
-    reference: &mut [f64],
-) {
+fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], shift: Option<&[f64]>, d: &mut [f64]) {
     // Blocks of epochs copied into dense [epoch][track] buffers (each track's
     // rows of a block are contiguous), so that the per-epoch work reads and
     // writes sequentially.
@@ -398,7 +387,7 @@ fn deviations(
     let mut block_start = vec![0usize; n_tracks];
     let cells = BLOCK * n_tracks;
     let (mut present, mut value) = (vec![f64::NAN; cells], vec![f64::NAN; cells]);
-    let (mut dev, mut med) = (vec![f64::NAN; cells], vec![0.0; cells]);
+    let mut dev = vec![f64::NAN; cells];
     let mut vals = [0.0f64; MAX_AT_EPOCH];
     let mut sorted = [0.0f64; MAX_AT_EPOCH];
     let mut rank_of = [0usize; MAX_AT_EPOCH];
@@ -424,7 +413,7 @@ fn deviations(
         }
         for e in 0..e1 - e0 {
             let (p_row, v_row) = (&present[e * n_tracks..][..n_tracks], &value[e * n_tracks..][..n_tracks]);
-            let (d_row, m_row) = (&mut dev[e * n_tracks..][..n_tracks], &mut med[e * n_tracks..][..n_tracks]);
+            let d_row = &mut dev[e * n_tracks..][..n_tracks];
             // The values entering the median (at most MAX_AT_EPOCH of them).
             let mut m = 0;
             for (i, &v) in v_row.iter().enumerate() {
@@ -465,14 +454,12 @@ fn deviations(
                 let (lo, hi) = (get((others - 1) / 2), get(others / 2));
                 let md = 0.5 * (lo + hi);
                 d_row[i] = p_row[i] - md;
-                m_row[i] = md;
             }
         }
         for i in 0..n_tracks {
             for r in block_start[i]..cursor[i] {
                 let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
                 d[r] = dev[k];
-                reference[r] = med[k];
             }
         }
     }
@@ -623,7 +610,6 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     let c = initial_offsets(rows, n_epochs, flags);
     let mut c = c;
     let mut d = vec![f64::NAN; n_rows];
-    let mut reference = vec![0.0; n_rows];
     // Two rounds: the first finds each track's levels (steps) and slips
     // against the others as they are; the second (when the first found any)
     // compares every track with the others less their levels and without
@@ -639,7 +625,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
         let cn0_mask = flag::CN0_DROP | flag::STARTUP_CN0;
         let (mask, shift) =
             if round == 0 { (cn0_mask, None) } else { (cn0_mask | flag::SLIP | flag::STARTUP, Some(level.as_slice())) };
-        deviations(rows, n_epochs, flags, mask, &c, shift, &mut d, &mut reference);
+        deviations(rows, n_epochs, flags, mask, &c, shift, &mut d);
         // Each track's own offset refined by the median of its deviations (the
         // others' medians are robust to their small errors); σ from the local MAD.
         for i in 0..n_tracks {
@@ -734,7 +720,6 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             sigma[i].is_finite().then(|| GainInput {
                 epoch: &rows.epoch[range.clone()],
                 phase: &rows.phase[range.clone()],
-                reference: &reference[range.clone()],
                 dev: &d[range.clone()],
                 level: &level[range],
                 offset: c[i],
@@ -1063,7 +1048,6 @@ fn noisy_windows(
 struct GainInput<'a> {
     epoch: &'a [u32],
     phase: &'a [f64],
-    reference: &'a [f64],
     dev: &'a [f64],
     level: &'a [f64],
     offset: f64,
@@ -1074,6 +1058,14 @@ impl GainInput<'_> {
     #[inline]
     fn usable(&self, flags: &[u8], j: usize) -> bool {
         flags[j] == 0 && self.dev[j].is_finite()
+    }
+
+    /// The reference the track is regressed on: the median of the others at
+    /// the row's epoch, which is the phase less the offset and the deviation
+    /// (d = φ − c − median; not stored: a row table's worth of memory).
+    #[inline]
+    fn x(&self, j: usize) -> f64 {
+        self.phase[j] - self.offset - self.dev[j]
     }
 
     /// The track's phase less its offset and level (steps removed).
@@ -1146,11 +1138,14 @@ fn gain_fits(g: &GainInput, track: usize, window: u32, flags: &[u8], fits: &mut 
         // Lagged sums over consecutive usable rows (for the residuals' lag-one correlation).
         let mut lag = Lagged::default();
         let mut prev: Option<(f64, f64)> = None;
-        // Shifted sums (by the window's first values) for accuracy.
-        let (x0, y0) = (g.reference[j], g.y(j));
+        // Shifted sums (by the window's first values) for accuracy; the
+        // reference of the first usable row (a row without a deviation has none).
+        let y0 = g.y(j);
+        let mut x0 = None;
         while j < n && g.epoch[j] / window == w {
             if g.usable(flags, j) {
-                let (x, y) = (g.reference[j] - x0, g.y(j) - y0);
+                let x0 = *x0.get_or_insert_with(|| g.x(j));
+                let (x, y) = (g.x(j) - x0, g.y(j) - y0);
                 m += 1;
                 sx += x;
                 sy += y;

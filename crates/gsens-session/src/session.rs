@@ -187,18 +187,19 @@ impl Grid {
         }
     }
 
-    /// Grid indices of the rows of a track whose time stamps are all stamps of the log.
-    fn track_ks(&self, stamps: &[f64], t_s: &[f64]) -> Vec<u64> {
+    /// Grid indices of the rows of a track whose time stamps are all stamps
+    /// of the log, into `ks` (one track's worth, reused from track to track:
+    /// all of them at once would be 8 bytes a row of the log).
+    fn track_ks(&self, stamps: &[f64], t_s: &[f64], ks: &mut Vec<u64>) {
         let mut p = 0usize;
-        t_s.iter()
-            .map(|&t| {
-                while stamps[p] < t {
-                    p += 1;
-                }
-                debug_assert_eq!(stamps[p], t);
-                self.k_of_stamp[p]
-            })
-            .collect()
+        ks.clear();
+        ks.extend(t_s.iter().map(|&t| {
+            while stamps[p] < t {
+                p += 1;
+            }
+            debug_assert_eq!(stamps[p], t);
+            self.k_of_stamp[p]
+        }));
     }
 
     /// The grid of a log. The median spacing assigns the grid indices (each
@@ -385,12 +386,12 @@ pub fn prepare_session_from(
     let above_mask = |elev: f64| selection.elevation_mask_deg.is_none_or(|m| elev.is_nan() || elev >= m);
     let above_cn0 = |cn0: f64| selection.min_cn0_dbhz.is_none_or(|m| cn0 >= m);
 
-    let tracks = tracking.tracks();
-    let track_ks: Vec<Vec<u64>> = tracks.iter().map(|tr| grid.track_ks(stamps, &tr.t_s)).collect();
-    let stats: Vec<TrackStats> = tracks
+    let mut ks = Vec::new();
+    let stats: Vec<TrackStats> = tracking
+        .tracks()
         .iter()
-        .zip(&track_ks)
-        .map(|(tr, ks)| {
+        .map(|tr| {
+            grid.track_ks(stamps, &tr.t_s, &mut ks);
             let mut s = TrackStats { in_span: 0, above_mask: 0, passing: 0, cn0_sum_passing: 0.0, cn0_sum_span: 0.0 };
             for (j, &k) in ks.iter().enumerate() {
                 if !in_span(k) {
@@ -412,6 +413,11 @@ pub fn prepare_session_from(
             s
         })
         .collect();
+    let tracks: Vec<TrackMeta> = tracking
+        .tracks()
+        .iter()
+        .map(|t| TrackMeta { channel: t.channel, prn: t.prn, carrier: t.carrier, mean_cn0_dbhz: t.mean_cn0_dbhz() })
+        .collect();
 
     // The rows passing the masks of every track that has some (the candidates), screened.
     let mut candidate_of: Vec<Option<usize>> = vec![None; tracks.len()];
@@ -421,19 +427,20 @@ pub fn prepare_session_from(
     rows.epoch.reserve_exact(n_rows);
     rows.phase.reserve_exact(n_rows);
     rows.cn0.reserve_exact(n_rows);
-    for (i, tr) in tracks.iter().enumerate() {
+    let mut take_rows = |i: usize, tr: &gsens_io::ChannelTrack| {
         if stats[i].passing == 0 {
-            continue;
+            return;
         }
+        grid.track_ks(stamps, &tr.t_s, &mut ks);
         candidate_of[i] = Some(rows.tracks());
         // The start-up ends startup_s after the track's first row in the log
         // (which may precede the usable span).
         let startup_epochs = (selection.screening.startup_s / grid.log_interval_s).round() as u64;
-        let startup_end = (track_ks[i][0] + startup_epochs).saturating_sub(k_first).min(u32::MAX as u64);
+        let startup_end = (ks[0] + startup_epochs).saturating_sub(k_first).min(u32::MAX as u64);
         rows.startup_end.push(startup_end as u32);
         let to_l1 = tr.carrier.scale_to_l1();
         rows.to_l1.push(to_l1);
-        for (j, &k) in track_ks[i].iter().enumerate() {
+        for (j, &k) in ks.iter().enumerate() {
             if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
                 rows.epoch.push((k - k_first) as u32);
                 rows.phase.push(tr.phase_err_rad[j] * to_l1);
@@ -441,14 +448,15 @@ pub fn prepare_session_from(
             }
         }
         rows.track_start.push(rows.epoch.len());
+    };
+    match tracking {
+        // An owned log is freed track by track as its rows are taken, so that
+        // the log and the row table are never both whole in memory.
+        Cow::Owned(log) => log.into_tracks().into_iter().enumerate().for_each(|(i, tr)| take_rows(i, &tr)),
+        // A borrowed one stays with its owner.
+        Cow::Borrowed(log) => log.tracks().iter().enumerate().for_each(|(i, tr)| take_rows(i, tr)),
     }
-    let tracks: Vec<TrackMeta> = tracks
-        .iter()
-        .map(|t| TrackMeta { channel: t.channel, prn: t.prn, carrier: t.carrier, mean_cn0_dbhz: t.mean_cn0_dbhz() })
-        .collect();
-    drop(track_ks);
-    // An owned log is freed here; a borrowed one stays with its owner.
-    drop(tracking);
+    drop(ks);
     let screened = if selection.screening.enabled {
         screening::screen(&rows, n_epochs, grid.log_interval_s, &selection.screening)
     } else {
