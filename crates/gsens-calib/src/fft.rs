@@ -26,3 +26,51 @@ pub(crate) fn forward(n: usize) -> Arc<dyn Fft<f64>> {
 pub(crate) fn real_forward(n: usize) -> Arc<dyn RealToComplex<f64>> {
     REAL_PLANNER.with(|p| p.borrow_mut().plan_fft_forward(n))
 }
+
+/// The smallest even length ≥ `min` whose only prime factors are 2, 3 and 5
+/// (rustfft's fastest radices): zero padding to it instead of the next power
+/// of two saves up to half of every transform (for 2 × 144 000 epochs:
+/// 288 000 = 2⁸·3²·5³ points, not 524 288).
+pub(crate) fn fast_len(min: usize) -> usize {
+    let target = min.max(2);
+    let mut best = target.next_power_of_two();
+    let mut p5 = 1usize;
+    while p5 < best {
+        let mut p35 = p5;
+        while p35 < best {
+            // The least power of two (at least 2: even) taking p35 to the target.
+            let mut n = p35 * 2;
+            while n < target {
+                n *= 2;
+            }
+            best = best.min(n);
+            p35 *= 3;
+        }
+        p5 *= 5;
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fast_len;
+
+    /// Against the definition: the first even 5-smooth number at or above each length.
+    #[test]
+    fn fast_len_is_the_least_even_5_smooth_length() {
+        let smooth = |mut n: usize| {
+            for p in [2, 3, 5] {
+                while n.is_multiple_of(p) {
+                    n /= p;
+                }
+            }
+            n == 1
+        };
+        for min in 0usize..5000 {
+            let want = (min.max(2)..).find(|&n: &usize| n.is_multiple_of(2) && smooth(n)).unwrap();
+            assert_eq!(fast_len(min), want, "min {min}");
+        }
+        assert_eq!(fast_len(288_000), 288_000);
+        assert_eq!(fast_len(288_001), 291_600);
+    }
+}

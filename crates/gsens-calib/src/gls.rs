@@ -391,7 +391,7 @@ pub fn covariance_middle_columns(
         if len == 0 {
             continue;
         }
-        let n = (2 * len).next_power_of_two().max(2 * (model.order() + 1));
+        let n = crate::fft::fast_len((2 * len).max(2 * (model.order() + 1)));
         let fft = crate::fft::real_forward(n);
         let transform = |input: &mut Vec<f64>| {
             let mut out = fft.make_output_vec();

@@ -10,6 +10,15 @@
 //! residual sum of squares min_Γ Σ (φ_k − φ_a,k(τ)ᵀΓ)² over a grid of τ, refined
 //! by golden section (a variable-projection estimate: Γ is eliminated in
 //! closed form for each τ).
+//!
+//! The interpolated series is linear in φ_a: with the shift τ/T = i + u (i
+//! whole, 0 ≤ u < 1) and Catmull–Rom's weights w_j(u) on the samples k+i−1+j
+//! (j = 0…3), the normal equations at τ are
+//! AᵀA(τ) = Σ_j Σ_l w_j w_l C(i−1+j, l−j) and Aᵀφ(τ) = Σ_j w_j b(i−1+j), from the
+//! lagged sums C(m, d) = Σ_k φ_a[k+m] φ_a[k+m+d]ᵀ and b(m) = Σ_k φ_k φ_a[k+m]
+//! over the used epochs k. They are summed once for every whole shift m the
+//! search can reach; a candidate τ then costs a few 3×3 products, not a pass
+//! over the log.
 
 use crate::estimate::{build_model, model_input};
 use crate::{CalibError, EpochSeries, EstimateSettings};
@@ -48,13 +57,16 @@ pub(crate) fn catmull_rom(y: &[[f64; 3]], x: f64) -> [f64; 3] {
     let u = x - i as f64;
     let at = |k: isize| y[k.clamp(0, n - 1) as usize];
     let (p0, p1, p2, p3) = (at(i - 1), at(i), at(i + 1), at(i + 2));
+    let w = catmull_rom_weights(u);
+    [0, 1, 2].map(|c| w[0] * p0[c] + w[1] * p1[c] + w[2] * p2[c] + w[3] * p3[c])
+}
+
+/// Catmull–Rom's weights on the samples i−1, i, i+1, i+2 for the point
+/// i + u (0 ≤ u < 1): the cubic ½·(2p₁ + (p₂ − p₀)u + (2p₀ − 5p₁ + 4p₂ − p₃)u² +
+/// (−p₀ + 3p₁ − 3p₂ + p₃)u³) collected by sample.
+pub(crate) fn catmull_rom_weights(u: f64) -> [f64; 4] {
     let (u2, u3) = (u * u, u * u * u);
-    [0, 1, 2].map(|c| {
-        0.5 * (2.0 * p1[c]
-            + (-p0[c] + p2[c]) * u
-            + (2.0 * p0[c] - 5.0 * p1[c] + 4.0 * p2[c] - p3[c]) * u2
-            + (-p0[c] + 3.0 * p1[c] - 3.0 * p2[c] + p3[c]) * u3)
-    })
+    [0.5 * (-u + 2.0 * u2 - u3), 0.5 * (2.0 - 5.0 * u2 + 3.0 * u3), 0.5 * (u + 4.0 * u2 - 3.0 * u3), 0.5 * (-u2 + u3)]
 }
 
 /// Golden-section minimization of `f` on \[a, b\].
@@ -82,17 +94,16 @@ fn golden(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f6
 }
 
 /// Grid search then golden-section refinement of `f` on \[lo, hi\]; returns the
-/// minimizer. The grid's points are evaluated in parallel (each is a pass
-/// over the log); the first smallest wins, as in a sequential scan.
-fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, f: impl Fn(f64) -> f64 + Sync) -> f64 {
-    use rayon::prelude::*;
+/// minimizer (the first smallest grid point starts the refinement).
+fn minimize_1d(lo: f64, hi: f64, grid: usize, tol: f64, f: impl Fn(f64) -> f64) -> f64 {
     let step = (hi - lo) / grid as f64;
-    let values: Vec<f64> = (0..=grid).into_par_iter().map(|i| f(lo + i as f64 * step)).collect();
     let (mut best_x, mut best_f) = (lo, f64::INFINITY);
-    for (i, v) in values.into_iter().enumerate() {
+    for i in 0..=grid {
+        let x = lo + i as f64 * step;
+        let v = f(x);
         if v < best_f {
             best_f = v;
-            best_x = lo + i as f64 * step;
+            best_x = x;
         }
     }
     golden((best_x - step).max(lo), (best_x + step).min(hi), tol, &f)
@@ -103,8 +114,83 @@ pub(crate) struct OffsetProfile {
     pub(crate) dtau_s: f64,
 }
 
+/// C(m, d) for d = 0…3 (3×3 each).
+type Lags = [[[f64; 3]; 3]; 4];
+
+/// The lagged sums of the used epochs for every whole shift `m` in
+/// `m_lo..=m_hi` (module documentation): `c[m − m_lo][d]` = C(m, d) for
+/// d = 0…3 with m + d ≤ m_hi (the others are never needed; zero), `b[m − m_lo]` = b(m).
+struct LaggedSums {
+    m_lo: isize,
+    c: Vec<Lags>,
+    b: Vec<[f64; 3]>,
+    btb: f64,
+    n: u64,
+}
+
+impl LaggedSums {
+    /// Every k + m for m in `m_lo..=m_hi` must lie in `phi_a` (the caller's margin).
+    fn new(phi_a: &[[f64; 3]], phi: &[f64], used: &[usize], m_lo: isize, m_hi: isize) -> Self {
+        use rayon::prelude::*;
+        let sums: Vec<(Lags, [f64; 3])> = (m_lo..=m_hi)
+            .into_par_iter()
+            .map(|m| {
+                let mut c: Lags = [[[0.0; 3]; 3]; 4];
+                let mut b = [0.0; 3];
+                for (&k, &p) in used.iter().zip(phi) {
+                    let at = (k as isize + m) as usize;
+                    let x = phi_a[at];
+                    let lags = ((m_hi - m) as usize).min(3);
+                    for (d, cd) in c.iter_mut().enumerate().take(lags + 1) {
+                        let y = phi_a[at + d];
+                        for (r, row) in cd.iter_mut().enumerate() {
+                            for (q, v) in row.iter_mut().enumerate() {
+                                *v += x[r] * y[q];
+                            }
+                        }
+                    }
+                    for r in 0..3 {
+                        b[r] += p * x[r];
+                    }
+                }
+                (c, b)
+            })
+            .collect();
+        let (c, b) = sums.into_iter().unzip();
+        LaggedSums { m_lo, c, b, btb: phi.iter().map(|p| p * p).sum(), n: used.len() as u64 }
+    }
+
+    /// The normal equations of the series shifted by `shift` samples.
+    fn normal_at(&self, shift: f64) -> NormalEquations {
+        let i = shift.floor();
+        let w = catmull_rom_weights(shift - i);
+        let base = (i as isize - 1 - self.m_lo) as usize;
+        let mut ne = NormalEquations { btb: self.btb, n: self.n, ..NormalEquations::default() };
+        for j in 0..4 {
+            for r in 0..3 {
+                ne.atb[r] += w[j] * self.b[base + j][r];
+            }
+            for l in j..4 {
+                let c = &self.c[base + j][l - j];
+                let wjl = w[j] * w[l];
+                for r in 0..3 {
+                    for q in 0..3 {
+                        // C(j, l) and, for l ≠ j, its transpose C(l, j).
+                        ne.ata[(r, q)] += wjl * c[r][q];
+                        if l != j {
+                            ne.ata[(q, r)] += wjl * c[r][q];
+                        }
+                    }
+                }
+            }
+        }
+        ne
+    }
+}
+
 pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result<OffsetProfile, CalibError> {
-    let margin = (max_abs_s / t).ceil() as usize + 2;
+    let reach = (max_abs_s / t).ceil() as usize;
+    let margin = reach + 2;
     let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
     let mut used: Vec<usize> =
         (margin..fed.len().saturating_sub(margin)).filter(|&k| fed[k].used && fed[k].phase_err_rad.is_some()).collect();
@@ -116,15 +202,12 @@ pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result
     if stride > 1 {
         used = used.into_iter().step_by(stride).collect();
     }
-    // φ_a at true time t_k comes from the IMU at stamp t_k + τ: a shift of +τ/T samples.
-    let rss_at = |dtau: f64| {
-        let mut ne = NormalEquations::default();
-        for &k in &used {
-            let v = catmull_rom(&phi_a, k as f64 + dtau / t);
-            ne.add(fed[k].phase_err_rad.unwrap_or(0.0), &v);
-        }
-        rss(&ne)
-    };
+    let phi: Vec<f64> = used.iter().map(|&k| fed[k].phase_err_rad.unwrap_or(0.0)).collect();
+    // φ_a at true time t_k comes from the IMU at stamp t_k + τ: a shift of +τ/T
+    // samples, whole part −reach … reach, taps one before to two after it.
+    let reach = reach as isize;
+    let sums = LaggedSums::new(&phi_a, &phi, &used, -reach - 1, reach + 2);
+    let rss_at = |dtau: f64| rss(&sums.normal_at(dtau / t));
     let grid = ((2.0 * max_abs_s / (0.25 * t)).ceil() as usize).max(8);
     let dtau_s = minimize_1d(-max_abs_s, max_abs_s, grid, 1e-5, rss_at);
     Ok(OffsetProfile { dtau_s })
@@ -145,4 +228,57 @@ pub(crate) fn scaled_loop(model: &LoopModel, scale: f64, zeta: Option<f64>) -> L
         (m, _) => m,
     };
     model.with_bn_scaled(scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Uniform};
+
+    /// The lagged sums' normal equations against the definition: every used
+    /// epoch's φ_a interpolated by Catmull–Rom at the shift and summed.
+    #[test]
+    fn lagged_sums_give_the_interpolated_normal_equations() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(15);
+        let uniform = Uniform::new(-1.0, 1.0).expect("a range");
+        let n = 600;
+        let reach = 7usize;
+        let phi_a: Vec<[f64; 3]> = (0..n).map(|_| [0, 1, 2].map(|_| uniform.sample(&mut rng))).collect();
+        let margin = reach + 2;
+        let used: Vec<usize> = (margin..n - margin).filter(|_| uniform.sample(&mut rng) < 0.6).collect();
+        let phi: Vec<f64> = used.iter().map(|_| uniform.sample(&mut rng)).collect();
+        let sums = LaggedSums::new(&phi_a, &phi, &used, -(reach as isize) - 1, reach as isize + 2);
+        for shift in [-7.0, -6.3, -0.5, 0.0, 1e-9, 0.25, 3.999, 6.75, 7.0] {
+            let mut want = NormalEquations::default();
+            for (&k, &p) in used.iter().zip(&phi) {
+                want.add(p, &catmull_rom(&phi_a, k as f64 + shift));
+            }
+            let got = sums.normal_at(shift);
+            assert_eq!(got.n, want.n);
+            assert!((got.btb - want.btb).abs() <= 1e-12 * want.btb, "shift {shift}");
+            for r in 0..3 {
+                assert!((got.atb[r] - want.atb[r]).abs() <= 1e-12 * want.btb, "shift {shift}: atb[{r}]");
+                for q in 0..3 {
+                    let (g, w) = (got.ata[(r, q)], want.ata[(r, q)]);
+                    assert!((g - w).abs() <= 1e-12 * want.ata.trace(), "shift {shift}: ata[{r}][{q}] {g} vs {w}");
+                }
+            }
+        }
+    }
+
+    /// Catmull–Rom passes through the samples and is exact on cubics' lower
+    /// relatives: a quadratic is reproduced anywhere between its samples.
+    #[test]
+    fn catmull_rom_weights_interpolate_and_reproduce_quadratics() {
+        for u in [0.0, 0.1, 0.5, 0.9] {
+            let w = catmull_rom_weights(u);
+            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+            let q = |x: f64| 0.3 * x * x - 1.7 * x + 2.0;
+            let y: Vec<[f64; 3]> = (0..6).map(|i| [q(i as f64); 3]).collect();
+            let got = catmull_rom(&y, 2.0 + u)[0];
+            assert!((got - q(2.0 + u)).abs() < 1e-12, "u {u}: {got} vs {}", q(2.0 + u));
+        }
+        assert_eq!(catmull_rom_weights(0.0), [0.0, 1.0, 0.0, 0.0]);
+    }
 }

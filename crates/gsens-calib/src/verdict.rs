@@ -30,14 +30,14 @@ pub struct AxisVerdict {
 }
 
 /// Periodogram peak of `x` (mean removed) over 0.1–5 Hz (or up to 90 % of
-/// Nyquist), by FFT of the zero-padded series.
+/// Nyquist), by FFT of the series zero-padded to at least twice its length.
 fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
     let n = x.len();
     if n < 16 {
         return None;
     }
     let mean = x.iter().sum::<f64>() / n as f64;
-    let len = (2 * n).next_power_of_two();
+    let len = crate::fft::fast_len(2 * n);
     // A real series: the real-input transform's bins 0 … len/2 are all the
     // periodogram has (half the memory and work of a complex one).
     let fft = crate::fft::real_forward(len);
