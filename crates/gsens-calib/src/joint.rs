@@ -25,7 +25,7 @@
 //! confounded (a constant shaking rate, whose phase lag a loop error and a
 //! delay both explain) it grows, instead of one absorbing the other.
 
-use crate::search::{batch_pass, catmull_rom, offset_profile, scaled_loop};
+use crate::search::{Shift, batch_pass, offset_profile, scaled_loop};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
@@ -121,9 +121,10 @@ fn triad_pass(
     Ok(batch_pass(series, &s)?.0)
 }
 
-/// φ_a of `fed` at epoch k shifted by `dtau_s` (IMU read later by dtau).
-fn shifted(fed: &[FedEpoch], phi_a: &[[f64; 3]], k: usize, dtau_s: f64, t: f64) -> [f64; 3] {
-    if dtau_s == 0.0 { fed[k].phi_a } else { catmull_rom(phi_a, k as f64 + dtau_s / t) }
+/// φ_a of `fed` at epoch k shifted by `dtau_s` (IMU read later by dtau): `by`,
+/// the shift by dtau_s/T samples (φ_a itself at no shift).
+fn shifted(fed: &[FedEpoch], k: usize, dtau_s: f64, by: &Shift) -> [f64; 3] {
+    if dtau_s == 0.0 { fed[k].phi_a } else { by.at(fed.len(), k, |j| fed[j].phi_a) }
 }
 
 fn dot(a: &[f64; 3], g: &[f64; 3]) -> f64 {
@@ -190,7 +191,6 @@ fn joint_fit_axes(
     let h = 0.01;
     let eps = 0.1 * t;
     let loop_at = |ln_s: f64, zeta: Option<f64>| scaled_loop(&stated, ln_s.exp(), zeta);
-    let phi_a_of = |fed: &[FedEpoch]| -> Vec<[f64; 3]> { fed.iter().map(|e| e.phi_a).collect() };
 
     let na = axes.len();
     let p = na + fit_loop as usize + fit_zeta as usize + spec.offset_max_abs_s.is_some() as usize;
@@ -202,8 +202,8 @@ fn joint_fit_axes(
         } else {
             std::borrow::Cow::Owned(triad_pass(series, settings, &loop_at(ln_s, zeta))?)
         };
-        let pa_c = phi_a_of(&center);
-        let a: Vec<[f64; 3]> = used.iter().map(|&k| shifted(&center, &pa_c, k, dtau, t)).collect();
+        let by = Shift::samples(dtau / t);
+        let a: Vec<[f64; 3]> = used.iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
         // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
         let mut ne = gsens_core::NormalEquations::default();
         for (ak, pk) in a.iter().zip(&phi) {
@@ -220,10 +220,9 @@ fn joint_fit_axes(
             // Two independent passes over the log: one per core.
             let (fl, fh) = rayon::join(|| triad_pass(series, settings, lo), || triad_pass(series, settings, hi));
             let (fl, fh) = (fl?, fh?);
-            let (pl, ph) = (phi_a_of(&fl), phi_a_of(&fh));
             Ok(used
                 .iter()
-                .map(|&k| (dot(&shifted(&fh, &ph, k, dtau, t), &g) - dot(&shifted(&fl, &pl, k, dtau, t), &g)) / step)
+                .map(|&k| (dot(&shifted(&fh, k, dtau, &by), &g) - dot(&shifted(&fl, k, dtau, &by), &g)) / step)
                 .collect())
         };
         if fit_loop {
@@ -234,23 +233,24 @@ fn joint_fit_axes(
             columns.push(diff(&loop_at(ln_s, Some(z - h)), &loop_at(ln_s, Some(z + h)), 2.0 * h)?);
         }
         if spec.offset_max_abs_s.is_some() {
+            let (later, earlier) = (Shift::samples((dtau + eps) / t), Shift::samples((dtau - eps) / t));
+            let n_c = center.len();
             columns.push(
                 used.iter()
                     .map(|&k| {
-                        (dot(&catmull_rom(&pa_c, k as f64 + (dtau + eps) / t), &g)
-                            - dot(&catmull_rom(&pa_c, k as f64 + (dtau - eps) / t), &g))
-                            / (2.0 * eps)
+                        let phi_a = |j: usize| center[j].phi_a;
+                        (dot(&later.at(n_c, k, phi_a), &g) - dot(&earlier.at(n_c, k, phi_a), &g)) / (2.0 * eps)
                     })
                     .collect(),
             );
         }
         let jac = DMatrix::from_fn(used.len(), p, |r, c| columns[c][r]);
         let y = DVector::from_column_slice(&phi);
-        let jtj = jac.transpose() * &jac;
+        let jtj = jac.tr_mul(&jac);
         let Some(jtj_inv) = jtj.clone().try_inverse() else {
             return Err(CalibError::Unsupported("the joint fit of Γ, the loop and the time offset is singular"));
         };
-        let beta = &jtj_inv * (jac.transpose() * &y);
+        let beta = &jtj_inv * jac.tr_mul(&y);
         // Converged when every step is far below its (white-noise) σ.
         let white_var = {
             let r = &y - &jac * &beta;
@@ -285,10 +285,10 @@ fn joint_fit_axes(
                 gamma[i] = beta[k];
             }
             let gamma_stated = if fit_loop || fit_zeta {
-                let pa0 = phi_a_of(&fed0);
+                let by = Shift::samples(dtau / t);
                 let mut ne = gsens_core::NormalEquations::default();
                 for (&k, pk) in used.iter().zip(&phi) {
-                    ne.add(*pk, &shifted(&fed0, &pa0, k, dtau, t));
+                    ne.add(*pk, &shifted(&fed0, k, dtau, &by));
                 }
                 ne.solve().gamma_hz_per_mps2
             } else {
@@ -322,11 +322,11 @@ fn joint_fit_axes(
         })
         .collect();
     let middle = gls::covariance_middle_columns(&noise, &full_columns, &segments);
-    let jtj_inv = (jac.transpose() * &jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
+    let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
     let cov = &jtj_inv * &middle * &jtj_inv;
     // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
     let a3 = jac.columns(0, na).into_owned();
-    let a3_inv = (a3.transpose() * &a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(na, na));
+    let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(na, na));
     // Entry (i, j) of the middle depends on columns i and j alone: the Γ
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();

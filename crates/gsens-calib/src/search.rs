@@ -50,8 +50,11 @@ fn rss(normal: &NormalEquations) -> f64 {
     })
 }
 
-/// Catmull–Rom interpolation of a uniformly sampled series at fractional index `x`.
-pub(crate) fn catmull_rom(y: &[[f64; 3]], x: f64) -> [f64; 3] {
+/// Catmull–Rom interpolation of a uniformly sampled series at fractional
+/// index `x`, point by point: the reference [`Shift`] and the lagged sums are
+/// tested against.
+#[cfg(test)]
+fn catmull_rom(y: &[[f64; 3]], x: f64) -> [f64; 3] {
     let n = y.len() as isize;
     let i = x.floor() as isize;
     let u = x - i as f64;
@@ -59,6 +62,39 @@ pub(crate) fn catmull_rom(y: &[[f64; 3]], x: f64) -> [f64; 3] {
     let (p0, p1, p2, p3) = (at(i - 1), at(i), at(i + 1), at(i + 2));
     let w = catmull_rom_weights(u);
     [0, 1, 2].map(|c| w[0] * p0[c] + w[1] * p1[c] + w[2] * p2[c] + w[3] * p3[c])
+}
+
+/// A uniformly sampled series shifted by a fixed number of samples s = i + u
+/// (i whole, 0 ≤ u < 1), by Catmull–Rom interpolation: the value at k + s is
+/// Σ_j w_j(u)·y[k+i−1+j] ([`catmull_rom_weights`]), the same four weights at
+/// every k (indices clamped to the series).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Shift {
+    whole: isize,
+    weights: [f64; 4],
+}
+
+impl Shift {
+    /// The shift by `samples` (any sign).
+    pub(crate) fn samples(samples: f64) -> Self {
+        let i = samples.floor();
+        Shift { whole: i as isize, weights: catmull_rom_weights(samples - i) }
+    }
+
+    /// The shifted series at `k`, of a series of `n` samples read by `y`.
+    #[inline]
+    pub(crate) fn at(&self, n: usize, k: usize, y: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
+        let last = n as isize - 1;
+        let base = k as isize + self.whole - 1;
+        let mut v = [0.0; 3];
+        for (j, w) in self.weights.iter().enumerate() {
+            let p = y((base + j as isize).clamp(0, last) as usize);
+            for c in 0..3 {
+                v[c] += w * p[c];
+            }
+        }
+        v
+    }
 }
 
 /// Catmull–Rom's weights on the samples i−1, i, i+1, i+2 for the point
@@ -162,9 +198,8 @@ impl LaggedSums {
 
     /// The normal equations of the series shifted by `shift` samples.
     fn normal_at(&self, shift: f64) -> NormalEquations {
-        let i = shift.floor();
-        let w = catmull_rom_weights(shift - i);
-        let base = (i as isize - 1 - self.m_lo) as usize;
+        let Shift { whole, weights: w } = Shift::samples(shift);
+        let base = (whole - 1 - self.m_lo) as usize;
         let mut ne = NormalEquations { btb: self.btb, n: self.n, ..NormalEquations::default() };
         for j in 0..4 {
             for r in 0..3 {
@@ -262,6 +297,25 @@ mod tests {
                 for q in 0..3 {
                     let (g, w) = (got.ata[(r, q)], want.ata[(r, q)]);
                     assert!((g - w).abs() <= 1e-12 * want.ata.trace(), "shift {shift}: ata[{r}][{q}] {g} vs {w}");
+                }
+            }
+        }
+    }
+
+    /// A fixed shift applied at every epoch against the point-by-point
+    /// interpolation, edges (clamped) included.
+    #[test]
+    fn shift_is_catmull_rom_at_every_epoch() {
+        let y: Vec<[f64; 3]> = (0..40).map(|i| [(0.3 * i as f64).sin(), (i as f64).sqrt(), -(i as f64)]).collect();
+        for s in [-3.25, -1.0, -0.001, 0.0, 0.4, 2.999, 5.5] {
+            let by = Shift::samples(s);
+            for k in 0..y.len() {
+                let (got, want) = (by.at(y.len(), k, |j| y[j]), catmull_rom(&y, k as f64 + s));
+                for c in 0..3 {
+                    assert!(
+                        (got[c] - want[c]).abs() <= 1e-12 * (1.0 + want[c].abs()),
+                        "s {s} k {k}: {got:?} vs {want:?}"
+                    );
                 }
             }
         }
