@@ -4,12 +4,61 @@ use std::io::Read;
 
 use crate::error::{Column, FormatError};
 
+/// The bytes of a source as the `csv` reader reads them, kept from the
+/// start of the current record on, and the line ends before them: the line
+/// a record starts on. `csv`'s own `Position::line` is that of the start of
+/// parsing, which is a blank line (or the `\n` of a `\r\n`) before the
+/// record when there is one (rust-csv issue 208): an error message would name
+/// the line above the row.
+struct LineCounter<R> {
+    inner: R,
+    /// Bytes read from absolute offset `base` on.
+    window: Vec<u8>,
+    base: u64,
+    /// Line ends before `base`.
+    newlines_before: u64,
+}
+
+impl<R: Read> Read for LineCounter<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.window.extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
+}
+
+impl<R> LineCounter<R> {
+    fn new(inner: R) -> Self {
+        LineCounter { inner, window: Vec::new(), base: 0, newlines_before: 0 }
+    }
+
+    /// The 1-based line of the record `csv` parsed from absolute offset
+    /// `start` on (its first byte that is not a line end), forgetting the
+    /// bytes before `start`; `None` when `start` was forgotten already.
+    fn line_of_record_at(&mut self, start: u64) -> Option<u64> {
+        let at = usize::try_from(start.checked_sub(self.base)?).ok().filter(|&at| at <= self.window.len())?;
+        self.newlines_before += memchr::memchr_iter(b'\n', &self.window[..at]).count() as u64;
+        self.window.drain(..at);
+        self.base = start;
+        let blank = self.window.iter().take_while(|&&b| b == b'\n' || b == b'\r').filter(|&&b| b == b'\n').count();
+        Some(self.newlines_before + blank as u64 + 1)
+    }
+}
+
+/// The `csv` reader of every source: no header row of its own (the readers
+/// check theirs), rows of any length (checked against the header here).
+fn csv_reader<R: Read>(input: R) -> csv::Reader<LineCounter<R>> {
+    csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(LineCounter::new(input))
+}
+
 /// A CSV source being read: the `csv` reader, the reused record and what is
 /// needed to build error messages.
 pub(crate) struct CsvSource<R: Read> {
-    reader: csv::Reader<R>,
+    reader: csv::Reader<LineCounter<R>>,
     /// The reused record of the current row.
     pub record: csv::ByteRecord,
+    /// The line the current record starts on.
+    line: u64,
     /// Source name.
     pub file: String,
     /// Header names as found (trimmed).
@@ -20,8 +69,9 @@ impl<R: Read> CsvSource<R> {
     /// Reads the header of `input` and locates the `required` columns (in the
     /// order given; any order in the file, extra columns ignored).
     pub fn open(input: R, file: &str, required: &[&str]) -> Result<(Self, Vec<usize>), FormatError> {
-        let reader = csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(input);
-        let mut src = CsvSource { reader, record: csv::ByteRecord::new(), file: file.to_owned(), header: Vec::new() };
+        let reader = csv_reader(input);
+        let mut src =
+            CsvSource { reader, record: csv::ByteRecord::new(), line: 0, file: file.to_owned(), header: Vec::new() };
         let expected_header = required.join(",");
         if !src.next_record()? {
             return Err(FormatError::EmptyFile { file: src.file, expected_header });
@@ -65,13 +115,12 @@ impl<R: Read> CsvSource<R> {
     /// (read by [`CsvSource::open`] from its start): the second half of a
     /// file read in two halves. Its lines count from 1 at its first byte.
     pub fn with_header(input: R, file: &str, header: Vec<String>) -> Self {
-        let reader = csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(input);
-        CsvSource { reader, record: csv::ByteRecord::new(), file: file.to_owned(), header }
+        CsvSource { reader: csv_reader(input), record: csv::ByteRecord::new(), line: 0, file: file.to_owned(), header }
     }
 
     /// The input, once read.
     pub fn into_inner(self) -> R {
-        self.reader.into_inner()
+        self.reader.into_inner().inner
     }
 
     /// The 0-based position of the optional column `name`, `None` when the
@@ -105,13 +154,18 @@ impl<R: Read> CsvSource<R> {
     /// Reads the next record into `self.record`; `false` at the end of the input.
     #[inline]
     pub fn next_record(&mut self) -> Result<bool, FormatError> {
-        self.reader.read_byte_record(&mut self.record).map_err(|e| FormatError::csv(&self.file, e))
+        let more = self.reader.read_byte_record(&mut self.record).map_err(|e| FormatError::csv(&self.file, e))?;
+        if let Some(p) = self.record.position() {
+            let (start, csv_line) = (p.byte(), p.line());
+            self.line = self.reader.get_mut().line_of_record_at(start).unwrap_or(csv_line);
+        }
+        Ok(more)
     }
 
-    /// The 1-based line of the current record.
+    /// The 1-based line the current record starts on.
     #[inline]
     pub fn line(&self) -> u64 {
-        self.record.position().map_or(0, |p| p.line())
+        self.line
     }
 
     /// Checks that the current record has as many fields as the header.

@@ -783,6 +783,31 @@ mod tests {
         msg
     }
 
+    /// Errors and epochs name the line a row is on, after blank lines and
+    /// with CRLF line ends too (the `csv` crate's own count names the blank
+    /// line above; found by the tracking_halves fuzz target, whose halves
+    /// counted right and disagreed).
+    #[test]
+    fn lines_count_blank_lines_and_crlf() {
+        let row1 = "0.15,1,28,47.1,63.1,-0.09";
+        let bad = "0.175,1,28,47.1,63.1,abc";
+        for (text, line) in [
+            (format!("{HEADER}{row1}\n\n{bad}\n"), 4),
+            (format!("{HEADER}{row1}\n\n\n\n{bad}\n"), 6),
+            (format!("{HEADER}{row1}\n{bad}"), 3),
+            (format!("{}\r\n{row1}\r\n{bad}\r\n", HEADER.trim_end()), 3),
+            (format!("{}\r\n{row1}\r\n\r\n{bad}\r\n", HEADER.trim_end()), 4),
+            (format!("\n\n{HEADER}{row1}\n{bad}\n"), 5),
+            // A quoted cell holding a line end: the next row is a line further.
+            (format!("{HEADER}0.15,1,28,\"47.1\n\",63.1,-0.09\n{bad}\n"), 4),
+        ] {
+            let msg = err_raw(&text);
+            assert!(msg.contains(&format!("line {line},")), "{text:?}: {msg}");
+        }
+        let log = read(&format!("{row1}\n\n0.175,1,28,47.1,63.1,-0.12\n\n")).unwrap();
+        assert_eq!(log.epoch_line(), &[2, 4]);
+    }
+
     #[test]
     fn reads_channels_appearing_disappearing_reappearing() {
         let log = read(
@@ -1105,6 +1130,16 @@ mod tests {
             let total = text.len() as u64;
             let halves = read_in_halves(&f.0, &path_name(&f.0), total).expect("a clean file is read in halves");
             assert_eq!(halves, serial, "{epochs} epochs");
+        }
+        // Blank lines and CRLF line ends on either side of the split: the
+        // epochs' lines agree (the fuzz target's finding).
+        let text = log_text(HEADER, 44, 3, 30, 33);
+        for edit in [text.replace("\n0.5", "\n\n\n0.5"), text.replace('\n', "\r\n"), text.replace("\n", "\n\n")] {
+            let f = TempFile::new("halves-blank.csv", &edit);
+            let serial = read_tracking(edit.as_bytes(), &path_name(&f.0)).unwrap();
+            if let Some(halves) = read_in_halves(&f.0, &path_name(&f.0), edit.len() as u64) {
+                assert_eq!(halves, serial);
+            }
         }
         // Large enough for read_tracking_file to take the two halves itself.
         let text = log_text(HEADER, 120_000, 3, 100_000, 110_000);
