@@ -12,15 +12,24 @@ use crate::error::{Column, FormatError};
 /// the line above the row.
 struct LineCounter<R> {
     inner: R,
-    /// Bytes read from absolute offset `base` on.
+    /// Bytes read from absolute offset `base` on; those before `window[seen]`
+    /// are counted in `newlines_before` (and dropped now and then).
     window: Vec<u8>,
     base: u64,
-    /// Line ends before `base`.
+    seen: usize,
     newlines_before: u64,
 }
 
+/// Counted bytes kept at most (beyond it they are dropped at the next read).
+const COUNTED_BYTES_KEPT: usize = 1 << 16;
+
 impl<R: Read> Read for LineCounter<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.seen > COUNTED_BYTES_KEPT {
+            self.window.drain(..self.seen);
+            self.base += self.seen as u64;
+            self.seen = 0;
+        }
         let n = self.inner.read(buf)?;
         self.window.extend_from_slice(&buf[..n]);
         Ok(n)
@@ -29,18 +38,21 @@ impl<R: Read> Read for LineCounter<R> {
 
 impl<R> LineCounter<R> {
     fn new(inner: R) -> Self {
-        LineCounter { inner, window: Vec::new(), base: 0, newlines_before: 0 }
+        LineCounter { inner, window: Vec::new(), base: 0, seen: 0, newlines_before: 0 }
     }
 
     /// The 1-based line of the record `csv` parsed from absolute offset
-    /// `start` on (its first byte that is not a line end), forgetting the
-    /// bytes before `start`; `None` when `start` was forgotten already.
+    /// `start` on (its first byte that is not a line end); `None` when
+    /// `start` lies before a record asked about already.
     fn line_of_record_at(&mut self, start: u64) -> Option<u64> {
-        let at = usize::try_from(start.checked_sub(self.base)?).ok().filter(|&at| at <= self.window.len())?;
-        self.newlines_before += memchr::memchr_iter(b'\n', &self.window[..at]).count() as u64;
-        self.window.drain(..at);
-        self.base = start;
-        let blank = self.window.iter().take_while(|&&b| b == b'\n' || b == b'\r').filter(|&&b| b == b'\n').count();
+        let at = usize::try_from(start.checked_sub(self.base)?).ok()?;
+        if at < self.seen || at > self.window.len() {
+            return None;
+        }
+        self.newlines_before += memchr::memchr_iter(b'\n', &self.window[self.seen..at]).count() as u64;
+        self.seen = at;
+        let blank =
+            self.window[at..].iter().take_while(|&&b| b == b'\n' || b == b'\r').filter(|&&b| b == b'\n').count();
         Some(self.newlines_before + blank as u64 + 1)
     }
 }
