@@ -375,15 +375,78 @@ const MAX_AT_EPOCH: usize = 64;
 
 /// The deviations of every row from the median of the other tracks at its
 /// epoch (NaN where fewer than two others), with the tracks' offsets `c`
-/// removed; rows with `flags & mask != 0` do not enter the medians, and the values entering them are less `shift` (the tracks' levels,
-/// steps included), if given.
+/// removed; rows with `flags & mask != 0` do not enter the medians, and the
+/// values entering them are less `shift` (the tracks' levels, steps
+/// included), if given.
+///
+/// Each epoch's medians need only that epoch's rows: spans of epochs are
+/// computed on all cores, a wave of one span per core at a time (so that the
+/// spans' outputs held at once stay small), and copied into `d`.
 fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], shift: Option<&[f64]>, d: &mut [f64]) {
+    use rayon::prelude::*;
+    const SPAN_EPOCHS: usize = 1 << 14;
+    let n_tracks = rows.tracks();
+    // The first row of each track at or after epoch `e`.
+    let first_at = |e: usize| -> Vec<usize> {
+        (0..n_tracks)
+            .map(|i| {
+                let range = rows.range(i);
+                range.start + rows.epoch[range].partition_point(|&ep| (ep as usize) < e)
+            })
+            .collect()
+    };
+    let spans: Vec<(usize, usize)> =
+        (0..n_epochs).step_by(SPAN_EPOCHS).map(|e0| (e0, (e0 + SPAN_EPOCHS).min(n_epochs))).collect();
+    let threads = rayon::current_num_threads().max(1);
+    for wave in spans.chunks(threads) {
+        let parts: Vec<(Vec<usize>, Vec<usize>, Vec<f64>)> = wave
+            .par_iter()
+            .map(|&(e0, e1)| {
+                let (first, end) = (first_at(e0), first_at(e1));
+                let mut offset = Vec::with_capacity(n_tracks);
+                let mut total = 0;
+                for i in 0..n_tracks {
+                    offset.push(total);
+                    total += end[i] - first[i];
+                }
+                let mut out = vec![f64::NAN; total];
+                deviations_span(rows, (e0, e1), &first, flags, mask, c, shift, &mut |i, r, v| {
+                    out[offset[i] + r - first[i]] = v
+                });
+                (first, end, out)
+            })
+            .collect();
+        for (first, end, out) in parts {
+            let mut at = 0;
+            for i in 0..n_tracks {
+                let len = end[i] - first[i];
+                d[first[i]..end[i]].copy_from_slice(&out[at..at + len]);
+                at += len;
+            }
+        }
+    }
+}
+
+/// [`deviations`] over the epochs `e0..e1` of `span`, whose rows start at
+/// `first` (per track); each row's deviation goes to `out(track, row, d)`.
+#[allow(clippy::too_many_arguments)]
+fn deviations_span(
+    rows: &Rows,
+    span: (usize, usize),
+    first: &[usize],
+    flags: &[u8],
+    mask: u8,
+    c: &[f64],
+    shift: Option<&[f64]>,
+    out: &mut dyn FnMut(usize, usize, f64),
+) {
     // Blocks of epochs copied into dense [epoch][track] buffers (each track's
     // rows of a block are contiguous), so that the per-epoch work reads and
     // writes sequentially.
     const BLOCK: usize = 256;
     let n_tracks = rows.tracks();
-    let mut cursor: Vec<usize> = rows.track_start[..n_tracks].to_vec();
+    let (span_start, span_end) = span;
+    let mut cursor: Vec<usize> = first.to_vec();
     let mut block_start = vec![0usize; n_tracks];
     let cells = BLOCK * n_tracks;
     let (mut present, mut value) = (vec![f64::NAN; cells], vec![f64::NAN; cells]);
@@ -393,8 +456,8 @@ fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], s
     let mut rank_of = [0usize; MAX_AT_EPOCH];
     let mut keys = [0i32; MAX_AT_EPOCH];
     let mut slot = vec![usize::MAX; n_tracks];
-    for e0 in (0..n_epochs).step_by(BLOCK) {
-        let e1 = (e0 + BLOCK).min(n_epochs);
+    for e0 in (span_start..span_end).step_by(BLOCK) {
+        let e1 = (e0 + BLOCK).min(span_end);
         present.fill(f64::NAN);
         value.fill(f64::NAN);
         for i in 0..n_tracks {
@@ -459,7 +522,7 @@ fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], s
         for i in 0..n_tracks {
             for r in block_start[i]..cursor[i] {
                 let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
-                d[r] = dev[k];
+                out(i, r, dev[k]);
             }
         }
     }
