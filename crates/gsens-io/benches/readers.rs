@@ -1,8 +1,8 @@
 //! Throughput of the readers on a 1-hour, 12-channel, 40 Hz log (1.7 M rows).
 //!
-//! Ignored by default (it allocates a few hundred MB); run it optimized:
-//! `cargo test -p gsens-io --release --test perf -- --ignored --nocapture`.
-//! (`prepare_session` on the same log: `gsens-session`'s `tests/perf.rs`.)
+//! A bench binary (not a test: speed is measured, never asserted):
+//! `cargo bench -p gsens-io --bench readers` (it allocates a few hundred MB).
+//! (`prepare_session` on the same log: `gsens-session`'s `benches/prepare.rs`.)
 
 use std::time::Instant;
 
@@ -67,9 +67,7 @@ fn time_tracking(label: &str, text: &[u8]) -> gsens_io::TrackingLog {
     log
 }
 
-#[test]
-#[ignore = "timing test: run with --release -- --ignored"]
-fn one_hour_twelve_channels_40hz() {
+fn main() {
     let full = tracking_text(|v, _| v);
     time_tracking("full f64 precision", &full);
     drop(full);

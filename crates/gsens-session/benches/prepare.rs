@@ -1,9 +1,9 @@
 //! Time of `prepare_session` on a 1-hour, 12-channel, 40 Hz log (1.7 M rows),
 //! with and without the screening (the readers' throughput on the same log:
-//! `gsens-io`'s `tests/perf.rs`).
+//! `gsens-io`'s `benches/readers.rs`).
 //!
-//! Ignored by default (it allocates a few hundred MB); run it optimized:
-//! `cargo test -p gsens-session --release --test perf -- --ignored --nocapture`.
+//! A bench binary (not a test: speed is measured, never asserted):
+//! `cargo bench -p gsens-session --bench prepare` (it allocates a few hundred MB).
 
 use std::time::Instant;
 
@@ -42,9 +42,7 @@ fn tracking_log() -> TrackingLog {
     TrackingLog::from_rows("tracking.csv", &rows).unwrap()
 }
 
-#[test]
-#[ignore = "timing test: run with --release -- --ignored"]
-fn one_hour_twelve_channels_40hz() {
+fn main() {
     let log = tracking_log();
     let imu = ImuSeries {
         t_s: (0..EPOCHS).map(|k| 345_600.0 + k as f64 * 0.025).collect(),
