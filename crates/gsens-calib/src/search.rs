@@ -173,10 +173,10 @@ impl LaggedSums {
             .map(|m| {
                 let mut c: Lags = [[[0.0; 3]; 3]; 4];
                 let mut b = [0.0; 3];
+                let lags = ((m_hi - m) as usize).min(3);
                 for (&k, &p) in used.iter().zip(phi) {
                     let at = (k as isize + m) as usize;
                     let x = phi_a[at];
-                    let lags = ((m_hi - m) as usize).min(3);
                     for (d, cd) in c.iter_mut().enumerate().take(lags + 1) {
                         let y = phi_a[at + d];
                         for (r, row) in cd.iter_mut().enumerate() {
