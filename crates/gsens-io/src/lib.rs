@@ -32,7 +32,10 @@ pub mod config;
 pub mod error;
 pub mod imu;
 mod parse;
+mod plain;
 pub mod signal;
+#[cfg(test)]
+mod test_files;
 pub mod tracking;
 pub mod vibration;
 pub mod writers;

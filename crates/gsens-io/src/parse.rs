@@ -219,15 +219,9 @@ impl<R: Read> CsvSource<R> {
     /// Parses the cell at column `index` as a finite `f64`, `None` if the cell is empty.
     #[inline]
     pub fn opt_f64_at(&self, index: usize) -> Result<Option<f64>, FormatError> {
-        let raw = self.cell(index).trim_ascii();
-        if raw.is_empty() {
-            return Ok(None);
-        }
-        // fast-float2 parses straight from bytes (Eisel–Lemire, correctly rounded
-        // like std) and rejects trailing garbage; NaN/inf parse and are refused here.
-        match fast_float2::parse::<f64, _>(raw) {
-            Ok(v) if v.is_finite() => Ok(Some(v)),
-            Ok(_) => Err(self.non_finite_error(index)),
+        match cell_f64(self.cell(index)) {
+            Ok(v) => Ok(v),
+            Err(BadCell::NonFinite) => Err(self.non_finite_error(index)),
             Err(_) => Err(self.not_a_number_error(index, "a number")),
         }
     }
@@ -235,18 +229,11 @@ impl<R: Read> CsvSource<R> {
     /// Parses the cell at column `index` as a `u32`.
     #[inline]
     pub fn u32_at(&self, index: usize) -> Result<u32, FormatError> {
-        let raw = self.cell(index).trim_ascii();
-        if raw.is_empty() {
-            return Err(self.empty_cell_error(index, "a non-negative integer"));
+        match cell_u32(self.cell(index)) {
+            Ok(v) => Ok(v),
+            Err(BadCell::Empty) => Err(self.empty_cell_error(index, "a non-negative integer")),
+            Err(_) => Err(self.not_a_number_error(index, "a non-negative integer")),
         }
-        // Fast path: plain decimal digits.
-        if raw.len() <= 9 && raw.iter().all(u8::is_ascii_digit) {
-            return Ok(raw.iter().fold(0u32, |acc, d| acc * 10 + u32::from(d - b'0')));
-        }
-        std::str::from_utf8(raw)
-            .ok()
-            .and_then(|s| s.parse::<u32>().ok())
-            .ok_or_else(|| self.not_a_number_error(index, "a non-negative integer"))
     }
 
     #[cold]
@@ -274,6 +261,49 @@ impl<R: Read> CsvSource<R> {
             value: cell_text(self.cell(index)),
         }
     }
+}
+
+/// Why a cell does not hold the number it should.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum BadCell {
+    /// Nothing but ASCII white space.
+    Empty,
+    /// Text that is not a number of the kind asked for.
+    NotANumber,
+    /// A NaN or an infinity.
+    NonFinite,
+}
+
+/// The cell `raw` as a finite `f64` (ASCII white space around it ignored),
+/// `None` when it is empty: the one rule for every reader's numbers.
+#[inline]
+pub(crate) fn cell_f64(raw: &[u8]) -> Result<Option<f64>, BadCell> {
+    let raw = raw.trim_ascii();
+    if raw.is_empty() {
+        return Ok(None);
+    }
+    // fast-float2 parses straight from bytes (Eisel–Lemire, correctly rounded
+    // like std) and rejects trailing garbage; NaN/inf parse and are refused here.
+    match fast_float2::parse::<f64, _>(raw) {
+        Ok(v) if v.is_finite() => Ok(Some(v)),
+        Ok(_) => Err(BadCell::NonFinite),
+        Err(_) => Err(BadCell::NotANumber),
+    }
+}
+
+/// The cell `raw` as a `u32` (ASCII white space around it ignored; a `+`
+/// sign allowed, as `str::parse` allows it).
+#[inline]
+pub(crate) fn cell_u32(raw: &[u8]) -> Result<u32, BadCell> {
+    let raw = raw.trim_ascii();
+    if raw.is_empty() {
+        return Err(BadCell::Empty);
+    }
+    // Fast path: plain decimal digits.
+    if raw.len() <= 9 && raw.iter().all(u8::is_ascii_digit) {
+        return Ok(raw.iter().fold(0u32, |acc, d| acc * 10 + u32::from(d - b'0')));
+    }
+    std::str::from_utf8(raw).ok().and_then(|s| s.parse::<u32>().ok()).ok_or(BadCell::NotANumber)
 }
 
 fn cell_text(raw: &[u8]) -> String {

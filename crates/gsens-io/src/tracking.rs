@@ -380,21 +380,46 @@ impl Builder {
         self.epoch_t_s.extend_from_slice(&next.epoch_t_s[skip..]);
         self.epoch_line.extend(next.epoch_line[skip..].iter().map(|l| l + line_offset));
         self.rows += next.rows;
+        // Each continued track's columns are appended on the thread that is
+        // free, track by track (tens of MB for a long log).
+        let mut appended: Vec<Option<ChannelTrack>> = Vec::with_capacity(self.tracks.len());
+        appended.resize_with(self.tracks.len(), || None);
         for tr in next.tracks {
             match self.track_of.get(&(tr.channel, tr.prn)) {
-                Some(&k) => {
-                    let to = &mut self.tracks[k];
+                Some(&k) => appended[k] = Some(tr),
+                None => {
+                    self.track_of.insert((tr.channel, tr.prn), self.tracks.len());
+                    self.tracks.push(tr);
+                    appended.push(None);
+                }
+            }
+        }
+        std::thread::scope(|scope| {
+            let mut pairs: Vec<(&mut ChannelTrack, ChannelTrack)> =
+                self.tracks.iter_mut().zip(appended).filter_map(|(to, tr)| Some((to, tr?))).collect();
+            // Two lists of about equal rows, one per thread.
+            pairs.sort_by_key(|(_, tr)| std::cmp::Reverse(tr.len()));
+            let (mut a, mut b, mut rows_a, mut rows_b) = (Vec::new(), Vec::new(), 0, 0);
+            for p in pairs {
+                if rows_a <= rows_b {
+                    rows_a += p.1.len();
+                    a.push(p);
+                } else {
+                    rows_b += p.1.len();
+                    b.push(p);
+                }
+            }
+            let append = |list: Vec<(&mut ChannelTrack, ChannelTrack)>| {
+                for (to, tr) in list {
                     to.t_s.extend_from_slice(&tr.t_s);
                     to.phase_err_rad.extend_from_slice(&tr.phase_err_rad);
                     to.cn0_dbhz.extend_from_slice(&tr.cn0_dbhz);
                     to.elev_deg.extend_from_slice(&tr.elev_deg);
                 }
-                None => {
-                    self.track_of.insert((tr.channel, tr.prn), self.tracks.len());
-                    self.tracks.push(tr);
-                }
-            }
-        }
+            };
+            scope.spawn(move || append(b));
+            append(a);
+        });
         Some(self)
     }
 
@@ -692,12 +717,121 @@ pub fn read_tracking_file(path: impl AsRef<Path>) -> Result<TrackingLog, FormatE
     let name = path_name(path);
     let file = std::fs::File::open(path).map_err(|e| FormatError::io(&name, e))?;
     let total_bytes = file.metadata().ok().map(|m| m.len());
+    if let Some(log) = total_bytes.and_then(|total| read_plain(path, &name, total)) {
+        return Ok(log);
+    }
     if let Some(total) = total_bytes.filter(|&t| t >= TWO_HALVES_BYTES)
         && let Some(log) = read_in_halves(path, &name, total)
     {
         return Ok(log);
     }
     read_tracking_sized(file, &name, total_bytes)
+}
+
+/// The file read on the quote-free fast path ([`crate::plain`]), `None`
+/// where [`read_tracking_file`] reads it with `csv`: for the differential
+/// fuzz target (the fast path must give the `csv` reader's log), not for use.
+#[doc(hidden)]
+pub fn read_tracking_file_plain(path: &Path) -> Option<TrackingLog> {
+    let total = std::fs::metadata(path).ok()?.len();
+    read_plain(path, &path_name(path), total)
+}
+
+/// A file without quotes and carrier columns read on the fast path
+/// ([`crate::plain`]), in two halves at once when long. `None` (the `csv`
+/// path then reads it, and reports the first error in the file) for anything
+/// else: a quote, a lone `\r`, blank lines before the header, carrier
+/// columns, a row the `csv` path would refuse.
+fn read_plain(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
+    use std::io::{Seek, SeekFrom};
+    let crate::plain::PlainFile { mut file, header: src, cols, data_start: start } =
+        crate::plain::open_plain(path, name, &TRACKING_COLUMNS, total)?;
+    if CarrierCells::find(&src).ok()?.any() {
+        return None;
+    }
+    let fields = src.header.len();
+    let (mut b1, mut b2) = (builder_for(&src, &cols).ok()?, builder_for(&src, &cols).ok()?);
+    let range = |from: u64, to: u64| -> Option<std::io::Take<std::fs::File>> {
+        let mut f = std::fs::File::open(path).ok()?;
+        f.seek(SeekFrom::Start(from)).ok()?;
+        Some(f.take(to - from))
+    };
+    if total - start < TWO_HALVES_BYTES {
+        plain_rows(file.take(total - start), 2, &cols, fields, &mut b1, total - start)?;
+        return b1.finish().ok();
+    }
+    // The split: just after the first line end past the middle.
+    let middle = start + (total - start) / 2;
+    file.seek(SeekFrom::Start(middle)).ok()?;
+    let mut window = vec![0u8; 1 << 16];
+    let got = file.read(&mut window).ok()?;
+    let split = middle + memchr::memchr(b'\n', &window[..got])? as u64 + 1;
+    let (first, second) = (range(start, split)?, range(split, total)?);
+    let (r1, r2) = std::thread::scope(|scope| {
+        let second = scope.spawn(|| plain_rows(second, 1, &cols, fields, &mut b2, total - split));
+        // The first half's columns are sized for the whole file: the second's rows join them.
+        let r1 = plain_rows(first, 2, &cols, fields, &mut b1, total - start);
+        (r1, second.join())
+    });
+    let newlines = r1?;
+    r2.ok()??;
+    // The second half's lines count from 1 at its first byte: the header's and the first half's lines precede it.
+    b1.join(b2, 1 + newlines)?.finish().ok()
+}
+
+/// The rows of `input` (lines from `first_line` on, `fields` cells each,
+/// the columns of [`TRACKING_COLUMNS`] at `cols`) into `b`, on the fast
+/// path; the columns are sized after the first rows for `reserve_bytes` of
+/// rows. The number of line ends read, `None` at the first row the `csv`
+/// path must read (to report it, or to read what this path does not).
+fn plain_rows(
+    input: impl Read,
+    first_line: u64,
+    cols: &[usize],
+    fields: usize,
+    b: &mut Builder,
+    reserve_bytes: u64,
+) -> Option<u64> {
+    use crate::parse::{cell_f64, cell_u32};
+    use crate::plain::{Record, for_each_plain_record};
+    let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
+    // The rows of one epoch share the text of their time stamp: parse it once.
+    let mut prev_t_text: Vec<u8> = Vec::new();
+    let mut prev_t: Option<f64> = None;
+    let mut values = |f: &[&[u8]]| -> Option<RowValues> {
+        if f.len() != fields {
+            return None;
+        }
+        let t_s = match prev_t {
+            Some(t) if f[ct] == prev_t_text.as_slice() => t,
+            _ => {
+                let t = cell_f64(f[ct]).ok()??;
+                prev_t_text.clear();
+                prev_t_text.extend_from_slice(f[ct]);
+                prev_t = Some(t);
+                t
+            }
+        };
+        Some(RowValues {
+            t_s,
+            channel: cell_u32(f[cch]).ok()?,
+            prn: cell_u32(f[cprn]).ok()?,
+            cn0_dbhz: cell_f64(f[ccn0]).ok()??,
+            elev_deg: cell_f64(f[celev]).ok()?.unwrap_or(f64::NAN),
+            phase_err_rad: cell_f64(f[cphase]).ok()??,
+            carrier: Carrier::GPS_L1,
+        })
+    };
+    for_each_plain_record(input, first_line, |line, bytes_before, f| {
+        let Some(row) = values(f) else { return Record::Decline };
+        if b.push(&row, line).is_err() {
+            return Record::Decline;
+        }
+        if b.rows == ROWS_BEFORE_RESERVE {
+            b.reserve_for(bytes_before, reserve_bytes);
+        }
+        Record::Next
+    })
 }
 
 /// The file read in two halves whatever its size, `None` where
@@ -1084,22 +1218,7 @@ mod tests {
         assert!(m.contains("line 3") && m.contains("expected 6 fields") && m.contains("found 5"), "{m}");
     }
 
-    /// A file in the system's temporary directory, removed when dropped.
-    struct TempFile(std::path::PathBuf);
-
-    impl TempFile {
-        fn new(name: &str, text: &str) -> Self {
-            let path = std::env::temp_dir().join(format!("gsens-io-{}-{name}", std::process::id()));
-            std::fs::write(&path, text).unwrap();
-            TempFile(path)
-        }
-    }
-
-    impl Drop for TempFile {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_file(&self.0);
-        }
-    }
+    use crate::test_files::TempFile;
 
     /// A log of `epochs` epochs of channels 0..`channels` (channel 1 moves to
     /// PRN 30 from epoch `reassign_at`; a channel 9 joins at epoch `join_at`).
@@ -1213,6 +1332,74 @@ mod tests {
                 m.contains(&format!("line {line},")) && m.contains(&format!("was on L1CA (line {previous})")),
                 "{m}"
             );
+        }
+    }
+
+    /// The quote-free fast path of [`read_tracking_file`] gives the log the
+    /// `csv` reader gives on the same bytes, in one piece or in two halves,
+    /// and leaves to it whatever it does not take (the reader's result is
+    /// then the `csv` reader's, error message included).
+    #[test]
+    fn fast_path_gives_the_csv_readers_log() {
+        let base = log_text(HEADER, 60, 3, 40, 45);
+        let clean = [
+            base.clone(),
+            base.replace('\n', "\r\n"),
+            base.replace("\n0.5", "\n\n\n0.5"),
+            format!("\u{feff}{base}"),
+            base.trim_end().to_string(),
+            base.replace(",30.0,", ", 30.0 ,").replace(",40.0,", ",+40.0,"),
+            base.replace(",30.0,", ",,"),
+            base.replace('\n', ",x\n").replacen(",x\n", ",foo\n", 1),
+        ];
+        for (i, text) in clean.iter().enumerate() {
+            let f = TempFile::new(&format!("plain-clean-{i}.csv"), text);
+            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64);
+            let plain = plain.unwrap_or_else(|| panic!("case {i}: a clean file takes the fast path"));
+            let csv = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
+            // Not PartialEq: NaN elevations differ; their bits do not.
+            assert_eq!(format!("{plain:?}"), format!("{csv:?}"), "case {i}");
+        }
+        let lines: Vec<&str> = base.lines().collect();
+        let left = [
+            // Every error the csv path reports, with its line and column.
+            (10, "0.225,1,2,41.0,abc,0.01"),
+            (10, "0.225,1,2,41.0,31.0"),
+            (10, "0.225,1,2,41.0,31.0,0.01,extra"),
+            (10, "0.000,0,1,40.0,30.0,0.01"),
+            (10, lines[9]),
+            (10, "0.225,-1,2,41.0,31.0,0.01"),
+            (10, "0.225,1,2,41.0,31.0,nan"),
+            (10, "0.225,1,2,,31.0,0.01"),
+            // What only csv reads: quotes, a lone carriage return, blank lines before the header.
+            (10, "\"0.230\",1,2,41.0,31.0,0.01"),
+            (10, "0.230,1,2,41.0,31.0,0.01\r0.231,0,1,40.0,30.0,0.01"),
+            (0, ""),
+        ];
+        for (at, line) in left {
+            let mut edited = lines.clone();
+            edited.insert(at, line);
+            let text = edited.join("\n") + "\n";
+            let f = TempFile::new("plain-left.csv", &text);
+            assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64).is_none(), "{line:?}");
+            match (read_tracking_file(&f.0), read_tracking(text.as_bytes(), &path_name(&f.0))) {
+                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                (Ok(a), Ok(b)) => assert_eq!(format!("{a:?}"), format!("{b:?}")),
+                (a, b) => panic!("{line:?}: {a:?} vs {b:?}"),
+            }
+        }
+        // Carrier columns are read by the csv path (the fast path reads L1 logs).
+        let text = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,signal\n0,1,5,45,30,0.01,L1CA\n";
+        let f = TempFile::new("plain-carrier.csv", text);
+        assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64).is_none());
+        assert_eq!(read_tracking_file(&f.0).unwrap().tracks()[0].carrier.label(), "L1CA");
+        // Long enough for two halves, wherever the split falls in an epoch.
+        for extra in 0..3 {
+            let text = log_text(HEADER, 120_000 + extra, 3, 100_000, 110_000);
+            assert!(text.len() as u64 >= 2 * TWO_HALVES_BYTES);
+            let f = TempFile::new("plain-halves.csv", &text);
+            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64).expect("a clean file");
+            assert_eq!(plain, read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
         }
     }
 }

@@ -1,0 +1,240 @@
+//! Records of CSV text that holds no quote character: the fast path of the
+//! file readers.
+//!
+//! Without a `"` the `csv` crate's reading (RFC 4180 with `\r`, `\n` or
+//! `\r\n` ending a record, blank lines skipped, no header of its own) comes
+//! down to this: a record is a line, its fields are the bytes between
+//! commas. So such text is split here with `memchr` over large blocks,
+//! without `csv`'s per-byte state machine, its record copies or a second pass
+//! to count lines. Whatever would need that state machine (a quote, a `\r`
+//! that does not end a line) makes [`for_each_plain_record`] decline, and the
+//! caller reads the text with `csv` instead; the readers also leave every
+//! error to their `csv` path, so the messages are that path's. Tests compare
+//! the two on the same bytes (the `tracking_halves` fuzz target too).
+
+use std::io::{Cursor, Read, Seek, SeekFrom};
+use std::path::Path;
+
+use crate::parse::CsvSource;
+
+/// Bytes read at a time (a line longer than this grows the buffer).
+const BLOCK_BYTES: usize = 1 << 18;
+
+/// Header lines longer than this are left to the `csv` path.
+const HEADER_BYTES: usize = 1 << 16;
+
+/// A file opened for the fast path: positioned at its first row, its header
+/// read by `csv` (the same checks and names as the `csv` path).
+pub(crate) struct PlainFile {
+    /// The file, at the first byte after the header line.
+    pub file: std::fs::File,
+    /// The header, as a source of no rows (for its names and columns).
+    pub header: CsvSource<Cursor<Vec<u8>>>,
+    /// The positions of the required columns, in the order asked for.
+    pub cols: Vec<usize>,
+    /// The offset of the first byte after the header line.
+    pub data_start: u64,
+}
+
+/// Opens the file at `path` (`total` bytes long, `name` in messages) for the
+/// fast path with the columns `required`; `None` where the `csv` path must
+/// read it: blank lines before the header, a quote or a lone `\r` in it, a
+/// header `csv` refuses (that path then reports it), no row after it.
+pub(crate) fn open_plain(path: &Path, name: &str, required: &[&str], total: u64) -> Option<PlainFile> {
+    let mut file = std::fs::File::open(path).ok()?;
+    let mut head = vec![0u8; HEADER_BYTES.min(usize::try_from(total).ok()?)];
+    file.read_exact(&mut head).ok()?;
+    let header_end = memchr::memchr(b'\n', &head)? + 1;
+    head.truncate(header_end);
+    let line = head.strip_suffix(b"\n").map(|l| l.strip_suffix(b"\r").unwrap_or(l))?;
+    if line.is_empty() || matches!(line[0], b'\r') || memchr::memchr2(b'"', b'\r', line).is_some() {
+        return None;
+    }
+    let (header, cols) = CsvSource::open(Cursor::new(head), name, required).ok()?;
+    let data_start = header_end as u64;
+    file.seek(SeekFrom::Start(data_start)).ok()?;
+    Some(PlainFile { file, header, cols, data_start })
+}
+
+/// What the caller makes of one record.
+pub(crate) enum Record {
+    /// Go on with the next record.
+    Next,
+    /// Stop reading: the record cannot be taken on the fast path.
+    Decline,
+}
+
+/// Calls `row(line, bytes_before, fields)` for every record of `input` in
+/// order: `line` is the 1-based line the record is on counting from
+/// `first_line` at the first byte of `input`, `bytes_before` the bytes of
+/// `input` before the record's line, `fields` its cells (at least one,
+/// untrimmed). Blank lines are skipped, as `csv` skips them.
+///
+/// Returns the number of line ends read (`\n`), or `None` when the text
+/// holds a quote or a lone `\r`, when reading fails, or when `row` declined.
+pub(crate) fn for_each_plain_record<R: Read>(
+    mut input: R,
+    first_line: u64,
+    mut row: impl FnMut(u64, u64, &[&[u8]]) -> Record,
+) -> Option<u64> {
+    let mut buf = vec![0u8; BLOCK_BYTES];
+    // Bytes of `buf` filled (an unfinished line of the last block first), bytes of `input` before `buf`.
+    let mut filled = 0usize;
+    let mut consumed: u64 = 0;
+    let mut line = first_line;
+    let mut at_end = false;
+    while !at_end {
+        while filled < buf.len() {
+            let n = match input.read(&mut buf[filled..]) {
+                Ok(0) => {
+                    at_end = true;
+                    break;
+                }
+                Ok(n) => n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(_) => return None,
+            };
+            filled += n;
+        }
+        // The whole lines of the block (all of it at the end of the input).
+        let whole = if at_end {
+            filled
+        } else {
+            match memchr::memrchr(b'\n', &buf[..filled]) {
+                Some(i) => i + 1,
+                None => {
+                    // One line longer than the buffer: read on into a larger one.
+                    let len = buf.len();
+                    buf.resize(2 * len, 0);
+                    continue;
+                }
+            }
+        };
+        let block = &buf[..whole];
+        if memchr::memchr(b'"', block).is_some() {
+            return None;
+        }
+        let crs = memchr::memchr(b'\r', block).is_some();
+        let mut fields: Vec<&[u8]> = Vec::with_capacity(16);
+        // One pass over the block finds every comma and line end (memchr2's
+        // vector search); a line's fields lie between them.
+        let (mut line_start, mut field_start) = (0usize, 0usize);
+        let separators =
+            memchr::memchr2_iter(b',', b'\n', block).chain((whole > 0 && block[whole - 1] != b'\n').then_some(whole));
+        for at in separators {
+            if at < whole && block[at] == b',' {
+                fields.push(&block[field_start..at]);
+                field_start = at + 1;
+                continue;
+            }
+            let mut last = &block[field_start..at];
+            if crs {
+                if let [rest @ .., b'\r'] = last {
+                    last = rest;
+                }
+                if memchr::memchr(b'\r', &block[line_start..field_start]).is_some()
+                    || memchr::memchr(b'\r', last).is_some()
+                {
+                    return None;
+                }
+            }
+            // A blank line (csv skips it): no comma before its end, nothing in it.
+            if !(fields.is_empty() && last.is_empty()) {
+                fields.push(last);
+                if let Record::Decline = row(line, consumed + line_start as u64, &fields) {
+                    return None;
+                }
+                fields.clear();
+            }
+            if at < whole {
+                line += 1;
+            }
+            line_start = at + 1;
+            field_start = at + 1;
+        }
+        consumed += whole as u64;
+        buf.copy_within(whole..filled, 0);
+        filled -= whole;
+    }
+    Some(line - first_line)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Records as (line, fields).
+    type Records = Vec<(u64, Vec<Vec<u8>>)>;
+
+    /// Every record from the fast path and the line ends read, or `None` where it declines.
+    fn plain(text: &[u8], block: usize) -> Option<(Records, u64)> {
+        // A reader that hands out `block` bytes at a time, to cross block ends anywhere.
+        struct Trickle<'a>(&'a [u8], usize);
+        impl Read for Trickle<'_> {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                let n = self.0.len().min(self.1).min(buf.len());
+                buf[..n].copy_from_slice(&self.0[..n]);
+                self.0 = &self.0[n..];
+                Ok(n)
+            }
+        }
+        let mut out = Vec::new();
+        let newlines = for_each_plain_record(Trickle(text, block), 1, |line, _, f| {
+            out.push((line, f.iter().map(|c| c.to_vec()).collect()));
+            Record::Next
+        })?;
+        Some((out, newlines))
+    }
+
+    /// The `csv` crate's records of the same text (lines counted from the
+    /// bytes, as the readers' `csv` path counts them).
+    fn csv_records(text: &[u8]) -> Records {
+        let mut rdr = csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(text);
+        let mut rec = csv::ByteRecord::new();
+        let mut out = Vec::new();
+        while rdr.read_byte_record(&mut rec).unwrap() {
+            let start = rec.position().unwrap().byte() as usize;
+            let blank_after = text[start..].iter().take_while(|&&b| b == b'\n' || b == b'\r').count();
+            let s = start + blank_after;
+            let line = text[..s].iter().filter(|&&b| b == b'\n').count() as u64 + 1;
+            out.push((line, rec.iter().map(<[u8]>::to_vec).collect()));
+        }
+        out
+    }
+
+    /// On quote-free text with `\n` or `\r\n` line ends, blank lines, empty
+    /// cells, rows of any length and a last line without its end, the fast
+    /// path gives `csv`'s records on the same lines, whatever the blocks.
+    #[test]
+    fn records_are_csvs_records() {
+        let texts: [&[u8]; 8] = [
+            b"a,b,c\n1,2,3\n4,5,6\n",
+            b"a,b,c\n1,2,3\n4,5,6",
+            b"a,b\r\n1,2\r\n\r\n3,4\r\n",
+            b"\n\na,b\n\n\n1,,2\n,\n",
+            b"x\n",
+            b"",
+            b"1,2\n3\n4,5,6,7\n \n",
+            b"t_s,channel\n0.025,1\n\n0.05,1\r\n0.075,1",
+        ];
+        for text in texts {
+            for block in [1, 2, 3, 7, 64, 1 << 20] {
+                let (records, newlines) = plain(text, block).expect("quote-free text");
+                assert_eq!(records, csv_records(text), "{:?} in blocks of {block}", String::from_utf8_lossy(text));
+                assert_eq!(newlines, text.iter().filter(|&&b| b == b'\n').count() as u64);
+            }
+        }
+        // A line longer than the buffer.
+        let long = format!("{}\n1,2\n", "x,".repeat(BLOCK_BYTES));
+        let (records, _) = plain(long.as_bytes(), 1 << 20).unwrap();
+        assert_eq!(records, csv_records(long.as_bytes()));
+    }
+
+    /// A quote or a lone carriage return is left to `csv`.
+    #[test]
+    fn declines_quotes_and_lone_carriage_returns() {
+        for text in [&b"a,b\n\"1\",2\n"[..], b"a,b\r1,2\n", b"a,b\n1,2\r\r\n", b"a\n1\n\""] {
+            assert!(plain(text, 1 << 20).is_none(), "{:?}", String::from_utf8_lossy(text));
+        }
+    }
+}
