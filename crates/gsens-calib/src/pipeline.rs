@@ -228,9 +228,38 @@ pub fn calibrate_owned_logs(
     calibrate_tracking(Cow::Owned(tracking), imu, imu_name, settings)
 }
 
+/// The IMU log as the pipeline uses it: isolated spikes replaced
+/// ([`despike_imu`], when the settings ask for it) and the runs of identical
+/// samples found ([`find_flat_runs`]). It needs nothing of the tracking log,
+/// so [`calibrate_files`] prepares it while the tracking log is read.
+struct PreparedImu {
+    despiked: ImuSeries,
+    spikes_t_s: Vec<f64>,
+    flat_runs: FlatRuns,
+}
+
+impl PreparedImu {
+    fn new(imu: &ImuSeries, settings: &PipelineSettings) -> Self {
+        let ((despiked, spikes), flat_runs) = rayon::join(
+            || if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) },
+            || find_flat_runs(imu),
+        );
+        PreparedImu { despiked, spikes_t_s: spikes.t_s, flat_runs }
+    }
+}
+
 fn calibrate_tracking(
     tracking: Cow<'_, TrackingLog>,
     imu: &ImuSeries,
+    imu_name: &str,
+    settings: &PipelineSettings,
+) -> Result<Outcome, PipelineError> {
+    calibrate_prepared(tracking, PreparedImu::new(imu, settings), imu_name, settings)
+}
+
+fn calibrate_prepared(
+    tracking: Cow<'_, TrackingLog>,
+    imu: PreparedImu,
     imu_name: &str,
     settings: &PipelineSettings,
 ) -> Result<Outcome, PipelineError> {
@@ -261,8 +290,7 @@ fn calibrate_tracking(
         }
         .into());
     }
-    let (despiked, spikes) = if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) };
-    let flat_runs = find_flat_runs(imu);
+    let PreparedImu { despiked, spikes_t_s, flat_runs } = imu;
     let imu = &despiked;
     // The session holds what the estimate needs of the log; a log given to
     // the pipeline is freed as soon as its rows are taken.
@@ -346,7 +374,7 @@ fn calibrate_tracking(
         gnss_sdr: None,
         chosen_loop,
         loop_response,
-        imu_spikes_t_s: spikes.t_s,
+        imu_spikes_t_s: spikes_t_s,
         imu_flat_runs: flat_runs,
         imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
@@ -355,12 +383,15 @@ fn calibrate_tracking(
 
 /// [`calibrate_logs`] on files: `imu.csv` and `tracking.csv`.
 pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings) -> Result<Outcome, PipelineError> {
-    // The two files are read at once (the IMU log on the second core); a bad
-    // tracking log is still the error reported first.
-    let (tracking_log, imu_series) =
-        rayon::join(|| gsens_io::read_tracking_file(tracking), || gsens_io::read_imu_file(imu));
-    let (tracking_log, imu_series) = (tracking_log?, imu_series?);
-    let mut outcome = calibrate_owned_logs(tracking_log, &imu_series, &imu.display().to_string(), settings)?;
+    // The two files are read at once, and the IMU log prepared while the
+    // tracking log is still being read; a bad tracking log is still the
+    // error reported first.
+    let (tracking_log, imu_series) = rayon::join(
+        || gsens_io::read_tracking_file(tracking),
+        || gsens_io::read_imu_file(imu).map(|series| PreparedImu::new(&series, settings)),
+    );
+    let (tracking_log, prepared_imu) = (tracking_log?, imu_series?);
+    let mut outcome = calibrate_prepared(Cow::Owned(tracking_log), prepared_imu, &imu.display().to_string(), settings)?;
     outcome.inputs = vec![input("imu", imu), input("tracking", tracking)];
     Ok(outcome)
 }
