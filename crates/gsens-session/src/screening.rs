@@ -350,6 +350,20 @@ impl Screened {
     }
 }
 
+/// `v`, a value per row, split into the rows of each track (`track_start`
+/// as in [`Rows`]: track i holds rows `track_start[i]..track_start[i + 1]`),
+/// so that the tracks can be worked on at once.
+fn per_track<'a, T>(v: &'a mut [T], track_start: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(track_start.len().saturating_sub(1));
+    let mut rest = &mut v[track_start.first().copied().unwrap_or(0)..];
+    for w in track_start.windows(2) {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(w[1] - w[0]);
+        out.push(head);
+        rest = tail;
+    }
+    out
+}
+
 /// Median of a slice (reordered); NaN when empty.
 fn median_of(v: &mut [f64]) -> f64 {
     let n = v.len();
@@ -620,6 +634,7 @@ fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64
 /// Screens the rows (see the crate documentation, section "Screening"). `n_epochs`: the epoch
 /// indices are below it; `log_interval_s`: the epoch spacing.
 pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &ScreeningConfig) -> Screened {
+    use rayon::prelude::*;
     let n_tracks = rows.tracks();
     let n_rows = rows.epoch.len();
     let mut out = Screened::none(rows);
@@ -630,40 +645,46 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     let guard = epochs_of(cfg.guard_s);
     let flags = &mut out.flags;
 
-    // Test 5: C/N0 drops.
-    let mut scratch: Vec<f64> = Vec::new();
-    for i in 0..n_tracks {
-        let range = rows.range(i);
-        let median_cn0 = sampled_median(&rows.cn0[range.clone()], &mut scratch, |v| v);
-        out.summaries[i].median_cn0_dbhz = Some(median_cn0).filter(|v| v.is_finite());
-        if let Some(x) = cfg.cn0_drop_db {
-            let (ep, cn0) = (&rows.epoch[range.clone()], &rows.cn0[range.clone()]);
-            let low: Vec<bool> = cn0.iter().map(|&v| v < median_cn0 - x).collect();
-            let mut drop: Vec<u8> = low.iter().map(|&l| if l { flag::CN0_DROP } else { 0 }).collect();
-            spread_with_guard(ep, &mut drop, flag::CN0_DROP, guard);
-            // Each stretch (drops closer than two guards merged) is the
-            // start-up when its first low row lies in the track's start-up;
-            // then so is every row before it: the estimator averaged them
-            // (the pull-in) into that low C/N0.
-            let (fl, startup_end) = (&mut flags[range], rows.startup_end(i));
-            let mut j = 0;
-            while j < drop.len() {
-                if drop[j] == 0 {
-                    j += 1;
-                    continue;
-                }
-                let a = j;
-                while j < drop.len() && drop[j] != 0 {
-                    j += 1;
-                }
-                let first_low = (a..j).find(|&r| low[r]).unwrap_or(a);
-                let (bit, from) =
-                    if ep[first_low] < startup_end { (flag::STARTUP_CN0, 0) } else { (flag::CN0_DROP, a) };
-                for f in &mut fl[from..j] {
-                    *f |= bit;
+    // Test 5: C/N0 drops (each track on its own: the tracks on both cores).
+    let cn0_medians: Vec<f64> = per_track(flags, &rows.track_start)
+        .into_par_iter()
+        .enumerate()
+        .map_init(Vec::new, |scratch, (i, fl)| {
+            let range = rows.range(i);
+            let median_cn0 = sampled_median(&rows.cn0[range.clone()], scratch, |v| v);
+            if let Some(x) = cfg.cn0_drop_db {
+                let (ep, cn0) = (&rows.epoch[range.clone()], &rows.cn0[range]);
+                let low: Vec<bool> = cn0.iter().map(|&v| v < median_cn0 - x).collect();
+                let mut drop: Vec<u8> = low.iter().map(|&l| if l { flag::CN0_DROP } else { 0 }).collect();
+                spread_with_guard(ep, &mut drop, flag::CN0_DROP, guard);
+                // Each stretch (drops closer than two guards merged) is the
+                // start-up when its first low row lies in the track's start-up;
+                // then so is every row before it: the estimator averaged them
+                // (the pull-in) into that low C/N0.
+                let startup_end = rows.startup_end(i);
+                let mut j = 0;
+                while j < drop.len() {
+                    if drop[j] == 0 {
+                        j += 1;
+                        continue;
+                    }
+                    let a = j;
+                    while j < drop.len() && drop[j] != 0 {
+                        j += 1;
+                    }
+                    let first_low = (a..j).find(|&r| low[r]).unwrap_or(a);
+                    let (bit, from) =
+                        if ep[first_low] < startup_end { (flag::STARTUP_CN0, 0) } else { (flag::CN0_DROP, a) };
+                    for f in &mut fl[from..j] {
+                        *f |= bit;
+                    }
                 }
             }
-        }
+            median_cn0
+        })
+        .collect();
+    for (sum, median_cn0) in out.summaries.iter_mut().zip(cn0_medians) {
+        sum.median_cn0_dbhz = Some(median_cn0).filter(|v| v.is_finite());
     }
 
     // Offsets, σ and the deviations (tests 1–4 use them).
@@ -679,7 +700,6 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     // their slips, and is the one kept.
     let mut level = vec![0.0; n_rows];
     let mut sigma = vec![f64::NAN; n_tracks];
-    let mut buf = Vec::new();
     let noisy_window = epochs_of(cfg.noisy_window_s).max(1);
     let mut startup_events = vec![0usize; n_tracks];
     for round in 0..2 {
@@ -690,50 +710,60 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             if round == 0 { (cn0_mask, None) } else { (cn0_mask | flag::SLIP | flag::STARTUP, Some(level.as_slice())) };
         deviations(rows, n_epochs, flags, mask, &c, shift, &mut d);
         // Each track's own offset refined by the median of its deviations (the
-        // others' medians are robust to their small errors); σ from the local MAD.
-        for i in 0..n_tracks {
-            let range = rows.range(i);
-            let m = sampled_median(&d[range.clone()], &mut scratch, |v| v);
-            if m.is_finite() {
+        // others' medians are robust to their small errors); σ from the local
+        // MAD. Each track on its own: the tracks on both cores.
+        let refined: Vec<Option<(f64, f64)>> = per_track(&mut d, &rows.track_start)
+            .into_par_iter()
+            .enumerate()
+            .map_init(Vec::new, |scratch, (i, dev)| {
+                let m = sampled_median(dev, scratch, |v| v);
+                m.is_finite().then(|| {
+                    for v in dev.iter_mut() {
+                        *v -= m;
+                    }
+                    (m, local_sigma(&rows.epoch[rows.range(i)], dev, noisy_window, scratch).max(cfg.min_sigma_rad))
+                })
+            })
+            .collect();
+        for (i, r) in refined.into_iter().enumerate() {
+            if let Some((m, s)) = r {
                 c[i] += m;
-                for v in &mut d[range.clone()] {
-                    *v -= m;
-                }
-                sigma[i] = local_sigma(&rows.epoch[range.clone()], &d[range], noisy_window, &mut scratch)
-                    .max(cfg.min_sigma_rad);
+                sigma[i] = s;
             }
         }
-        // Test 1 (slips, steps, levels).
-        for i in 0..n_tracks {
-            let range = rows.range(i);
-            if round == 1 {
-                out.segment[range.clone()].fill(0);
-                level[range.clone()].fill(0.0);
-                for f in &mut flags[range.clone()] {
-                    *f &= !(flag::SLIP | flag::STARTUP);
+        // Test 1 (slips, steps, levels), track by track on both cores.
+        let per_row = per_track(&mut level, &rows.track_start)
+            .into_iter()
+            .zip(per_track(flags, &rows.track_start))
+            .zip(per_track(&mut out.segment, &rows.track_start))
+            .collect::<Vec<_>>();
+        let events: Vec<Option<SlipEvents>> = per_row
+            .into_par_iter()
+            .enumerate()
+            .map_init(Vec::new, |buf, (i, ((lvl, fl), seg))| {
+                if round == 1 {
+                    seg.fill(0);
+                    lvl.fill(0.0);
+                    for f in fl.iter_mut() {
+                        *f &= !(flag::SLIP | flag::STARTUP);
+                    }
                 }
+                if !sigma[i].is_finite() {
+                    return None;
+                }
+                let range = rows.range(i);
+                let (ep, dev) = (&rows.epoch[range.clone()], &d[range]);
+                let startup_end = rows.startup_end(i);
+                Some(slip_events(ep, dev, sigma[i], log_interval_s, cfg, guard, startup_end, lvl, fl, seg, buf))
+            })
+            .collect();
+        for (i, ev) in events.into_iter().enumerate() {
+            if let Some(ev) = ev {
+                out.summaries[i].slips = ev.slips;
+                out.summaries[i].steps = ev.steps;
+                out.segments[i] = ev.steps + 1;
+                startup_events[i] = ev.startup;
             }
-            if !sigma[i].is_finite() {
-                continue;
-            }
-            let (r0, r1) = (range.start, range.end);
-            let ev = slip_events(
-                &rows.epoch[r0..r1],
-                &d[r0..r1],
-                sigma[i],
-                log_interval_s,
-                cfg,
-                guard,
-                rows.startup_end(i),
-                &mut level[r0..r1],
-                &mut flags[r0..r1],
-                &mut out.segment[r0..r1],
-                &mut buf,
-            );
-            out.summaries[i].slips = ev.slips;
-            out.summaries[i].steps = ev.steps;
-            out.segments[i] = ev.steps + 1;
-            startup_events[i] = ev.startup;
         }
         if round == 0 {
             // Nothing found: the second round would find the same.

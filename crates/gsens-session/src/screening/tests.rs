@@ -404,3 +404,12 @@ fn noise_crossing_the_linear_range_is_not_an_excursion() {
     let se = 0.5 * sigma / sxx.sqrt();
     assert!((slope - 1.0).abs() < 3.0 * se, "slope {slope} ± {se}");
 }
+
+/// The per-row arrays split by track are the tracks' rows, empty tracks included.
+#[test]
+fn per_track_splits_rows_by_track() {
+    let mut v: Vec<u32> = (0..7).collect();
+    let parts = per_track(&mut v, &[0, 2, 2, 7]);
+    let parts: Vec<Vec<u32>> = parts.into_iter().map(|p| p.to_vec()).collect();
+    assert_eq!(parts, vec![vec![0, 1], vec![], vec![2, 3, 4, 5, 6]]);
+}
