@@ -353,7 +353,7 @@ impl Screened {
 /// `v`, a value per row, split into the rows of each track (`track_start`
 /// as in [`Rows`]: track i holds rows `track_start[i]..track_start[i + 1]`),
 /// so that the tracks can be worked on at once.
-fn per_track<'a, T>(v: &'a mut [T], track_start: &[usize]) -> Vec<&'a mut [T]> {
+pub(crate) fn per_track<'a, T>(v: &'a mut [T], track_start: &[usize]) -> Vec<&'a mut [T]> {
     let mut out = Vec::with_capacity(track_start.len().saturating_sub(1));
     let mut rest = &mut v[track_start.first().copied().unwrap_or(0)..];
     for w in track_start.windows(2) {

@@ -2,6 +2,7 @@
 //! IMU interpolation (documented at the crate root).
 
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use std::borrow::Cow;
 use std::path::Path;
 
@@ -327,6 +328,9 @@ struct TrackMeta {
     mean_cn0_dbhz: f64,
 }
 
+/// One track's part of the row table: its epochs, phases and C/N0.
+type RowSlices<'a> = (&'a mut [u32], &'a mut [f64], &'a mut [f64]);
+
 /// [`prepare_session`] on a log lent or given: a given log is freed once the
 /// rows that pass the masks are copied out, before the screening, so that the
 /// log and the screening's per-row arrays are never held at once (the peak
@@ -386,12 +390,13 @@ pub fn prepare_session_from(
     let above_mask = |elev: f64| selection.elevation_mask_deg.is_none_or(|m| elev.is_nan() || elev >= m);
     let above_cn0 = |cn0: f64| selection.min_cn0_dbhz.is_none_or(|m| cn0 >= m);
 
-    let mut ks = Vec::new();
+    // Each track on its own: the tracks on both cores, each thread with its
+    // own buffer of grid indices.
     let stats: Vec<TrackStats> = tracking
         .tracks()
-        .iter()
-        .map(|tr| {
-            grid.track_ks(stamps, &tr.t_s, &mut ks);
+        .par_iter()
+        .map_init(Vec::new, |ks, tr| {
+            grid.track_ks(stamps, &tr.t_s, ks);
             let mut s = TrackStats { in_span: 0, above_mask: 0, passing: 0, cn0_sum_passing: 0.0, cn0_sum_span: 0.0 };
             for (j, &k) in ks.iter().enumerate() {
                 if !in_span(k) {
@@ -419,44 +424,62 @@ pub fn prepare_session_from(
         .map(|t| TrackMeta { channel: t.channel, prn: t.prn, carrier: t.carrier, mean_cn0_dbhz: t.mean_cn0_dbhz() })
         .collect();
 
-    // The rows passing the masks of every track that has some (the candidates), screened.
+    // The rows passing the masks of every track that has some (the
+    // candidates), in one table sized by the masks' counts, each candidate's
+    // rows filled on either core.
     let mut candidate_of: Vec<Option<usize>> = vec![None; tracks.len()];
     let mut rows = Rows { track_start: vec![0], ..Rows::default() };
-    // The masks' counts size the row table exactly (no doubling slack).
-    let n_rows: usize = stats.iter().map(|s| s.passing).sum();
-    rows.epoch.reserve_exact(n_rows);
-    rows.phase.reserve_exact(n_rows);
-    rows.cn0.reserve_exact(n_rows);
-    let mut take_rows = |i: usize, tr: &gsens_io::ChannelTrack| {
-        if stats[i].passing == 0 {
-            return;
-        }
-        grid.track_ks(stamps, &tr.t_s, &mut ks);
+    for (i, s) in stats.iter().enumerate().filter(|(_, s)| s.passing > 0) {
         candidate_of[i] = Some(rows.tracks());
-        // The start-up ends startup_s after the track's first row in the log
-        // (which may precede the usable span).
-        let startup_epochs = (selection.screening.startup_s / grid.log_interval_s).round() as u64;
-        let startup_end = (ks[0] + startup_epochs).saturating_sub(k_first).min(u32::MAX as u64);
-        rows.startup_end.push(startup_end as u32);
+        rows.track_start.push(rows.track_start.last().copied().unwrap_or(0) + s.passing);
+        rows.to_l1.push(tracks[i].carrier.scale_to_l1());
+    }
+    let n_rows = *rows.track_start.last().expect("starts at 0");
+    // Zeroed by the allocator (untouched pages), each written once below.
+    (rows.epoch, rows.phase, rows.cn0) = (vec![0; n_rows], vec![0.0; n_rows], vec![0.0; n_rows]);
+    let mut into: Vec<Option<RowSlices>> = (0..tracks.len()).map(|_| None).collect();
+    let candidates = candidate_of.iter().enumerate().filter_map(|(i, c)| c.map(|_| i));
+    let starts = &rows.track_start;
+    let (epoch, phase) = (screening::per_track(&mut rows.epoch, starts), screening::per_track(&mut rows.phase, starts));
+    let cn0 = screening::per_track(&mut rows.cn0, starts);
+    for (i, ((epoch, phase), cn0)) in candidates.zip(epoch.into_iter().zip(phase).zip(cn0)) {
+        into[i] = Some((epoch, phase, cn0));
+    }
+    // The start-up ends startup_s after a track's first row in the log
+    // (which may precede the usable span).
+    let startup_epochs = (selection.screening.startup_s / grid.log_interval_s).round() as u64;
+    let take_rows = |ks: &mut Vec<u64>, tr: &gsens_io::ChannelTrack, to: RowSlices| {
+        grid.track_ks(stamps, &tr.t_s, ks);
         let to_l1 = tr.carrier.scale_to_l1();
-        rows.to_l1.push(to_l1);
+        let mut r = 0;
         for (j, &k) in ks.iter().enumerate() {
             if in_span(k) && above_mask(tr.elev_deg[j]) && above_cn0(tr.cn0_dbhz[j]) {
-                rows.epoch.push((k - k_first) as u32);
-                rows.phase.push(tr.phase_err_rad[j] * to_l1);
-                rows.cn0.push(tr.cn0_dbhz[j]);
+                to.0[r] = (k - k_first) as u32;
+                to.1[r] = tr.phase_err_rad[j] * to_l1;
+                to.2[r] = tr.cn0_dbhz[j];
+                r += 1;
             }
         }
-        rows.track_start.push(rows.epoch.len());
+        (ks[0] + startup_epochs).saturating_sub(k_first).min(u32::MAX as u64) as u32
     };
-    match tracking {
+    let startup_end: Vec<Option<u32>> = match tracking {
         // An owned log is freed track by track as its rows are taken, so that
         // the log and the row table are never both whole in memory.
-        Cow::Owned(log) => log.into_tracks().into_iter().enumerate().for_each(|(i, tr)| take_rows(i, &tr)),
+        Cow::Owned(log) => log
+            .into_tracks()
+            .into_par_iter()
+            .zip(into)
+            .map_init(Vec::new, |ks, (tr, to)| to.map(|to| take_rows(ks, &tr, to)))
+            .collect(),
         // A borrowed one stays with its owner.
-        Cow::Borrowed(log) => log.tracks().iter().enumerate().for_each(|(i, tr)| take_rows(i, tr)),
-    }
-    drop(ks);
+        Cow::Borrowed(log) => log
+            .tracks()
+            .par_iter()
+            .zip(into)
+            .map_init(Vec::new, |ks, (tr, to)| to.map(|to| take_rows(ks, tr, to)))
+            .collect(),
+    };
+    rows.startup_end = startup_end.into_iter().flatten().collect();
     let screened = if selection.screening.enabled {
         screening::screen(&rows, n_epochs, grid.log_interval_s, &selection.screening)
     } else {
