@@ -417,7 +417,12 @@ impl Builder {
                     to.elev_deg.extend_from_slice(&tr.elev_deg);
                 }
             };
-            scope.spawn(move || append(b));
+            // A thread only for a long log: a short one is copied sooner than a thread starts.
+            if rows_a + rows_b >= JOIN_THREAD_ROWS {
+                scope.spawn(move || append(b));
+            } else {
+                append(b);
+            }
             append(a);
         });
         Some(self)
@@ -698,6 +703,10 @@ fn read_rows<R: Read>(
     }
     Ok(())
 }
+
+/// Rows appended at least this many when two halves are joined are copied
+/// on two threads.
+const JOIN_THREAD_ROWS: usize = 1 << 16;
 
 /// Files at least this long are parsed in two halves at once (one per core);
 /// below it a second thread costs more than it saves.
