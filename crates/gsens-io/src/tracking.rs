@@ -1402,13 +1402,20 @@ mod tests {
         let f = TempFile::new("plain-carrier.csv", text);
         assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64).is_none());
         assert_eq!(read_tracking_file(&f.0).unwrap().tracks()[0].carrier.label(), "L1CA");
-        // Long enough for two halves, wherever the split falls in an epoch.
-        for extra in 0..3 {
-            let text = log_text(HEADER, 120_000 + extra, 3, 100_000, 110_000);
+        // Long enough for two halves, wherever the split falls in an epoch,
+        // with CRLF line ends and blank lines around the split too.
+        let long = |extra: usize| log_text(HEADER, 120_000 + extra, 3, 100_000, 110_000);
+        let blank_lines = {
+            let text = long(0);
+            let at = text.len() / 2 + text[text.len() / 2..].find('\n').unwrap() + 1;
+            format!("{}\n\n{}", &text[..at], &text[at..]).replace("\n0.5", "\n\n0.5")
+        };
+        for text in [long(0), long(1), long(2), long(1).replace('\n', "\r\n"), blank_lines] {
             assert!(text.len() as u64 >= 2 * TWO_HALVES_BYTES);
             let f = TempFile::new("plain-halves.csv", &text);
             let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64).expect("a clean file");
-            assert_eq!(plain, read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
+            let csv = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
+            assert!(plain == csv, "the fast path's halves differ from the csv reader's log");
         }
     }
 }
