@@ -148,17 +148,22 @@ fn read_plain(path: &Path, name: &str, total: u64) -> Option<ImuSeries> {
     let (fields, ct, cx, cy, cz) = (header.header.len(), cols[0], cols[1], cols[2], cols[3]);
     let mut out = ImuSeries::default();
     let number = |cell: &[u8]| cell_f64(cell).ok().flatten();
+    let row = |f: &[&[u8]]| -> Option<(f64, [f64; 3])> {
+        if f.len() != fields {
+            return None;
+        }
+        Some((number(f[ct])?, [number(f[cx])?, number(f[cy])?, number(f[cz])?]))
+    };
     for_each_plain_record(file, 2, |_, bytes_before, f| {
-        let row = (f.len() == fields).then(|| Some((number(f[ct])?, [number(f[cx])?, number(f[cy])?, number(f[cz])?])));
-        let Some(Some((t, a))) = row else { return Record::Decline };
+        let Some((t, a)) = row(f) else { return Record::Decline };
         if out.t_s.last().is_some_and(|&prev| t <= prev) {
             return Record::Decline;
         }
         out.t_s.push(t);
         out.accel_mps2.push(a);
         if out.t_s.len() == ROWS_BEFORE_RESERVE && bytes_before > 0 {
-            // The rest of the file at the average row length so far (2 % spare).
-            let rows = ((total - data_start) as f64 / bytes_before as f64 * 1.02 * ROWS_BEFORE_RESERVE as f64) as usize;
+            // The rows of the whole file (2 % spare).
+            let rows = (1.02 * crate::plain::rows_in(total - data_start, ROWS_BEFORE_RESERVE, bytes_before)) as usize;
             out.t_s.reserve_exact(rows.saturating_sub(out.t_s.len()));
             out.accel_mps2.reserve_exact(rows.saturating_sub(out.accel_mps2.len()));
         }

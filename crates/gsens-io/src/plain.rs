@@ -56,6 +56,13 @@ pub(crate) fn open_plain(path: &Path, name: &str, required: &[&str], total: u64)
     Some(PlainFile { file, header, cols, data_start })
 }
 
+/// The rows `rest_bytes` more of a file hold at the average row length of
+/// the first `rows` rows, `bytes_read` long: what a reader reserves its
+/// columns for (so that they are neither grown by doubling nor copied).
+pub(crate) fn rows_in(rest_bytes: u64, rows: usize, bytes_read: u64) -> f64 {
+    rest_bytes as f64 * rows as f64 / bytes_read as f64
+}
+
 /// What the caller makes of one record.
 pub(crate) enum Record {
     /// Go on with the next record.

@@ -336,7 +336,7 @@ impl Builder {
         if self.rows == 0 || bytes_read == 0 || total_bytes <= bytes_read {
             return;
         }
-        let rows_left = (total_bytes - bytes_read) as f64 * self.rows as f64 / bytes_read as f64;
+        let rows_left = crate::plain::rows_in(total_bytes - bytes_read, self.rows, bytes_read);
         for tr in &mut self.tracks {
             let share = tr.t_s.len() as f64 / self.rows as f64;
             let extra = (1.02 * share * rows_left) as usize + 16;
@@ -637,6 +637,32 @@ pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog
     read_tracking_sized(input, source_name, None)
 }
 
+/// The time stamp of the previous row: the rows of one epoch share the
+/// text of their stamp, which is then parsed once.
+#[derive(Default)]
+struct StampCache {
+    text: Vec<u8>,
+    t_s: Option<f64>,
+}
+
+impl StampCache {
+    /// The stamp of `cell`: the previous row's when the text is the same,
+    /// else `parse()`.
+    #[inline]
+    fn get<E>(&mut self, cell: &[u8], parse: impl FnOnce() -> Result<f64, E>) -> Result<f64, E> {
+        match self.t_s {
+            Some(t) if cell == self.text.as_slice() => Ok(t),
+            _ => {
+                let t = parse()?;
+                self.text.clear();
+                self.text.extend_from_slice(cell);
+                self.t_s = Some(t);
+                Ok(t)
+            }
+        }
+    }
+}
+
 /// Rows read before the columns are reserved for the rest of a source of known size.
 const ROWS_BEFORE_RESERVE: usize = 4096;
 
@@ -671,22 +697,10 @@ fn read_rows<R: Read>(
 ) -> Result<(), FormatError> {
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
     let mut carriers = CarrierCells::find(src)?;
-    // The rows of one epoch share the text of their time stamp: parse it once.
-    let mut prev_t_text: Vec<u8> = Vec::new();
-    let mut prev_t: Option<f64> = None;
-
+    let mut stamp = StampCache::default();
     while src.next_record()? {
         src.check_field_count()?;
-        let t_s = match prev_t {
-            Some(t) if src.cell(ct) == prev_t_text.as_slice() => t,
-            _ => {
-                let t = src.f64_at(ct)?;
-                prev_t_text.clear();
-                prev_t_text.extend_from_slice(src.cell(ct));
-                t
-            }
-        };
-        prev_t = Some(t_s);
+        let t_s = stamp.get(src.cell(ct), || src.f64_at(ct))?;
         let values = RowValues {
             t_s,
             channel: src.u32_at(cch)?,
@@ -752,7 +766,6 @@ pub fn read_tracking_file_plain(path: &Path) -> Option<TrackingLog> {
 /// else: a quote, a lone `\r`, blank lines before the header, carrier
 /// columns, a row the `csv` path would refuse.
 fn read_plain(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
-    use std::io::{Seek, SeekFrom};
     let crate::plain::PlainFile { mut file, header: src, cols, data_start: start } =
         crate::plain::open_plain(path, name, &TRACKING_COLUMNS, total)?;
     if CarrierCells::find(&src).ok()?.any() {
@@ -760,22 +773,12 @@ fn read_plain(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
     }
     let fields = src.header.len();
     let (mut b1, mut b2) = (builder_for(&src, &cols).ok()?, builder_for(&src, &cols).ok()?);
-    let range = |from: u64, to: u64| -> Option<std::io::Take<std::fs::File>> {
-        let mut f = std::fs::File::open(path).ok()?;
-        f.seek(SeekFrom::Start(from)).ok()?;
-        Some(f.take(to - from))
-    };
     if total - start < TWO_HALVES_BYTES {
         plain_rows(file.take(total - start), 2, &cols, fields, &mut b1, total - start)?;
         return b1.finish().ok();
     }
-    // The split: just after the first line end past the middle.
-    let middle = start + (total - start) / 2;
-    file.seek(SeekFrom::Start(middle)).ok()?;
-    let mut window = vec![0u8; 1 << 16];
-    let got = file.read(&mut window).ok()?;
-    let split = middle + memchr::memchr(b'\n', &window[..got])? as u64 + 1;
-    let (first, second) = (range(start, split)?, range(split, total)?);
+    let split = split_after_middle(&mut file, start, total)?;
+    let (first, second) = (byte_range(path, start, split)?, byte_range(path, split, total)?);
     let (r1, r2) = std::thread::scope(|scope| {
         let second = scope.spawn(|| plain_rows(second, 1, &cols, fields, &mut b2, total - split));
         // The first half's columns are sized for the whole file: the second's rows join them.
@@ -804,23 +807,12 @@ fn plain_rows(
     use crate::parse::{cell_f64, cell_u32};
     use crate::plain::{Record, for_each_plain_record};
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
-    // The rows of one epoch share the text of their time stamp: parse it once.
-    let mut prev_t_text: Vec<u8> = Vec::new();
-    let mut prev_t: Option<f64> = None;
+    let mut stamp = StampCache::default();
     let mut values = |f: &[&[u8]]| -> Option<RowValues> {
         if f.len() != fields {
             return None;
         }
-        let t_s = match prev_t {
-            Some(t) if f[ct] == prev_t_text.as_slice() => t,
-            _ => {
-                let t = cell_f64(f[ct]).ok()??;
-                prev_t_text.clear();
-                prev_t_text.extend_from_slice(f[ct]);
-                prev_t = Some(t);
-                t
-            }
-        };
+        let t_s = stamp.get(f[ct], || cell_f64(f[ct]).ok().flatten().ok_or(())).ok()?;
         Some(RowValues {
             t_s,
             channel: cell_u32(f[cch]).ok()?,
@@ -841,6 +833,26 @@ fn plain_rows(
         }
         Record::Next
     })
+}
+
+/// Where a file's bytes `from..to` are split into two halves read at once:
+/// just after the first line end past their middle (`None` when there is
+/// none within 64 KiB of it).
+fn split_after_middle(file: &mut std::fs::File, from: u64, to: u64) -> Option<u64> {
+    use std::io::{Seek, SeekFrom};
+    let middle = from + (to - from) / 2;
+    file.seek(SeekFrom::Start(middle)).ok()?;
+    let mut window = vec![0u8; 1 << 16];
+    let got = file.read(&mut window).ok()?;
+    Some(middle + memchr::memchr(b'\n', &window[..got])? as u64 + 1)
+}
+
+/// The bytes `from..to` of the file at `path`, opened on their own.
+fn byte_range(path: &Path, from: u64, to: u64) -> Option<std::io::Take<std::fs::File>> {
+    use std::io::{Seek, SeekFrom};
+    let mut f = std::fs::File::open(path).ok()?;
+    f.seek(SeekFrom::Start(from)).ok()?;
+    Some(f.take(to - from))
 }
 
 /// The file read in two halves whatever its size, `None` where
@@ -874,12 +886,8 @@ impl<R: Read> Read for Scanned<R> {
 /// on one (see [`read_tracking_file`]).
 fn read_in_halves(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
     use std::io::{Seek, SeekFrom};
-    // The split: just after the first line end past the middle.
     let mut probe = std::fs::File::open(path).ok()?;
-    probe.seek(SeekFrom::Start(total / 2)).ok()?;
-    let mut window = vec![0u8; 1 << 16];
-    let got = probe.read(&mut window).ok()?;
-    let split = total / 2 + memchr::memchr(b'\n', &window[..got])? as u64 + 1;
+    let split = split_after_middle(&mut probe, 0, total)?;
     if split >= total {
         return None;
     }
@@ -890,10 +898,8 @@ fn read_in_halves(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
     if probe.read(&mut head).ok()? == 3 && head == *b"\xEF\xBB\xBF" {
         return None;
     }
-    let first = Scanned { inner: std::fs::File::open(path).ok()?.take(split), newlines: 0, quoted: false };
-    let mut second_file = std::fs::File::open(path).ok()?;
-    second_file.seek(SeekFrom::Start(split)).ok()?;
-    let second = Scanned { inner: second_file.take(total - split), newlines: 0, quoted: false };
+    let first = Scanned { inner: byte_range(path, 0, split)?, newlines: 0, quoted: false };
+    let second = Scanned { inner: byte_range(path, split, total)?, newlines: 0, quoted: false };
 
     let (mut src1, cols) = CsvSource::open(first, name, &TRACKING_COLUMNS).ok()?;
     let mut src2 = CsvSource::with_header(second, name, src1.header.clone());
