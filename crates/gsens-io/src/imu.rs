@@ -143,19 +143,35 @@ const ROWS_BEFORE_RESERVE: usize = 1024;
 /// error in the file).
 fn read_plain(path: &Path, name: &str, total: u64) -> Option<ImuSeries> {
     use crate::parse::cell_f64;
-    use crate::plain::{PlainFile, Record, for_each_plain_record, open_plain};
+    use crate::plain::{Cells, PlainFile, Record, for_each_plain_line, open_plain, split};
     let PlainFile { file, header, cols, data_start } = open_plain(path, name, &IMU_COLUMNS, total)?;
     let (fields, ct, cx, cy, cz) = (header.header.len(), cols[0], cols[1], cols[2], cols[3]);
     let mut out = ImuSeries::default();
+    // Which value each cell is (0: time, 1–3: the axes), for the reading in place.
+    let mut layout = vec![None; fields];
+    for (slot, at) in [ct, cx, cy, cz].into_iter().enumerate() {
+        layout[at] = Some(slot);
+    }
     let number = |cell: &[u8]| cell_f64(cell).ok().flatten();
-    let row = |f: &[&[u8]]| -> Option<(f64, [f64; 3])> {
+    let row = |text: &[u8]| -> Option<(f64, [f64; 3])> {
+        // In place first; a row it does not take is split and read by the rules.
+        let mut cells = Cells::new(text);
+        let mut v = [0.0; 4];
+        let in_place = layout.iter().all(|slot| match slot {
+            Some(i) => cells.number().flatten().map(|x| v[*i] = x).is_some(),
+            None => cells.text().is_some(),
+        });
+        if in_place && cells.finished() {
+            return Some((v[0], [v[1], v[2], v[3]]));
+        }
+        let f = split(text);
         if f.len() != fields {
             return None;
         }
         Some((number(f[ct])?, [number(f[cx])?, number(f[cy])?, number(f[cz])?]))
     };
-    for_each_plain_record(file, 2, |_, bytes_before, f| {
-        let Some((t, a)) = row(f) else { return Record::Decline };
+    for_each_plain_line(file, 2, |_, bytes_before, text| {
+        let Some((t, a)) = row(text) else { return Record::Decline };
         if out.t_s.last().is_some_and(|&prev| t <= prev) {
             return Record::Decline;
         }

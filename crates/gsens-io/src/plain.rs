@@ -3,14 +3,16 @@
 //!
 //! Without a `"` the `csv` crate's reading (RFC 4180 with `\r`, `\n` or
 //! `\r\n` ending a record, blank lines skipped, no header of its own) comes
-//! down to this: a record is a line, its fields are the bytes between
-//! commas. So such text is split here with `memchr` over large blocks,
-//! without `csv`'s per-byte state machine, its record copies or a second pass
-//! to count lines. Whatever would need that state machine (a quote, a `\r`
-//! that does not end a line) makes [`for_each_plain_record`] decline, and the
-//! caller reads the text with `csv` instead; the readers also leave every
-//! error to their `csv` path, so the messages are that path's. Tests compare
-//! the two on the same bytes (the `tracking_halves` fuzz target too).
+//! down to this: a record is a line, its cells are the bytes between
+//! commas. So such text is cut into lines with `memchr` over large blocks,
+//! and each line's cells are parsed in place as they are reached
+//! ([`Cells`]), without `csv`'s per-byte state machine, its record copies or
+//! a second pass to count lines. Whatever would need that state machine (a
+//! quote, a `\r` that does not end a line) makes [`for_each_plain_line`]
+//! decline, and the caller reads the text with `csv` instead; the readers
+//! also leave every error to their `csv` path, so the messages are that
+//! path's. Tests compare the two on the same bytes (the `tracking_halves`
+//! fuzz target too).
 
 use std::io::{Cursor, Read, Seek, SeekFrom};
 use std::path::Path;
@@ -71,18 +73,19 @@ pub(crate) enum Record {
     Decline,
 }
 
-/// Calls `row(line, bytes_before, fields)` for every record of `input` in
+/// Calls `row(line, bytes_before, text)` for every record of `input` in
 /// order: `line` is the 1-based line the record is on counting from
 /// `first_line` at the first byte of `input`, `bytes_before` the bytes of
-/// `input` before the record's line, `fields` its cells (at least one,
-/// untrimmed). Blank lines are skipped, as `csv` skips them.
+/// `input` before the record's line, `text` the line without its end (not
+/// empty: blank lines are skipped, as `csv` skips them). Its cells are the
+/// bytes between commas ([`split`], or read in place with [`Cells`]).
 ///
 /// Returns the number of line ends read (`\n`), or `None` when the text
 /// holds a quote or a lone `\r`, when reading fails, or when `row` declined.
-pub(crate) fn for_each_plain_record<R: Read>(
+pub(crate) fn for_each_plain_line<R: Read>(
     mut input: R,
     first_line: u64,
-    mut row: impl FnMut(u64, u64, &[&[u8]]) -> Record,
+    mut row: impl FnMut(u64, u64, &[u8]) -> Record,
 ) -> Option<u64> {
     let mut buf = vec![0u8; BLOCK_BYTES];
     // Bytes of `buf` filled (an unfinished line of the last block first), bytes of `input` before `buf`.
@@ -122,48 +125,113 @@ pub(crate) fn for_each_plain_record<R: Read>(
             return None;
         }
         let crs = memchr::memchr(b'\r', block).is_some();
-        let mut fields: Vec<&[u8]> = Vec::with_capacity(16);
-        // One pass over the block finds every comma and line end (memchr2's
-        // vector search); a line's fields lie between them.
-        let (mut line_start, mut field_start) = (0usize, 0usize);
-        let separators =
-            memchr::memchr2_iter(b',', b'\n', block).chain((whole > 0 && block[whole - 1] != b'\n').then_some(whole));
-        for at in separators {
-            if at < whole && block[at] == b',' {
-                fields.push(&block[field_start..at]);
-                field_start = at + 1;
-                continue;
-            }
-            let mut last = &block[field_start..at];
+        let mut line_start = 0usize;
+        let ends = memchr::memchr_iter(b'\n', block).chain((whole > 0 && block[whole - 1] != b'\n').then_some(whole));
+        for at in ends {
+            let mut text = &block[line_start..at];
             if crs {
-                if let [rest @ .., b'\r'] = last {
-                    last = rest;
+                if let [rest @ .., b'\r'] = text {
+                    text = rest;
                 }
-                if memchr::memchr(b'\r', &block[line_start..field_start]).is_some()
-                    || memchr::memchr(b'\r', last).is_some()
-                {
+                if memchr::memchr(b'\r', text).is_some() {
                     return None;
                 }
             }
-            // A blank line (csv skips it): no comma before its end, nothing in it.
-            if !(fields.is_empty() && last.is_empty()) {
-                fields.push(last);
-                if let Record::Decline = row(line, consumed + line_start as u64, &fields) {
-                    return None;
-                }
-                fields.clear();
+            if !text.is_empty() && matches!(row(line, consumed + line_start as u64, text), Record::Decline) {
+                return None;
             }
             if at < whole {
                 line += 1;
             }
             line_start = at + 1;
-            field_start = at + 1;
         }
         consumed += whole as u64;
         buf.copy_within(whole..filled, 0);
         filled -= whole;
     }
     Some(line - first_line)
+}
+
+/// The cells of a record's `text`: the bytes between its commas (untrimmed).
+pub(crate) fn split(text: &[u8]) -> Vec<&[u8]> {
+    text.split(|&b| b == b',').collect()
+}
+
+/// The cells of a record read in place, left to right, each parsed as it is
+/// reached: no pass to find the commas first. A cell is taken only when it
+/// is exactly what [`crate::parse`]'s rules would make of it without
+/// trimming (a number straight up to the next comma or the line's end);
+/// anything else (white space, a sign or text after a number, a non-finite
+/// value, a missing cell) gives `None`, and the caller reads the record
+/// again by [`split`] and the rules themselves, which decide.
+pub(crate) struct Cells<'a> {
+    /// The text from the next cell on; `None` once the last cell is read.
+    rest: Option<&'a [u8]>,
+}
+
+impl<'a> Cells<'a> {
+    /// The cells of `text`, a record's line without its end.
+    pub(crate) fn new(text: &'a [u8]) -> Self {
+        Cells { rest: Some(text) }
+    }
+
+    /// Moves past a cell of `len` bytes at the start of `rest`: `false` when
+    /// neither a comma nor the line's end follows it.
+    #[inline]
+    fn past(&mut self, rest: &'a [u8], len: usize) -> bool {
+        match rest.get(len) {
+            None => {
+                self.rest = None;
+                true
+            }
+            Some(b',') => {
+                self.rest = Some(&rest[len + 1..]);
+                true
+            }
+            Some(_) => false,
+        }
+    }
+
+    /// The next cell's bytes, whatever they are.
+    #[inline]
+    pub(crate) fn text(&mut self) -> Option<&'a [u8]> {
+        let rest = self.rest?;
+        let len = memchr::memchr(b',', rest).unwrap_or(rest.len());
+        self.past(rest, len);
+        Some(&rest[..len])
+    }
+
+    /// The next cell as [`crate::parse::cell_f64`] reads it (`Some(None)`: empty).
+    #[inline]
+    pub(crate) fn number(&mut self) -> Option<Option<f64>> {
+        let rest = self.rest?;
+        if matches!(rest.first(), None | Some(b',')) {
+            self.past(rest, 0);
+            return Some(None);
+        }
+        // fast-float2's full parse is this partial one with every byte used:
+        // the same number, read without first finding where the cell ends.
+        let (v, len) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
+        (v.is_finite() && self.past(rest, len)).then_some(Some(v))
+    }
+
+    /// The next cell as [`crate::parse::cell_u32`] reads it, when it is one to
+    /// nine decimal digits.
+    #[inline]
+    pub(crate) fn integer(&mut self) -> Option<u32> {
+        let rest = self.rest?;
+        let len = rest.iter().take(10).take_while(|b| b.is_ascii_digit()).count();
+        if len == 0 || len > 9 {
+            return None;
+        }
+        let v = rest[..len].iter().fold(0u32, |acc, d| acc * 10 + u32::from(d - b'0'));
+        self.past(rest, len).then_some(v)
+    }
+
+    /// Whether every cell has been read.
+    pub(crate) fn finished(&self) -> bool {
+        self.rest.is_none()
+    }
 }
 
 #[cfg(test)]
@@ -186,8 +254,8 @@ mod tests {
             }
         }
         let mut out = Vec::new();
-        let newlines = for_each_plain_record(Trickle(text, block), 1, |line, _, f| {
-            out.push((line, f.iter().map(|c| c.to_vec()).collect()));
+        let newlines = for_each_plain_line(Trickle(text, block), 1, |line, _, text| {
+            out.push((line, split(text).iter().map(|c| c.to_vec()).collect()));
             Record::Next
         })?;
         Some((out, newlines))
@@ -243,5 +311,65 @@ mod tests {
         for text in [&b"a,b\n\"1\",2\n"[..], b"a,b\r1,2\n", b"a,b\n1,2\r\r\n", b"a\n1\n\""] {
             assert!(plain(text, 1 << 20).is_none(), "{:?}", String::from_utf8_lossy(text));
         }
+    }
+
+    /// Wherever [`Cells`] takes a cell it reads what [`split`] and the
+    /// number rules read (the rules decide the rest); it takes every plainly
+    /// written number; it counts the cells.
+    #[test]
+    fn cells_read_what_the_rules_read() {
+        use crate::parse::{cell_f64, cell_u32};
+        let plain_numbers =
+            ["0", "12", "123456789", "0.042199930681108805", "-3.5e-7", "1.", ".5", "-.5e3", "9.80665", "1e-400", ""];
+        let others = [
+            "1234567890",
+            "4294967296",
+            "+5",
+            " 1",
+            "1 ",
+            " ",
+            "1e",
+            "1e+",
+            "1e400",
+            "inf",
+            "NaN",
+            "-infinity",
+            "0x10",
+            "1,5",
+            "1.2.3",
+            "abc",
+            "1_0",
+            "\u{663}",
+            "1e5x",
+        ];
+        let all: Vec<&str> = plain_numbers.iter().chain(&others).copied().collect();
+        for a in &all {
+            for b in &all {
+                let text = format!("{a},{b}");
+                let cut = split(text.as_bytes());
+                let plain = plain_numbers.contains(a) && plain_numbers.contains(b);
+                let mut c = Cells::new(text.as_bytes());
+                match c.number().zip(c.number()).filter(|_| c.finished()) {
+                    Some((x, y)) => assert_eq!((Ok(x), Ok(y)), (cell_f64(cut[0]), cell_f64(cut[1])), "{text:?}"),
+                    None => assert!(!plain, "{text:?} not taken"),
+                }
+                let digits = |v: &str| (1..=9).contains(&v.len()) && v.bytes().all(|b| b.is_ascii_digit());
+                let mut c = Cells::new(text.as_bytes());
+                match c.integer().zip(c.integer()).filter(|_| c.finished()) {
+                    Some((x, y)) => assert_eq!((Ok(x), Ok(y)), (cell_u32(cut[0]), cell_u32(cut[1])), "{text:?}"),
+                    None => assert!(!(digits(a) && digits(b)), "{text:?} not taken"),
+                }
+                let mut c = Cells::new(text.as_bytes());
+                let two = [c.text(), c.text()];
+                assert_eq!(two, [Some(cut[0]), Some(cut[1])], "{text:?}");
+                assert_eq!(c.finished(), cut.len() == 2, "{text:?}");
+                assert_eq!(c.text(), cut.get(2).copied(), "{text:?}");
+            }
+        }
+        // A last cell left empty by a trailing comma is a cell; a missing one is not.
+        let mut c = Cells::new(b"1,");
+        assert_eq!((c.number(), c.number(), c.finished()), (Some(Some(1.0)), Some(None), true));
+        let mut c = Cells::new(b"1");
+        assert_eq!((c.number(), c.number()), (Some(Some(1.0)), None));
     }
 }

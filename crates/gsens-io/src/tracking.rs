@@ -200,6 +200,7 @@ impl ChannelTable {
 }
 
 /// One row's values, as parsed.
+#[derive(Clone, Copy)]
 struct RowValues {
     t_s: f64,
     channel: u32,
@@ -805,10 +806,60 @@ fn plain_rows(
     reserve_bytes: u64,
 ) -> Option<u64> {
     use crate::parse::{cell_f64, cell_u32};
-    use crate::plain::{Record, for_each_plain_record};
+    use crate::plain::{Cells, Record, for_each_plain_line, split};
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
     let mut stamp = StampCache::default();
-    let mut values = |f: &[&[u8]]| -> Option<RowValues> {
+    // What each cell of a row is, for the reading in place.
+    #[derive(Clone, Copy)]
+    enum Cell {
+        Other,
+        T,
+        Channel,
+        Prn,
+        Cn0,
+        Elev,
+        Phase,
+    }
+    let mut layout = vec![Cell::Other; fields];
+    for (at, cell) in [(ct, Cell::T), (cch, Cell::Channel), (cprn, Cell::Prn), (ccn0, Cell::Cn0)]
+        .into_iter()
+        .chain([(celev, Cell::Elev), (cphase, Cell::Phase)])
+    {
+        layout[at] = cell;
+    }
+    let nan = f64::NAN;
+    let blank = RowValues {
+        t_s: nan,
+        channel: 0,
+        prn: 0,
+        cn0_dbhz: nan,
+        elev_deg: nan,
+        phase_err_rad: nan,
+        carrier: Carrier::GPS_L1,
+    };
+    let mut values = |text: &[u8]| -> Option<RowValues> {
+        // In place first; a row it does not take is split and read by the rules.
+        let mut cells = Cells::new(text);
+        let mut r = blank;
+        let in_place = layout.iter().all(|cell| {
+            let got = match cell {
+                Cell::Other => cells.text().map(|_| ()),
+                Cell::T => cells
+                    .text()
+                    .and_then(|c| stamp.get(c, || cell_f64(c).ok().flatten().ok_or(())).ok())
+                    .map(|t| r.t_s = t),
+                Cell::Channel => cells.integer().map(|v| r.channel = v),
+                Cell::Prn => cells.integer().map(|v| r.prn = v),
+                Cell::Cn0 => cells.number().flatten().map(|v| r.cn0_dbhz = v),
+                Cell::Elev => cells.number().map(|v| r.elev_deg = v.unwrap_or(nan)),
+                Cell::Phase => cells.number().flatten().map(|v| r.phase_err_rad = v),
+            };
+            got.is_some()
+        });
+        if in_place && cells.finished() {
+            return Some(r);
+        }
+        let f = split(text);
         if f.len() != fields {
             return None;
         }
@@ -823,8 +874,8 @@ fn plain_rows(
             carrier: Carrier::GPS_L1,
         })
     };
-    for_each_plain_record(input, first_line, |line, bytes_before, f| {
-        let Some(row) = values(f) else { return Record::Decline };
+    for_each_plain_line(input, first_line, |line, bytes_before, text| {
+        let Some(row) = values(text) else { return Record::Decline };
         if b.push(&row, line).is_err() {
             return Record::Decline;
         }
