@@ -250,8 +250,54 @@ const PARALLEL_BURG_SAMPLES: usize = 32_768;
 /// `b_prev` at k − 1, writes f_k + κ·b_{k−1} to `f` and b_{k−1} + κ·f_k to
 /// `b_next`; returns Σ f_k·b_{k−1} and Σ f_k² + b_{k−1}² of the new errors
 /// over the pairs inside the run (k = lo + 1 … hi − 1), in four lanes (one
-/// running total cannot vectorize).
+/// running total cannot vectorize): pair k + 1 + 4c + l to lane l, a tail of
+/// fewer than four to lane 0.
+///
+/// One pass: each new pair is summed as it is made (the arrays are streamed
+/// once per order, not twice), in the lanes and order of [`burg_step_two_passes`],
+/// so the sums are the same to the last bit (a test holds it to that).
 fn burg_step(f: &mut [f64], b_next: &mut [f64], b_prev: &[f64], kappa: f64) -> (f64, f64) {
+    let n = f.len().min(b_next.len()).min(b_prev.len());
+    if n == 0 {
+        return (0.0, 0.0);
+    }
+    let (f, b_next, b_prev) = (&mut f[..n], &mut b_next[..n], &b_prev[..n]);
+    let f0 = f[0];
+    f[0] = f0 + kappa * b_prev[0];
+    b_next[0] = b_prev[0] + kappa * f0;
+    let (mut num, mut den) = ([0.0; 4], [0.0; 4]);
+    // The backward error of the pair's k − 1, made one sample earlier.
+    let mut b_before = b_next[0];
+    let body = 1 + (n - 1) / 4 * 4;
+    let (fc, nc, pc) =
+        (f[1..body].chunks_exact_mut(4), b_next[1..body].chunks_exact_mut(4), b_prev[1..body].chunks_exact(4));
+    for ((f4, n4), p4) in fc.zip(nc).zip(pc) {
+        let f_old: [f64; 4] = [f4[0], f4[1], f4[2], f4[3]];
+        let f_new: [f64; 4] = core::array::from_fn(|l| f_old[l] + kappa * p4[l]);
+        let b_new: [f64; 4] = core::array::from_fn(|l| p4[l] + kappa * f_old[l]);
+        f4.copy_from_slice(&f_new);
+        n4.copy_from_slice(&b_new);
+        let b_pair = [b_before, b_new[0], b_new[1], b_new[2]];
+        for l in 0..4 {
+            num[l] += f_new[l] * b_pair[l];
+            den[l] += f_new[l] * f_new[l] + b_pair[l] * b_pair[l];
+        }
+        b_before = b_new[3];
+    }
+    for k in body..n {
+        let f_old = f[k];
+        f[k] = f_old + kappa * b_prev[k];
+        b_next[k] = b_prev[k] + kappa * f_old;
+        num[0] += f[k] * b_before;
+        den[0] += f[k] * f[k] + b_before * b_before;
+        b_before = b_next[k];
+    }
+    ((num[0] + num[1]) + (num[2] + num[3]), (den[0] + den[1]) + (den[2] + den[3]))
+}
+
+/// [`burg_step`] as two passes, the update and then the sums: its reference.
+#[cfg(test)]
+fn burg_step_two_passes(f: &mut [f64], b_next: &mut [f64], b_prev: &[f64], kappa: f64) -> (f64, f64) {
     for ((fk, bn), &bp) in f.iter_mut().zip(b_next.iter_mut()).zip(b_prev) {
         let f_old = *fk;
         *fk = f_old + kappa * bp;
@@ -588,6 +634,24 @@ mod tests {
             assert_eq!(f.order(), m);
             for (a, b) in f.coeffs.iter().zip(s) {
                 assert!((a - b).abs() < 1e-10, "order {m}: {:?} vs {:?}", f.coeffs, s);
+            }
+        }
+    }
+
+    /// The one-pass Burg step is its two-pass reference to the last bit, on
+    /// runs of every length around the four lanes.
+    #[test]
+    fn burg_step_is_its_two_pass_reference() {
+        let x = ar_series(&[-1.6, 0.8], 300, 3);
+        for n in 0..40 {
+            for kappa in [-0.93, 0.0, 0.41] {
+                let (f, b) = (x[..n].to_vec(), x[7..7 + n].to_vec());
+                let (mut f1, mut n1, mut f2, mut n2) = (f.clone(), vec![0.0; n], f.clone(), vec![0.0; n]);
+                let one = burg_step(&mut f1, &mut n1, &b, kappa);
+                let two = burg_step_two_passes(&mut f2, &mut n2, &b, kappa);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!((one.0.to_bits(), one.1.to_bits()), (two.0.to_bits(), two.1.to_bits()), "n {n}");
+                assert_eq!((bits(&f1), bits(&n1)), (bits(&f2), bits(&n2)), "n {n}");
             }
         }
     }
