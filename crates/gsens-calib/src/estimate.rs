@@ -213,8 +213,16 @@ fn calibrate_all_axes(
     if batch.normal_equations().n < 10 {
         return Err(CalibError::TooFewEpochs { epochs: batch.normal_equations().n, warmup_s: settings.warmup_s });
     }
-    // The noise model, the Cramér–Rao bound and the GLS estimate (all methods get the bound).
-    let noise_fit = gls_pass(&fed, settings, series.log_interval_s);
+    // The noise model, the Cramér–Rao bound and the GLS estimate (all methods
+    // get the bound), while the estimate's history and the regressors'
+    // transforms for the robust covariance (neither needs the model) are
+    // computed on the other core.
+    let segments = gls::segments_of(fed.iter().map(|e| e.used));
+    let columns: Vec<Vec<f64>> = (0..3).map(|i| fed.iter().map(|e| e.phi_a[i]).collect()).collect();
+    let (noise_fit, (history, spectra)) = rayon::join(
+        || gls_pass(&fed, settings, series.log_interval_s),
+        || rayon::join(history, || gls::ColumnSpectra::new(&columns, &segments)),
+    );
     let estimate = match (&settings.method, &noise_fit) {
         (Method::Gls, Some(g)) => g.estimate,
         _ => estimate,
@@ -251,9 +259,8 @@ fn calibrate_all_axes(
     // or Newey–West where no model could be fitted.
     let robust_ls = match &noise_fit {
         Some(g) => {
-            let segments = gls::segments_of(fed.iter().map(|e| e.used));
-            let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
-            let middle = gls::covariance_middle(&g.noise, &phi_a, &segments);
+            let m = spectra.middle(&g.noise);
+            let middle = [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[(i, j)]));
             sandwich(&batch.normal_equations().pseudo_inverse(gsens_core::RANK_TOL).0, &middle)
         }
         None => {
@@ -396,15 +403,22 @@ fn gls_pass(fed: &[FedEpoch], settings: &EstimateSettings, log_interval_s: f64) 
     gls::gls(&phase, &phi_a, &segments, &gls_settings)
 }
 
+/// The estimate's history, to be computed: every [`HISTORY_INTERVAL_S`] the
+/// estimator as it stood then, each solved when asked for (on all cores).
+type History<'a> = Box<dyn FnOnce() -> Vec<HistoryPoint> + Send + 'a>;
+
 /// Runs an estimator and, alongside, a batch accumulator (for the
 /// observability verdict and the robust covariance) over the series.
-fn run<E: GammaEstimator>(
+fn run<'a, E: GammaEstimator + Copy + Send + Sync + 'a>(
     mut cal: Calibrator<E>,
-    series: &EpochSeries,
-) -> (GammaEstimate, Vec<FedEpoch>, BatchLeastSquares, Vec<HistoryPoint>) {
+    series: &EpochSeries<'a>,
+) -> (GammaEstimate, Vec<FedEpoch>, BatchLeastSquares, History<'a>) {
+    use rayon::prelude::*;
     let mut batch = BatchLeastSquares::new();
     let every = ((HISTORY_INTERVAL_S / series.log_interval_s).round() as usize).max(1);
-    let mut history = Vec::new();
+    // The estimator's state is a few numbers; solving it (an eigen-
+    // decomposition for the least squares) is what costs.
+    let mut states: Vec<(f64, E)> = Vec::new();
     let mut fed = Vec::with_capacity(series.accel_mps2.len());
     for (k, (a, p)) in series.accel_mps2.iter().zip(series.phase_err_rad).enumerate() {
         let e = cal.feed(a, *p);
@@ -413,13 +427,21 @@ fn run<E: GammaEstimator>(
         }
         fed.push(e);
         if k % every == 0 && batch.normal_equations().n >= 3 {
-            let est = cal.estimate();
-            history.push(HistoryPoint {
-                t_s: series.t_s[k],
-                gamma_hz_per_mps2: est.gamma_hz_per_mps2,
-                sigma_hz_per_mps2: est.sigma_hz_per_mps2(),
-            });
+            states.push((series.t_s[k], *cal.estimator()));
         }
     }
+    let history: History<'a> = Box::new(move || {
+        states
+            .par_iter()
+            .map(|(t_s, state)| {
+                let est = state.estimate();
+                HistoryPoint {
+                    t_s: *t_s,
+                    gamma_hz_per_mps2: est.gamma_hz_per_mps2,
+                    sigma_hz_per_mps2: est.sigma_hz_per_mps2(),
+                }
+            })
+            .collect()
+    });
     (cal.estimate(), fed, batch, history)
 }

@@ -428,60 +428,104 @@ pub fn covariance_middle_columns(
     columns: &[Vec<f64>],
     segments: &[Range<usize>],
 ) -> nalgebra::DMatrix<f64> {
-    use rayon::prelude::*;
-    use rustfft::num_complex::Complex;
-    let p = columns.len();
-    let mut m = nalgebra::DMatrix::<f64>::zeros(p, p);
-    for seg in segments {
+    ColumnSpectra::new(columns, segments).middle(model)
+}
+
+/// The transforms of regressor columns over each segment that
+/// [`covariance_middle_columns`] weighs by a noise model's spectrum: they do
+/// not depend on the model, so they are computed while it is fitted.
+pub struct ColumnSpectra<'a> {
+    columns: &'a [Vec<f64>],
+    segments: &'a [Range<usize>],
+    /// Per segment: the transform length N and the columns' bins 0 … N/2.
+    spectra: Vec<(usize, Vec<Vec<rustfft::num_complex::Complex<f64>>>)>,
+}
+
+impl<'a> ColumnSpectra<'a> {
+    /// Every column's transform over each segment, zero-padded to N ≥ 2m
+    /// (m the segment's length), the columns on all cores.
+    pub fn new(columns: &'a [Vec<f64>], segments: &'a [Range<usize>]) -> Self {
+        let spectra = segments.iter().map(|seg| Self::segment(columns, seg, 0)).collect();
+        ColumnSpectra { columns, segments, spectra }
+    }
+
+    /// The transforms of one segment, at the length that an AR model of
+    /// order `order` needs too.
+    fn segment(
+        columns: &[Vec<f64>],
+        seg: &Range<usize>,
+        order: usize,
+    ) -> (usize, Vec<Vec<rustfft::num_complex::Complex<f64>>>) {
+        use rayon::prelude::*;
         let len = seg.len();
         if len == 0 {
-            continue;
+            return (0, Vec::new());
         }
-        let n = crate::fft::fast_len((2 * len).max(2 * (model.order() + 1)));
+        let n = crate::fft::fast_len((2 * len).max(2 * (order + 1)));
         let fft = crate::fft::real_forward(n);
-        let transform = |input: &mut Vec<f64>| {
-            let mut out = fft.make_output_vec();
-            fft.process(input, &mut out).expect("buffers sized by the plan");
-            out
-        };
-        // The columns' transforms are independent: one per core.
-        let x: Vec<Vec<Complex<f64>>> = columns
+        let x = columns
             .par_iter()
             .map(|c| {
                 let mut v = fft.make_input_vec();
                 v[..len].copy_from_slice(&c[seg.clone()]);
-                transform(&mut v)
+                let mut out = fft.make_output_vec();
+                fft.process(&mut v, &mut out).expect("buffers sized by the plan");
+                out
             })
             .collect();
-        let mut a = fft.make_input_vec();
-        a[0] = 1.0;
-        a[1..=model.order()].copy_from_slice(&model.coeffs);
-        let a = transform(&mut a);
-        // Real series: bin n − f is the conjugate of bin f and S(f) is even, so
-        // the sum over all n bins is bins 0 and n/2 once and 1 … n/2 − 1 twice.
-        let mut acc = vec![0.0; p * p];
-        for (f, af) in a.iter().enumerate() {
-            let weight = if f == 0 || f == n / 2 { 1.0 } else { 2.0 };
-            let s = weight * model.innovation_variance / af.norm_sqr();
+        (n, x)
+    }
+
+    /// Σ_k Σ_l x_k·x_lᵀ·γ(k − l) over each segment, γ the autocovariance of
+    /// `model` ([`covariance_middle`]'s method).
+    pub fn middle(&self, model: &ArModel) -> nalgebra::DMatrix<f64> {
+        let p = self.columns.len();
+        let mut m = nalgebra::DMatrix::<f64>::zeros(p, p);
+        for (seg, (n0, x0)) in self.segments.iter().zip(&self.spectra) {
+            let len = seg.len();
+            if len == 0 {
+                continue;
+            }
+            // A model longer than half the padded segment needs a longer transform.
+            let redone;
+            let (n, x) = if *n0 == crate::fft::fast_len((2 * len).max(2 * (model.order() + 1))) {
+                (*n0, x0)
+            } else {
+                redone = Self::segment(self.columns, seg, model.order());
+                (redone.0, &redone.1)
+            };
+            let fft = crate::fft::real_forward(n);
+            let mut a = fft.make_input_vec();
+            a[0] = 1.0;
+            a[1..=model.order()].copy_from_slice(&model.coeffs);
+            let mut af = fft.make_output_vec();
+            fft.process(&mut a, &mut af).expect("buffers sized by the plan");
+            // Real series: bin n − f is the conjugate of bin f and S(f) is even, so
+            // the sum over all n bins is bins 0 and n/2 once and 1 … n/2 − 1 twice.
+            let mut acc = vec![0.0; p * p];
+            for (f, af) in af.iter().enumerate() {
+                let weight = if f == 0 || f == n / 2 { 1.0 } else { 2.0 };
+                let s = weight * model.innovation_variance / af.norm_sqr();
+                for i in 0..p {
+                    let xi = x[i][f];
+                    for j in i..p {
+                        acc[i * p + j] += s * (xi * x[j][f].conj()).re;
+                    }
+                }
+            }
             for i in 0..p {
-                let xi = x[i][f];
                 for j in i..p {
-                    acc[i * p + j] += s * (xi * x[j][f].conj()).re;
+                    m[(i, j)] += acc[i * p + j] / n as f64;
                 }
             }
         }
         for i in 0..p {
-            for j in i..p {
-                m[(i, j)] += acc[i * p + j] / n as f64;
+            for j in 0..i {
+                m[(i, j)] = m[(j, i)];
             }
         }
+        m
     }
-    for i in 0..p {
-        for j in 0..i {
-            m[(i, j)] = m[(j, i)];
-        }
-    }
-    m
 }
 
 /// The contiguous runs of `true` in `used`, as index ranges.
@@ -652,6 +696,49 @@ mod tests {
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!((one.0.to_bits(), one.1.to_bits()), (two.0.to_bits(), two.1.to_bits()), "n {n}");
                 assert_eq!((bits(&f1), bits(&n1)), (bits(&f2), bits(&n2)), "n {n}");
+            }
+        }
+    }
+
+    /// The frequency-domain middle against its definition in the time
+    /// domain, Σ_k Σ_l x_k·x_lᵀ·γ_N(k − l) per segment (γ from the model's
+    /// impulse response; γ_N(h) = Σ_m γ(h + mN) what N samples of the
+    /// spectrum hold, N the segment's transform length), on segments long
+    /// and short: one shorter than the model's order takes the longer
+    /// transform the model needs.
+    #[test]
+    fn covariance_middle_is_its_time_domain_definition() {
+        let model = ArModel { coeffs: vec![-0.3, 0.1, 0.0, 0.0, 0.05], innovation_variance: 1.7 };
+        // ψ_0 = 1, ψ_j = −Σ_i a_i·ψ_{j−i}; γ(h) = σ²·Σ_j ψ_j·ψ_{j+h}.
+        let mut psi = vec![1.0];
+        for j in 1..400 {
+            let v: f64 = (1..=model.order().min(j)).map(|i| -model.coeffs[i - 1] * psi[j - i]).sum();
+            psi.push(v);
+        }
+        let gamma = |h: usize| {
+            model.innovation_variance * (0..psi.len().saturating_sub(h)).map(|j| psi[j] * psi[j + h]).sum::<f64>()
+        };
+        let x = ar_series(&[0.4], 4 * 700, 9);
+        let columns: Vec<Vec<f64>> = (0..4).map(|c| x[c * 700..(c + 1) * 700].to_vec()).collect();
+        let segments = vec![0..300, 310..313, 320..700];
+        let fast = covariance_middle_columns(&model, &columns, &segments);
+        for i in 0..4 {
+            for j in 0..4 {
+                let mut want = 0.0;
+                for seg in &segments {
+                    let n = crate::fft::fast_len((2 * seg.len()).max(2 * (model.order() + 1)));
+                    let periodic = |h: usize| (0..4).map(|m| gamma(h + m * n) + gamma(m * n + n - h)).sum::<f64>();
+                    for k in seg.clone() {
+                        for l in seg.clone() {
+                            want += columns[i][k] * columns[j][l] * periodic(k.abs_diff(l));
+                        }
+                    }
+                }
+                assert!(
+                    (fast[(i, j)] - want).abs() <= 1e-9 * want.abs().max(1.0),
+                    "({i}, {j}): {} vs {want}",
+                    fast[(i, j)]
+                );
             }
         }
     }

@@ -311,7 +311,6 @@ fn joint_fit_axes(
     }
     let slices: Vec<&[f64]> = segments.iter().map(|s| &full_resid[s.clone()]).collect();
     let max_order = ((gls::MAX_AR_SPAN_S / t).ceil() as usize).min(used.len() / 20).max(1);
-    let noise = gls::fit_ar(&slices, max_order);
     let full_columns: Vec<Vec<f64>> = (0..p)
         .map(|c| {
             let mut v = vec![0.0; n];
@@ -321,7 +320,11 @@ fn joint_fit_axes(
             v
         })
         .collect();
-    let middle = gls::covariance_middle_columns(&noise, &full_columns, &segments);
+    // The columns' transforms do not need the noise model: one core fits it
+    // while the other transforms them.
+    let (noise, spectra) =
+        rayon::join(|| gls::fit_ar(&slices, max_order), || gls::ColumnSpectra::new(&full_columns, &segments));
+    let middle = spectra.middle(&noise);
     let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
     let cov = &jtj_inv * &middle * &jtj_inv;
     // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
