@@ -29,6 +29,7 @@ use crate::search::{Shift, batch_pass, offset_profile, scaled_loop};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// False-alarm probability of the test of the stated loop (two-sided).
@@ -203,7 +204,7 @@ fn joint_fit_axes(
             std::borrow::Cow::Owned(triad_pass(series, settings, &loop_at(ln_s, zeta))?)
         };
         let by = Shift::samples(dtau / t);
-        let a: Vec<[f64; 3]> = used.iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
+        let a: Vec<[f64; 3]> = used.par_iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
         // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
         let mut ne = gsens_core::NormalEquations::default();
         for (ak, pk) in a.iter().zip(&phi) {
@@ -216,14 +217,16 @@ fn joint_fit_axes(
             }
         }
         let mut columns: Vec<Vec<f64>> = axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
+        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
+        let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
+            let fed = triad_pass(series, settings, model)?;
+            Ok(used.iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
+        };
         let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
             // Two independent passes over the log: one per core.
-            let (fl, fh) = rayon::join(|| triad_pass(series, settings, lo), || triad_pass(series, settings, hi));
-            let (fl, fh) = (fl?, fh?);
-            Ok(used
-                .iter()
-                .map(|&k| (dot(&shifted(&fh, k, dtau, &by), &g) - dot(&shifted(&fl, k, dtau, &by), &g)) / step)
-                .collect())
+            let (pl, ph) = rayon::join(|| predicted(lo), || predicted(hi));
+            let (pl, ph) = (pl?, ph?);
+            Ok(ph.iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
         };
         if fit_loop {
             columns.push(diff(&loop_at(ln_s - h, zeta), &loop_at(ln_s + h, zeta), 2.0 * h)?);
@@ -236,7 +239,7 @@ fn joint_fit_axes(
             let (later, earlier) = (Shift::samples((dtau + eps) / t), Shift::samples((dtau - eps) / t));
             let n_c = center.len();
             columns.push(
-                used.iter()
+                used.par_iter()
                     .map(|&k| {
                         let phi_a = |j: usize| center[j].phi_a;
                         (dot(&later.at(n_c, k, phi_a), &g) - dot(&earlier.at(n_c, k, phi_a), &g)) / (2.0 * eps)

@@ -420,16 +420,21 @@ pub fn measure_response_with(
     // Δ epochs apart: var(S_un/S_uu) = κ·E|N|²/S_uu exactly (κ = 1 without
     // overlap, 1 + 2ρ(D)(K − 1)/K for a steady tone).
     let mut cross = vec![zero; n_bins + 1];
+    // c_ij depends on the lag alone, and the segments take few lags (one
+    // step within a run): each lag's factors are made once.
+    let mut factors: Vec<Option<Vec<Complex64>>> = vec![None; n_seg];
     for i in 0..segments {
         for k in (i + 1)..segments {
             let lag = starts[k] - starts[i];
             if lag >= n_seg {
                 break;
             }
-            let r = rho(lag);
+            let c = factors[lag].get_or_insert_with(|| {
+                let r = rho(lag);
+                (0..=n_bins).map(|b| Complex64::from_polar(r, -TAU * (b * lag) as f64 / n_seg as f64)).collect()
+            });
             for b in 1..=n_bins {
-                let c = Complex64::from_polar(r, -TAU * (b * lag) as f64 / n_seg as f64);
-                cross[b] += u_spectra[i][b].conj() * u_spectra[k][b] * c;
+                cross[b] += u_spectra[i][b].conj() * u_spectra[k][b] * c[b];
             }
         }
     }
