@@ -580,42 +580,56 @@ fn local_sigma(epoch: &[u32], d: &[f64], window: u32, scratch: &mut Vec<f64>) ->
 /// [`MEDIAN_SAMPLE`]) of each track's departure from the mean of the tracks
 /// present (at least two; rows in C/N0 drops, start-up ones included, left out of the mean).
 fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
+    use rayon::prelude::*;
     let n_tracks = rows.tracks();
     let stride = n_epochs.div_ceil(MEDIAN_SAMPLE).max(1);
-    let mut cursor: Vec<usize> = rows.track_start[..n_tracks].to_vec();
-    let mut dep: Vec<Vec<f64>> = vec![Vec::new(); n_tracks];
-    let mut at: Vec<(usize, usize)> = Vec::with_capacity(n_tracks);
-    for e in (0..n_epochs).step_by(stride) {
-        at.clear();
-        let (mut sum, mut n) = (0.0, 0usize);
-        for i in 0..n_tracks {
-            let end = rows.track_start[i + 1];
-            // The track's row at epoch e, if any (its rows are in epoch order).
-            let c = &mut cursor[i];
-            if *c < end && (rows.epoch[*c] as usize) < e {
-                // Rows are mostly consecutive epochs: jump, then adjust.
-                let guess = (*c + (e - rows.epoch[*c] as usize)).min(end - 1);
-                *c = if rows.epoch[guess] as usize >= e {
-                    *c + rows.epoch[*c..=guess].partition_point(|&x| (x as usize) < e)
-                } else {
-                    guess + rows.epoch[guess..end].partition_point(|&x| (x as usize) < e)
-                };
+    let sampled: Vec<usize> = (0..n_epochs).step_by(stride).collect();
+    // The departures of a run of sampled epochs, per track.
+    let departures = |epochs: &[usize]| -> Vec<Vec<f64>> {
+        let mut cursor: Vec<usize> = rows.track_start[..n_tracks].to_vec();
+        let mut dep: Vec<Vec<f64>> = vec![Vec::new(); n_tracks];
+        let mut at: Vec<(usize, usize)> = Vec::with_capacity(n_tracks);
+        for &e in epochs {
+            at.clear();
+            let (mut sum, mut n) = (0.0, 0usize);
+            for i in 0..n_tracks {
+                let end = rows.track_start[i + 1];
+                // The track's row at epoch e, if any (its rows are in epoch order).
+                let c = &mut cursor[i];
+                if *c < end && (rows.epoch[*c] as usize) < e {
+                    // Rows are mostly consecutive epochs: jump, then adjust.
+                    let guess = (*c + (e - rows.epoch[*c] as usize)).min(end - 1);
+                    *c = if rows.epoch[guess] as usize >= e {
+                        *c + rows.epoch[*c..=guess].partition_point(|&x| (x as usize) < e)
+                    } else {
+                        guess + rows.epoch[guess..end].partition_point(|&x| (x as usize) < e)
+                    };
+                }
+                if *c < end && rows.epoch[*c] as usize == e {
+                    at.push((i, *c));
+                    if flags[*c] & (flag::CN0_DROP | flag::STARTUP_CN0) == 0 {
+                        sum += rows.phase[*c];
+                        n += 1;
+                    }
+                }
             }
-            if *c < end && rows.epoch[*c] as usize == e {
-                at.push((i, *c));
-                if flags[*c] & (flag::CN0_DROP | flag::STARTUP_CN0) == 0 {
-                    sum += rows.phase[*c];
-                    n += 1;
+            if n >= 2 {
+                for &(i, r) in &at {
+                    dep[i].push(rows.phase[r] - sum / n as f64);
                 }
             }
         }
-        if n >= 2 {
-            for &(i, r) in &at {
-                dep[i].push(rows.phase[r] - sum / n as f64);
-            }
-        }
-    }
-    dep.iter_mut().map(|v| if v.is_empty() { 0.0 } else { median_of(v) }).collect()
+        dep
+    };
+    // The runs on all cores, their departures joined in epoch order.
+    let run = sampled.len().div_ceil(rayon::current_num_threads().max(1)).max(1);
+    let parts: Vec<Vec<Vec<f64>>> = sampled.par_chunks(run).map(departures).collect();
+    (0..n_tracks)
+        .map(|i| {
+            let mut v: Vec<f64> = parts.iter().flat_map(|p| p[i].iter().copied()).collect();
+            if v.is_empty() { 0.0 } else { median_of(&mut v) }
+        })
+        .collect()
 }
 
 /// The most values a median of a track's rows is taken over (a regular
@@ -776,37 +790,37 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     // than the track's noise explains, while the common level (the others'
     // median plus the track's offset, φ − d) is well within it; a log of a
     // single track has no common level (and no σ) to compare with.
+    // Tests 4 and 2 look at one track at a time: the tracks on both cores.
     if let Some(limit) = cfg.max_abs_phase_rad {
-        for i in 0..n_tracks {
+        per_track(flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
             let range = rows.range(i);
             // In the discriminator's own units: the phase on L1's scale over f_L1/f_c,
             // plus the noise margin (docs of `phase_range_margin_rad`).
             let limit = limit * rows.to_l1(i) + phase_range_margin_rad(sigma[i], range.len());
-            for r in range.clone() {
+            for (f, r) in fl.iter_mut().zip(range.clone()) {
                 let p = rows.phase[r];
                 // A start-up row is excluded already, as the pull-in it is.
-                if flags[r] & flag::ANY_STARTUP != 0 {
+                if *f & flag::ANY_STARTUP != 0 {
                     continue;
                 }
                 if p.abs() > limit && (!d[r].is_finite() || (p - d[r]).abs() < 0.5 * limit) {
-                    flags[r] |= flag::PHASE_RANGE;
+                    *f |= flag::PHASE_RANGE;
                 }
             }
-            spread_with_guard(&rows.epoch[range.clone()], &mut flags[range], flag::PHASE_RANGE, guard);
-        }
+            spread_with_guard(&rows.epoch[range], fl, flag::PHASE_RANGE, guard);
+        });
     }
     let gain_window = epochs_of(cfg.gain_window_s).max(2);
-    let mut fits: Vec<GainFit> = Vec::new();
-    for i in 0..n_tracks {
-        out.summaries[i].deviation_sigma_rad = Some(sigma[i]).filter(|v| v.is_finite());
-        if !sigma[i].is_finite() {
-            continue;
-        }
-        let range = rows.range(i);
-        let (r0, r1) = (range.start, range.end);
-        let (ep, dev, lvl) = (&rows.epoch[r0..r1], &d[r0..r1], &level[r0..r1]);
-        noisy_windows(ep, dev, lvl, sigma[i], noisy_window, cfg.noisy_rms_k, guard, &mut flags[r0..r1]);
+    for (sum, s) in out.summaries.iter_mut().zip(&sigma) {
+        sum.deviation_sigma_rad = Some(*s).filter(|v| v.is_finite());
     }
+    per_track(flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
+        if sigma[i].is_finite() {
+            let range = rows.range(i);
+            let (ep, dev, lvl) = (&rows.epoch[range.clone()], &d[range.clone()], &level[range]);
+            noisy_windows(ep, dev, lvl, sigma[i], noisy_window, cfg.noisy_rms_k, guard, fl);
+        }
+    });
     let inputs: Vec<Option<GainInput>> = (0..n_tracks)
         .map(|i| {
             let range = rows.range(i);
@@ -819,11 +833,19 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             })
         })
         .collect();
-    for (i, g) in inputs.iter().enumerate() {
-        if let Some(g) = g {
-            gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut fits);
-        }
-    }
+    // Each track's windows on either core, gathered in track order.
+    let per_track_fits: Vec<Vec<GainFit>> = inputs
+        .par_iter()
+        .enumerate()
+        .map(|(i, g)| {
+            let mut track_fits = Vec::new();
+            if let Some(g) = g {
+                gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut track_fits);
+            }
+            track_fits
+        })
+        .collect();
+    let fits: Vec<GainFit> = per_track_fits.into_iter().flatten().collect();
     let (tested, pooled) = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
     drop(inputs);
     for (sum, p) in out.summaries.iter_mut().zip(pooled) {
@@ -854,13 +876,14 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
         }
     }
 
-    // Whole tracks (the fraction flagged by the cross-channel tests), counts, spans.
-    for i in 0..n_tracks {
+    // Whole tracks (the fraction flagged by the cross-channel tests), counts,
+    // spans: the tracks on both cores.
+    let per_row = per_track(flags, &rows.track_start);
+    let each = per_row.into_par_iter().zip(out.summaries.par_iter_mut()).zip(out.spans.par_iter_mut());
+    each.enumerate().for_each(|(i, ((fl, sum), spans))| {
         let range = rows.range(i);
         let n = range.len();
-        let fl = &mut flags[range.clone()];
         let excluded = fl.iter().filter(|&&f| f & (flag::SLIP | flag::NOISY | flag::LOW_GAIN) != 0).count();
-        let sum = &mut out.summaries[i];
         if n > 0 && excluded as f64 > cfg.max_excluded_fraction * n as f64 {
             sum.track_excluded = true;
             for f in fl.iter_mut() {
@@ -884,7 +907,6 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
         sum.rows_cn0_drop = count(flag::CN0_DROP);
         sum.rows_startup = fl.iter().filter(|&&f| f & flag::ANY_STARTUP != 0).count();
         let ep = &rows.epoch[range];
-        let spans = &mut out.spans[i];
         let mut j = 0;
         while j < n && spans.len() < MAX_SPANS {
             if fl[j] == 0 {
@@ -900,7 +922,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             }
             spans.push(span);
         }
-    }
+    });
     out
 }
 
