@@ -297,7 +297,7 @@ impl Rows {
         self.track_start.len().saturating_sub(1)
     }
 
-    fn range(&self, i: usize) -> core::ops::Range<usize> {
+    pub(crate) fn range(&self, i: usize) -> core::ops::Range<usize> {
         self.track_start[i]..self.track_start[i + 1]
     }
 

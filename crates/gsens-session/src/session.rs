@@ -574,9 +574,17 @@ pub fn prepare_session_from(
         slot_base.push(slot_base.last().copied().unwrap_or(0) + screened.segments[c]);
     }
     let n_slots = *slot_base.last().expect("non-empty");
-    let for_each_used_row = |f: &mut dyn FnMut(usize, usize, f64)| {
+    // The epochs in two halves, each on its own core: a track's rows in a
+    // run of epochs are a run of its rows (in epoch order), and every epoch's
+    // entries come out in the order of one pass over the tracks.
+    let mid = n_epochs / 2;
+    let for_each_used_row = |epochs: std::ops::Range<usize>, f: &mut dyn FnMut(usize, usize, f64)| {
         for (sel, &c) in selected_candidates.iter().enumerate() {
-            for r in rows.track_start[c]..rows.track_start[c + 1] {
+            let range = rows.range(c);
+            let ep = &rows.epoch[range.clone()];
+            let first = range.start + ep.partition_point(|&x| (x as usize) < epochs.start);
+            let end = range.start + ep.partition_point(|&x| (x as usize) < epochs.end);
+            for r in first..end {
                 if screened.flags[r] == 0 {
                     f(slot_base[sel] + screened.segment[r] as usize, r, rows.to_l1[c]);
                 }
@@ -584,18 +592,32 @@ pub fn prepare_session_from(
         }
     };
     let mut start = vec![0usize; n_epochs + 1];
-    for_each_used_row(&mut |_, r, _| start[rows.epoch[r] as usize + 1] += 1);
+    {
+        let (lo, hi) = start[1..].split_at_mut(mid);
+        rayon::join(
+            || for_each_used_row(0..mid, &mut |_, r, _| lo[rows.epoch[r] as usize] += 1),
+            || for_each_used_row(mid..n_epochs, &mut |_, r, _| hi[rows.epoch[r] as usize - mid] += 1),
+        );
+    }
     for e in 0..n_epochs {
         start[e + 1] += start[e];
     }
-    let mut fill = start.clone();
     let mut entries = vec![(0usize, 0f64, 0f64); start[n_epochs]];
-    for_each_used_row(&mut |slot, r, to_l1| {
-        let e = rows.epoch[r] as usize;
-        entries[fill[e]] = (slot, weight(rows.cn0[r], to_l1), rows.phase[r]);
-        fill[e] += 1;
-    });
-    drop(fill);
+    {
+        let (lo, hi) = entries.split_at_mut(start[mid]);
+        let fill_half = |epochs: std::ops::Range<usize>, out: &mut [(usize, f64, f64)]| {
+            // Where each epoch's next entry goes, in `out`.
+            let base = start[epochs.start];
+            let mut fill: Vec<usize> = start[epochs.clone()].iter().map(|s| s - base).collect();
+            let e0 = epochs.start;
+            for_each_used_row(epochs, &mut |slot, r, to_l1| {
+                let e = rows.epoch[r] as usize - e0;
+                out[fill[e]] = (slot, weight(rows.cn0[r], to_l1), rows.phase[r]);
+                fill[e] += 1;
+            });
+        };
+        rayon::join(|| fill_half(0..mid, lo), || fill_half(mid..n_epochs, hi));
+    }
 
     let offsets_rad = if selection.remove_channel_offsets && n_slots > 1 {
         let first_segment: Vec<bool> = (0..n_slots).map(|slot| slot_base.contains(&slot)).collect();
@@ -604,32 +626,43 @@ pub fn prepare_session_from(
         vec![0.0; n_slots]
     };
 
-    // Average, interpolate.
-    let mut t_s = Vec::with_capacity(n_epochs);
-    let mut phase_err_rad = Vec::with_capacity(n_epochs);
-    let mut accel_mps2 = Vec::with_capacity(n_epochs);
-    let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first);
-    let mut cursor = 0usize;
-    let (mut phases, mut weights) = (Vec::new(), Vec::new());
-    for e in 0..n_epochs {
-        let k = k_first + e as u64;
-        let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
-            stamp_idx += 1;
-            stamps[stamp_idx - 1]
-        } else {
-            grid.t0_s + k as f64 * grid.log_interval_s
-        };
-        t_s.push(t);
-        let rows = &entries[start[e]..start[e + 1]];
-        phases.clear();
-        weights.clear();
-        for &(slot, w, p) in rows {
-            phases.push(p - offsets_rad[slot]);
-            weights.push(w);
+    // Average, interpolate: each epoch on its own, the two halves at once.
+    let average = |epochs: std::ops::Range<usize>| {
+        let n = epochs.len();
+        let (mut t_s, mut phase_err_rad, mut accel_mps2) =
+            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first + epochs.start as u64);
+        // The IMU sample at or before the first read time (the cursor a
+        // pass from the first epoch would have reached).
+        let first_read = grid.time(stamps, k_first + epochs.start as u64) + imu_time_offset_s;
+        let mut cursor = imu.t_s.partition_point(|&x| x <= first_read).saturating_sub(1);
+        let (mut phases, mut weights) = (Vec::new(), Vec::new());
+        for e in epochs {
+            let k = k_first + e as u64;
+            let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
+                stamp_idx += 1;
+                stamps[stamp_idx - 1]
+            } else {
+                grid.t0_s + k as f64 * grid.log_interval_s
+            };
+            t_s.push(t);
+            let rows = &entries[start[e]..start[e + 1]];
+            phases.clear();
+            weights.clear();
+            for &(slot, w, p) in rows {
+                phases.push(p - offsets_rad[slot]);
+                weights.push(w);
+            }
+            phase_err_rad.push(average_phase_rad(&phases, &weights));
+            accel_mps2.push(imu.interpolate_at(t + imu_time_offset_s, &mut cursor));
         }
-        phase_err_rad.push(average_phase_rad(&phases, &weights));
-        accel_mps2.push(imu.interpolate_at(t + imu_time_offset_s, &mut cursor));
-    }
+        (t_s, phase_err_rad, accel_mps2)
+    };
+    let ((mut t_s, mut phase_err_rad, mut accel_mps2), (t_hi, phase_hi, accel_hi)) =
+        rayon::join(|| average(0..mid), || average(mid..n_epochs));
+    t_s.extend(t_hi);
+    phase_err_rad.extend(phase_hi);
+    accel_mps2.extend(accel_hi);
 
     let mut summaries = screened.summaries;
     let mut channels: Vec<ChannelSummary> = (0..tracks.len())
