@@ -479,6 +479,7 @@ impl<'a> ColumnSpectra<'a> {
     /// Σ_k Σ_l x_k·x_lᵀ·γ(k − l) over each segment, γ the autocovariance of
     /// `model` ([`covariance_middle`]'s method).
     pub fn middle(&self, model: &ArModel) -> nalgebra::DMatrix<f64> {
+        use rayon::prelude::*;
         let p = self.columns.len();
         let mut m = nalgebra::DMatrix::<f64>::zeros(p, p);
         for (seg, (n0, x0)) in self.segments.iter().zip(&self.spectra) {
@@ -502,21 +503,25 @@ impl<'a> ColumnSpectra<'a> {
             fft.process(&mut a, &mut af).expect("buffers sized by the plan");
             // Real series: bin n − f is the conjugate of bin f and S(f) is even, so
             // the sum over all n bins is bins 0 and n/2 once and 1 … n/2 − 1 twice.
-            let mut acc = vec![0.0; p * p];
-            for (f, af) in af.iter().enumerate() {
-                let weight = if f == 0 || f == n / 2 { 1.0 } else { 2.0 };
-                let s = weight * model.innovation_variance / af.norm_sqr();
-                for i in 0..p {
-                    let xi = x[i][f];
-                    for j in i..p {
-                        acc[i * p + j] += s * (xi * x[j][f].conj()).re;
-                    }
-                }
-            }
-            for i in 0..p {
-                for j in i..p {
-                    m[(i, j)] += acc[i * p + j] / n as f64;
-                }
+            let spectrum: Vec<f64> = af
+                .iter()
+                .enumerate()
+                .map(|(f, af)| {
+                    let weight = if f == 0 || f == n / 2 { 1.0 } else { 2.0 };
+                    weight * model.innovation_variance / af.norm_sqr()
+                })
+                .collect();
+            // Each entry is its own sum over the bins: the entries on all cores.
+            let pairs: Vec<(usize, usize)> = (0..p).flat_map(|i| (i..p).map(move |j| (i, j))).collect();
+            let sums: Vec<f64> = pairs
+                .par_iter()
+                .map(|&(i, j)| {
+                    let (xi, xj) = (&x[i], &x[j]);
+                    spectrum.iter().enumerate().fold(0.0, |acc, (f, s)| acc + s * (xi[f] * xj[f].conj()).re)
+                })
+                .collect();
+            for (&(i, j), sum) in pairs.iter().zip(sums) {
+                m[(i, j)] += sum / n as f64;
             }
         }
         for i in 0..p {
