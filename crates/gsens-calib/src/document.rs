@@ -56,6 +56,35 @@ pub struct Warning {
     pub message: String,
 }
 
+/// The largest step of the joint fit's nuisance parameters, at one σ, that its
+/// linearized covariance holds for \[rad\]. The fit linearizes the model in the
+/// IMU time offset τ and the loop's scale ln s; a 1σ error of τ turns the
+/// shaking's phase by x = 2π·f·σ_τ (f its frequency), and e^{jx} = 1 + jx −
+/// x²/2 + …: the term the linearization drops is x/2 of the one it keeps (the
+/// loop's scale likewise, x = σ_ln s, as a relative change of the response
+/// near its peak). At x = 0.2 that is 10 %; beyond it Γ̂ moves with the
+/// nuisance errors in ways σ does not describe.
+pub const JOINT_LINEAR_LIMIT_RAD: f64 = 0.2;
+
+/// The linearity of the joint fit: x = max(2π·f·σ_τ, σ_ln s) (see
+/// [`JOINT_LINEAR_LIMIT_RAD`]), f the highest dominant shaking frequency of
+/// the observable axes; with it the offset's and the scale's parts. `None`
+/// when the fit estimated neither or no observable axis has a frequency.
+pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f64>)> {
+    let j = c.joint_fit.as_ref()?;
+    let f_hz = c
+        .axes
+        .iter()
+        .zip(&c.observable)
+        .filter(|(_, o)| **o)
+        .filter_map(|(a, _)| a.shaking_frequency_hz)
+        .fold(None, |m: Option<f64>, f| Some(m.map_or(f, |m| m.max(f))))?;
+    let offset = j.sigma_imu_time_offset_s.map(|s| core::f64::consts::TAU * f_hz * s);
+    let scale = j.sigma_natural_frequency_hz.zip(j.natural_frequency_hz).map(|(s, f)| s / f);
+    let x = offset.into_iter().chain(scale).fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))?;
+    Some((x, offset, scale))
+}
+
 /// Warning codes that report something gsens already corrected for (the
 /// estimate stays trustworthy); every other code means the estimate may be
 /// wrong beyond its σ.
@@ -357,6 +386,20 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
                     })
                     .collect::<Vec<_>>()
                     .join(", "),
+            ),
+        });
+    }
+    if let Some((x, offset, scale)) = joint_nonlinearity(c).filter(|(x, ..)| *x > JOINT_LINEAR_LIMIT_RAD) {
+        let part = |v: Option<f64>| v.map_or("not fitted".to_string(), |v| format!("{v:.2}"));
+        w.push(Warning {
+            code: "loop_offset_unresolved",
+            message: format!(
+                "the data do not resolve the IMU time offset and the loop well enough for σ to hold: one σ of them \
+                 moves the shaking's phase by {x:.2} rad (offset {}, loop scale {}), beyond the {JOINT_LINEAR_LIMIT_RAD} \
+                 rad the joint fit's linearization holds for, and Γ̂ moves with them. State the IMU's latency \
+                 (--time-offset) if you know it, or shake harder, longer and at more than one rate",
+                part(offset),
+                part(scale)
             ),
         });
     }

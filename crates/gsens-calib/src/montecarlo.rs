@@ -38,6 +38,12 @@ pub struct MethodRun {
     pub time_offset_error_s: Option<f64>,
     /// Identified minus true natural frequency ωn/2π \[Hz\] (when identified).
     pub natural_frequency_error_hz: Option<f64>,
+    /// The joint fit's 1σ of the IMU time offset \[s\] (when estimated).
+    pub sigma_imu_time_offset_s: Option<f64>,
+    /// The joint fit's 1σ of ωn/2π \[Hz\] (when identified).
+    pub sigma_natural_frequency_hz: Option<f64>,
+    /// The correlation of the fitted loop's ln ωn with the offset (when both are fitted).
+    pub correlation_loop_offset: Option<f64>,
     /// Order of the AR noise model.
     pub noise_ar_order: usize,
     /// Whether the result document called the estimate trustworthy.
@@ -227,6 +233,9 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
                     .joint_fit
                     .as_ref()
                     .and_then(|j| j.natural_frequency_hz.zip(true_fn_hz).map(|(f, t)| f - t)),
+                sigma_imu_time_offset_s: c.joint_fit.as_ref().and_then(|j| j.sigma_imu_time_offset_s),
+                sigma_natural_frequency_hz: c.joint_fit.as_ref().and_then(|j| j.sigma_natural_frequency_hz),
+                correlation_loop_offset: c.joint_fit.as_ref().and_then(|j| j.correlation_loop_offset),
                 noise_ar_order: c.noise_ar_order,
                 trustworthy: doc.trustworthy,
                 warnings: doc.warnings.iter().map(|w| w.code).collect(),
