@@ -261,7 +261,17 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
         )
     };
     let (unit, factor, evidence) = if let Some(r) = all.filter(|&r| r < CYCLES_BELOW) {
-        ("cycles", "multiply phase_err_rad by 2π", format!("{}, near 1/(2π) = {:.3}", scatter(r), 1.0 / TAU))
+        let mut factor = "multiply phase_err_rad by 2π".to_string();
+        if logged == LoggedPhase::Last && n > 1 {
+            // The mean of n updates stated as the last scatters 1/√n as much:
+            // a description error that looks like a unit.
+            factor = format!(
+                "{factor}. Or the log holds the mean of the {n} loop updates of each epoch, not the last: that \
+                 scatters 1/√{n} = {:.3} times as much; then state the logged phase as the mean (--logged-phase mean)",
+                1.0 / f64::from(n).sqrt()
+            );
+        }
+        ("cycles", factor, format!("{}, near 1/(2π) = {:.3}", scatter(r), 1.0 / TAU))
     } else if let Some(r) = exact.filter(|&r| r > DEGREES_ABOVE) {
         let e = format!(
             "{}, near 180/π = {:.1}; {:.0} % of the epochs' phase lies beyond ±π, where no discriminator's output goes",
@@ -269,7 +279,7 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
             180.0 / PI,
             beyond * 100.0
         );
-        ("degrees", "multiply phase_err_rad by π/180", e)
+        ("degrees", "multiply phase_err_rad by π/180".to_string(), e)
     } else if exact.is_none() && beyond > BEYOND_PI_FRACTION {
         let e = format!(
             "{:.0} % of the epochs' phase lies beyond ±π, where no discriminator's output goes",
@@ -277,7 +287,8 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
         );
         (
             "degrees",
-            "multiply phase_err_rad by π/180 (or, if it is an unwrapped phase, log the discriminator's output)",
+            "multiply phase_err_rad by π/180 (or, if it is an unwrapped phase, log the discriminator's output)"
+                .to_string(),
             e,
         )
     } else {

@@ -136,4 +136,11 @@ fn an_offset_the_data_do_not_resolve_is_flagged() {
     let stated = [&described[..], &["--time-offset", "0"]].concat();
     let (code, _, z, codes) = estimate(&dir, "imu.csv", "tracking.csv", &stated, truth);
     assert!(code == 0 && z < 3.0, "stated offset: exit {code}, |z| up to {z:.1}, warnings {codes}");
+    // Described as logging the last update (the default): its scatter is 1/√25
+    // of that prediction, which the units check flags, naming both fixes.
+    let last = [&RIGHT_LOOP[..], &["--time-offset", "0"]].concat();
+    let (code, _, _, codes) = estimate(&dir, "imu.csv", "tracking.csv", &last, truth);
+    let message = json(&dir.join("out.json"))["warnings"][0]["message"].as_str().unwrap_or_default().to_string();
+    assert_eq!((code, codes.as_str()), (3, "phase_units"), "{message}");
+    assert!(message.contains("2π") && message.contains("mean of the 25 loop updates"), "{message}");
 }
