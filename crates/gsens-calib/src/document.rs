@@ -78,10 +78,10 @@ pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f
         .zip(&c.observable)
         .filter(|(_, o)| **o)
         .filter_map(|(a, _)| a.shaking_frequency_hz)
-        .fold(None, |m: Option<f64>, f| Some(m.map_or(f, |m| m.max(f))))?;
+        .reduce(f64::max)?;
     let offset = j.sigma_imu_time_offset_s.map(|s| core::f64::consts::TAU * f_hz * s);
     let scale = j.sigma_natural_frequency_hz.zip(j.natural_frequency_hz).map(|(s, f)| s / f);
-    let x = offset.into_iter().chain(scale).fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))?;
+    let x = offset.into_iter().chain(scale).reduce(f64::max)?;
     Some((x, offset, scale))
 }
 

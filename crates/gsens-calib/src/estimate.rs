@@ -220,7 +220,7 @@ fn calibrate_all_axes(
     let segments = gls::segments_of(fed.iter().map(|e| e.used));
     let columns: Vec<Vec<f64>> = (0..3).map(|i| fed.iter().map(|e| e.phi_a[i]).collect()).collect();
     let (noise_fit, (history, spectra)) = rayon::join(
-        || gls_pass(&fed, settings, series.log_interval_s),
+        || gls_pass(&fed, &segments, settings, series.log_interval_s),
         || rayon::join(history, || gls::ColumnSpectra::new(&columns, &segments)),
     );
     let estimate = match (&settings.method, &noise_fit) {
@@ -389,18 +389,22 @@ fn huber_pass(
     Ok(robust::huber_irls(&phase, &phi_a, estimate.gamma_hz_per_mps2, gsens_core::HuberWeights::K_95, max_lag))
 }
 
-/// GLS over the used epochs of a pass (their contiguous runs are the segments).
-fn gls_pass(fed: &[FedEpoch], settings: &EstimateSettings, log_interval_s: f64) -> Option<gls::GlsFit> {
+/// GLS over the used epochs of a pass, `segments` their contiguous runs.
+fn gls_pass(
+    fed: &[FedEpoch],
+    segments: &[core::ops::Range<usize>],
+    settings: &EstimateSettings,
+    log_interval_s: f64,
+) -> Option<gls::GlsFit> {
     let phase: Vec<f64> = fed.iter().map(|e| e.phase_err_rad.unwrap_or(0.0)).collect();
     let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
-    let segments = gls::segments_of(fed.iter().map(|e| e.used));
     let gls_settings = gls::GlsSettings {
         // The robust covariance only where it is used: the GLS method's σ.
         hac_max_lag: (settings.method == Method::Gls).then(|| (settings.hac_lag_s / log_interval_s).round() as usize),
         max_ar_order: (gls::MAX_AR_SPAN_S / log_interval_s).ceil() as usize,
         ..gls::GlsSettings::default()
     };
-    gls::gls(&phase, &phi_a, &segments, &gls_settings)
+    gls::gls(&phase, &phi_a, segments, &gls_settings)
 }
 
 /// The estimate's history, to be computed: every [`HISTORY_INTERVAL_S`] the

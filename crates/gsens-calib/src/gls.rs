@@ -405,24 +405,18 @@ impl GlsFit {
     }
 }
 
-/// Σ_k Σ_l a_k·a_lᵀ·γ(k − l) over each segment of `phi_a`: the middle of the
-/// least-squares sandwich (AᵀA)⁻¹·AᵀΣA·(AᵀA)⁻¹ when the noise has the
-/// autocovariance γ of `model`, exactly (no lag truncation or kernel weights).
+/// Σ_k Σ_l x_k·x_lᵀ·γ(k − l) over each segment of the regressor `columns`
+/// (each a series over the same epochs: Γ's three, plus the loop's and the
+/// time offset's in the joint fit): the middle of the least-squares sandwich
+/// (XᵀX)⁻¹·XᵀΣX·(XᵀX)⁻¹ when the noise has the autocovariance γ of `model`,
+/// exactly (no lag truncation or kernel weights).
 ///
 /// In the frequency domain per segment of m samples, zero-padded to N ≥ 2m so
-/// that circular correlation is linear: AᵀΣA = (1/N)·Σ_f S(f)·X(f)·X(f)ᴴ with
+/// that circular correlation is linear: XᵀΣX = (1/N)·Σ_f S(f)·X(f)·X(f)ᴴ with
 /// X the DFT of the regressors and S(f) = σ²/|A(e^{−j2πf/N})|² the model's
 /// two-sided spectrum per sample (aliasing of γ beyond N samples neglected).
-/// O(N log N) per segment.
-pub fn covariance_middle(model: &ArModel, phi_a: &[[f64; 3]], segments: &[Range<usize>]) -> [[f64; 3]; 3] {
-    let columns: Vec<Vec<f64>> = (0..3).map(|i| phi_a.iter().map(|a| a[i]).collect()).collect();
-    let m = covariance_middle_columns(model, &columns, segments);
-    [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[(i, j)]))
-}
-
-/// [`covariance_middle`] for any number of regressor columns, each a series
-/// over the same epochs (the joint fit of Γ with the loop and the time
-/// offset has four to six).
+/// O(N log N) per segment; [`ColumnSpectra`] when the transforms are wanted
+/// before the model is known.
 pub fn covariance_middle_columns(
     model: &ArModel,
     columns: &[Vec<f64>],
@@ -477,7 +471,7 @@ impl<'a> ColumnSpectra<'a> {
     }
 
     /// Σ_k Σ_l x_k·x_lᵀ·γ(k − l) over each segment, γ the autocovariance of
-    /// `model` ([`covariance_middle`]'s method).
+    /// `model` ([`covariance_middle_columns`]'s method).
     pub fn middle(&self, model: &ArModel) -> nalgebra::DMatrix<f64> {
         use rayon::prelude::*;
         let p = self.columns.len();
