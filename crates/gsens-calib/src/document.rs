@@ -85,6 +85,25 @@ pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f
     Some((x, offset, scale))
 }
 
+/// The two-rate protocol for `loop_used`, in words: each axis half the time
+/// at each of [`gsens_core::LoopPeak::two_rate_periods_s`] (empty for a loop
+/// without a peak).
+pub fn two_rate_advice(loop_used: &LoopModel) -> String {
+    match loop_used.peak() {
+        Ok(peak) => {
+            let [slow, fast] = peak.two_rate_periods_s();
+            format!(
+                "shake each axis half the time at about {slow:.1} s and half at about {fast:.1} s per cycle ({} and {} \
+                 times the loop's peak frequency, {:.2} Hz)",
+                gsens_core::TWO_RATE_FACTORS[0],
+                gsens_core::TWO_RATE_FACTORS[1],
+                peak.f_hz
+            )
+        }
+        Err(_) => "shake each axis at two rates, one slower and one faster than the loop's peak".to_string(),
+    }
+}
+
 /// Warning codes that report something gsens already corrected for (the
 /// estimate stays trustworthy); every other code means the estimate may be
 /// wrong beyond its σ.
@@ -397,9 +416,10 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
                 "the data do not resolve the IMU time offset and the loop well enough for σ to hold: one σ of them \
                  moves the shaking's phase by {x:.2} rad (offset {}, loop scale {}), beyond the {JOINT_LINEAR_LIMIT_RAD} \
                  rad the joint fit's linearization holds for, and Γ̂ moves with them. State the IMU's latency \
-                 (--time-offset) if you know it, or shake harder, longer and at more than one rate",
+                 (--time-offset) if you know it, or shake harder and longer, and at two rates: {}",
                 part(offset),
-                part(scale)
+                part(scale),
+                two_rate_advice(&c.loop_used)
             ),
         });
     }

@@ -31,6 +31,7 @@ use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// False-alarm probability of the test of the stated loop (two-sided).
 pub const LOOP_TEST_FALSE_ALARM: f64 = 1e-3;
@@ -49,6 +50,11 @@ pub struct JointSpec {
     /// Estimate the IMU time offset within ± this many seconds of the
     /// series' own offset.
     pub offset_max_abs_s: Option<f64>,
+    /// With the natural frequency estimated: the relative 1σ uncertainty of
+    /// the stated loop's natural frequency, a Gaussian prior on ln s of this
+    /// width (0: the stated loop is exact; `None`: nothing is known of it
+    /// beyond its shape, and Γ̂ is given under the fitted loop).
+    pub loop_tolerance: Option<f64>,
 }
 
 /// The joint estimate of Γ, the loop and the IMU time offset.
@@ -79,6 +85,15 @@ pub struct JointFit {
     pub loop_test_false_alarm: f64,
     /// Whether the data reject the stated loop.
     pub stated_loop_rejected: bool,
+    /// The relative 1σ tolerance of the stated loop's natural frequency the
+    /// fit combined with the data (`None`: unknown, the loop fitted freely).
+    pub loop_tolerance: Option<f64>,
+    /// The natural frequency of the loop Γ̂ is given under \[Hz\]: the data's
+    /// fit and the stated loop within its tolerance combined (the fitted one
+    /// without a tolerance or when the data reject the stated loop).
+    pub used_natural_frequency_hz: Option<f64>,
+    /// Its 1σ \[Hz\].
+    pub sigma_used_natural_frequency_hz: Option<f64>,
     /// IMU time stamp minus true time \[s\] (total), when estimated.
     pub imu_time_offset_s: Option<f64>,
     /// Its 1σ \[s\].
@@ -97,8 +112,9 @@ pub struct JointFit {
     /// over the variance with them known (≥ 1): how much not knowing the
     /// loop and the offset costs.
     pub variance_inflation: [f64; 3],
-    /// Whether Γ̂ is under the fitted loop (false: under the stated loop,
-    /// which passed its test and is taken as known).
+    /// Whether Γ̂ is under a loop other than the stated one: the fitted loop,
+    /// or the stated one moved within its tolerance (false: under the stated
+    /// loop itself, exact or not estimated).
     pub fitted_loop_used: bool,
     /// Residual sum of squares of the joint fit \[rad²\].
     pub rss_rad2: f64,
@@ -147,40 +163,159 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 /// ([`gsens_core::assess`] with `settings.criteria`) are left out of the fit
 /// (their Γ̂ reads 0, their variance inflation 1): their small, correlated
 /// columns would otherwise inflate the shaken axes' σ.
+///
+/// With a loop tolerance σ_p ([`JointSpec::loop_tolerance`]) the data's
+/// ln ŝ (variance C_ss) and the prior ln s ~ N(0, σ_p²) are combined as two
+/// Gaussian measurements of ln s:
+///
+/// ```text
+/// z = ln ŝ / √(C_ss + σ_p²)                      the stated loop's test
+/// w = σ_p² / (C_ss + σ_p²),  ln s* = w·ln ŝ,  σ*² = w·C_ss
+/// Cov(η) = Cov(η | ln s*) + b·bᵀ·σ*²,  b = C_η,s / C_ss
+/// ```
+///
+/// η is every other parameter (Γ, ζ, τ), Cov(η | ln s*) the sandwich of a
+/// second fit with the loop held at ln s*, and b their regression on ln s in
+/// the free fit: the Gaussian posterior, linearized (σ_p = 0: the stated loop
+/// exact, Cov(η | 0); σ_p → ∞: the free fit). Γ̂ and τ̂ are the second fit's:
+/// the model is nonlinear in ln s, so Γ̂ is refitted at ln s* rather than
+/// extrapolated there. When the test rejects the stated loop, Γ̂ is the free
+/// fit's.
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
     // The stated loop's pass: it decides the axes and starts the fit.
     let (fed0, ne) = batch_pass(series, settings)?;
     let in_solve = gsens_core::axes_in_solve(&ne, &settings.criteria);
-    let axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
-    if axes.is_empty() || axes.len() == 3 {
-        return joint_fit_axes(series, settings, spec, &[0, 1, 2], fed0);
+    let mut axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
+    if axes.is_empty() {
+        axes = vec![0, 1, 2];
     }
-    joint_fit_axes(series, settings, spec, &axes, fed0)
+    let stated = settings.loop_at(series.log_interval_s);
+    let fit_loop = spec.natural_frequency && stated.natural_frequency_hz().is_some();
+    let tolerance = spec.loop_tolerance.filter(|t| fit_loop && t.is_finite());
+    let Some(tol) = tolerance else {
+        let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None)?;
+        let data = free.ln_s_and_variance();
+        return Ok(describe(series, &stated, spec, &axes, &free, data, None));
+    };
+    let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), None)?;
+    let (ln_s, c_ss) = free.ln_s_and_variance().unwrap_or((0.0, 0.0));
+    let z = ln_s / (c_ss + tol * tol).sqrt();
+    if !(c_ss > 0.0) || !(z.abs() <= LOOP_TEST_Z) {
+        return Ok(describe(series, &stated, spec, &axes, &free, Some((ln_s, c_ss)), Some(tol)));
+    }
+    let w = tol * tol / (c_ss + tol * tol);
+    let (ln_s_post, var_post) = (w * ln_s, w * c_ss);
+    // The second fit: the loop held at ln s*, everything else free.
+    let mut at_post = *settings;
+    at_post.receiver_loop = scaled_loop(&stated, ln_s_post.exp(), free.zeta);
+    let fed_post = if ln_s_post == 0.0 && free.zeta == zeta_of(&stated) {
+        Cow::Owned(fed0)
+    } else {
+        drop(fed0);
+        Cow::Owned(triad_pass(series, settings, &at_post.receiver_loop)?)
+    };
+    let held = JointSpec { natural_frequency: false, loop_tolerance: None, ..spec };
+    let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.dtau))?;
+    let posterior = free.posterior(&refit, ln_s_post, var_post);
+    Ok(describe(series, &stated, spec, &axes, &posterior, Some((ln_s, c_ss)), Some(tol)))
 }
 
-/// [`joint_fit`] with Γ estimated on `axes` only, from `fed0`, the series
-/// as the stated loop fed it.
-fn joint_fit_axes(
+/// A solved joint fit: the parameters and their sandwich covariance.
+struct Solution {
+    /// Γ̂ (0 on the axes left out).
+    gamma: [f64; 3],
+    /// Γ̂ under the loop the fit started from, at the fitted offset.
+    gamma_stated: [f64; 3],
+    /// ln s of the loop the fit is under (relative to the starting loop).
+    ln_s: f64,
+    zeta: Option<f64>,
+    dtau: f64,
+    /// Covariance of (Γ on the fit's axes, ln s, ζ, τ: those estimated).
+    cov: DMatrix<f64>,
+    /// Covariance of Γ̂ with the nuisance parameters known.
+    cov3: DMatrix<f64>,
+    loop_idx: Option<usize>,
+    zeta_idx: Option<usize>,
+    tau_idx: Option<usize>,
+    rss_rad2: f64,
+    epochs: usize,
+    iterations: u32,
+}
+
+impl Solution {
+    /// ln ŝ and its variance, when the natural frequency was estimated.
+    fn ln_s_and_variance(&self) -> Option<(f64, f64)> {
+        self.loop_idx.map(|l| (self.ln_s, self.cov[(l, l)]))
+    }
+
+    /// The posterior of [`joint_fit`]'s combination: `held`, a fit with the
+    /// loop held at `ln_s_post` (no loop column), with the free fit's (self's)
+    /// regression on ln s adding the posterior variance `var_post`.
+    fn posterior(&self, held: &Solution, ln_s_post: f64, var_post: f64) -> Solution {
+        let l = self.loop_idx.expect("a free fit with the natural frequency estimated");
+        let c_ss = self.cov[(l, l)];
+        let b: Vec<f64> = (0..self.cov.nrows()).map(|m| self.cov[(m, l)] / c_ss).collect();
+        // The held fit's index of each of the free fit's parameters (the
+        // free fit's columns without ln s, in the same order).
+        let map = |m: usize| -> Option<usize> {
+            match m.cmp(&l) {
+                core::cmp::Ordering::Less => Some(m),
+                core::cmp::Ordering::Equal => None,
+                core::cmp::Ordering::Greater => Some(m - 1),
+            }
+        };
+        let p = self.cov.nrows();
+        let cov = DMatrix::from_fn(p, p, |r, c| {
+            let conditional = match (map(r), map(c)) {
+                (Some(i), Some(j)) => held.cov[(i, j)],
+                _ => 0.0,
+            };
+            conditional + b[r] * b[c] * var_post
+        });
+        Solution {
+            gamma: held.gamma,
+            gamma_stated: self.gamma_stated,
+            ln_s: ln_s_post,
+            zeta: held.zeta,
+            dtau: held.dtau,
+            cov,
+            cov3: held.cov3.clone(),
+            loop_idx: self.loop_idx,
+            zeta_idx: self.zeta_idx,
+            tau_idx: self.tau_idx,
+            rss_rad2: held.rss_rad2,
+            epochs: held.epochs,
+            iterations: self.iterations + held.iterations,
+        }
+    }
+}
+
+/// Gauss–Newton on Γ (on `axes`) and the nuisance parameters `spec` asks
+/// for, from `fed0`, the series as `settings`' loop fed it, and the offset
+/// `start_dtau_s` (None: the global search's under that loop).
+fn solve(
     series: &EpochSeries,
     settings: &EstimateSettings,
     spec: JointSpec,
     axes: &[usize],
-    fed0: Vec<FedEpoch>,
-) -> Result<JointFit, CalibError> {
+    fed0: Cow<'_, [FedEpoch]>,
+    start_dtau_s: Option<f64>,
+) -> Result<Solution, CalibError> {
     let t = series.log_interval_s;
     let stated = settings.loop_at(t);
     let wn_stated = stated.natural_frequency_hz();
     let fit_loop = spec.natural_frequency && wn_stated.is_some();
     let zeta0 = zeta_of(&stated);
-    let fit_zeta = fit_loop && spec.damping && zeta0.is_some();
+    let fit_zeta = spec.damping && zeta0.is_some();
     let margin = spec.offset_max_abs_s.map_or(0, |m| (m / t).ceil() as usize + 2);
 
     // Start: the stated loop, the offset from the global search under it.
     let mut ln_s = 0.0f64;
     let mut zeta = zeta0;
-    let mut dtau = match spec.offset_max_abs_s {
-        Some(max) => offset_profile(&fed0, t, max)?.dtau_s,
-        None => 0.0,
+    let mut dtau = match (spec.offset_max_abs_s, start_dtau_s) {
+        (Some(max), Some(d)) => d.clamp(-max, max),
+        (Some(max), None) => offset_profile(&fed0, t, max)?.dtau_s,
+        (None, _) => 0.0,
     };
     let n = fed0.len();
     let used: Vec<usize> =
@@ -199,9 +334,9 @@ fn joint_fit_axes(
     let (jac, resid, gamma, gamma_stated) = loop {
         iterations += 1;
         let center = if ln_s == 0.0 && zeta == zeta0 {
-            std::borrow::Cow::Borrowed(fed0.as_slice())
+            Cow::Borrowed(&fed0[..])
         } else {
-            std::borrow::Cow::Owned(triad_pass(series, settings, &loop_at(ln_s, zeta))?)
+            Cow::Owned(triad_pass(series, settings, &loop_at(ln_s, zeta))?)
         };
         let by = Shift::samples(dtau / t);
         let a: Vec<[f64; 3]> = used.par_iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
@@ -223,7 +358,7 @@ fn joint_fit_axes(
             Ok(used.iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
         };
         let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
-            // Two independent passes over the log: one per core.
+            // Two independent passes over the log.
             let (pl, ph) = rayon::join(|| predicted(lo), || predicted(hi));
             let (pl, ph) = (pl?, ph?);
             Ok(ph.iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
@@ -281,7 +416,7 @@ fn joint_fit_axes(
         }
         // Converged (steps far below any σ) or out of iterations: Γ at the
         // final θ and the Jacobian there give the covariance.
-        if converged || iterations >= 12 || p == 3 {
+        if converged || iterations >= 12 || p == na {
             let resid = &y - &jac * &beta;
             let mut gamma = [0.0; 3];
             for (k, &i) in axes.iter().enumerate() {
@@ -323,8 +458,8 @@ fn joint_fit_axes(
             v
         })
         .collect();
-    // The columns' transforms do not need the noise model: one core fits it
-    // while the other transforms them.
+    // The columns' transforms do not need the noise model: they are computed
+    // while it is fitted.
     let (noise, spectra) =
         rayon::join(|| gls::fit_ar(&slices, max_order), || gls::ColumnSpectra::new(&full_columns, &segments));
     let middle = spectra.middle(&noise);
@@ -337,105 +472,111 @@ fn joint_fit_axes(
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();
     let cov3 = &a3_inv * middle3 * &a3_inv;
+
+    let mut next = na..;
+    let loop_idx = fit_loop.then(|| next.next()).flatten();
+    let zeta_idx = fit_zeta.then(|| next.next()).flatten();
+    let tau_idx = spec.offset_max_abs_s.and_then(|_| next.next());
+    Ok(Solution {
+        gamma,
+        gamma_stated,
+        ln_s,
+        zeta,
+        dtau,
+        cov,
+        cov3,
+        loop_idx,
+        zeta_idx,
+        tau_idx,
+        rss_rad2: resid.norm_squared(),
+        epochs: used.len(),
+        iterations,
+    })
+}
+
+/// The [`JointFit`] of a solution: `data` is the free fit's ln ŝ and its
+/// variance (the loop test's), `tolerance` the prior's width it was combined
+/// with.
+fn describe(
+    series: &EpochSeries,
+    stated: &LoopModel,
+    spec: JointSpec,
+    axes: &[usize],
+    sol: &Solution,
+    data: Option<(f64, f64)>,
+    tolerance: Option<f64>,
+) -> JointFit {
+    let cov = &sol.cov;
+    let cov3 = &sol.cov3;
     // Row/column of axis i in the fit (None: left out as unobservable).
     let at = |i: usize| axes.iter().position(|&a| a == i);
     let variance_inflation = [0, 1, 2].map(|i| match at(i) {
         Some(k) if cov3[(k, k)] > 0.0 => (cov[(k, k)] / cov3[(k, k)]).max(1.0),
         _ => 1.0,
     });
-
-    let mut c = na;
-    let (mut loop_idx, mut zeta_idx, mut tau_idx) = (None, None, None);
-    if fit_loop {
-        loop_idx = Some(c);
-        c += 1;
-    }
-    if fit_zeta {
-        zeta_idx = Some(c);
-        c += 1;
-    }
-    if spec.offset_max_abs_s.is_some() {
-        tau_idx = Some(c);
-    }
     let sd = |i: usize| cov[(i, i)].max(0.0).sqrt();
-    let fitted = loop_at(ln_s, zeta);
-    let sigma_ln = loop_idx.map(sd);
-    let z = sigma_ln.map(|s| if s > 0.0 { ln_s / s } else { 0.0 });
-    let rejected = z.is_some_and(|z| z.abs() > LOOP_TEST_Z);
-    let correlation = match (loop_idx, tau_idx) {
+    let wn_stated = stated.natural_frequency_hz();
+    let fitted_free = data.and_then(|(ln_s, _)| scaled_loop(stated, ln_s.exp(), sol.zeta).natural_frequency_hz());
+    let sigma_data_ln = data.map(|(_, v)| v.max(0.0).sqrt());
+    let z = data.map(|(ln_s, v)| {
+        let total = v.max(0.0) + tolerance.unwrap_or(0.0).powi(2);
+        if total > 0.0 { ln_s / total.sqrt() } else { 0.0 }
+    });
+    // Without a tolerance nothing was claimed of the loop: there is nothing to reject.
+    let rejected = tolerance.is_some() && z.is_some_and(|z| z.abs() > LOOP_TEST_Z);
+    let used = scaled_loop(stated, sol.ln_s.exp(), sol.zeta);
+    let fit_loop = sol.loop_idx.is_some();
+    let correlation = match (sol.loop_idx, sol.tau_idx) {
         (Some(l), Some(o)) if sd(l) > 0.0 && sd(o) > 0.0 => Some(cov[(l, o)] / (sd(l) * sd(o))),
         _ => None,
     };
-    let offset_at_limit = spec.offset_max_abs_s.is_some_and(|m| dtau.abs() >= 0.999 * m);
-    Ok(JointFit {
+    let offset_at_limit = spec.offset_max_abs_s.is_some_and(|m| sol.dtau.abs() >= 0.999 * m);
+    JointFit {
         stated_loop: stated.to_string(),
-        fitted_loop: fitted.to_string(),
+        fitted_loop: if fit_loop { used.to_string() } else { stated.to_string() },
         stated_natural_frequency_hz: fit_loop.then_some(wn_stated).flatten(),
-        natural_frequency_hz: fit_loop.then(|| fitted.natural_frequency_hz()).flatten(),
-        sigma_natural_frequency_hz: match (sigma_ln, fitted.natural_frequency_hz()) {
-            (Some(s), Some(f)) => Some(s * f),
-            _ => None,
-        },
-        bn_hz: fitted.bn_hz(),
-        stated_zeta: fit_zeta.then_some(zeta0).flatten(),
-        zeta: zeta_idx.and_then(|i| zeta.map(|z| [z, sd(i)])),
+        natural_frequency_hz: fitted_free,
+        sigma_natural_frequency_hz: sigma_data_ln.zip(fitted_free).map(|(s, f)| s * f),
+        bn_hz: used.bn_hz(),
+        stated_zeta: sol.zeta_idx.and_then(|_| zeta_of(stated)),
+        zeta: sol.zeta_idx.and_then(|i| sol.zeta.map(|z| [z, sd(i)])),
         loop_test_z: z,
         loop_test_threshold_z: LOOP_TEST_Z,
         loop_test_false_alarm: LOOP_TEST_FALSE_ALARM,
         stated_loop_rejected: rejected,
-        imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + dtau),
-        sigma_imu_time_offset_s: tau_idx.map(sd),
+        loop_tolerance: tolerance,
+        used_natural_frequency_hz: fit_loop.then(|| used.natural_frequency_hz()).flatten(),
+        sigma_used_natural_frequency_hz: sol.loop_idx.zip(used.natural_frequency_hz()).map(|(l, f)| sd(l) * f),
+        imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + sol.dtau),
+        sigma_imu_time_offset_s: sol.tau_idx.map(sd),
         offset_max_abs_s: spec.offset_max_abs_s,
         offset_at_limit,
         correlation_loop_offset: correlation,
-        gamma_hz_per_mps2: gamma,
-        gamma_stated_loop_hz_per_mps2: gamma_stated,
+        gamma_hz_per_mps2: sol.gamma,
+        gamma_stated_loop_hz_per_mps2: sol.gamma_stated,
         variance_inflation,
-        fitted_loop_used: fit_loop,
-        rss_rad2: resid.norm_squared(),
-        epochs: used.len(),
+        fitted_loop_used: fit_loop && (sol.ln_s != 0.0 || sol.zeta != zeta_of(stated)),
+        rss_rad2: sol.rss_rad2,
+        epochs: sol.epochs,
         gamma_covariance_hz_per_mps2_sq: [0, 1, 2].map(|i| {
             [0, 1, 2].map(|j| match (at(i), at(j)) {
                 (Some(k), Some(l)) => cov[(k, l)],
                 _ => 0.0,
             })
         }),
-        iterations,
-    })
-    .map(|mut f: JointFit| {
-        if !fit_loop {
-            f.fitted_loop = f.stated_loop.clone();
-        }
-        f
-    })
+        iterations: sol.iterations,
+    }
 }
 
 impl JointFit {
-    /// This fit's test of the stated loop with everything else from `known`,
-    /// the fit with the loop known: Γ̂ under the stated loop.
-    pub fn with_loop_known(self, known: JointFit) -> JointFit {
-        JointFit {
-            stated_loop: self.stated_loop,
-            stated_natural_frequency_hz: self.stated_natural_frequency_hz,
-            natural_frequency_hz: self.natural_frequency_hz,
-            sigma_natural_frequency_hz: self.sigma_natural_frequency_hz,
-            stated_zeta: self.stated_zeta,
-            zeta: self.zeta,
-            loop_test_z: self.loop_test_z,
-            stated_loop_rejected: self.stated_loop_rejected,
-            correlation_loop_offset: self.correlation_loop_offset,
-            fitted_loop_used: false,
-            ..known
-        }
-    }
-
-    /// The fitted loop, given the stated one (the stated loop itself when
-    /// the loop was not estimated).
+    /// The loop Γ̂ is given under, given the stated one: the stated loop
+    /// scaled to [`used_natural_frequency_hz`](Self::used_natural_frequency_hz)
+    /// (with the fitted damping), or the stated loop itself when the fit kept it.
     pub fn fitted(&self, stated: &LoopModel) -> LoopModel {
         if !self.fitted_loop_used {
             return *stated;
         }
-        match (self.natural_frequency_hz, self.stated_natural_frequency_hz) {
+        match (self.used_natural_frequency_hz, self.stated_natural_frequency_hz) {
             (Some(f), Some(f0)) => scaled_loop(stated, f / f0, self.zeta.map(|z| z[0]).or(zeta_of(stated))),
             _ => *stated,
         }
@@ -483,7 +624,7 @@ pub fn choose_loop(
         .filter(|&i| i < t * (1.0 - 1e-9) && ((t / i) - (t / i).round()).abs() < 1e-6)
         .collect();
     intervals.push(t);
-    let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s };
+    let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s, loop_tolerance: None };
     let mut tried: Vec<(f64, LoopModel, gsens_core::LoggedPhase)> = Vec::new();
     for order in [2u8, 3] {
         let loop_spec = match order {

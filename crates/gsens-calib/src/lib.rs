@@ -68,7 +68,7 @@ mod verdict;
 
 pub use document::{
     FigureInfo, GnssSdrConversion, INFORMATIONAL_WARNINGS, LoopSummary, PipelineSummary, ReportInfo, ResultDocument,
-    Warning, tool_version,
+    Warning, tool_version, two_rate_advice,
 };
 pub use error::CalibError;
 pub use estimate::{
@@ -81,9 +81,9 @@ pub use joint::{
 };
 pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
 pub use pipeline::{
-    LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings, RESPONSE_CHECK_FALSE_ALARM,
-    TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_logs, calibrate_owned_logs, gnss_sdr_tracking_log,
-    series_of, with_gnss_sdr_loop,
+    DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
+    RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_logs, calibrate_owned_logs,
+    gnss_sdr_tracking_log, series_of, with_gnss_sdr_loop,
 };
 pub use response_check::{
     ResponseBin, ResponseCheck, ResponseCheckError, ResponseSettings, epoch_response, measure_response,

@@ -108,6 +108,10 @@ pub struct CalibrationOptions {
     pub loop_check: bool,
     /// With the loop check: fit a 2nd-order loop's damping too.
     pub identify_damping: bool,
+    /// The relative 1σ uncertainty of the stated loop's natural frequency
+    /// (0: exact; infinite: only its shape is known; `None`: the input's own,
+    /// [`crate::DEFAULT_LOOP_TOLERANCE`] for a loop stated by options).
+    pub loop_tolerance: Option<f64>,
     /// Replace isolated IMU spikes by their neighbours' mean.
     pub imu_despike: bool,
 }
@@ -142,6 +146,7 @@ impl Default for CalibrationOptions {
             time_offset_max_s: 0.25,
             loop_check: true,
             identify_damping: false,
+            loop_tolerance: None,
             imu_despike: true,
         }
     }
@@ -223,6 +228,10 @@ impl CalibrationOptions {
         ] {
             check_range(name, value, false)?;
         }
+        if let Some(t) = self.loop_tolerance.filter(|t| !(*t >= 0.0)) {
+            let expected = "at least 0: a relative 1σ (0.05 = 5 %), 0 for a loop known exactly, inf for a loop known only by its shape";
+            return Err(CalibError::Setting { name: "loop_tolerance", value: t, expected });
+        }
         if let Some(order) = self.order.filter(|o| !(2..=3).contains(o)) {
             return Err(CalibError::Setting { name: "order", value: f64::from(order), expected: "2 or 3" });
         }
@@ -251,6 +260,7 @@ impl CalibrationOptions {
             time_offset,
             despike_imu: self.imu_despike,
             loop_identification,
+            loop_tolerance: self.loop_tolerance,
             ..PipelineSettings::default()
         })
     }

@@ -62,20 +62,28 @@ impl Default for TimeOffset {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LoopIdentificationMode {
-    /// The stated loop is taken as exact (its uncertainty is not in σ).
+    /// The stated loop is taken as exact and not tested (its uncertainty is
+    /// not in σ).
     Off,
     /// The loop's natural frequency is estimated jointly with Γ (and the time
-    /// offset), the stated one tested against it, and Γ̂ given under the
-    /// fitted loop with the loop's uncertainty in its σ.
+    /// offset), the stated one tested against it within its tolerance
+    /// ([`PipelineSettings::loop_tolerance`]), and Γ̂ given under the loop the
+    /// data and the stated loop agree on, with the remaining uncertainty in σ.
     #[default]
     NaturalFrequency,
     /// The natural frequency and a 2nd-order loop's damping.
     NaturalFrequencyAndDamping,
-    /// The stated loop is tested the same way, but Γ̂ is given under it (its
-    /// uncertainty not in σ) unless the data reject it: for a loop known
-    /// exactly, such as GNSS-SDR's from its own configuration.
-    TestOnly,
 }
+
+/// The relative 1σ tolerance of a loop stated by its design (order,
+/// bandwidth, update interval) when the user gives none: 5 %. An
+/// implementation's natural frequency differs from its design's by the
+/// constants that turn Bn into ωn (0.53 against 0.5303 for ζ = 1/√2, 0.7845
+/// for Kaplan's 3rd order), by how its integrators are discretized (a
+/// rectangular against a bilinear integrator moves ωn by about ωn·T/2:
+/// 0.3 % at 3 Hz and 1 ms, 1.4 % at 5 ms, 5.7 % at 20 ms) and by rounding of
+/// the design's gains, each a few per cent at most.
+pub const DEFAULT_LOOP_TOLERANCE: f64 = 0.05;
 
 /// False-alarm probability of the measured-response check in the pipeline:
 /// 0.5 %, so that with the loop test's 0.1 % a clean session is flagged less
@@ -97,6 +105,12 @@ pub struct PipelineSettings {
     pub time_offset: TimeOffset,
     /// Loop identification.
     pub loop_identification: LoopIdentificationMode,
+    /// The relative 1σ uncertainty of the stated loop's natural frequency
+    /// (0: the receiver implements exactly the stated loop; infinite: only
+    /// its shape is known). `None`: the input's own, 0 for a loop modelled
+    /// from a receiver's configuration (GNSS-SDR, PocketSDR), otherwise
+    /// [`DEFAULT_LOOP_TOLERANCE`].
+    pub loop_tolerance: Option<f64>,
     /// Whether the receiver loop in `estimate` was stated by the user. When
     /// not, the loop is chosen among typical receiver loops by the data
     /// ([`crate::choose_loop`]) and the estimate is flagged until it is stated.
@@ -113,6 +127,7 @@ impl Default for PipelineSettings {
             selection: SelectionConfig::default(),
             time_offset: TimeOffset::default(),
             loop_identification: LoopIdentificationMode::default(),
+            loop_tolerance: None,
             loop_stated: true,
             despike_imu: true,
         }
@@ -310,10 +325,20 @@ fn calibrate_prepared(
     // A stuck or clipped stretch would enter every regressor: its epochs become gaps before any search.
     let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;
-    let spec = JointSpec {
+    let tolerance = settings.loop_tolerance.unwrap_or(DEFAULT_LOOP_TOLERANCE);
+    if !(tolerance >= 0.0) {
+        return Err(CalibError::Setting {
+            name: "loop_tolerance",
+            value: tolerance,
+            expected: "at least 0 (a relative 1σ; infinite: only the loop's shape is known)",
+        }
+        .into());
+    }
+    let mut spec = JointSpec {
         natural_frequency: settings.loop_identification != LoopIdentificationMode::Off,
         damping: settings.loop_identification == LoopIdentificationMode::NaturalFrequencyAndDamping,
         offset_max_abs_s: max_abs_s,
+        loop_tolerance: tolerance.is_finite().then_some(tolerance),
     };
     let mut chosen_loop = None;
     if !settings.loop_stated {
@@ -322,21 +347,19 @@ fn calibrate_prepared(
         estimate.receiver_loop = chosen.model;
         estimate.logged_phase = chosen.logged_phase;
         chosen_loop = Some(chosen);
+        // The data chose the loop: nothing was stated to hold it to.
+        spec.loop_tolerance = None;
     }
     let mut joint = None;
     if spec.natural_frequency || spec.offset_max_abs_s.is_some() {
         let stage = |error| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", error };
-        let mut fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
-        if settings.loop_identification == LoopIdentificationMode::TestOnly && !fit.stated_loop_rejected {
-            // The loop passed its test and is known: Γ̂ and the offset under it.
-            let known = JointSpec { natural_frequency: false, damping: false, ..spec };
-            fit = fit.with_loop_known(joint_fit(&series_of(&session), &estimate, known).map_err(stage)?);
-        }
+        let fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
         if let Some(offset_s) = fit.imu_time_offset_s {
             reinterpolate_imu(&mut session, imu, offset_s);
             flat_run_epochs += mask_flat_runs(&mut session, &flat_runs);
         }
-        // Γ̂ under the fitted loop: its σ then covers the loop's uncertainty.
+        // Γ̂ under the loop the fit settled on: its σ covers what remains
+        // uncertain of the loop.
         estimate.receiver_loop = fit.fitted(&estimate.loop_at(session.log_interval_s));
         joint = Some(fit);
     }
@@ -410,8 +433,8 @@ pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<Tracking
 
 /// `settings` with GNSS-SDR's own carrier loop of `import` (its configuration)
 /// modelled exactly: the receiver loop is GNSS-SDR's stage, each row holds its
-/// last discriminator output, the loop counts as stated, and it is tested
-/// rather than fitted. For tracking rows that came from GNSS-SDR by another
+/// last discriminator output, the loop counts as stated, and it is exact,
+/// with a tolerance of 0 unless one was given. For tracking rows that came from GNSS-SDR by another
 /// path than its dumps (its tracking monitor): a Kaplan model of the same
 /// order and bandwidth at its 20 ms integration is not its loop.
 pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) -> PipelineSettings {
@@ -419,9 +442,7 @@ pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) 
     settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
     settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
     settings.loop_stated = true;
-    if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
-        settings.loop_identification = LoopIdentificationMode::TestOnly;
-    }
+    settings.loop_tolerance.get_or_insert(0.0);
     settings
 }
 

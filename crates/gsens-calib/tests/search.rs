@@ -10,8 +10,11 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
 const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
-const OFFSET_ONLY: JointSpec = JointSpec { natural_frequency: false, damping: false, offset_max_abs_s: Some(0.2) };
-const LOOP_ONLY: JointSpec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s: None };
+const OFFSET_ONLY: JointSpec =
+    JointSpec { natural_frequency: false, damping: false, offset_max_abs_s: Some(0.2), loop_tolerance: None };
+/// The loop's natural frequency fitted and the stated loop tested as exact.
+const LOOP_ONLY: JointSpec =
+    JointSpec { natural_frequency: true, damping: false, offset_max_abs_s: None, loop_tolerance: Some(0.0) };
 const T: f64 = 0.025;
 
 /// Paper-like motion: x, y, z shaken 20 s each at ~0.9 Hz with rests.
@@ -163,4 +166,48 @@ fn loop_and_time_offset_identified_together() {
     assert!((offset_s - 0.030).abs() < 3.0 * id.sigma_imu_time_offset_s.unwrap(), "{id:?}");
     // Not knowing the loop and the offset costs σ, and the fit says how much.
     assert!(id.variance_inflation.iter().all(|r| *r > 1.0), "{id:?}");
+}
+
+#[test]
+fn a_stated_loop_and_its_tolerance_combine_as_two_gaussian_measurements() {
+    // One shaking rate, the loop stated 10 % narrow: the data's ln ŝ and the
+    // prior ln s ~ N(0, t²) combine in closed form (joint_fit's docs).
+    let (t_s, phase, imu) = session(LoopSpec::PAPER, 0.0, 0.01, 5);
+    let series =
+        EpochSeries { log_interval_s: T, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &imu, imu_time_offset_s: 0.0 };
+    let assumed = EstimateSettings::default()
+        .with_loop(LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 2.7, zeta: FRAC_1_SQRT_2 }, None));
+    let spec = |loop_tolerance| JointSpec { offset_max_abs_s: Some(0.2), loop_tolerance, ..LOOP_ONLY };
+    let free = joint_fit(&series, &assumed, spec(None)).unwrap();
+    let (f, f0, sf) = (
+        free.natural_frequency_hz.unwrap(),
+        free.stated_natural_frequency_hz.unwrap(),
+        free.sigma_natural_frequency_hz.unwrap(),
+    );
+    let (ln_s, c_ss) = ((f / f0).ln(), (sf / f).powi(2));
+    // Nothing claimed of the loop: Γ̂ under the fitted loop, nothing rejected.
+    assert!(!free.stated_loop_rejected && free.used_natural_frequency_hz == Some(f), "{free:?}");
+    let mut variances = vec![free.gamma_covariance_hz_per_mps2_sq[0][0]];
+    for tol in [0.05, 0.02, 0.0] {
+        let fit = joint_fit(&series, &assumed, spec(Some(tol))).unwrap();
+        let w = tol * tol / (c_ss + tol * tol);
+        let z = ln_s / (c_ss + tol * tol).sqrt();
+        assert!((fit.loop_test_z.unwrap() - z).abs() < 1e-9, "tolerance {tol}: {fit:?}");
+        assert_eq!(fit.stated_loop_rejected, z.abs() > gsens_calib::LOOP_TEST_Z, "tolerance {tol}");
+        if fit.stated_loop_rejected {
+            // Rejected: Γ̂ is the free fit's, under the fitted loop.
+            assert_eq!(fit.gamma_hz_per_mps2, free.gamma_hz_per_mps2);
+            continue;
+        }
+        let used = fit.used_natural_frequency_hz.unwrap();
+        assert!((used / (f0 * (w * ln_s).exp()) - 1.0).abs() < 1e-9, "tolerance {tol}: {fit:?}");
+        let sigma_used = fit.sigma_used_natural_frequency_hz.unwrap();
+        assert!((sigma_used - (w * c_ss).sqrt() * used).abs() < 1e-9 * used, "tolerance {tol}: {fit:?}");
+        variances.push(fit.gamma_covariance_hz_per_mps2_sq[0][0]);
+    }
+    // The tighter the tolerance, the smaller Γ̂'s variance.
+    assert!(variances.windows(2).all(|v| v[1] < v[0]), "{variances:?}");
+    // 10 % off is within about 2σ of a 5 % tolerance but rejected as exact.
+    assert!(!joint_fit(&series, &assumed, spec(Some(0.05))).unwrap().stated_loop_rejected);
+    assert!(joint_fit(&series, &assumed, spec(Some(0.0))).unwrap().stated_loop_rejected);
 }

@@ -360,12 +360,22 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
     }
+    let band = session.view().band;
+    let rates = match session.protocol() {
+        gsens_live::Protocol::OneRate => format!("about {:.1} s per cycle", band.period_s()),
+        gsens_live::Protocol::TwoRates => {
+            let [slow, fast] = band.two_rate_periods_s();
+            format!("about {slow:.1} s and {fast:.1} s per cycle, half the time each")
+        }
+    };
     crate::out(&format!(
-        "gsens live: target σ {} Hz/(m/s²) per axis; shake at about {:.1} s per cycle (the loop's peak, band {:.2}–{:.2} Hz)\n",
+        "gsens live: target σ {} Hz/(m/s²) per axis; shake each axis at {rates} (the loop's peak {:.2} Hz, band \
+         {:.2}–{:.2} Hz): {}\n",
         args.target_sigma,
-        session.view().band.period_s(),
-        session.view().band.band_hz[0],
-        session.view().band.band_hz[1]
+        band.peak_hz,
+        band.band_hz[0],
+        band.band_hz[1],
+        session.protocol().why()
     ))?;
     let mut screen = if args.plain || !std::io::stdout().is_terminal() {
         Screen::Plain(Plain { last: None })

@@ -38,7 +38,7 @@ pub use estimator::{
     RecursiveLeastSquares, hac_covariance,
 };
 pub use filter::HighPass;
-pub use loop_model::{LoopModel, LoopPeak};
+pub use loop_model::{LoopModel, LoopPeak, TWO_RATE_FACTORS};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
 pub use pll::{
     CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopError, LoopFilter, LoopFilterCoeffs,

@@ -56,10 +56,27 @@ pub struct LoopPeak {
     pub rad_per_hz: f64,
 }
 
+/// The two shaking rates of the two-rate protocol, as multiples of the
+/// loop's peak frequency: one below the peak, where |L| grows with the
+/// frequency and a loop error changes the response's magnitude most, one
+/// above it, where |L| falls and barely depends on the loop's natural
+/// frequency. A 2nd-order loop (ζ = 1/√2) keeps 89 % and 82 % of its peak
+/// sensitivity there (|L(u)|/|L(1)| = 2ζu/√((1 − u²)² + 4ζ²u²)), while Γ
+/// scales both rates alike and an IMU time offset turns both phases: the
+/// ratio of the two responses measures the loop, which one rate confounds
+/// with the offset.
+pub const TWO_RATE_FACTORS: [f64; 2] = [0.7, 1.6];
+
 impl LoopPeak {
     /// The shaking period that excites the loop most, 1/f_peak \[s\].
     pub fn period_s(&self) -> f64 {
         1.0 / self.f_hz
+    }
+
+    /// The periods of the two-rate protocol, slow then fast:
+    /// 1/(k·f_peak) for k in [`TWO_RATE_FACTORS`] \[s\].
+    pub fn two_rate_periods_s(&self) -> [f64; 2] {
+        TWO_RATE_FACTORS.map(|k| 1.0 / (k * self.f_hz))
     }
 }
 

@@ -25,6 +25,38 @@ impl LoopBand {
     pub fn period_s(&self) -> f64 {
         1.0 / self.peak_hz
     }
+
+    /// The two-rate protocol's periods, slow then fast
+    /// ([`gsens_core::LoopPeak::two_rate_periods_s`]) \[s\].
+    pub fn two_rate_periods_s(&self) -> [f64; 2] {
+        gsens_core::LoopPeak { f_hz: self.peak_hz, rad_per_hz: f64::NAN }.two_rate_periods_s()
+    }
+}
+
+/// Which rates the person is guided to shake at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Protocol {
+    /// Each axis at the loop's peak: the loop is known exactly, so all the
+    /// shaking goes where it is most sensitive.
+    OneRate,
+    /// Each axis half the time below and half above the loop's peak
+    /// ([`gsens_core::TWO_RATE_FACTORS`]): the loop is not known exactly, and
+    /// at one rate an error of its natural frequency and the IMU's latency
+    /// look alike.
+    TwoRates,
+}
+
+impl Protocol {
+    /// Why this protocol, in a sentence for the person shaking.
+    pub fn why(&self) -> &'static str {
+        match self {
+            Protocol::OneRate => "one rate per axis, at the loop's peak: the loop is known exactly",
+            Protocol::TwoRates => {
+                "two rates per axis, slower and faster than the loop's peak: the loop is not known exactly, and at one \
+                 rate its error and the IMU's latency look alike"
+            }
+        }
+    }
 }
 
 /// What to do next.
@@ -55,6 +87,8 @@ pub enum Instruction {
         axis: usize,
         /// The period to aim at \[s\].
         period_s: f64,
+        /// Under the two-rate protocol: which of the two (0 slow, 1 fast).
+        rate: Option<usize>,
         /// Seconds of shaking still needed for the target σ (None: not known yet).
         more_s: Option<f64>,
     },
@@ -105,8 +139,11 @@ impl core::fmt::Display for Instruction {
                 "gentler: the phase error ({peak_rad:.2} rad) nears the discriminator's limit ({range_rad:.2} rad)"
             ),
             Instruction::OneAxis { axis } => write!(f, "shake along {} only: several axes move", AXES[axis]),
-            Instruction::Shake { axis, period_s, more_s } => {
+            Instruction::Shake { axis, period_s, rate, more_s } => {
                 write!(f, "shake {}, about {period_s:.1} s per cycle", AXES[axis])?;
+                if let Some(r) = rate {
+                    write!(f, " (the {} of two rates)", ["slower", "faster"][r.min(1)])?;
+                }
                 match more_s {
                     Some(s) => write!(f, ", {}", more_text(s)),
                     None => Ok(()),
@@ -146,7 +183,15 @@ pub struct Situation {
     pub range_rad: f64,
     /// Per axis: whether it meets the target σ, and the seconds of shaking still needed.
     pub axes: [(bool, Option<f64>); 3],
+    /// The protocol guided.
+    pub protocol: Protocol,
+    /// Per axis, the seconds shaken below and above the loop's peak frequency.
+    pub shaken_by_rate_s: [[f64; 2]; 3],
 }
+
+/// Under the two-rate protocol, seconds by which the rate shaken may lead the
+/// other before the person is asked to change pace.
+pub const TWO_RATE_LEAD_S: f64 = 5.0;
 
 /// The fraction of the discriminator's linear range at which "gentler" is
 /// said: the phase error's peaks then leave less than the 3σ of a Costas
@@ -158,7 +203,18 @@ pub fn instruct(s: &Situation, band: &LoopBand) -> Instruction {
     if s.data_s <= 0.0 {
         return Instruction::Waiting;
     }
-    let period_s = band.period_s();
+    // The period and rate to ask of `axis`: the peak, or under two rates the
+    // one shaken less so far.
+    let aim = |axis: usize| -> (f64, Option<usize>) {
+        match s.protocol {
+            Protocol::OneRate => (band.period_s(), None),
+            Protocol::TwoRates => {
+                let [slow, fast] = s.shaken_by_rate_s[axis];
+                let r = usize::from(fast < slow);
+                (band.two_rate_periods_s()[r], Some(r))
+            }
+        }
+    };
     let next = (0..3).find(|&i| !s.axes[i].0);
     let Some(next) = next else { return Instruction::Done };
     if s.shaken.is_none() && s.rest_more_s > 0.0 {
@@ -171,12 +227,28 @@ pub fn instruct(s: &Situation, band: &LoopBand) -> Instruction {
         return Instruction::OneAxis { axis: next };
     }
     match s.shaken {
-        Some((axis, _)) if s.axes[axis].0 => Instruction::Next { done: axis, axis: next, period_s },
+        Some((axis, _)) if s.axes[axis].0 => Instruction::Next { done: axis, axis: next, period_s: aim(next).0 },
         Some((axis, Some(f_hz))) if f_hz < band.band_hz[0] || f_hz > band.band_hz[1] => {
-            Instruction::Pace { axis, period_s, now_s: 1.0 / f_hz }
+            Instruction::Pace { axis, period_s: aim(axis).0, now_s: 1.0 / f_hz }
         }
-        Some((axis, _)) => Instruction::Shake { axis, period_s, more_s: s.axes[axis].1 },
-        None => Instruction::Shake { axis: next, period_s, more_s: s.axes[next].1 },
+        // Two rates: shaking on the side of the peak that already leads.
+        Some((axis, Some(f_hz)))
+            if aim(axis).1.is_some_and(|r| {
+                let now = usize::from(f_hz > band.peak_hz);
+                let by_rate = s.shaken_by_rate_s[axis];
+                now != r && by_rate[now] - by_rate[r] > TWO_RATE_LEAD_S
+            }) =>
+        {
+            Instruction::Pace { axis, period_s: aim(axis).0, now_s: 1.0 / f_hz }
+        }
+        Some((axis, _)) => {
+            let (period_s, rate) = aim(axis);
+            Instruction::Shake { axis, period_s, rate, more_s: s.axes[axis].1 }
+        }
+        None => {
+            let (period_s, rate) = aim(next);
+            Instruction::Shake { axis: next, period_s, rate, more_s: s.axes[next].1 }
+        }
     }
 }
 
@@ -197,6 +269,8 @@ mod tests {
             peak_phase_rad: 0.2,
             range_rad: core::f64::consts::FRAC_PI_4,
             axes: [(false, None); 3],
+            protocol: Protocol::OneRate,
+            shaken_by_rate_s: [[0.0; 2]; 3],
         }
     }
 
@@ -231,5 +305,26 @@ mod tests {
         assert_eq!(instruct(&s, &b).axis(), Some(2));
         s.axes[2] = (true, Some(0.0));
         assert_eq!(instruct(&s, &b), Instruction::Done);
+    }
+
+    #[test]
+    fn two_rates_alternate_below_and_above_the_peak() {
+        let b = band();
+        // 0.7 and 1.6 times the peak's 0.90 Hz: 1.59 s and 0.69 s.
+        let [slow, fast] = b.two_rate_periods_s();
+        assert!((slow - 1.0 / (0.7 * b.peak_hz)).abs() < 1e-12 && (fast - 1.0 / (1.6 * b.peak_hz)).abs() < 1e-12);
+        let mut s = Situation { protocol: Protocol::TwoRates, ..situation() };
+        assert_eq!(instruct(&s, &b).to_string(), "shake x, about 1.6 s per cycle (the slower of two rates)");
+        // Shaking slowly, the slow rate leads: the fast one is asked for next.
+        s.shaken = Some((0, Some(0.7 * b.peak_hz)));
+        s.shaken_by_rate_s[0] = [8.0, 0.0];
+        s.axes[0] = (false, Some(12.0));
+        assert_eq!(instruct(&s, &b).to_string(), "shake x faster: about 0.7 s per cycle (now 1.6 s)");
+        s.shaken_by_rate_s[0] = [4.0, 0.0];
+        assert_eq!(instruct(&s, &b).to_string(), "shake x, about 0.7 s per cycle (the faster of two rates), 12 s more");
+        // The next axis starts at the slow rate again.
+        s.axes[0] = (true, Some(0.0));
+        assert_eq!(instruct(&s, &b).to_string(), "x has enough: shake y, about 1.6 s per cycle");
+        assert!(Protocol::TwoRates.why().contains("two rates"));
     }
 }

@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, VecDeque};
 use gsens_calib::{DISCRIMINATOR_LINEAR_RANGE_RAD, Outcome, PipelineSettings, ResultDocument, calibrate_logs};
 use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 
-use crate::guidance::{Instruction, LoopBand, Situation, instruct};
+use crate::guidance::{Instruction, LoopBand, Protocol, Situation, instruct};
 use crate::input::{Input, Notice};
 use crate::motion::{MotionWindow, Shaking};
 use crate::stream::{Epoch, EpochAverager, StreamEstimate};
@@ -213,6 +213,8 @@ pub struct LiveSession {
     phase_window: VecDeque<(f64, f64, u32)>,
     first_t_s: Option<f64>,
     shaken_s: [f64; 3],
+    /// Per axis, seconds shaken below and above the loop's peak frequency.
+    shaken_by_rate_s: [[f64; 2]; 3],
     rest_s: f64,
     rest_done: bool,
     last_imu_t_s: Option<f64>,
@@ -253,6 +255,7 @@ impl LiveSession {
             phase_window: VecDeque::with_capacity(256),
             first_t_s: None,
             shaken_s: [0.0; 3],
+            shaken_by_rate_s: [[0.0; 2]; 3],
             rest_s: 0.0,
             rest_done: false,
             last_imu_t_s: None,
@@ -271,6 +274,14 @@ impl LiveSession {
     /// The configuration.
     pub fn config(&self) -> &LiveConfig {
         &self.config
+    }
+
+    /// The shaking protocol guided: one rate when the stated loop is taken
+    /// as exact (loop check off, or a tolerance of 0), two otherwise.
+    pub fn protocol(&self) -> Protocol {
+        let s = &self.config.settings;
+        let exact = s.loop_identification == gsens_calib::LoopIdentificationMode::Off || s.loop_tolerance == Some(0.0);
+        if exact && s.loop_stated { Protocol::OneRate } else { Protocol::TwoRates }
     }
 
     /// Records a notice (kept: the latest few for the screen, the count of all).
@@ -327,6 +338,9 @@ impl LiveSession {
                 match shaking.axis {
                     Some(i) if dt < 1.0 => {
                         self.shaken_s[i] += dt;
+                        if let Some(f_hz) = shaking.frequency_hz {
+                            self.shaken_by_rate_s[i][usize::from(f_hz > self.band.peak_hz)] += dt;
+                        }
                         self.rest_done = true;
                     }
                     None if !shaking.several_axes && dt < 1.0 => self.rest_s += dt,
@@ -537,6 +551,8 @@ impl LiveSession {
             peak_phase_rad,
             range_rad: DISCRIMINATOR_LINEAR_RANGE_RAD,
             axes: axes.map(|a| (a.meets_target, a.more_s)),
+            protocol: self.protocol(),
+            shaken_by_rate_s: self.shaken_by_rate_s,
         };
         let latest_trk = self.rows.last().map_or(f64::NEG_INFINITY, |r| r.t_s);
         let channels =

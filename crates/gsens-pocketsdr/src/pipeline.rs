@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use gsens_calib::{LoopIdentificationMode, Outcome, PipelineSettings, calibrate_logs};
+use gsens_calib::{Outcome, PipelineSettings, calibrate_logs};
 use gsens_core::{LoggedPhase, LoopModel};
 use gsens_io::{FormatError, TrackingLog};
 
@@ -30,8 +30,8 @@ pub fn pocketsdr_tracking_log(imported: &Imported) -> Result<TrackingLog, Format
 /// carrier loop modelled exactly ([`gsens_core::pocket_sdr`]): the loop of
 /// `settings` is replaced by PocketSDR's at the options' `b_pll`, each row
 /// is the single 1 ms discriminator output at its epoch
-/// ([`LoggedPhase::Last`]), the loop is tested but not fitted
-/// ([`LoopIdentificationMode::TestOnly`] where the default would fit it), and
+/// ([`LoggedPhase::Last`]), the loop is exact (a tolerance of 0 unless
+/// `settings` give one: tested, not fitted), and
 /// the warm-up is at least [`ImportSettings::models_warmup_s`].
 pub fn calibrate_pocketsdr(
     log: &Path,
@@ -47,9 +47,7 @@ pub fn calibrate_pocketsdr(
     settings.estimate.logged_phase = LoggedPhase::Last;
     settings.loop_stated = true;
     // PocketSDR's loop is known exactly from its options: tested, not fitted.
-    if settings.loop_identification == LoopIdentificationMode::NaturalFrequency {
-        settings.loop_identification = LoopIdentificationMode::TestOnly;
-    }
+    settings.loop_tolerance.get_or_insert(0.0);
     // The regressor models start at the first kept line, possibly while the
     // board is shaken: their start-up error, computed from the IMU, is left to
     // the warm-up (ImportSettings::models_warmup_s).

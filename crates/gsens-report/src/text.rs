@@ -127,9 +127,14 @@ pub fn render_text(doc: &ResultDocument) -> String {
     {
         let _ = writeln!(
             s_,
-            "loop check: ωn/2π fits at {f:.4} ± {sf:.4} Hz{} (stated {f0:.4} Hz{}), z = {z:+.2}: {}",
+            "loop check: ωn/2π fits at {f:.4} ± {sf:.4} Hz{} (stated {f0:.4} Hz{}{}), z = {z:+.2}: {}",
             j.zeta.map(|z| format!(", ζ {:.3} ± {:.3}", z[0], z[1])).unwrap_or_default(),
             j.stated_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+            match j.loop_tolerance {
+                Some(t) if t > 0.0 => format!(" ± {} %", percent(t)),
+                Some(_) => ", exact".to_string(),
+                None => String::new(),
+            },
             if j.stated_loop_rejected {
                 format!("the data REJECT the stated loop (|z| > {:.2})", j.loop_test_threshold_z)
             } else {
@@ -141,14 +146,28 @@ pub fn render_text(doc: &ResultDocument) -> String {
             }
         );
         let inflation = j.variance_inflation.map(f64::sqrt);
+        let used = match (j.used_natural_frequency_hz, j.sigma_used_natural_frequency_hz) {
+            (Some(f), Some(s)) if s > 0.0 => format!("ωn/2π {f:.4} ± {s:.4} Hz"),
+            (Some(f), _) => format!("ωn/2π {f:.4} Hz"),
+            _ => String::new(),
+        };
         let _ = writeln!(
             s_,
             "  {}widens σ by ×{:.2}, ×{:.2}, ×{:.2} (x, y, z){}",
-            match (j.fitted_loop_used, j.imu_time_offset_s.is_some()) {
-                (true, true) => "Γ̂ under the fitted loop; not knowing the loop and the offset ",
-                (true, false) => "Γ̂ under the fitted loop; not knowing the loop ",
-                (false, true) => "Γ̂ under the stated loop, taken as known; not knowing the offset ",
-                (false, false) => "Γ̂ under the stated loop, taken as known; ",
+            match (j.fitted_loop_used, j.loop_tolerance, j.imu_time_offset_s.is_some()) {
+                (true, None, true) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop and the offset "),
+                (true, None, false) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop "),
+                (true, Some(_), true) if !j.stated_loop_rejected => format!(
+                    "Γ̂ under the fit and the stated loop's tolerance combined ({used}); not knowing the loop and the \
+                     offset exactly "
+                ),
+                (true, Some(_), false) if !j.stated_loop_rejected => format!(
+                    "Γ̂ under the fit and the stated loop's tolerance combined ({used}); not knowing the loop exactly "
+                ),
+                (true, _, true) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop and the offset "),
+                (true, _, false) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop "),
+                (false, _, true) => "Γ̂ under the stated loop, taken as exact; not knowing the offset ".to_string(),
+                (false, _, false) => "Γ̂ under the stated loop, taken as exact; ".to_string(),
             },
             inflation[0],
             inflation[1],
@@ -156,8 +175,8 @@ pub fn render_text(doc: &ResultDocument) -> String {
             j.correlation_loop_offset
                 .filter(|r| r.abs() > 0.9)
                 .map(|r| format!(
-                    "; loop and offset are confounded (correlation {r:+.2}): shake at more than one rate to \
-                         separate them"
+                    "; loop and offset are confounded (correlation {r:+.2}): to separate them, {}",
+                    gsens_calib::two_rate_advice(&c.loop_used)
                 ))
                 .unwrap_or_default()
         );
@@ -314,4 +333,9 @@ pub fn render_response_text(r: &crate::figures::ResponseData) -> String {
     }
     s.push('\n');
     s
+}
+
+/// A fraction as a percentage at the precision it was given (0.05 → "5").
+fn percent(fraction: f64) -> String {
+    format!("{}", (fraction * 100.0 * 1e6).round() / 1e6)
 }

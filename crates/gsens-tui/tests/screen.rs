@@ -36,6 +36,8 @@ fn situation(view: &LiveView, rest_more_s: f64) -> Situation {
         peak_phase_rad: view.peak_phase_rad,
         range_rad: view.range_rad,
         axes: view.axes.map(|a| (a.meets_target, a.more_s)),
+        protocol: gsens_live::Protocol::OneRate,
+        shaken_by_rate_s: [[0.0; 2]; 3],
     }
 }
 
