@@ -587,7 +587,7 @@ pub fn import_dump(
         // synchronization, the track's last record's): every record then holds the
         // last of 20 updates, as the stage states.
         let anchor = synced.map_or(j - 1, |s| s - 1);
-        let on_lattice = |k: usize| after_sync(k) || (anchor - k) % BIT_SYMBOLS as usize == 0;
+        let on_lattice = |k: usize| after_sync(k) || (anchor - k).is_multiple_of(BIT_SYMBOLS as usize);
         let switch_s = k0.map(t_mid);
         let (mut modelled, mut good, mut cn0_sum) = (0usize, 0usize, 0.0);
         let mut track_rows = Vec::new();

@@ -119,7 +119,7 @@ impl GnssSdrStage {
     /// docs, "What a record holds"); `None` when N does not divide 20 (a
     /// record then falls inside an integration and holds an older update).
     pub fn updates_per_record(&self) -> Option<u32> {
-        (self.symbols > 0 && BIT_SYMBOLS % self.symbols == 0).then(|| BIT_SYMBOLS / self.symbols)
+        (self.symbols > 0 && BIT_SYMBOLS.is_multiple_of(self.symbols)).then(|| BIT_SYMBOLS / self.symbols)
     }
 
     /// Spacing of the tracking records after bit synchronization, one per
