@@ -24,8 +24,21 @@
 #    records (channel 1 of the 3rd-order run holds its reacquired track too);
 #    imu.csv, truth.json, both gnss-sdr.conf. About 2.4 MB.
 #
+# 3. fixtures/ext1, fixtures/ext2 (ONLY=ext): the other tracking settings, on
+#    one 60 s session (2 satellites at 50 dB-Hz, the paper's OCXO and Γ, 20 s
+#    of rest, then 11 s shakes of 3 m/s² at a 1.1 s period along x, y and z with
+#    2 s rests). ext1: extend_correlation_symbols=1 (GNSS-SDR's default), a
+#    2nd-order loop of pll_bw_hz = 3 Hz updated every 1 ms after a 10 Hz FLL
+#    pull-in: one record per 1 ms update before bit synchronization, one per
+#    20 ms data bit (the last of its 20 updates) after it. ext2:
+#    extend_correlation_symbols=2, no FLL, a 3rd-order 35 Hz loop at 1 ms, then
+#    3 Hz at 2 ms after bit synchronization: one record per 20 ms bit (the last
+#    of its 10 updates). Kept: both channels, each the last 100 records before
+#    bit synchronization and all after it; imu.csv, truth.json, gnss-sdr.conf
+#    in each. About 0.9 MB each.
+#
 # Usage: scripts/make-gnss-sdr-fixtures.sh   (needs gnss-sdr, python3)
-# Environment: ONLY=quiet|shaken|mat|kf (one set; default all), GSENS (a gsens binary
+# Environment: ONLY=quiet|shaken|ext|mat|kf (one set; default all), GSENS (a gsens binary
 # to use instead of building one), WORK (scratch directory).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -154,11 +167,54 @@ for order in (2, 3):
 PY
 }
 
-# 3. fixtures/mat (ONLY=mat): GNSS-SDR's own .dat and .mat of one short run
+# 3. The other extend_correlation_symbols settings: one record per 20 ms bit after bit synchronization.
+ext() {
+    local W="$WORK/ext"
+    mkdir -p "$W"
+    paper_session 2 > "$W/scenario.toml"
+    satellites 2 50.0 >> "$W/scenario.toml"
+    shake_sequence 20.0 11.0 2.0 >> "$W/scenario.toml"
+    "$G" simulate --scenario "$W/scenario.toml" --seed $SEED --out "$W" --iq "$W/signal.bin" --fs-hz 2048000
+    # name: symbols order pll_bw_hz fll_pull_in
+    for run in "ext1 1 2 3 true" "ext2 2 3 35 false"; do
+        set -- $run
+        local d="$W/$1"
+        mkdir -p "$d"
+        sed -e "s|^Tracking_1C.pll_filter_order=.*|Tracking_1C.pll_filter_order=$3|" \
+            -e "s|^Tracking_1C.extend_correlation_symbols=.*|Tracking_1C.extend_correlation_symbols=$2|" \
+            -e "s|^Tracking_1C.pll_bw_hz=.*|Tracking_1C.pll_bw_hz=$4|" \
+            -e "s|^Tracking_1C.enable_fll_pull_in=.*|Tracking_1C.enable_fll_pull_in=$5|" \
+            -e "s|^Tracking_1C.dump_filename=.*|Tracking_1C.dump_filename=./trk_ch_|" \
+            -e "s|^SignalSource.filename=.*|SignalSource.filename=signal.bin|" "$W/gnss-sdr.conf" > "$d/gnss-sdr.conf"
+        ln -sf "$W/signal.bin" "$d/signal.bin"
+        (cd "$d" && gnss-sdr --config_file=gnss-sdr.conf --log_dir="$d" > gnss-sdr.log 2>&1)
+        rm -rf "${FIX:?}/$1" && mkdir -p "$FIX/$1"
+        cp "$W/imu.csv" "$W/truth.json" "$d/gnss-sdr.conf" "$FIX/$1/"
+        python3 - "$d" "$FIX/$1" <<'PY'
+import glob, os, struct, sys
+work, fix = sys.argv[1], sys.argv[2]
+REC = 96
+fs = 2048000.0
+for path in sorted(glob.glob(f"{work}/trk_ch_*.dat")):
+    b = open(path, "rb").read()
+    n = [struct.unpack_from("<Q", b, i * REC + 28)[0] for i in range(len(b) // REC)]
+    # The first 20 ms step (not a re-acquisition's longer one): the first record after bit synchronization.
+    synced = next((i for i in range(1, len(n)) if abs(n[i] - n[i - 1] - 20 * fs / 1000) < fs / 1000), None)
+    if synced is None:
+        print(f"{path}: never synchronized, not kept")
+        continue
+    start = max(0, synced - 100)
+    open(f"{fix}/{os.path.basename(path)}", "wb").write(b[start * REC:])
+    print(f"{path}: records {start}..{len(n)} of {len(n)}, bit synchronization at {synced}")
+PY
+    done
+}
+
+# 4. fixtures/mat (ONLY=mat): GNSS-SDR's own .dat and .mat of one short run
 #    (1.2 s, one satellite at 50 dB-Hz, the default DLL/PLL tracking with
 #    Tracking_1C.dump_mat=true; about 160 KB), for the test that the .mat
 #    reader gives the .dat's records bit for bit.
-# 4. fixtures/kf (ONLY=kf): the same for GPS_L1_CA_KF_Tracking (another record
+# 5. fixtures/kf (ONLY=kf): the same for GPS_L1_CA_KF_Tracking (another record
 #    layout of the same size as the DLL/PLL's) on 0.3 s (about 90 KB).
 # $1: mat|kf; $2: Tracking_1C.implementation; $3: dump prefix; $4: IF duration [s].
 short_fixture() {
@@ -181,9 +237,10 @@ short_fixture() {
 case "${ONLY:-both}" in
     quiet) quiet ;;
     shaken) shaken ;;
+    ext) ext ;;
     mat) short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2 ;;
     kf) short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ 0.3 ;;
-    *) quiet; shaken; short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2;
+    *) quiet; shaken; ext; short_fixture mat GPS_L1_CA_DLL_PLL_Tracking trk_ch_ 1.2;
        short_fixture kf GPS_L1_CA_KF_Tracking trk_kf_ch_ 0.3 ;;
 esac
 du -ah "$FIX" | sort -k2

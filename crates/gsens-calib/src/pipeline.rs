@@ -424,7 +424,9 @@ fn input(role: &str, path: &Path) -> (String, String) {
 }
 
 /// The tracking log of GNSS-SDR dumps on their common grid (every track
-/// resampled at t = j·T, T the modelled stage's integration).
+/// resampled at t = j·T, T = 20 ms the record interval: each row holds the last
+/// of the 20/N loop updates since the previous one, which
+/// [`with_gnss_sdr_loop`]'s `last` logged phase states).
 pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<TrackingLog, FormatError> {
     let rows = resample(imported, imported.interval_s);
     let name = format!("{} (GNSS-SDR dumps on a {} ms grid)", dir.display(), imported.interval_s * 1e3);

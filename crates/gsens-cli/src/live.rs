@@ -344,7 +344,8 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         let stream = gsens_gnss_sdr::monitor::MonitorStream::new(setup.fs_hz, setup.decimation);
         let rx = gsens_gnss_sdr::monitor::MonitorReceiver::bind(addr.as_str(), stream, Duration::from_millis(100))
             .with_context(|| format!("{addr}: cannot listen"))?;
-        let grid = gsens_gnss_sdr::monitor::LiveGrid::new(setup.import.interval_s(), setup.import.settle_time_s());
+        let grid =
+            gsens_gnss_sdr::monitor::LiveGrid::new(setup.import.record_interval_s(), setup.import.settle_time_s());
         std::fs::create_dir_all(args.out.join("received"))?;
         let raw_path = args.out.join("received").join("monitor-datagrams.bin");
         let raw = std::fs::File::create(&raw_path).with_context(|| format!("{}: cannot create", raw_path.display()))?;

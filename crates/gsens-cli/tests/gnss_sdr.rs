@@ -101,6 +101,21 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
     }
 }
 
+/// GNSS-SDR's default tracking setting, `extend_correlation_symbols=1` (1 ms
+/// updates, one record per 20 ms data bit after bit synchronization), with the
+/// default options: one track per channel, the estimate trustworthy (exit 0).
+#[test]
+fn estimate_from_dumps_of_the_default_1_ms_setting() {
+    let f = fixtures().join("ext1");
+    let out = tmp("ext1").join("ext1.json");
+    let (imu, conf) = (s(&f.join("imu.csv")), s(&f.join("gnss-sdr.conf")));
+    let text = gsens(&["estimate", "--imu", &imu, "--gnss-sdr", &s(&f), "--gnss-sdr-conf", &conf, "--json", &s(&out)]);
+    assert!(text.contains("2 tracks, 2 used"), "{text}");
+    let v = json(&out);
+    assert_eq!((v["trustworthy"].as_bool(), v["model_substeps"].as_u64()), (Some(true), Some(20)), "{text}");
+    assert_eq!(v["settings"]["receiver_loop"]["symbols"], 1);
+}
+
 /// `gsens estimate --gnss-sdr` on the dumps of a board shaken from 3 s on (the
 /// lock test down to 0.75 while shaking, the channels switching to the narrow
 /// loop mid-shake), with the default options: every track passes GNSS-SDR's own

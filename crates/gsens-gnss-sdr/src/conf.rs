@@ -161,7 +161,7 @@ pub struct TrackingConf {
     /// `pll_bw_narrow_hz`: the PLL bandwidth once the integration is extended \[Hz\].
     pub pll_bw_narrow_hz: f64,
     /// `extend_correlation_symbols`: 1 ms symbols per coherent integration
-    /// after bit synchronization (1…20).
+    /// after bit synchronization (a divisor of 20: 1, 2, 4, 5, 10, 20).
     pub extend_correlation_symbols: u32,
     /// `enable_fll_pull_in`: an FLL during the pull-in (before the modelled records).
     pub enable_fll_pull_in: bool,
@@ -349,7 +349,7 @@ impl GnssSdrConf {
 
     /// The GPS L1 C/A carrier-loop settings (module docs), checked: a
     /// supported tracking implementation, order 2 or 3, positive bandwidths,
-    /// 1…20 symbols, no steady-state FLL.
+    /// 1…20 symbols dividing 20, no steady-state FLL.
     pub fn tracking(&self) -> Result<TrackingConf, GnssSdrError> {
         let d = TrackingConf::defaults();
         let fail = |key: &str, reason: String| {
@@ -379,6 +379,20 @@ impl GnssSdrConf {
         let symbols = self.get_f64("Tracking_1C.extend_correlation_symbols")?.unwrap_or(1.0);
         // GNSS-SDR clamps to [1, 20] with a warning; so do we.
         let extend_correlation_symbols = if symbols.is_finite() { symbols.round().clamp(1.0, 20.0) as u32 } else { 1 };
+        // After bit synchronization GNSS-SDR writes the record of the millisecond
+        // that closes a 20 ms data bit; only when N divides 20 does that
+        // millisecond close an integration, so that the record holds its update.
+        let stage = gsens_core::gnss_sdr::GnssSdrStage { order: 2, bw_hz: 1.0, symbols: extend_correlation_symbols };
+        if stage.updates_per_record().is_none() {
+            return fail(
+                "Tracking_1C.extend_correlation_symbols",
+                format!(
+                    "extend_correlation_symbols = {extend_correlation_symbols}: GNSS-SDR writes one record per 20 ms \
+                     data bit, which then falls inside an integration and holds an older loop update; gsens models \
+                     1, 2, 4, 5, 10 and 20 (the divisors of 20)"
+                ),
+            );
+        }
         // A loop updated every T cannot have a noise bandwidth beyond 1/(2T)
         // (the discrete loop is unstable long before): 500 Hz at the C/A
         // code's 1 ms, less once the integration is extended.
@@ -688,6 +702,16 @@ mod tests {
         let e =
             GnssSdrConf::parse("Tracking_1C.enable_fll_steady_state=true\n", "f.conf").unwrap().tracking().unwrap_err();
         assert!(e.to_string().contains("FLL"), "{e}");
+        // N not dividing 20: the record of a data bit's last millisecond falls inside an integration.
+        for n in [3, 7, 19] {
+            let text = format!("x=1\nTracking_1C.extend_correlation_symbols={n}\n");
+            let e = GnssSdrConf::parse(&text, "e.conf").unwrap().tracking().unwrap_err().to_string();
+            assert!(e.contains("e.conf: line 2") && e.contains("divisors of 20"), "{e}");
+        }
+        for n in [1, 2, 4, 5, 10, 20] {
+            let text = format!("Tracking_1C.extend_correlation_symbols={n}\n");
+            assert_eq!(GnssSdrConf::parse(&text, "e.conf").unwrap().tracking().unwrap().extend_correlation_symbols, n);
+        }
         // Bandwidths no loop at its update interval can have (1e200 once sent the
         // importer's eigenvalue search into a long loop; found by fuzzing).
         for (conf, want) in [

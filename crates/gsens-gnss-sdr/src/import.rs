@@ -3,17 +3,20 @@
 //!
 //! # Records, tracks and stages
 //!
-//! A dump holds one channel's loop updates. It is cut into *tracks* (one
-//! satellite tracked without interruption) where the PRN changes or the
-//! sample counter jumps by more than one integration (the channel lost lock
-//! and went back to acquisition). Within a track, each record's integration
-//! length is the sample-counter step to the previous record (the first
-//! record: 1 ms): 1 ms during the pull-in, `extend_correlation_symbols` ms
-//! once GNSS-SDR has synchronized to the data bits and switched to the narrow
-//! loop (`pll_bw_narrow_hz`). A record is converted to
+//! A dump holds one channel's records. Before bit synchronization GNSS-SDR
+//! writes one per 1 ms loop update; after it one per 20 ms data bit, holding
+//! the last of the 20/N updates of N = `extend_correlation_symbols` ms since
+//! the previous record (module docs of [`gsens_core::gnss_sdr`]). A dump is
+//! cut into *tracks* (one satellite tracked without interruption) where the
+//! PRN changes or the sample counter steps by anything but 1 ms before bit
+//! synchronization or one bit after it (the channel lost lock and went back to
+//! acquisition). After bit synchronization the loop runs N ms integrations at
+//! `pll_bw_narrow_hz` when N > 1; with N = 1 it keeps its 1 ms update and
+//! `pll_bw_hz`. A record is converted to
 //!
-//! - `t_s`: the middle of its integration, (n − Δn/2)/fs with n the sample
-//!   counter at its end (`PRN_start_sample_count`) and Δn its length, in the
+//! - `t_s`: the middle of its integration, (n − N₁·fs·1 ms/2)/fs with n the
+//!   sample counter at its end (`PRN_start_sample_count`) and N₁ its
+//!   integration in ms (1 before bit synchronization, N after), in the
 //!   receiver's sample time (sample 0 of the file at t = 0);
 //! - `phase_err_rad` = 2π·`carr_error_hz` (the discriminator output in cycles;
 //!   its sign is θ_signal − θ_replica, docs/conventions.md's);
@@ -35,18 +38,23 @@
 //! importer's.
 //!
 //! Of the tracking records, only those of the loop the estimator models are
-//! kept: the narrow stage after bit synchronization (or, without extended
-//! integration, the 1 ms loop), minus its first seconds
-//! ([`ImportSettings::settle_time_s`]: the switch's transient). A track that
-//! never reached the narrow stage is dropped. Every track is reported with
-//! what became of it and the rule and values that decided
-//! ([`TrackSummary::reason`]).
+//! kept, minus its first seconds ([`ImportSettings::settle_time_s`]: the
+//! transient of the switch to it): with N > 1 the narrow stage from bit
+//! synchronization on; with N = 1 the 1 ms loop from the end of GNSS-SDR's
+//! pull-in transitory (`pull_in_time_s`, the FLL's time when
+//! `enable_fll_pull_in`), its 1 ms records before bit synchronization thinned
+//! to one per data bit on the lattice of the later ones, so that every kept
+//! record holds the last of 20/N updates. A track that never reached the
+//! modelled loop is dropped. Every track is reported with what became of it
+//! ([`TrackSummary::fate`]) and the rule and values that decided
+//! ([`TrackSummary::reason`]); when nothing is kept, the error gives one line
+//! per channel and fate ([`nothing_usable_reason`]).
 //!
 //! # A common epoch grid
 //!
 //! Each channel's integrations end on its own satellite's code epochs, so
 //! channels are not sampled at the same instants. [`resample`] puts every
-//! track on the common grid t = j·T (T the narrow integration time) by
+//! track on the common grid t = j·T (T = 20 ms, the record interval) by
 //! four-point cubic (Lagrange) interpolation between consecutive records (linear at a
 //! track's ends; nothing across a dropped record): for the slow phase errors
 //! of a calibration (≈ 1 Hz at 50 Hz) the interpolation error is of order
@@ -58,7 +66,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use gsens_core::LinearLoop;
-use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};
+use gsens_core::gnss_sdr::{BIT_SYMBOLS, GnssSdrPll, GnssSdrStage};
 use gsens_io::{ImuSeries, TrackingRow};
 
 use crate::conf::TrackingConf;
@@ -104,9 +112,17 @@ impl ImportSettings {
         Ok(ImportSettings::new(fs_hz, tracking))
     }
 
-    /// The integration time of the modelled stage \[s\].
+    /// The integration time of the modelled stage, its loop's update interval \[s\].
     pub fn interval_s(&self) -> f64 {
         self.tracking.narrow_interval_s()
+    }
+
+    /// The spacing of the modelled stage's records \[s\]: one per 20 ms data
+    /// bit after bit synchronization, whatever `extend_correlation_symbols`
+    /// ([`GnssSdrStage::record_interval_s`]), each holding the last of its
+    /// 20/N loop updates ([`GnssSdrStage::updates_per_record`]).
+    pub fn record_interval_s(&self) -> f64 {
+        self.stage().record_interval_s()
     }
 
     /// The modelled stage of GNSS-SDR's loop (after bit synchronization).
@@ -314,9 +330,14 @@ pub struct LockReplay {
 /// was given other settings than the dumps', or a dump cut from mid-track).
 ///
 /// `start_sample[k]`: sample count at the start of record k's last
-/// millisecond (when its detector call runs); `lock` and `cn0` per record.
+/// millisecond (when its detector call runs); `calls[k]`: the detector calls
+/// (loop updates) record k stands for, 1 before bit synchronization and 20/N
+/// after it (GNSS-SDR logs one update in 20/N, module docs of
+/// [`gsens_core::gnss_sdr`]), each counted with the record's values; `lock`
+/// and `cn0` per record.
 pub fn replay_lock_detector(
     start_sample: &[f64],
+    calls: &[u32],
     lock_test: &[f64],
     cn0_dbhz: &[f64],
     fs_hz: f64,
@@ -342,26 +363,21 @@ pub fn replay_lock_detector(
             continue;
         }
         r.judged_records += 1;
-        if lock_test[k] < l.carrier_lock_th.value {
-            r.carrier_lock_failures += 1;
-            carrier += 1;
-        } else {
-            carrier = carrier.saturating_sub(1);
+        let (carrier_fails, code_fails) = (lock_test[k] < l.carrier_lock_th.value, cn0_dbhz[k] < l.cn0_min_dbhz.value);
+        r.carrier_lock_failures += usize::from(carrier_fails);
+        r.code_lock_failures += usize::from(code_fails);
+        for _ in 0..calls.get(k).copied().unwrap_or(1).max(1) {
+            carrier = if carrier_fails { carrier + 1 } else { carrier.saturating_sub(1) };
+            code = if code_fails { code + 1 } else { code.saturating_sub(1) };
+            let (by_carrier, by_code) = (carrier > l.max_carrier_lock_fail.value, code > l.max_lock_fail.value);
+            if by_carrier || by_code {
+                r.loss_of_lock = Some(k);
+                r.loss_by = Some(if by_carrier { "carrier" } else { "code" });
+                return r;
+            }
+            r.carrier_fail_counter_max = r.carrier_fail_counter_max.max(carrier);
+            r.code_fail_counter_max = r.code_fail_counter_max.max(code);
         }
-        if cn0_dbhz[k] < l.cn0_min_dbhz.value {
-            r.code_lock_failures += 1;
-            code += 1;
-        } else {
-            code = code.saturating_sub(1);
-        }
-        let (by_carrier, by_code) = (carrier > l.max_carrier_lock_fail.value, code > l.max_lock_fail.value);
-        if by_carrier || by_code {
-            r.loss_of_lock = Some(k);
-            r.loss_by = Some(if by_carrier { "carrier" } else { "code" });
-            break;
-        }
-        r.carrier_fail_counter_max = r.carrier_fail_counter_max.max(carrier);
-        r.code_fail_counter_max = r.code_fail_counter_max.max(code);
     }
     r
 }
@@ -456,6 +472,8 @@ pub struct TrackSummary {
     pub mean_cn0_dbhz: f64,
     /// Whether its rows are kept.
     pub used: bool,
+    /// What became of it: [`TrackSummary::reason`]'s kind.
+    pub fate: TrackFate,
     /// `"used: …"` with the rule that kept it, or why not.
     pub reason: String,
 }
@@ -467,8 +485,28 @@ pub struct Imported {
     pub rows: Vec<ImportedRow>,
     /// Every track found.
     pub tracks: Vec<TrackSummary>,
-    /// Integration time of the modelled stage \[s\].
+    /// Spacing of the modelled stage's records, one per 20 ms data bit
+    /// ([`ImportSettings::record_interval_s`]), the grid [`resample`] puts them on \[s\].
     pub interval_s: f64,
+}
+
+/// What became of a track, the key by which [`import_dir`] aggregates the
+/// reasons of tracks that gave nothing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrackFate {
+    /// Kept to its end.
+    Used,
+    /// Kept up to the record where the replayed lock detector declares a loss of lock.
+    UsedToLossOfLock,
+    /// The lock detector declares a loss of lock before the modelled loop.
+    LostBeforeModelledLoop,
+    /// Never reached the modelled loop (no bit synchronization, or ended in the pull-in).
+    NeverModelled,
+    /// The modelled loop lasted less than its settling time.
+    ShorterThanSettling,
+    /// The lock detector declares a loss of lock before the modelled loop had settled.
+    LostBeforeSettled,
 }
 
 /// Converts one decoded dump (see the module docs); `track_base` numbers its tracks.
@@ -479,7 +517,11 @@ pub fn import_dump(
 ) -> (Vec<ImportedRow>, Vec<TrackSummary>) {
     let fs = settings.fs_hz;
     let samples_per_ms = fs * 1e-3;
-    let ext = settings.tracking.extend_correlation_symbols.max(1);
+    let stage = settings.stage();
+    let ext = stage.symbols.max(1);
+    // Detector calls (loop updates) a record after bit synchronization stands for.
+    let per_record = stage.updates_per_record().unwrap_or(1);
+    let bit_ms = f64::from(BIT_SYMBOLS);
     let channel = dump.channel.unwrap_or(0);
     let settle_s = settings.settle_time_s();
     let mut rows = Vec::new();
@@ -487,48 +529,70 @@ pub fn import_dump(
     let recs = &dump.records;
     let mut i = 0;
     while i < recs.len() {
-        // One track: records i..j.
+        // One track: records i..j, 1 ms apart until bit synchronization (`synced`,
+        // the first record one data bit after its predecessor), one bit apart from there on.
         let mut j = i + 1;
-        let mut symbols = vec![1u32];
+        let mut synced = None;
         while j < recs.len() {
-            let dn = recs[j].prn_start_sample_count - recs[j - 1].prn_start_sample_count;
-            let s = (dn as f64 / samples_per_ms).round().max(1.0) as u32;
-            let last = *symbols.last().expect("non-empty");
-            let restart = recs[j].prn != recs[i].prn || s > ext + 1 || (ext > 1 && last == ext && s == 1);
-            if restart {
+            let (a, b) = (recs[j - 1].prn_start_sample_count, recs[j].prn_start_sample_count);
+            let step_ms = b.checked_sub(a).map_or(f64::NAN, |dn| dn as f64 / samples_per_ms);
+            let (one_ms, one_bit) = ((step_ms - 1.0).abs() < 0.5, (step_ms - bit_ms).abs() < 1.0);
+            let continues = recs[j].prn == recs[i].prn && if synced.is_some() { one_bit } else { one_ms || one_bit };
+            if !continues {
                 break;
             }
-            symbols.push(if ext > 1 && s >= ext - 1 { ext } else { s });
+            if one_bit && synced.is_none() {
+                synced = Some(j);
+            }
             j += 1;
         }
+        let after_sync = |k: usize| synced.is_some_and(|s| k >= s);
+        // The integration a record's discriminator output comes from: 1 ms before
+        // bit synchronization, N ms after; its middle is the record's time.
+        let symbols = |k: usize| if after_sync(k) { ext } else { 1 };
+        let t_mid =
+            |k: usize| (recs[k].prn_start_sample_count as f64 - 0.5 * f64::from(symbols(k)) * samples_per_ms) / fs;
         let track = track_base + tracks.len();
-        let t_mid = |k: usize| {
-            let dn = if k == i {
-                f64::from(symbols[0]) * samples_per_ms
-            } else {
-                (recs[k].prn_start_sample_count - recs[k - 1].prn_start_sample_count) as f64
-            };
-            (recs[k].prn_start_sample_count as f64 - 0.5 * dn) / fs
-        };
-        // The lock detector, over the whole track (its counters run through the stages).
-        let first_start = recs[i].prn_start_sample_count as f64 - f64::from(symbols[0]) * samples_per_ms;
+        // The lock detector, over the whole track (its counters run through the stages):
+        // called once per loop update, so a record after bit synchronization stands for
+        // 20/N calls (the smoothed lock test and C/N0 it holds barely move within them).
+        let first_start = recs[i].prn_start_sample_count as f64 - samples_per_ms;
         let call_sample: Vec<f64> =
             (i..j).map(|k| (recs[k].prn_start_sample_count as f64 - samples_per_ms).max(first_start)).collect();
+        let calls: Vec<u32> = (i..j).map(|k| if after_sync(k) { per_record } else { 1 }).collect();
         let lock_test: Vec<f64> = recs[i..j].iter().map(|r| r.carrier_lock_test).collect();
         let cn0: Vec<f64> = recs[i..j].iter().map(|r| r.cn0_dbhz).collect();
-        let lock = replay_lock_detector(&call_sample, &lock_test, &cn0, fs, &settings.tracking);
+        let lock = replay_lock_detector(&call_sample, &calls, &lock_test, &cn0, fs, &settings.tracking);
         let tracking_end = lock.loss_of_lock.map_or(j, |k| i + k);
-        let modelled_symbols = if ext > 1 { ext } else { 1 };
-        let switch = (i..j).find(|&k| symbols[k - i] == modelled_symbols && (ext == 1 || k > i));
-        // Without extended integration the modelled loop runs from the start,
-        // after the FLL pull-in when there is one.
-        let fll_s =
-            if ext == 1 && settings.tracking.enable_fll_pull_in { settings.tracking.pull_in_time_s } else { 0.0 };
-        let switch_s = switch.map(|k| t_mid(k) + fll_s);
+        // The first record of the modelled loop. Extended integration: the first after
+        // bit synchronization (the narrow loop starts there). Without it the 1 ms loop
+        // runs throughout, PLL only once GNSS-SDR's pull-in transitory (its FLL, if
+        // enabled) is over: at the latest floor(Δn/fs) > pull_in_time_s after the
+        // track's first record (acquisition came a little earlier), and before bit
+        // synchronization, which GNSS-SDR seeks only after the transitory.
+        let k0 = if ext > 1 {
+            synced
+        } else {
+            let end_sample = first_start + (settings.tracking.pull_in_time_s + 1.0) * fs.floor();
+            let after_pull_in =
+                (i..j).find(|&k| recs[k].prn_start_sample_count as f64 - samples_per_ms >= end_sample - 0.5);
+            match (after_pull_in, synced) {
+                (Some(a), Some(s)) => Some(a.min(s)),
+                (a, s) => a.or(s),
+            }
+        };
+        // Without extended integration, the 1 ms records before bit synchronization
+        // are thinned to one per data bit, on the lattice of the records after it (the
+        // first of which comes one bit after the last 1 ms record; without
+        // synchronization, the track's last record's): every record then holds the
+        // last of 20 updates, as the stage states.
+        let anchor = synced.map_or(j - 1, |s| s - 1);
+        let on_lattice = |k: usize| after_sync(k) || (anchor - k).is_multiple_of(BIT_SYMBOLS as usize);
+        let switch_s = k0.map(t_mid);
         let (mut modelled, mut good, mut cn0_sum) = (0usize, 0usize, 0.0);
         let mut track_rows = Vec::new();
-        if let (Some(k0), Some(t0)) = (switch, switch_s) {
-            for k in k0..j {
+        if let (Some(k0), Some(t0)) = (k0, switch_s) {
+            for k in (k0..j).filter(|&k| on_lattice(k)) {
                 let t = t_mid(k);
                 if t < t0 + settle_s - 1e-9 {
                     continue;
@@ -545,7 +609,7 @@ pub fn import_dump(
                         cn0_dbhz: r.cn0_dbhz,
                         phase_err_rad: core::f64::consts::TAU * r.carr_error_cycles,
                         lock_test: r.carrier_lock_test,
-                        symbols: symbols[k - i],
+                        symbols: symbols(k),
                         track,
                     });
                 }
@@ -553,27 +617,47 @@ pub fn import_dump(
         }
         let lock_loss_s = lock.loss_of_lock.map(|k| t_mid(i + k));
         let loss = lock_loss_s.map(|t| lock.describe_loss(&settings.tracking, t));
-        let reason = if let (Some(loss), true) = (&loss, switch.is_none_or(|k| tracking_end <= k)) {
-            format!("{loss}, before it reached the modelled loop")
-        } else if switch.is_none() {
-            format!(
-                "never reached the modelled loop ({} ms integrations{}): no bit synchronization in its {} records",
-                modelled_symbols,
-                if ext > 1 {
-                    format!(", pll_bw_narrow_hz = {}", settings.tracking.pll_bw_narrow_hz)
-                } else {
-                    String::new()
-                },
-                j - i
-            )
+        let (fate, reason) = if let (Some(loss), true) = (&loss, k0.is_none_or(|k| tracking_end <= k)) {
+            (TrackFate::LostBeforeModelledLoop, format!("{loss}, before it reached the modelled loop"))
+        } else if k0.is_none() {
+            let why = if ext > 1 {
+                format!(
+                    "{ext} ms integrations, pll_bw_narrow_hz = {}): no bit synchronization in its {} records",
+                    settings.tracking.pll_bw_narrow_hz,
+                    j - i
+                )
+            } else {
+                format!(
+                    "1 ms loop after the pull-in): its {} records end within pull_in_time_s = {} s{}",
+                    j - i,
+                    settings.tracking.pull_in_time_s,
+                    if settings.tracking.enable_fll_pull_in { " (the FLL)" } else { "" }
+                )
+            };
+            (TrackFate::NeverModelled, format!("never reached the modelled loop ({why}"))
         } else if modelled == 0 {
-            format!("fewer than {settle_s:.1} s of the modelled loop (its settling time)")
+            (
+                TrackFate::ShorterThanSettling,
+                format!("fewer than {settle_s:.1} s of the modelled loop (its settling time)"),
+            )
         } else if good == 0 {
-            format!("{}, before the modelled loop had settled", loss.unwrap_or_default())
+            (
+                TrackFate::LostBeforeSettled,
+                format!("{}, before the modelled loop had settled", loss.unwrap_or_default()),
+            )
         } else if let Some(loss) = loss {
-            format!("used up to the loss of lock: {loss}; the {} records from there on are dropped", j - tracking_end)
+            (
+                TrackFate::UsedToLossOfLock,
+                format!(
+                    "used up to the loss of lock: {loss}; the {} records from there on are dropped",
+                    j - tracking_end
+                ),
+            )
         } else {
-            format!("used: GNSS-SDR's lock detector keeps it to its end ({})", lock.describe(&settings.tracking))
+            (
+                TrackFate::Used,
+                format!("used: GNSS-SDR's lock detector keeps it to its end ({})", lock.describe(&settings.tracking)),
+            )
         };
         let used = good > 0;
         if used {
@@ -594,11 +678,45 @@ pub fn import_dump(
             lock_loss_s,
             mean_cn0_dbhz: if modelled > 0 { cn0_sum / modelled as f64 } else { f64::NAN },
             used,
+            fate,
             reason,
         });
         i = j;
     }
     (rows, tracks)
+}
+
+/// Why no track of a dump directory gave a record: one line per channel and
+/// fate, with the number of tracks, their PRNs and the first one's reason (a
+/// dump cut into thousands of tracks still says it in a few lines).
+pub fn nothing_usable_reason(tracks: &[TrackSummary]) -> String {
+    if tracks.is_empty() {
+        return "the dumps hold no record".into();
+    }
+    let mut groups: Vec<(u32, TrackFate, usize, Vec<u32>, &str)> = Vec::new();
+    for t in tracks {
+        match groups.iter_mut().find(|g| g.0 == t.channel && g.1 == t.fate) {
+            Some(g) => {
+                g.2 += 1;
+                if !g.3.contains(&t.prn) {
+                    g.3.push(t.prn);
+                }
+            }
+            None => groups.push((t.channel, t.fate, 1, vec![t.prn], &t.reason)),
+        }
+    }
+    groups.sort_by_key(|g| (g.0, g.1));
+    groups
+        .iter()
+        .map(|(channel, _, n, prns, reason)| {
+            let prns = prns.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
+            if *n == 1 {
+                format!("\n  channel {channel} (PRN {prns}): {reason}")
+            } else {
+                format!("\n  channel {channel}, {n} tracks (PRN {prns}), the first: {reason}")
+            }
+        })
+        .collect()
 }
 
 /// Reads every dump `<prefix><channel>.dat` in `dir` (the prefix from the
@@ -634,18 +752,13 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
         tracks.extend(t);
     }
     if rows.is_empty() {
-        let reason = tracks
-            .iter()
-            .map(|t| format!("channel {} (PRN {}): {}", t.channel, t.prn, t.reason))
-            .collect::<Vec<_>>()
-            .join("; ");
         return Err(GnssSdrError::NothingUsable {
             dir: dir.display().to_string(),
-            reason: if reason.is_empty() { "the dumps hold no record".into() } else { reason },
+            reason: nothing_usable_reason(&tracks),
         });
     }
     rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
-    Ok(Imported { rows, tracks, interval_s: settings.interval_s() })
+    Ok(Imported { rows, tracks, interval_s: settings.record_interval_s() })
 }
 
 /// Adds the runs of one PRN of `dump` to `runs` (those of the dumps read
@@ -886,6 +999,40 @@ mod tests {
     }
 
     #[test]
+    fn with_1_ms_updates_the_records_before_bit_synchronization_join_the_bit_lattice() {
+        // N = 1: 3000 records of 1 ms, then 50 of one bit each. The 1 ms loop is modelled from
+        // the end of the pull-in transitory, floor(Δn/fs) > pull_in_time_s = 0, 1 s after the
+        // track's first record; the earlier 1 ms records are thinned to one per bit.
+        let mut s = settings();
+        s.tracking.extend_correlation_symbols = 1;
+        let d = TrackingDump {
+            file: "trk_ch_0.dat".into(),
+            channel: Some(0),
+            layout: "x".into(),
+            layout_description: "x".into(),
+            modelled: true,
+            records: records(0, 3000, 50, 4, 0.95),
+        };
+        let (rows, tracks) = import_dump(&d, &s, 0);
+        assert_eq!(tracks.len(), 1, "{tracks:?}");
+        let t = &tracks[0];
+        assert_eq!(t.fate, TrackFate::Used, "{}", t.reason);
+        // Record k (0-based) ends at (k + 1) ms; its call at k ms reaches 1 s at k = 1000.
+        assert!((t.switch_s.unwrap() - 1.0005).abs() < 1e-12, "{:?}", t.switch_s);
+        // Kept from 0.1 s later: 1 ms records k ≡ 2999 (mod 20) from k = 1119, i.e. (k + 1 − 0.5) ms,
+        // then the 50 records of one bit, all one bit apart.
+        assert!((rows[0].t_s - 1.1195).abs() < 1e-12, "{}", rows[0].t_s);
+        for w in rows.windows(2) {
+            assert!((w[1].t_s - w[0].t_s - 0.02).abs() < 1e-12, "{} → {}", w[0].t_s, w[1].t_s);
+        }
+        assert_eq!(rows.len(), (2999 - 1119) / 20 + 1 + 50);
+        assert!(rows.iter().all(|r| r.symbols == 1));
+        // With N = 20 the same records give the 20 ms loop only after bit synchronization.
+        let (rows20, t20) = import_dump(&d, &settings(), 0);
+        assert_eq!((t20.len(), rows20.len()), (1, 50 - 5));
+    }
+
+    #[test]
     fn lock_detector_counts_up_and_down_like_gnss_sdr() {
         let mut tc = TrackingConf::defaults();
         tc.pull_in_time_s = 0.0;
@@ -897,23 +1044,31 @@ mod tests {
         let lock = vec![1.0; 9];
         // fail, fail, pass, fail, fail → counter 1, 2, 1, 2, 3 > 2: loss at the 5th judged call.
         let cn0 = [0.0, 20.0, 20.0, 30.0, 20.0, 20.0, 30.0, 30.0, 30.0];
-        let r = replay_lock_detector(&t, &lock, &cn0, fs, &tc);
+        let r = replay_lock_detector(&t, &[1; 9], &lock, &cn0, fs, &tc);
         assert_eq!(r.loss_of_lock, Some(5));
         assert_eq!(r.loss_by, Some("code"));
         assert_eq!(r.code_fail_counter_max, 2);
         assert_eq!(r.code_lock_failures, 4);
         // The counter never goes below zero: passes first bank nothing.
         let cn0 = [0.0, 30.0, 30.0, 30.0, 20.0, 20.0, 30.0, 20.0, 20.0];
-        let r = replay_lock_detector(&t, &lock, &cn0, fs, &tc);
+        let r = replay_lock_detector(&t, &[1; 9], &lock, &cn0, fs, &tc);
         assert_eq!(r.loss_of_lock, Some(8), "{r:?}");
         // The pull-in transitory: with pull_in_time_s = 2 nothing is judged before floor(Δt) > 2 s.
         tc.pull_in_time_s = 2.0;
-        let r = replay_lock_detector(&t, &lock, &[20.0; 9], fs, &tc);
+        let r = replay_lock_detector(&t, &[1; 9], &lock, &[20.0; 9], fs, &tc);
         assert_eq!((r.judged_records, r.loss_of_lock), (3, Some(5)));
         // C/N0 exactly at cn0_min and a lock test exactly at carrier_lock_th pass (strict <).
         tc.pull_in_time_s = 0.0;
-        let r = replay_lock_detector(&t, &[0.7; 9], &[25.0; 9], fs, &tc);
+        let r = replay_lock_detector(&t, &[1; 9], &[0.7; 9], &[25.0; 9], fs, &tc);
         assert_eq!((r.carrier_lock_failures, r.code_lock_failures, r.loss_of_lock), (0, 0, None));
+        // A record standing for 20/N = 2 calls counts twice: fail, fail → counter 2, 4 > 2 at the 2nd record.
+        let cn0 = [0.0, 20.0, 20.0, 30.0, 30.0, 30.0, 30.0, 30.0, 30.0];
+        let r = replay_lock_detector(&t, &[2; 9], &[1.0; 9], &cn0, fs, &tc);
+        assert_eq!((r.loss_of_lock, r.code_fail_counter_max, r.code_lock_failures), (Some(2), 2, 2));
+        // Passes bank as many: fail ×2, pass ×2 (back to 0), fail ×2 = 2, never above 2.
+        let cn0 = [0.0, 20.0, 30.0, 20.0, 30.0, 30.0, 30.0, 30.0, 30.0];
+        let r = replay_lock_detector(&t, &[2; 9], &[1.0; 9], &cn0, fs, &tc);
+        assert_eq!((r.loss_of_lock, r.code_fail_counter_max), (None, 2));
     }
 
     #[test]
@@ -930,7 +1085,8 @@ mod tests {
             records: 0,
             modelled_records: 0,
             good_records: 0,
-            lock: replay_lock_detector(&[], &[], &[], 1.0, &TrackingConf::defaults()),
+            lock: replay_lock_detector(&[], &[], &[], &[], 1.0, &TrackingConf::defaults()),
+            fate: TrackFate::Used,
             lock_loss_s: None,
             mean_cn0_dbhz: 40.0,
             used: true,

@@ -32,4 +32,4 @@ pub mod monitor;
 pub use conf::{GnssSdrConf, TrackingConf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
 pub use error::{GnssSdrError, LayoutSpecError};
-pub use import::{ImportSettings, Imported, import_dir, resample};
+pub use import::{ImportSettings, Imported, TrackFate, import_dir, resample};

@@ -57,6 +57,18 @@
 //!   Kaplan's b₃·ωn + a₃·ωn²/s + ωn³/s²: its real noise bandwidth is below the
 //!   nominal Bn and it is less damped.
 //!
+//! # What a record holds
+//!
+//! Before bit synchronization GNSS-SDR writes one dump record per 1 ms loop
+//! update. After it, the record is written when the 1 ms code period that
+//! closes a 20 ms data bit has been correlated ([`BIT_SYMBOLS`]): with N
+//! dividing 20 that period closes an integration, so each record holds the
+//! latest of the 20/N updates since the previous record (its discriminator
+//! output φ, the filter output, the lock test) and records are 20 ms apart
+//! for every N ([`GnssSdrStage::updates_per_record`]). With N = 1 the loop
+//! keeps its 1 ms update and its bandwidth `pll_bw_hz` (GNSS-SDR changes the
+//! bandwidth only together with the integration time); only the dump thins.
+//!
 //! When the integration is extended (bit synchronization), GNSS-SDR changes
 //! the gains to `pll_bw_narrow_hz` and T to N ms and keeps the integrators'
 //! values ([`GnssSdrPll::switch_stage`]); at the start of tracking it loads the
@@ -69,6 +81,9 @@ use crate::math::{PI, TAU, cos, sin};
 
 /// Length of one C/A code period, the unit of GNSS-SDR's integrations \[s\].
 pub const SYMBOL_S: f64 = 1e-3;
+/// C/A code periods per GPS L1 C/A navigation data bit: after bit
+/// synchronization GNSS-SDR writes one tracking record per 20 ms bit.
+pub const BIT_SYMBOLS: u32 = 20;
 /// ωn = Bn / this for GNSS-SDR's 2nd-order loop.
 pub const BN_OVER_WN_ORDER2: f64 = 0.53;
 /// ωn = Bn / this for GNSS-SDR's 3rd-order loop.
@@ -97,6 +112,20 @@ impl GnssSdrStage {
     /// The stage's integration time T = symbols × 1 ms \[s\].
     pub fn interval_s(&self) -> f64 {
         f64::from(self.symbols) * SYMBOL_S
+    }
+
+    /// Loop updates per tracking record once GNSS-SDR has synchronized to
+    /// the data bits: n = 20/N, the record holding the last of them (module
+    /// docs, "What a record holds"); `None` when N does not divide 20 (a
+    /// record then falls inside an integration and holds an older update).
+    pub fn updates_per_record(&self) -> Option<u32> {
+        (self.symbols > 0 && BIT_SYMBOLS.is_multiple_of(self.symbols)).then(|| BIT_SYMBOLS / self.symbols)
+    }
+
+    /// Spacing of the tracking records after bit synchronization, one per
+    /// data bit: 20 × 1 ms \[s\], whatever N.
+    pub fn record_interval_s(&self) -> f64 {
+        f64::from(BIT_SYMBOLS) * SYMBOL_S
     }
 
     fn check(&self) -> Result<(), LoopError> {
@@ -448,6 +477,18 @@ mod tests {
         assert!((t3 - 2.6).abs() < 0.2, "{t3}"); // discrete: 2.52 s
         assert!((t2 - 0.25).abs() < 0.03, "{t2}");
         assert_eq!(pll(2, 60.0, 20).settling_time_s(5.0), f64::INFINITY);
+    }
+
+    #[test]
+    fn records_hold_the_last_of_twenty_over_n_updates() {
+        for (n, want) in [(1, Some(20)), (2, Some(10)), (4, Some(5)), (5, Some(4)), (10, Some(2)), (20, Some(1))] {
+            let s = GnssSdrStage { order: 2, bw_hz: 3.0, symbols: n };
+            assert_eq!(s.updates_per_record(), want);
+            assert_eq!(s.record_interval_s(), 0.02);
+        }
+        for n in [3, 7, 19] {
+            assert_eq!(GnssSdrStage { order: 3, bw_hz: 3.0, symbols: n }.updates_per_record(), None);
+        }
     }
 
     #[test]
