@@ -76,14 +76,16 @@ pub enum LoopIdentificationMode {
 }
 
 /// The relative 1σ tolerance of a loop stated by its design (order,
-/// bandwidth, update interval) when the user gives none: 5 %. An
-/// implementation's natural frequency differs from its design's by the
-/// constants that turn Bn into ωn (0.53 against 0.5303 for ζ = 1/√2, 0.7845
-/// for Kaplan's 3rd order), by how its integrators are discretized (a
-/// rectangular against a bilinear integrator moves ωn by about ωn·T/2:
-/// 0.3 % at 3 Hz and 1 ms, 1.4 % at 5 ms, 5.7 % at 20 ms) and by rounding of
-/// the design's gains, each a few per cent at most.
-pub const DEFAULT_LOOP_TOLERANCE: f64 = 0.05;
+/// bandwidth, update interval) when the user gives none: 2 %. With the
+/// order, bandwidth and update interval stated right, an implementation's
+/// natural frequency differs from its design's by the constants that turn Bn
+/// into ωn (0.53 against 0.5303 for ζ = 1/√2: 0.06 %), by how its integrators
+/// are discretized (rectangular against bilinear moves ωn by about ωn·T/2:
+/// 0.3 % at 3 Hz and 1 ms, 1.4 % at 5 ms) and by rounding of its gains (under
+/// 1 %). A wider tolerance would also take in errors of the loop's shape
+/// (a wrong update interval, order or logged phase), which no natural
+/// frequency makes right: those the loop test must reject.
+pub const DEFAULT_LOOP_TOLERANCE: f64 = 0.02;
 
 /// False-alarm probability of the measured-response check in the pipeline:
 /// 0.5 %, so that with the loop test's 0.1 % a clean session is flagged less

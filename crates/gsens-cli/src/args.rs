@@ -263,7 +263,7 @@ pub struct SystematicArgs {
     /// loop and the stated loop within this tolerance are combined, and what remains uncertain is in σ. `0`: the
     /// receiver implements exactly the stated loop (Γ̂ reaches the known-loop bound, but a loop error below the
     /// test's reach, about 2 % on the paper's session, then biases Γ̂ unseen); `inf`: only the loop's shape is
-    /// known. Default: 0 for a loop modelled from the receiver's configuration (--gnss-sdr, --pocketsdr), 0.05
+    /// known. Default: 0 for a loop modelled from the receiver's configuration (--gnss-sdr, --pocketsdr), 0.02
     /// for a loop stated by --order/--bn-hz.
     #[arg(long, value_name = "FRACTION", value_parser = non_negative_or_inf)]
     pub loop_tolerance: Option<f64>,

@@ -147,7 +147,7 @@ fn the_screen_of_the_default_session_at_60_s() {
     }
     let expected = std::fs::read_to_string(&path).unwrap();
     assert_eq!(text, expected, "the screen changed: UPDATE_SNAPSHOTS=1 rewrites {}", path.display());
-    for what in ["shake y", "x  ", "met", "tracking", "TRUSTWORTHY"] {
+    for what in ["has enough: shake z", "x  ", "met", "tracking", "TRUSTWORTHY"] {
         assert!(text.contains(what), "{what}:\n{text}");
     }
     // The README shows this screen.

@@ -137,6 +137,8 @@ pub fn render_text(doc: &ResultDocument) -> String {
             },
             if j.stated_loop_rejected {
                 format!("the data REJECT the stated loop (|z| > {:.2})", j.loop_test_threshold_z)
+            } else if j.loop_tolerance.is_none() {
+                "not tested (no tolerance: only the loop's shape is taken as known)".to_string()
             } else {
                 format!(
                     "consistent with the stated loop (|z| ≤ {:.2}, {} % false alarms)",
