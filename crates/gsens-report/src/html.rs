@@ -92,7 +92,7 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; font-family: "De
 .banner li { margin: 4px 0; }
 .banner li code { font-weight: 700; color: var(--bad); }
 .banner.ok li code { color: var(--ok); }
-td.untrusted { color: var(--bad); background: var(--badbg); text-decoration: line-through wavy var(--bad); }
+td.untrusted { color: var(--bad); background: var(--badbg); text-decoration: line-through var(--bad); }
 td.untrusted::after { content: " ⚠"; text-decoration: none; display: inline-block; }
 caption.untrusted { caption-side: top; text-align: left; color: var(--bad); font-weight: 600; padding: 4px 0; }
 .tag { display:inline-block; padding: 1px 8px; border-radius: 10px; font-size: .82rem; font-weight: 600; }
