@@ -40,7 +40,7 @@ pub struct LiveArgs {
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
     /// received in received/), and at the end the report of `gsens report`
-    /// (report.html, report.json, gsens_gamma.h, figures/).
+    /// (report.html, report.json, gsens_gamma.h as `gsens report` writes it, figures/).
     #[arg(long)]
     pub out: PathBuf,
     /// End when every axis's σ is at most this [Hz/(m/s²)].

@@ -21,7 +21,8 @@ pub struct ReportArgs {
     /// truth.json of a simulated session: the true Γ is drawn dashed and the errors reported.
     #[arg(long)]
     pub truth: Option<PathBuf>,
-    /// Output directory: report.html, report.json, gsens_gamma.h and figures/ (PNG and SVG).
+    /// Output directory: report.html, report.json, gsens_gamma.h (a trustworthy estimate's,
+    /// see --write-untrusted-header) and figures/ (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
     /// Heading of the report.
