@@ -14,22 +14,28 @@ fn live_guides_x_y_z_and_stops_at_the_target_with_the_batch_estimate() {
     let out = dir.join("live");
     gsens(&["simulate", "--out", sim.to_str().unwrap(), "--seed", "1"]);
     let truth = sim.join("truth.json");
-    let mut replay = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["replay", sim.to_str().unwrap(), "--speed", "0"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["live", "--stdin", "--plain", "--target-sigma", "8e-4", "--out", out.to_str().unwrap()])
-        .args(["--truth", truth.to_str().unwrap()])
-        .stdin(replay.stdout.take().unwrap())
-        .output()
-        .unwrap();
-    let _ = replay.wait();
+    let live = replay_into_live(&sim, &["--target-sigma", "8e-4", "--out", &s(&out), "--truth", &s(&truth)]);
     let text = String::from_utf8(live.stdout).unwrap();
     assert!(live.status.success(), "{text}\n{}", String::from_utf8_lossy(&live.stderr));
     check_the_run(&text, &dir, &sim, &out);
     assert!(out.join("received/stdin.txt").exists());
+}
+
+/// `gsens replay DIR --speed 0` piped into `gsens live --stdin --plain` with `args`.
+fn replay_into_live(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    let mut replay = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["replay", dir.to_str().unwrap(), "--speed", "0"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["live", "--stdin", "--plain"])
+        .args(args)
+        .stdin(replay.stdout.take().unwrap())
+        .output()
+        .unwrap();
+    let _ = replay.wait();
+    live
 }
 
 /// The same through growing files: `gsens replay --out` appends to
@@ -170,18 +176,7 @@ fn live_names_the_warnings_of_an_untrustworthy_session() {
     std::fs::create_dir_all(&g).unwrap();
     imu_in_g(&sim.join("imu.csv"), &g.join("imu.csv"));
     std::fs::copy(sim.join("tracking.csv"), g.join("tracking.csv")).unwrap();
-    let mut replay = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["replay", g.to_str().unwrap(), "--speed", "0"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["live", "--stdin", "--plain", "--out", out.to_str().unwrap()])
-        .args(["--truth", sim.join("truth.json").to_str().unwrap()])
-        .stdin(replay.stdout.take().unwrap())
-        .output()
-        .unwrap();
-    let _ = replay.wait();
+    let live = replay_into_live(&g, &["--out", &s(&out), "--truth", &s(&sim.join("truth.json"))]);
     let (text, err) = (String::from_utf8(live.stdout).unwrap(), String::from_utf8_lossy(&live.stderr));
     assert_eq!(live.status.code(), Some(3), "{text}\n{err}");
     let batches: Vec<&str> = text.lines().filter(|l| l.starts_with('[') && l.contains("Γ̂ [Hz/(m/s²)]")).collect();
