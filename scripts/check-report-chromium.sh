@@ -2,14 +2,17 @@
 # Opens the HTML report of `gsens report` in headless Chromium and checks that
 # it rendered: the page loads without console errors or failed requests, every
 # figure is an inline SVG in the DOM, the estimate and the verdicts are there,
-# and a screenshot shows a non-trivial page.
+# and a screenshot shows a non-trivial page; and that the report of an
+# untrustworthy estimate shows its verdict.
 #
 # Not part of `cargo test` (CI has no browser). Needs Debian's `chromium`
 # package: installed here when missing and running as root.
 #
 # Usage: scripts/check-report-chromium.sh [OUT_DIR]
 #   OUT_DIR (default: a temporary folder) receives the simulated logs, the
-#   report, the DOM dump, Chromium's log and the screenshot `screenshot.png`.
+#   report, the DOM dump, Chromium's log and the screenshot `screenshot.png`;
+#   then the same for the session's IMU log rewritten in g, an untrustworthy
+#   estimate (`untrusted/`, `screenshot-untrusted.png`).
 #   GSENS=path/to/gsens uses that binary instead of building one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -92,3 +95,29 @@ awk -v ink="$ink" 'BEGIN { exit !(ink > 0.05) }' || fail "screenshot is nearly b
 
 echo "OK: report rendered in Chromium: $n_fig figures as inline SVG ($n_text text elements), no console errors;"
 echo "    screenshot ${w}x${h}, $colours colours, $(awk -v i="$ink" 'BEGIN{printf "%.0f", i*100}') % drawn: $shot"
+
+# The same session with its IMU log in g (imu_units): the report must say NOT
+# TRUSTWORTHY in a red banner above the table, strike through the Γ̂ cells,
+# show no green "complete" note, and come without gsens_gamma.h.
+awk -F, -v OFS=, -v CONVFMT=%.17g -v OFMT=%.17g 'NR == 1 { print; next } { $2 /= 9.80665; $3 /= 9.80665; $4 /= 9.80665; print }' \
+    "$out/sim/imu.csv" >"$out/sim/imu_g.csv"
+status=0
+"$GSENS" report --imu "$out/sim/imu_g.csv" --tracking "$out/sim/tracking.csv" --truth "$out/sim/truth.json" \
+    ${loop_t:+--loop-interval-s "$loop_t"} ${logged:+--logged-phase "$logged"} --out "$out/untrusted" \
+    >/dev/null 2>"$out/untrusted.stderr" || status=$?
+[ "$status" = 3 ] || fail "gsens report on an IMU log in g exited with $status, not 3"
+[ ! -e "$out/untrusted/gsens_gamma.h" ] || fail "a gsens_gamma.h for an untrustworthy estimate"
+html_u="$(cd "$out/untrusted" && pwd)/report.html"
+shot_u="$out/screenshot-untrusted.png"
+rm -f "$shot_u"
+timeout 120 "${chrome[@]}" --window-size=1280,1000 --screenshot="$shot_u" "file://$html_u" >>"$out/chromium.log" 2>&1 \
+    || fail "chromium failed on the untrustworthy report"
+timeout 120 "${chrome[@]}" --dump-dom "file://$html_u" >"$out/dom-untrusted.html" 2>>"$out/chromium.log" \
+    || fail "chromium --dump-dom failed on the untrustworthy report"
+grep -q 'id="verdict" role="alert">NOT TRUSTWORTHY (imu_units)' "$out/dom-untrusted.html" || fail "no red verdict banner"
+grep -q '<li><code>imu_units</code>' "$out/dom-untrusted.html" || fail "the banner does not list imu_units"
+! grep -q 'Γ̂ is complete' "$out/dom-untrusted.html" || fail "the green note on an untrustworthy estimate"
+n_marked=$(grep -o 'class="num untrusted"' "$out/dom-untrusted.html" | wc -l)
+[ "$n_marked" -eq 6 ] || fail "$n_marked Γ̂ cells marked, expected 6"
+[ -s "$shot_u" ] || fail "no screenshot of the untrustworthy report"
+echo "OK: the untrustworthy report (IMU in g): red banner with imu_units, 6 Γ̂ cells struck through, no header: $shot_u"

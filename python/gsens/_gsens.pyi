@@ -48,10 +48,12 @@ class Estimate:
         """1σ of the estimated offset [s] (None when given)."""
     @property
     def trustworthy(self) -> bool:
-        """False when any check failed or the loop was not stated."""
+        """The verdict: False when a warning other than the informational ones
+        (imu_spikes, imu_stuck, imu_clipped, response_unchecked) was raised or no
+        axis is observable; ``repr`` names the codes that decide it."""
     @property
-    def warnings(self) -> List[Dict[str, Any]]:
-        """Every warning: what failed, why and the fix."""
+    def warnings(self) -> List[Dict[str, str]]:
+        """Every warning as ``{"code": ..., "message": ...}``: what failed, why and the fix."""
     @property
     def verdicts(self) -> List[Dict[str, Any]]:
         """Per axis: the shaking's frequency, excitation and observability."""

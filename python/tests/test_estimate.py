@@ -144,6 +144,21 @@ def test_an_unstated_loop_is_flagged(session):
     assert e.warnings, "a loop the user did not state must be named in the warnings"
 
 
+def test_an_imu_logged_in_g_gives_an_untrustworthy_estimate_that_says_why(session):
+    g0 = 9.80665
+    imu_g = {k: (v / g0 if k != "t_s" else v) for k, v in session.imu.items()}
+    e = gsens.estimate(imu_g, session.tracking, **session.estimate_settings())
+    assert not e.trustworthy
+    assert [w["code"] for w in e.warnings] == ["imu_units"], e.warnings
+    assert "in g" in e.warnings[0]["message"]
+    assert repr(e).endswith("; NOT trustworthy (imu_units)>"), repr(e)
+    assert "verdict: NOT TRUSTWORTHY (imu_units)" in e.report()
+    assert e.to_dict()["trustworthy"] is False
+    # The same session in m/s²: trustworthy, and the repr says so.
+    ok = gsens.estimate(session.imu, session.tracking, **session.estimate_settings())
+    assert ok.trustworthy and ok.warnings == [] and repr(ok).endswith("; trustworthy>"), (repr(ok), ok.warnings)
+
+
 def test_default_settings_are_the_cli_defaults():
     d = gsens.default_settings()
     assert d["time_offset"] == "auto" and d["loop_check"] is True and d["method"] == "batch"

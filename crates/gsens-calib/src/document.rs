@@ -117,6 +117,12 @@ impl Warning {
     }
 }
 
+/// The codes of the `warnings` that make an estimate untrustworthy (those
+/// that [`Warning::affects_trust`]), in their order.
+pub fn untrusted_codes(warnings: &[Warning]) -> Vec<&'static str> {
+    warnings.iter().filter(|w| w.affects_trust()).map(|w| w.code).collect()
+}
+
 /// What the GNSS-SDR conversion did (sessions from GNSS-SDR dumps).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GnssSdrConversion {
@@ -278,6 +284,13 @@ impl ResultDocument {
         }
         doc.judge();
         doc
+    }
+
+    /// The codes of the warnings that make the estimate untrustworthy (those
+    /// that [`Warning::affects_trust`]), in the order raised: what every
+    /// output names beside its verdict.
+    pub fn untrusted_codes(&self) -> Vec<&'static str> {
+        untrusted_codes(&self.warnings)
     }
 
     /// Sets [`ResultDocument::trustworthy`] from the warnings and the axes.

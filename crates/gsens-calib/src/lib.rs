@@ -68,7 +68,7 @@ mod verdict;
 
 pub use document::{
     FigureInfo, GnssSdrConversion, INFORMATIONAL_WARNINGS, LoopSummary, PipelineSummary, ReportInfo, ResultDocument,
-    Warning, tool_version, two_rate_advice,
+    Warning, tool_version, two_rate_advice, untrusted_codes,
 };
 pub use error::CalibError;
 pub use estimate::{

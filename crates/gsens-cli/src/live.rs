@@ -40,7 +40,7 @@ pub struct LiveArgs {
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
     /// received in received/), and at the end the report of `gsens report`
-    /// (report.html, report.json, gsens_gamma.h, figures/).
+    /// (report.html, report.json, gsens_gamma.h as `gsens report` writes it, figures/).
     #[arg(long)]
     pub out: PathBuf,
     /// End when every axis's σ is at most this [Hz/(m/s²)].
@@ -58,6 +58,8 @@ pub struct LiveArgs {
     /// Heading of the report.
     #[arg(long, default_value = "Oscillator g-sensitivity calibration (live)")]
     pub title: String,
+    #[command(flatten)]
+    pub header: crate::report::HeaderArgs,
     #[command(flatten)]
     pub calibration: CalibrationArgs,
 }
@@ -254,9 +256,13 @@ impl Kept {
     }
 }
 
-/// The plain screen: a line when the instruction changes, one per batch estimate, each notice.
+/// The plain screen: a line when the instruction changes, one per batch
+/// estimate (with its verdict and the codes that decide it), each warning
+/// with its message the first time a batch raises it, each notice.
 struct Plain {
     last: Option<(std::mem::Discriminant<Instruction>, Option<usize>)>,
+    /// The warning codes already printed with their message.
+    warned: Vec<&'static str>,
 }
 
 impl Plain {
@@ -265,6 +271,7 @@ impl Plain {
         if let Some(job) = session.batch_due() {
             session.apply(job.run());
             self.batch(&session.view())?;
+            self.warnings(&session.view())?;
         }
         self.instruction(&session.view())
     }
@@ -274,6 +281,16 @@ impl Plain {
         if self.last != Some(key) {
             self.last = Some(key);
             crate::out(&format!("[{:7.2} s] {}\n", v.data_t_s.max(0.0), v.instruction))?;
+        }
+        Ok(())
+    }
+
+    fn warnings(&mut self, v: &LiveView) -> Result<()> {
+        for w in v.batch.iter().flat_map(|b| &b.2) {
+            if !self.warned.contains(&w.code) {
+                self.warned.push(w.code);
+                crate::out(&format!("warning [{}]: {}\n", w.code, w.message))?;
+            }
         }
         Ok(())
     }
@@ -296,7 +313,7 @@ impl Plain {
             .collect();
         let trust = match (&v.batch, &v.batch_error) {
             (Some((_, true, _)), _) => "trustworthy".to_string(),
-            (Some((_, false, w)), _) => format!("not trustworthy ({} warnings)", w.len()),
+            (Some((_, false, w)), _) => format!("NOT TRUSTWORTHY ({})", gsens_calib::untrusted_codes(w).join(", ")),
             (None, Some(e)) => format!("no estimate: {e}"),
             (None, None) => String::new(),
         };
@@ -379,7 +396,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         session.protocol().why()
     ))?;
     let mut screen = if args.plain || !std::io::stdout().is_terminal() {
-        Screen::Plain(Plain { last: None })
+        Screen::Plain(Plain { last: None, warned: Vec::new() })
     } else {
         Screen::Tui { terminal: gsens_tui::Terminal::new()?, last_draw: None, worker: None }
     };
@@ -566,7 +583,7 @@ fn finish(session: LiveSession, kept: Kept, truth: Option<[f64; 3]>, args: &Live
     if let Some(t) = &args.truth {
         outcome.inputs.push(("truth".into(), t.display().to_string()));
     }
-    let status = crate::report::write_report(&outcome, &tracking, truth, &args.out, &args.title)?;
+    let status = crate::report::write_report(&outcome, &tracking, truth, &args.out, &args.title, args.header)?;
     if !met {
         crate::out(&format!(
             "the target σ ({} Hz/(m/s²)) was not met on every axis: shake longer, or lower the target\n",

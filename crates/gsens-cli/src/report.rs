@@ -21,14 +21,26 @@ pub struct ReportArgs {
     /// truth.json of a simulated session: the true Γ is drawn dashed and the errors reported.
     #[arg(long)]
     pub truth: Option<PathBuf>,
-    /// Output directory: report.html, report.json, gsens_gamma.h and figures/ (PNG and SVG).
+    /// Output directory: report.html, report.json, gsens_gamma.h (a trustworthy estimate's,
+    /// see --write-untrusted-header) and figures/ (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
     /// Heading of the report.
     #[arg(long, default_value = "Oscillator g-sensitivity calibration")]
     pub title: String,
     #[command(flatten)]
+    pub header: HeaderArgs,
+    #[command(flatten)]
     pub calibration: CalibrationArgs,
+}
+
+/// Whether a report writes the C header of an estimate that is not trustworthy.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct HeaderArgs {
+    /// Write gsens_gamma.h even when the estimate is not trustworthy (it then defines
+    /// GSENS_GAMMA_TRUSTWORTHY 0 and lists the warnings); by default none is written.
+    #[arg(long)]
+    pub write_untrusted_header: bool,
 }
 
 /// The settings of the options, with the receiver loop of a simulated
@@ -83,25 +95,38 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     bar.set_message("reading the tracking log for C/N0");
     let tracking = gsens_io::read_tracking_file(&args.tracking)?;
     bar.finish_and_clear();
-    write_report(&outcome, &tracking, truth, &args.out, &args.title)
+    write_report(&outcome, &tracking, truth, &args.out, &args.title, args.header)
 }
 
 /// Writes the report of `outcome` (estimated from `tracking`) into `out` and
-/// prints its text: report.html, report.json, gsens_gamma.h and figures/.
+/// prints its text: report.html, report.json, gsens_gamma.h (for an
+/// untrustworthy estimate only as `header` asks; stderr says when it is not
+/// written) and figures/.
 pub fn write_report(
     outcome: &Outcome,
     tracking: &TrackingLog,
     truth: Option<[f64; 3]>,
     out: &Path,
     title: &str,
+    header: HeaderArgs,
 ) -> Result<crate::Status> {
     let bar = crate::spinner();
     let doc = outcome.document(truth);
     let figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
-    let html =
-        write_report_dir(out, title, &doc, &figure_inputs.figures(), |id| bar.set_message(format!("drawing {id}")))?;
+    let files = write_report_dir(out, title, &doc, &figure_inputs.figures(), header.write_untrusted_header, |id| {
+        bar.set_message(format!("drawing {id}"))
+    })?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_text(&doc))?;
-    crate::out(&format!("\nreport: {} (with report.json, gsens_gamma.h and figures/ beside it)\n", html.display()))?;
+    let beside = if files.header.is_some() { "report.json, gsens_gamma.h" } else { "report.json" };
+    crate::out(&format!("\nreport: {} (with {beside} and figures/ beside it)\n", files.html.display()))?;
+    if files.header.is_none() {
+        let codes = doc.untrusted_codes();
+        eprintln!(
+            "gsens_gamma.h not written: the estimate is not trustworthy ({}); --write-untrusted-header writes it \
+             anyway, marked GSENS_GAMMA_TRUSTWORTHY 0",
+            codes.join(", ")
+        );
+    }
     Ok(crate::Status::of(&doc))
 }

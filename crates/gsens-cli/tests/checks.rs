@@ -71,15 +71,7 @@ fn an_imu_logged_in_g_is_flagged_and_a_correct_one_is_not() {
     let (_, clean) = estimate(&dir, "imu.csv", "clean.json");
     assert_eq!(clean["warnings"], serde_json::json!([]), "{}", clean["warnings"]);
     // The same IMU log in g.
-    let text = std::fs::read_to_string(dir.join("imu.csv")).unwrap();
-    let mut lines = text.lines();
-    let mut g = String::from(lines.next().unwrap());
-    g.push('\n');
-    for l in lines {
-        let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
-        g += &format!("{},{},{},{}\n", f[0], f[1] / 9.80665, f[2] / 9.80665, f[3] / 9.80665);
-    }
-    std::fs::write(dir.join("imu_g.csv"), g).unwrap();
+    common::imu_in_g(&dir.join("imu.csv"), &dir.join("imu_g.csv"));
     let (text, v) = estimate(&dir, "imu_g.csv", "g.json");
     let codes: Vec<&str> = v["warnings"].as_array().unwrap().iter().map(|w| w["code"].as_str().unwrap()).collect();
     assert_eq!(codes, ["imu_units"], "{}", v["warnings"]);

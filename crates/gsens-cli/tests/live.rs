@@ -14,22 +14,28 @@ fn live_guides_x_y_z_and_stops_at_the_target_with_the_batch_estimate() {
     let out = dir.join("live");
     gsens(&["simulate", "--out", sim.to_str().unwrap(), "--seed", "1"]);
     let truth = sim.join("truth.json");
-    let mut replay = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["replay", sim.to_str().unwrap(), "--speed", "0"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["live", "--stdin", "--plain", "--target-sigma", "8e-4", "--out", out.to_str().unwrap()])
-        .args(["--truth", truth.to_str().unwrap()])
-        .stdin(replay.stdout.take().unwrap())
-        .output()
-        .unwrap();
-    let _ = replay.wait();
+    let live = replay_into_live(&sim, &["--target-sigma", "8e-4", "--out", &s(&out), "--truth", &s(&truth)]);
     let text = String::from_utf8(live.stdout).unwrap();
     assert!(live.status.success(), "{text}\n{}", String::from_utf8_lossy(&live.stderr));
     check_the_run(&text, &dir, &sim, &out);
     assert!(out.join("received/stdin.txt").exists());
+}
+
+/// `gsens replay DIR --speed 0` piped into `gsens live --stdin --plain` with `args`.
+fn replay_into_live(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    let mut replay = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["replay", dir.to_str().unwrap(), "--speed", "0"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["live", "--stdin", "--plain"])
+        .args(args)
+        .stdin(replay.stdout.take().unwrap())
+        .output()
+        .unwrap();
+    let _ = replay.wait();
+    live
 }
 
 /// The same through growing files: `gsens replay --out` appends to
@@ -154,4 +160,35 @@ fn the_screen_of_the_default_session_at_60_s() {
     let readme =
         std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
     assert!(readme.contains(expected.trim_end()), "README.md does not show tests/snapshots/live_default_60s.txt");
+}
+
+/// `gsens live --plain` on a session whose IMU logs in g: the batch lines
+/// name the warning that decides the verdict, the warning is printed once
+/// with its message, the end report says NOT TRUSTWORTHY with it, and the
+/// kept report has no gsens_gamma.h.
+#[test]
+fn live_names_the_warnings_of_an_untrustworthy_session() {
+    let dir = temp_dir("live-untrusted");
+    let sim = dir.join("sim");
+    let out = dir.join("live");
+    gsens(&["simulate", "--out", sim.to_str().unwrap(), "--seed", "3"]);
+    let g = dir.join("g");
+    std::fs::create_dir_all(&g).unwrap();
+    imu_in_g(&sim.join("imu.csv"), &g.join("imu.csv"));
+    std::fs::copy(sim.join("tracking.csv"), g.join("tracking.csv")).unwrap();
+    let live = replay_into_live(&g, &["--out", &s(&out), "--truth", &s(&sim.join("truth.json"))]);
+    let (text, err) = (String::from_utf8(live.stdout).unwrap(), String::from_utf8_lossy(&live.stderr));
+    assert_eq!(live.status.code(), Some(3), "{text}\n{err}");
+    let batches: Vec<&str> = text.lines().filter(|l| l.starts_with('[') && l.contains("Γ̂ [Hz/(m/s²)]")).collect();
+    assert!(batches.len() > 10, "{text}");
+    // Every batch names imu_units among the codes that decide its verdict.
+    let named = |l: &&str| l.rsplit_once("| NOT TRUSTWORTHY (").is_some_and(|(_, c)| c.contains("imu_units"));
+    assert!(batches.iter().all(named), "{}", batches.join("\n"));
+    // The warning with its fix, once while live, once more in the end report.
+    assert_eq!(text.matches("warning [imu_units]: the specific force's median magnitude").count(), 2, "{text}");
+    let end = &text[text.find("ended: ").unwrap()..];
+    assert!(end.contains("verdict: NOT TRUSTWORTHY (imu_units)"), "{end}");
+    assert!(err.contains("gsens_gamma.h not written: the estimate is not trustworthy (imu_units)"), "{err}");
+    assert!(!out.join("gsens_gamma.h").exists() && out.join("report.html").exists());
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::gsens;
+use common::{gsens, imu_in_g, json, run, s, temp_dir};
 
 use std::path::Path;
 use std::process::Command;
@@ -125,5 +125,43 @@ fn response_plot_and_demo_figures() {
         assert_png(&figs.join(format!("{f}.png")));
         assert_svg(&figs.join(format!("{f}.svg")));
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `gsens report` on an IMU logged in g (the document says `imu_units`):
+/// status 3, and every output carries the verdict: the text, report.json,
+/// report.html's red banner; no gsens_gamma.h unless asked for, and then one
+/// that says GSENS_GAMMA_TRUSTWORTHY 0 with the warning.
+#[test]
+fn an_untrustworthy_report_says_so_in_every_file_and_writes_no_header() {
+    let dir = temp_dir("report-untrusted");
+    let sim = dir.join("sim");
+    gsens(&["simulate", "--out", &s(&sim), "--seed", "3"]);
+    imu_in_g(&sim.join("imu.csv"), &sim.join("imu_g.csv"));
+    let out = dir.join("report");
+    let (imu, tracking, truth) = (s(&sim.join("imu_g.csv")), s(&sim.join("tracking.csv")), s(&sim.join("truth.json")));
+    let args = ["report", "--imu", &imu, "--tracking", &tracking, "--truth", &truth, "--out", &s(&out)];
+    let o = run(&args);
+    let (text, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.status.code(), Some(3), "{text}\n{err}");
+    assert!(text.contains("verdict: NOT TRUSTWORTHY (imu_units)"), "{text}");
+    assert!(text.contains("(with report.json and figures/ beside it)"), "{text}");
+    assert!(err.contains("gsens_gamma.h not written: the estimate is not trustworthy (imu_units)"), "{err}");
+    assert!(!out.join("gsens_gamma.h").exists(), "a header for an untrustworthy estimate");
+    let v = json(&out.join("report.json"));
+    assert_eq!(v["trustworthy"], false);
+    assert_eq!(v["warnings"][0]["code"], "imu_units", "{}", v["warnings"]);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("id=\"verdict\" role=\"alert\">NOT TRUSTWORTHY (imu_units)"));
+    assert!(html.contains("<li><code>imu_units</code>: the specific force&#39;s median magnitude"));
+    assert!(!html.contains("Γ̂ is complete"), "the green note on an untrustworthy estimate");
+    assert_eq!(html.matches("class=\"num untrusted\"").count(), 6);
+
+    let o = run(&[&args[..], &["--write-untrusted-header"]].concat());
+    assert_eq!(o.status.code(), Some(3));
+    let h = std::fs::read_to_string(out.join("gsens_gamma.h")).unwrap();
+    assert!(h.contains("#define GSENS_GAMMA_TRUSTWORTHY 0\n"), "{h}");
+    assert!(h.contains(" * VERDICT: NOT TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 0): imu_units."), "{h}");
+    assert!(h.contains(" *   imu_units: the specific force's median magnitude"), "{h}");
     std::fs::remove_dir_all(&dir).ok();
 }

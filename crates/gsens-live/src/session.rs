@@ -3,7 +3,7 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use gsens_calib::{DISCRIMINATOR_LINEAR_RANGE_RAD, Outcome, PipelineSettings, ResultDocument, calibrate_logs};
+use gsens_calib::{DISCRIMINATOR_LINEAR_RANGE_RAD, Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
 use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 
 use crate::guidance::{Instruction, LoopBand, Protocol, Situation, instruct};
@@ -185,8 +185,8 @@ pub struct LiveView {
     pub range_rad: f64,
     /// The channels.
     pub channels: Vec<ChannelStatus>,
-    /// The latest batch estimate: data it covers \[s\], trustworthy, its warnings (code: message).
-    pub batch: Option<(f64, bool, Vec<String>)>,
+    /// The latest batch estimate: data it covers \[s\], trustworthy, its warnings.
+    pub batch: Option<(f64, bool, Vec<Warning>)>,
     /// Why the latest batch estimate failed, if it did.
     pub batch_error: Option<String>,
     /// The latest notices, and how many there were in all.
@@ -196,7 +196,7 @@ pub struct LiveView {
 }
 
 /// What the view shows of the latest batch estimate: (data end, trustworthy, warnings), or its error.
-type BatchSummary = (Option<(f64, bool, Vec<String>)>, Option<String>);
+type BatchSummary = (Option<(f64, bool, Vec<Warning>)>, Option<String>);
 
 /// The data received so far and what is made of it.
 #[derive(Debug, Clone)]
@@ -481,8 +481,7 @@ impl LiveSession {
         self.batch_summary = match &result.outcome {
             Ok(o) => {
                 let doc = o.document(None);
-                let warnings = doc.warnings.iter().map(|w| format!("{}: {}", w.code, w.message)).collect();
-                (Some((result.data_end_s, doc.trustworthy, warnings)), None)
+                (Some((result.data_end_s, doc.trustworthy, doc.warnings)), None)
             }
             Err(e) => (None, Some(e.clone())),
         };

@@ -276,12 +276,11 @@ impl Estimate {
             (Some(g), Some(s)) => format!("{g:+.5} ± {s:.5}"),
             _ => "unobservable".to_string(),
         };
-        format!(
-            "<gsens.Estimate Γ̂ [Hz/(m/s²)] x {}, y {}, z {}; {}>",
-            axis(0),
-            axis(1),
-            axis(2),
-            if self.doc.trustworthy { "trustworthy" } else { "NOT trustworthy" }
-        )
+        let verdict = if self.doc.trustworthy {
+            "trustworthy".to_string()
+        } else {
+            format!("NOT trustworthy ({})", self.doc.untrusted_codes().join(", "))
+        };
+        format!("<gsens.Estimate Γ̂ [Hz/(m/s²)] x {}, y {}, z {}; {verdict}>", axis(0), axis(1), axis(2))
     }
 }

@@ -9,14 +9,17 @@
 //! | `GSENS_GAMMA_A_PPB_PER_G` | the same normalized \[ppb/g\]; `0.0` when unobservable |
 //! | `GSENS_GAMMA_A_SIGMA_HZ_PER_MPS2`, `..._SIGMA_PPB_PER_G` | 1σ, defined only for observable axes |
 //!
-//! plus `GSENS_GAMMA_HZ_PER_MPS2_INIT` / `GSENS_GAMMA_PPB_PER_G_INIT` (array
-//! initializers), `GSENS_GAMMA_OBSERVABLE_MASK` (bit 0 x, bit 1 y, bit 2 z),
-//! `GSENS_CARRIER_HZ`, `GSENS_CALIBRATION_DATE` and the source logs. An
-//! unobservable axis never gets a made-up number: its value is 0 with a
-//! comment saying why, and it has no σ macro.
+//! plus `GSENS_GAMMA_TRUSTWORTHY` (1 or 0: the result document's verdict,
+//! [`gsens_calib::ResultDocument::trustworthy`]), `GSENS_GAMMA_HZ_PER_MPS2_INIT` /
+//! `GSENS_GAMMA_PPB_PER_G_INIT` (array initializers), `GSENS_GAMMA_OBSERVABLE_MASK`
+//! (bit 0 x, bit 1 y, bit 2 z), `GSENS_CARRIER_HZ`, `GSENS_CALIBRATION_DATE` and
+//! the source logs. The verdict and every warning (code and message) head the
+//! header's comment, so whoever includes it sees why an estimate is not to
+//! be trusted. An unobservable axis never gets a made-up number: its value is
+//! 0 with a comment saying why, and it has no σ macro.
 
 use crate::ReportMeta;
-use gsens_calib::Calibration;
+use gsens_calib::ResultDocument;
 use gsens_core::units::STANDARD_GRAVITY_MPS2;
 use std::fmt::Write as _;
 
@@ -57,6 +60,19 @@ fn c_comment(s: &str) -> String {
             'Γ' => out.push_str("Gamma"),
             'φ' => out.push_str("phi"),
             'σ' => out.push_str("sigma"),
+            'τ' => out.push_str("tau"),
+            '\u{302}' => out.push_str("-hat"),
+            '±' => out.push_str("+/-"),
+            '≤' => out.push_str("<="),
+            '≥' => out.push_str(">="),
+            '×' => out.push('x'),
+            '√' => out.push_str("sqrt"),
+            '…' => out.push_str("..."),
+            '≈' => out.push('~'),
+            '→' => out.push_str("->"),
+            '₀' => out.push('0'),
+            '⁻' => out.push('-'),
+            '¹' => out.push('1'),
             '²' => out.push_str("^2"),
             '³' => out.push_str("^3"),
             '·' => out.push('*'),
@@ -68,8 +84,54 @@ fn c_comment(s: &str) -> String {
     out.replace("*/", "* /").replace("/*", "/ *")
 }
 
-/// The header text, named `gsens_gamma.h` by the CLI (include guard `GSENS_GAMMA_H`).
-pub fn render_c_header(c: &Calibration, meta: &ReportMeta) -> String {
+/// `text` cut at spaces into lines of at most `width` characters (a longer
+/// word stands alone on its line).
+fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// The comment block of the verdict: trustworthy or not, then every warning
+/// (code and message, wrapped), as [`ResultDocument::trustworthy`] and
+/// [`ResultDocument::warnings`] say.
+fn verdict_comment(h: &mut String, doc: &ResultDocument) {
+    let _ = writeln!(h, " *");
+    if doc.trustworthy {
+        let _ = writeln!(h, " * VERDICT: TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 1): gsens's checks found nothing");
+        let _ = writeln!(h, " * that makes the estimate doubtful beyond its 1-sigma values.");
+    } else {
+        let codes = doc.untrusted_codes();
+        let _ = writeln!(h, " * VERDICT: NOT TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 0): {}.", codes.join(", "));
+        let _ = writeln!(h, " * The values below may be wrong beyond their 1-sigma values: do not compile them");
+        let _ = writeln!(h, " * into firmware before the warnings are resolved and the calibration repeated.");
+    }
+    if !doc.warnings.is_empty() {
+        let _ = writeln!(h, " *");
+        let _ = writeln!(h, " * Warnings:");
+    }
+    for w in &doc.warnings {
+        for (k, line) in wrap(&c_comment(&format!("{}: {}", w.code, w.message)), 84).iter().enumerate() {
+            let _ = writeln!(h, " *   {}{line}", if k == 0 { "" } else { "  " });
+        }
+    }
+}
+
+/// The header text of `doc`, named `gsens_gamma.h` by the CLI (include guard `GSENS_GAMMA_H`).
+pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
+    let c = &doc.calibration;
     let mut h = String::new();
     let date = meta.generated_utc.split(' ').next().unwrap_or("").to_string();
     let carrier = c.settings.carrier_hz;
@@ -107,6 +169,7 @@ pub fn render_c_header(c: &Calibration, meta: &ReportMeta) -> String {
         c.rms_before_rad, c.rms_after_rad
     );
     let _ = writeln!(h, " * autocorrelation-robust.");
+    verdict_comment(&mut h, doc);
     if c.observable.iter().any(|o| !o) {
         let _ = writeln!(h, " *");
         let _ = writeln!(h, " * WARNING: at least one axis was NOT observable in this log (too little");
@@ -126,6 +189,10 @@ pub fn render_c_header(c: &Calibration, meta: &ReportMeta) -> String {
     }
     let _ = writeln!(h, "#define GSENS_CARRIER_HZ {}", c_double(carrier));
     let _ = writeln!(h, "#define GSENS_STANDARD_GRAVITY_MPS2 {}", c_double(STANDARD_GRAVITY_MPS2));
+    let _ = writeln!(h);
+    let _ =
+        writeln!(h, "/* 1 when gsens's checks found the estimate trustworthy, 0 when not (see the warnings above). */");
+    let _ = writeln!(h, "#define GSENS_GAMMA_TRUSTWORTHY {}", u8::from(doc.trustworthy));
     let mut mask = 0u32;
     for i in 0..3 {
         let a = crate::AXES[i].to_ascii_uppercase();
@@ -191,5 +258,8 @@ mod tests {
         assert_eq!(c_string("a\"b\\c?é"), "\"a\\\"b\\\\c\\?\\303\\251\"");
         assert_eq!(c_comment("x */ y"), "x * / y");
         assert_eq!(c_comment("ζ 0.707, ωn/2π, m/s², é"), "zeta 0.707, wn/2pi, m/s^2, ?");
+        assert_eq!(c_comment("Γ̂ ± 2σ, τ ≤ 1"), "Gamma-hat +/- 2sigma, tau <= 1");
+        assert_eq!(wrap("aa bb  cc dddddd e", 5), ["aa bb", "cc", "dddddd", "e"]);
+        assert!(wrap(" ", 5).is_empty());
     }
 }

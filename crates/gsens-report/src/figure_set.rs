@@ -307,17 +307,32 @@ pub fn write_figures(
     Ok(blocks)
 }
 
+/// What [`write_report_dir`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReportFiles {
+    /// `report.html`.
+    pub html: std::path::PathBuf,
+    /// `gsens_gamma.h`, or `None` when none was written (an untrustworthy
+    /// estimate without `write_untrusted_header`).
+    pub header: Option<std::path::PathBuf>,
+}
+
 /// Writes a whole report into `dir`: `figures/` (PNG and SVG of `figs`),
 /// `report.html`, `report.json` and `gsens_gamma.h`, for the result document
 /// `document` titled `title`; `on_figure` is told each figure's id before it
-/// is drawn. Returns the path of `report.html`.
+/// is drawn. The header carries Γ̂ into firmware, so for an estimate the
+/// document calls untrustworthy it is written only when
+/// `write_untrusted_header` (and then says `GSENS_GAMMA_TRUSTWORTHY 0`);
+/// otherwise a `gsens_gamma.h` of an earlier report in `dir` is removed, so
+/// that no header stands beside a report that does not vouch for it.
 pub fn write_report_dir(
     dir: &Path,
     title: &str,
     document: &gsens_calib::ResultDocument,
     figs: &[Figure],
+    write_untrusted_header: bool,
     on_figure: impl FnMut(&str),
-) -> Result<std::path::PathBuf, WriteError> {
+) -> Result<ReportFiles, WriteError> {
     let io = |p: &Path| {
         let path = p.display().to_string();
         move |error| WriteError::Io { path, error }
@@ -326,13 +341,20 @@ pub fn write_report_dir(
     let figures = write_figures(figs, &dir.join("figures"), on_figure)?;
     let inputs: Vec<(&str, &str)> = document.inputs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
     let meta = crate::ReportMeta::now(gsens_calib::tool_version(), &inputs);
-    let header = crate::cheader::render_c_header(&document.calibration, &meta);
-    let data = crate::ReportData { title: title.to_string(), document, meta, figures, c_header: Some(header.clone()) };
+    let header =
+        (document.trustworthy || write_untrusted_header).then(|| crate::cheader::render_c_header(document, &meta));
+    let data = crate::ReportData { title: title.to_string(), document, meta, figures, c_header: header.clone() };
     let json = crate::json::report_json_string(&data).expect("the document serializes");
-    for (name, text) in
-        [("report.html", crate::html::render_html(&data)), ("report.json", json), ("gsens_gamma.h", header)]
-    {
+    for (name, text) in [("report.html", crate::html::render_html(&data)), ("report.json", json)] {
         std::fs::write(dir.join(name), text).map_err(io(&dir.join(name)))?;
     }
-    Ok(dir.join("report.html"))
+    let header_path = dir.join("gsens_gamma.h");
+    match header {
+        Some(text) => std::fs::write(&header_path, text).map_err(io(&header_path))?,
+        None => match std::fs::remove_file(&header_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io(&header_path)(e)),
+            _ => {}
+        },
+    }
+    Ok(ReportFiles { html: dir.join("report.html"), header: data.c_header.is_some().then_some(header_path) })
 }

@@ -87,6 +87,14 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; font-family: "De
 .banner { padding: 12px 16px; border-radius: 6px; margin: 10px 0 6px; font-weight: 600; }
 .banner.ok { background: var(--okbg); color: var(--ok); border: 1px solid #b7dfc2; }
 .banner.bad { background: var(--badbg); color: var(--bad); border: 1px solid #f3c3bd; }
+.banner.note { background: #f1f3f6; color: var(--fg); border: 1px solid var(--line); }
+.banner ul { margin: 8px 0 0; padding-left: 22px; font-weight: 400; color: var(--fg); }
+.banner li { margin: 4px 0; }
+.banner li code { font-weight: 700; color: var(--bad); }
+.banner.ok li code { color: var(--ok); }
+td.untrusted { color: var(--bad); background: var(--badbg); text-decoration: line-through var(--bad); }
+td.untrusted::after { content: " ⚠"; text-decoration: none; display: inline-block; }
+caption.untrusted { caption-side: top; text-align: left; color: var(--bad); font-weight: 600; padding: 4px 0; }
 .tag { display:inline-block; padding: 1px 8px; border-radius: 10px; font-size: .82rem; font-weight: 600; }
 .tag.ok { background: var(--okbg); color: var(--ok); }
 .tag.bad { background: var(--badbg); color: var(--bad); }
@@ -103,6 +111,37 @@ details summary { cursor: pointer; font-weight: 600; margin: 8px 0; }
 footer { margin-top: 40px; color: var(--muted); font-size: .85rem; }
 nav a { margin-right: 14px; color: var(--accent); text-decoration: none; font-size: .92rem; }
 "#;
+
+/// The verdict banner (`id="verdict"`): green when the document calls the
+/// estimate trustworthy, red when not, each warning listed with its code and
+/// message (the message says what to do).
+fn verdict_banner(h: &mut String, d: &ReportData) {
+    let doc = d.document;
+    if doc.trustworthy {
+        let _ = writeln!(
+            h,
+            "<div class=\"banner ok\" id=\"verdict\">TRUSTWORTHY: gsens's checks found nothing that makes Γ̂ \
+             doubtful beyond its 1σ.{}",
+            if doc.warnings.is_empty() { "" } else { " Noted (these do not affect the verdict):" }
+        );
+    } else {
+        let _ = writeln!(
+            h,
+            "<div class=\"banner bad\" id=\"verdict\" role=\"alert\">NOT TRUSTWORTHY ({}): Γ̂ may be wrong \
+             beyond its 1σ. Do not use it, nor compile it into firmware, before these warnings are resolved{}:",
+            escape(&doc.untrusted_codes().join(", ")),
+            if d.c_header.is_some() { "" } else { " (no gsens_gamma.h was written)" }
+        );
+    }
+    if !doc.warnings.is_empty() {
+        let _ = writeln!(h, "<ul id=\"warnings\">");
+        for w in &doc.warnings {
+            let _ = writeln!(h, "<li><code>{}</code>: {}</li>", escape(w.code), escape(&w.message));
+        }
+        let _ = writeln!(h, "</ul>");
+    }
+    let _ = writeln!(h, "</div>");
+}
 
 /// The report as one HTML document.
 pub fn render_html(d: &ReportData) -> String {
@@ -134,16 +173,26 @@ pub fn render_html(d: &ReportData) -> String {
         if d.c_header.is_some() { "<a href=\"#header\">C header</a>" } else { "" }
     );
 
-    // Verdict and estimate.
-    let n_obs = c.observable.iter().filter(|&&o| o).count();
+    // Verdict and estimate: the document's verdict and warnings first, then what the shaking observed.
     let _ = writeln!(h, "<h2 id=\"estimate\">Estimate</h2>");
-    if n_obs == 3 {
-        let _ = writeln!(h, "<div class=\"banner ok\" id=\"verdict\">All three axes observable: Γ̂ is complete.</div>");
+    verdict_banner(&mut h, d);
+    let n_obs = c.observable.iter().filter(|&&o| o).count();
+    if n_obs == 3 && d.document.trustworthy {
+        let _ = writeln!(
+            h,
+            "<div class=\"banner ok\" id=\"observability\">All three axes observable: Γ̂ is complete.</div>"
+        );
+    } else if n_obs == 3 {
+        let _ = writeln!(
+            h,
+            "<div class=\"banner note\" id=\"observability\">All three axes observable, but Γ̂ is not \
+             trustworthy: see the warnings above.</div>"
+        );
     } else {
         let missing: Vec<&str> = (0..3).filter(|&i| !c.observable[i]).map(|i| AXES[i]).collect();
         let _ = writeln!(
             h,
-            "<div class=\"banner bad\" id=\"verdict\">Not observable along {}: too little excitation. \
+            "<div class=\"banner bad\" id=\"observability\">Not observable along {}: too little excitation. \
              Those components are not estimated (set to 0 in the C header); repeat the calibration shaking along {}.</div>",
             missing.join(", "),
             if missing.len() == 1 { "that axis" } else { "those axes" }
@@ -152,9 +201,20 @@ pub fn render_html(d: &ReportData) -> String {
     let peak_hz = d.document.loop_summary.peak_hz;
     let _ = write!(
         h,
-        "<table id=\"estimate-table\"><thead><tr><th>axis</th><th>Γ̂ [Hz/(m/s²)]</th><th>1σ</th>\
-         <th>Γ̂ [ppb/g]</th><th>1σ</th><th>excitation RMS<br>[rad per Hz/(m/s²)]</th><th>verdict</th>"
+        "<table id=\"estimate-table\">{}<thead><tr><th>axis</th><th>Γ̂ [Hz/(m/s²)]</th><th>1σ</th>\
+         <th>Γ̂ [ppb/g]</th><th>1σ</th><th>excitation RMS<br>[rad per Hz/(m/s²)]</th><th>verdict</th>",
+        if d.document.trustworthy {
+            ""
+        } else {
+            "<caption class=\"untrusted\">Γ̂ below is NOT TRUSTWORTHY (struck through): see the warnings above</caption>"
+        }
     );
+    // The Γ̂ cells of an untrustworthy estimate are struck through and flagged.
+    let gamma_class = if d.document.trustworthy {
+        "num".to_string()
+    } else {
+        format!("num untrusted\" title=\"not trustworthy: {}", escape(&d.document.untrusted_codes().join(", ")))
+    };
     if truth.is_some() {
         let _ = write!(h, "<th>truth [Hz/(m/s²)]</th><th>error</th>");
     }
@@ -172,7 +232,7 @@ pub fn render_html(d: &ReportData) -> String {
         };
         let _ = write!(
             h,
-            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">±{}</td><td class=\"num\">{}</td>\
+            "<tr><td>{}</td><td class=\"{gamma_class}\">{}</td><td class=\"num\">±{}</td><td class=\"{gamma_class}\">{}</td>\
              <td class=\"num\">±{}</td><td class=\"num\">{:.3}</td><td>{verdict}</td>",
             AXES[i],
             num(c.gamma_hz_per_mps2[i], 5, true),

@@ -15,7 +15,8 @@
 //!   RMS before and after compensation and every setting used.
 //! - [`json`]: the same report as JSON (the result document of
 //!   `gsens estimate --json` with its `report` block).
-//! - [`cheader`]: Γ̂ as C preprocessor constants (Hz/(m/s²) and ppb/g);
+//! - [`cheader`]: Γ̂ as C preprocessor constants (Hz/(m/s²) and ppb/g), with
+//!   the verdict (`GSENS_GAMMA_TRUSTWORTHY`) and the warnings;
 //! - [`render_text`]: the text report the CLI prints;
 //! - [`FigureInputs`]: the figure set of a calibration, drawn from its
 //!   [`gsens_calib::Outcome`], and [`write_figures`] to write it as PNG and SVG.
@@ -34,7 +35,7 @@ pub mod spectrum;
 mod text;
 mod time;
 
-pub use figure_set::{Figure, FigureInputs, WriteError, write_figures, write_report_dir};
+pub use figure_set::{Figure, FigureInputs, ReportFiles, WriteError, write_figures, write_report_dir};
 pub use figures::{Format, Image, RenderError};
 pub use montecarlo_text::render_montecarlo_text;
 pub use text::{render_gnss_sdr_tracks, render_response_text, render_text};
@@ -90,6 +91,7 @@ pub struct ReportData<'a> {
     pub meta: ReportMeta,
     /// Figures, in the order shown.
     pub figures: Vec<FigureBlock>,
-    /// The C header, shown in the HTML when given.
+    /// The C header, shown in the HTML when given; `None` when none was
+    /// written (the HTML of an untrustworthy estimate then says so).
     pub c_header: Option<String>,
 }

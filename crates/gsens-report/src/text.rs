@@ -274,7 +274,7 @@ fn verdict_line(doc: &ResultDocument) -> String {
     if doc.trustworthy {
         "verdict: TRUSTWORTHY: Γ̂ holds within its σ as far as gsens's checks can tell".into()
     } else {
-        let codes: Vec<&str> = doc.warnings.iter().filter(|w| w.affects_trust()).map(|w| w.code).collect();
+        let codes = doc.untrusted_codes();
         format!("verdict: NOT TRUSTWORTHY ({}): do not use Γ̂ before the warnings are resolved", codes.join(", "))
     }
 }

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{TRUTH, out_dir, session};
+use common::{TRUTH, out_dir, session, session_shaken};
 use gsens_calib::{LoopIdentificationMode, PipelineSummary, ResultDocument, TimeOffset};
 use gsens_core::LoopModel;
 use gsens_core::LoopSpec;
@@ -80,8 +80,9 @@ fn figures(s: &common::Session) -> Vec<FigureBlock> {
 fn html_report_is_self_contained_and_complete() {
     let s = session([true; 3]);
     let c = &s.calibration;
-    let header = render_c_header(c, &meta());
     let doc = document(c, Some(TRUTH));
+    assert!(doc.trustworthy && doc.warnings.is_empty(), "{:?}", doc.warnings);
+    let header = render_c_header(&doc, &meta());
     let data = ReportData {
         title: "g-sensitivity calibration".into(),
         document: &doc,
@@ -100,7 +101,9 @@ fn html_report_is_self_contained_and_complete() {
         assert!(html.contains(&format!("{:+.4}", c.gamma_ppb_per_g[i].unwrap())));
     }
     assert_eq!(html.matches("<span class=\"tag ok\">observable</span>").count(), 3);
-    assert!(html.contains("All three axes observable"));
+    assert!(html.contains("All three axes observable: Γ̂ is complete."));
+    assert!(html.contains("<div class=\"banner ok\" id=\"verdict\">TRUSTWORTHY"));
+    assert!(!html.contains("NOT TRUSTWORTHY") && !html.contains("class=\"num untrusted"));
     assert!(
         html.contains(&format!("{:.4} rad", c.rms_before_rad)) && html.contains(&format!("{:.4} rad", c.rms_after_rad))
     );
@@ -139,7 +142,7 @@ fn unobservable_axis_is_reported_not_invented() {
     assert!(html.contains("Not observable along z"));
     assert_eq!(html.matches("<span class=\"tag bad\">unobservable</span>").count(), 1);
 
-    let h = render_c_header(c, &meta());
+    let h = render_c_header(&doc, &meta());
     assert!(h.contains("#define GSENS_GAMMA_Z_OBSERVABLE 0"));
     assert!(h.contains("#define GSENS_GAMMA_Z_HZ_PER_MPS2 (0.0)"));
     assert!(!h.contains("GSENS_GAMMA_Z_SIGMA"));
@@ -184,24 +187,41 @@ fn json_has_the_estimate_shape() {
 fn c_header_compiles_and_round_trips() {
     let s = session([true; 3]);
     let c = &s.calibration;
-    let h = render_c_header(c, &meta());
+    let h = render_c_header(&document(c, None), &meta());
     assert!(h.contains("#ifndef GSENS_GAMMA_H") && h.contains("#endif"));
+    assert!(h.contains(" * VERDICT: TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 1)"));
     assert!(h.contains("2025-01-31") && h.contains("logs/tracking.csv"));
     assert!(h.contains("Axis convention"));
-    let dir = out_dir().join("cheader");
+    let Some(text) = compile_and_run(&h, "cheader") else { return };
+    let f: Vec<&str> = text.split_whitespace().collect();
+    for i in 0..3 {
+        assert_eq!(f[i].parse::<f64>().unwrap(), c.gamma_hz_per_mps2[i].unwrap(), "axis {i}");
+    }
+    assert_eq!(f[3].parse::<f64>().unwrap(), c.gamma_ppb_per_g[2].unwrap());
+    assert_eq!(f[4], "7");
+    assert_eq!(f[5], "2025-01-31");
+    assert_eq!(f[7], "1", "GSENS_GAMMA_TRUSTWORTHY");
+}
+
+/// `header` in `out_dir()/name`, included by a C99 program (warnings as
+/// errors) that prints Γ̂, the mask, the date, σ_x and the verdict; its
+/// output, or `None` where no C compiler is installed.
+fn compile_and_run(header: &str, name: &str) -> Option<String> {
+    let dir = out_dir().join(name);
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("gsens_gamma.h"), &h).unwrap();
+    std::fs::write(dir.join("gsens_gamma.h"), header).unwrap();
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     if std::process::Command::new(&cc).arg("--version").output().is_err() {
         eprintln!("no C compiler ({cc}): compile check skipped");
-        return;
+        return None;
     }
     std::fs::write(
         dir.join("main.c"),
         "#include <stdio.h>\n#include \"gsens_gamma.h\"\n\
          int main(void) {\n  static const double g[3] = GSENS_GAMMA_HZ_PER_MPS2_INIT;\n\
          static const double p[3] = GSENS_GAMMA_PPB_PER_G_INIT;\n\
-         printf(\"%.17g %.17g %.17g %.17g %u %s %g\\n\", g[0], g[1], g[2], p[2], GSENS_GAMMA_OBSERVABLE_MASK, GSENS_CALIBRATION_DATE, GSENS_GAMMA_X_SIGMA_HZ_PER_MPS2);\n  return 0;\n}\n",
+         printf(\"%.17g %.17g %.17g %.17g %u %s %g %d\\n\", g[0], g[1], g[2], p[2], GSENS_GAMMA_OBSERVABLE_MASK, GSENS_CALIBRATION_DATE, GSENS_GAMMA_X_SIGMA_HZ_PER_MPS2, GSENS_GAMMA_TRUSTWORTHY);\n\
+         #if !GSENS_GAMMA_TRUSTWORTHY\n  puts(\"untrusted\");\n#endif\n  return 0;\n}\n",
     )
     .unwrap();
     let exe = dir.join("main");
@@ -213,14 +233,113 @@ fn c_header_compiles_and_round_trips() {
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let run = std::process::Command::new(&exe).output().unwrap();
-    let text = String::from_utf8(run.stdout).unwrap();
-    let f: Vec<&str> = text.split_whitespace().collect();
+    Some(String::from_utf8(run.stdout).unwrap())
+}
+
+/// A session shaken 3× harder than [`session`]: the predicted g-induced phase
+/// error passes the discriminator's linear range, so the document calls the
+/// estimate untrustworthy (`discriminator_range`), and every output says so.
+fn untrustworthy() -> (common::Session, ResultDocument) {
+    let s = session_shaken([true; 3], 9.0);
+    let doc = document(&s.calibration, Some(TRUTH));
+    assert!(!doc.trustworthy, "{:?}", doc.warnings);
+    assert_eq!(doc.untrusted_codes(), ["discriminator_range"], "{:?}", doc.warnings);
+    assert_eq!(doc.calibration.observable, [true; 3]);
+    (s, doc)
+}
+
+#[test]
+fn an_untrustworthy_estimate_says_so_in_the_text_and_the_json() {
+    let (s, doc) = untrustworthy();
+    let text = gsens_report::render_text(&doc);
+    let verdict = "verdict: NOT TRUSTWORTHY (discriminator_range): do not use Γ̂ before the warnings are resolved";
+    // Before the estimate and again at the end, after the warning itself.
+    assert!(
+        text.starts_with(&format!("warning [discriminator_range]: {}\n{verdict}\n", doc.warnings[0].message)),
+        "{text}"
+    );
+    assert!(text.trim_end().ends_with(verdict), "{text}");
+    let data = ReportData { title: "t".into(), document: &doc, meta: meta(), figures: figures(&s), c_header: None };
+    let v = report_json(&data).unwrap();
+    assert_eq!(v["trustworthy"], false);
+    assert_eq!(v["warnings"][0]["code"], "discriminator_range");
+    assert_eq!(v["warnings"][0]["message"].as_str(), Some(doc.warnings[0].message.as_str()));
+}
+
+#[test]
+fn an_untrustworthy_estimate_has_a_red_banner_and_marked_numbers_in_the_html() {
+    let (s, doc) = untrustworthy();
+    let c = &doc.calibration;
+    let data = ReportData { title: "t".into(), document: &doc, meta: meta(), figures: figures(&s), c_header: None };
+    let html = render_html(&data);
+    std::fs::write(out_dir().join("report-untrustworthy.html"), &html).unwrap();
+    // The red banner above the table, with each warning's code and message (its fix).
+    let banner =
+        html.find("<div class=\"banner bad\" id=\"verdict\" role=\"alert\">NOT TRUSTWORTHY (discriminator_range)");
+    let table = html.find("id=\"estimate-table\"").unwrap();
+    assert!(banner.is_some_and(|b| b < table), "no red verdict banner above the table");
+    let item =
+        format!("<li><code>discriminator_range</code>: {}</li>", gsens_report::html::escape(&doc.warnings[0].message));
+    assert!(html[..table].contains(&item), "the warning and its fix in the banner");
+    assert!(html.contains("(no gsens_gamma.h was written)"));
+    // No green note: every axis observable, but Γ̂ is not complete in any useful sense.
+    assert!(
+        !html.contains("Γ̂ is complete") && !html.contains("banner ok"),
+        "a green note on an untrustworthy estimate"
+    );
+    assert!(html.contains("All three axes observable, but Γ̂ is not trustworthy"));
+    // Each Γ̂ cell (Hz/(m/s²) and ppb/g) is marked, and the numbers are still shown.
+    let marked = "<td class=\"num untrusted\" title=\"not trustworthy: discriminator_range\">";
+    assert_eq!(html.matches(marked).count(), 6, "{}", &html[table..table + 1500]);
     for i in 0..3 {
-        assert_eq!(f[i].parse::<f64>().unwrap(), c.gamma_hz_per_mps2[i].unwrap(), "axis {i}");
+        assert!(html.contains(&format!("{marked}{:+.5}</td>", c.gamma_hz_per_mps2[i].unwrap())), "Γ̂{i}");
+        assert!(html.contains(&format!("{marked}{:+.4}</td>", c.gamma_ppb_per_g[i].unwrap())), "Γ̂{i} ppb/g");
     }
-    assert_eq!(f[3].parse::<f64>().unwrap(), c.gamma_ppb_per_g[2].unwrap());
-    assert_eq!(f[4], "7");
-    assert_eq!(f[5], "2025-01-31");
+    assert!(html.contains("<caption class=\"untrusted\">"));
+}
+
+#[test]
+fn an_untrustworthy_header_says_so_and_compiles() {
+    let (_, doc) = untrustworthy();
+    let h = render_c_header(&doc, &meta());
+    assert!(h.is_ascii(), "the header's text must be ASCII");
+    let comment_end = h.find("*/").unwrap();
+    let comment = &h[..comment_end];
+    assert!(comment.contains(" * VERDICT: NOT TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 0): discriminator_range."), "{h}");
+    assert!(comment.contains(" *   discriminator_range: the predicted g-induced phase error reaches"), "{h}");
+    // The whole message is there, wrapped, in ASCII.
+    let joined: String = comment.lines().map(|l| l.trim_start_matches(" *").trim()).collect::<Vec<_>>().join(" ");
+    assert!(joined.contains("shake more gently or the loss of discriminator gain biases Gamma-hat low"), "{h}");
+    let warnings = &comment[comment.find(" * Warnings:").unwrap()..];
+    assert!(warnings.lines().all(|l| l.len() <= 92), "{h}");
+    assert!(h.contains("#define GSENS_GAMMA_TRUSTWORTHY 0\n"));
+    let Some(text) = compile_and_run(&h, "cheader-untrusted") else { return };
+    let f: Vec<&str> = text.split_whitespace().collect();
+    assert_eq!(f[7], "0", "GSENS_GAMMA_TRUSTWORTHY");
+    assert_eq!(f[8], "untrusted", "#if !GSENS_GAMMA_TRUSTWORTHY");
+    assert_eq!(f[0].parse::<f64>().unwrap(), doc.calibration.gamma_hz_per_mps2[0].unwrap());
+}
+
+/// `write_report_dir` writes no header for an untrustworthy estimate (and
+/// removes one an earlier report left), unless asked to.
+#[test]
+fn no_header_is_written_for_an_untrustworthy_estimate_unless_asked() {
+    let (_, doc) = untrustworthy();
+    let dir = out_dir().join("untrusted-dir");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("gsens_gamma.h"), "/* an earlier, trusted report's */").unwrap();
+    let files = gsens_report::write_report_dir(&dir, "t", &doc, &[], false, |_| {}).unwrap();
+    assert_eq!(files.header, None);
+    assert!(!dir.join("gsens_gamma.h").exists(), "a header left beside an untrustworthy report");
+    assert!(std::fs::read_to_string(&files.html).unwrap().contains("NOT TRUSTWORTHY"));
+    let files = gsens_report::write_report_dir(&dir, "t", &doc, &[], true, |_| {}).unwrap();
+    let h = std::fs::read_to_string(files.header.unwrap()).unwrap();
+    assert!(h.contains("#define GSENS_GAMMA_TRUSTWORTHY 0"));
+    assert!(std::fs::read_to_string(&files.html).unwrap().contains("#define GSENS_GAMMA_TRUSTWORTHY 0"));
+    // A trustworthy estimate always gets its header.
+    let good = document(&session([true; 3]).calibration, None);
+    let files = gsens_report::write_report_dir(&dir, "t", &good, &[], false, |_| {}).unwrap();
+    assert!(std::fs::read_to_string(files.header.unwrap()).unwrap().contains("#define GSENS_GAMMA_TRUSTWORTHY 1"));
 }
 
 /// The text names each channel's signal and each signal's scaling to L1 when

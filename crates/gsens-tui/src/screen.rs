@@ -464,7 +464,10 @@ fn draw_batch(buf: &mut Buffer, area: Rect, view: &LiveView) {
                 lines.push(Line::from("no warnings"));
             }
             for w in warnings {
-                lines.push(Line::from(Span::styled(format!("- {w}"), Style::new().fg(Color::Yellow))));
+                lines.push(Line::from(Span::styled(
+                    format!("- {}: {}", w.code, w.message),
+                    Style::new().fg(Color::Yellow),
+                )));
             }
         }
         (None, Some(error)) => {

@@ -57,3 +57,17 @@ pub fn fails(args: &[&str]) -> String {
     assert!(!err.contains("panicked"), "gsens {args:?} panicked: {err}");
     err
 }
+
+/// Writes `src` (an imu.csv in m/s²) as `dst` in g: fx, fy, fz divided by
+/// g₀ = 9.80665 m/s², as an IMU logging in g would have written it.
+pub fn imu_in_g(src: &Path, dst: &Path) {
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines = text.lines();
+    let mut g = String::from(lines.next().unwrap());
+    g.push('\n');
+    for l in lines {
+        let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+        g += &format!("{},{},{},{}\n", f[0], f[1] / 9.80665, f[2] / 9.80665, f[3] / 9.80665);
+    }
+    std::fs::write(dst, g).unwrap();
+}

@@ -17,6 +17,11 @@ pub struct Session {
 }
 
 pub fn session(shake: [bool; 3]) -> Session {
+    session_shaken(shake, 3.0)
+}
+
+/// [`session`] with the shaking's amplitude `amplitude_mps2` \[m/s²\] (3 in [`session`]).
+pub fn session_shaken(shake: [bool; 3], amplitude_mps2: f64) -> Session {
     let dt = 0.025;
     let n = 2400;
     let t_s: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
@@ -29,7 +34,7 @@ pub fn session(shake: [bool; 3]) -> Session {
                 let (lo, hi) = (8.0 + 14.0 * i as f64, 20.0 + 14.0 * i as f64);
                 let on = (t >= lo && t < hi) || t >= 50.0;
                 if shake[i] && on {
-                    a[i] += 3.0 * (tau * (0.8 + 0.1 * i as f64) * t).sin();
+                    a[i] += amplitude_mps2 * (tau * (0.8 + 0.1 * i as f64) * t).sin();
                 }
             }
             a
