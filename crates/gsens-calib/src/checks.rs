@@ -4,7 +4,7 @@
 use crate::pipeline::Outcome;
 use crate::{Calibration, LoopSummary, Warning};
 use gsens_core::LoggedPhase;
-use gsens_core::units::STANDARD_GRAVITY_MPS2;
+use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2};
 use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::f64::consts::{PI, TAU};
@@ -72,7 +72,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
             let cause = if (median - 1.0).abs() < GRAVITY_TOLERANCE {
                 format!("the IMU log looks like it is in g: multiply fx, fy, fz by {g0} to get m/s²")
             } else if (median / (1e3 * g0) - 1.0).abs() < GRAVITY_TOLERANCE {
-                format!("the IMU log looks like it is in mg: multiply fx, fy, fz by {} to get m/s²", g0 / 1e3)
+                format!("the IMU log looks like it is in mg: multiply fx, fy, fz by {} to get m/s²", Decimal(g0 / 1e3))
             } else {
                 "check the IMU log's units and scale factor (imu.csv holds specific force in m/s²)".into()
             };
@@ -98,10 +98,10 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                 "the tracking log's interval is {} s and it lasts {:.0} s ({:.1} h) for a session shaken by hand: \
                  its time stamps look like milliseconds ({} ms would be a usual log interval); divide t_s by 1000 \
                  (and the IMU's if it is in milliseconds too)",
-                c.log_interval_s,
+                Decimal(c.log_interval_s),
                 span_s(&outcome.session.t_s),
                 span_s(&outcome.session.t_s) / 3600.0,
-                c.log_interval_s
+                Decimal(c.log_interval_s)
             ),
         });
     } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
@@ -114,7 +114,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                 "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
                  resolved; log at least every {longest_s:.3} s",
-                c.log_interval_s,
+                Decimal(c.log_interval_s),
             ),
         });
     }
@@ -143,9 +143,11 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
         w.push(Warning {
             code: "time_units",
             message: format!(
-                "the IMU's sample interval is {imu_h} s: its time stamps look like milliseconds ({imu_h} ms would \
+                "the IMU's sample interval is {} s: its time stamps look like milliseconds ({} ms would \
                  be a usual IMU interval), so the tracking epochs see the specific force of a few samples \
-                 stretched over the session; divide the IMU's t_s by 1000"
+                 stretched over the session; divide the IMU's t_s by 1000",
+                Decimal(imu_h),
+                Decimal(imu_h)
             ),
         });
     } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
@@ -154,9 +156,10 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
         w.push(Warning {
             code: "imu_rate",
             message: format!(
-                "the IMU's sample interval {imu_h} s gives {:.1} samples per period of the loop's peak response \
+                "the IMU's sample interval {} s gives {:.1} samples per period of the loop's peak response \
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the motion that excites the loop is not \
                  resolved; log the IMU at least every {longest_s:.3} s",
+                Decimal(imu_h),
                 1.0 / (f_peak * imu_h)
             ),
         });

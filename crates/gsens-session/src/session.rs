@@ -9,6 +9,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use gsens_core::average_phase_rad;
+use gsens_core::units::Decimal;
 use gsens_io::{ImuSeries, TrackingLog, read_imu_file, read_tracking_file};
 
 use crate::error::SessionError;
@@ -530,7 +531,11 @@ pub fn prepare_session_from(
     }
     for (i, s) in stats.iter().enumerate() {
         if s.in_span == 0 {
-            reasons[i] = format!("no rows in the usable span [{}, {}] s (overlap with the IMU)", span.0, span.1);
+            reasons[i] = format!(
+                "no rows in the usable span [{}, {}] s (overlap with the IMU)",
+                Decimal(span.0),
+                Decimal(span.1)
+            );
         } else if s.above_mask == 0 {
             reasons[i] = format!(
                 "all {} rows in the usable span below the elevation mask of {} deg",
