@@ -328,11 +328,13 @@ fn joint_fit_axes(
     let (noise, spectra) =
         rayon::join(|| gls::fit_ar(&slices, max_order), || gls::ColumnSpectra::new(&full_columns, &segments));
     let middle = spectra.middle(&noise);
-    let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
+    // A singular normal matrix leaves σ undefined (NaN), never 0: the axes
+    // then come out unobservable (`Calibration::include_nuisance`).
+    let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::from_element(p, p, f64::NAN));
     let cov = &jtj_inv * &middle * &jtj_inv;
     // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
     let a3 = jac.columns(0, na).into_owned();
-    let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(na, na));
+    let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::from_element(na, na, f64::NAN));
     // Entry (i, j) of the middle depends on columns i and j alone: the Γ
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();
@@ -357,7 +359,8 @@ fn joint_fit_axes(
     if spec.offset_max_abs_s.is_some() {
         tau_idx = Some(c);
     }
-    let sd = |i: usize| cov[(i, i)].max(0.0).sqrt();
+    // No variance (a singular fit, or rounding below 0) is no σ: NaN, not 0.
+    let sd = |i: usize| if cov[(i, i)] > 0.0 { cov[(i, i)].sqrt() } else { f64::NAN };
     let fitted = loop_at(ln_s, zeta);
     let sigma_ln = loop_idx.map(sd);
     let z = sigma_ln.map(|s| if s > 0.0 { ln_s / s } else { 0.0 });
