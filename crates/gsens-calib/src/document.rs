@@ -7,7 +7,7 @@ use crate::{Calibration, DISCRIMINATOR_LINEAR_RANGE_RAD};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::import::TrackSummary;
-use gsens_session::{ChannelSummary, SelectionConfig, SignalSummary};
+use gsens_session::{ChannelRanking, ChannelSummary, SelectionConfig, SignalSummary};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -169,6 +169,10 @@ pub struct ResultDocument {
     pub signals: Vec<SignalSummary>,
     /// The channel selection used.
     pub selection: SelectionConfig,
+    /// How the tracks were ranked for the selection's `max_channels`: `cn0`
+    /// (mean C/N0) or `noise` (C/N0 did not vary between them); `null` for a
+    /// document built [`from_parts`](Self::from_parts).
+    pub channel_ranking: Option<ChannelRanking>,
     /// The session-level settings.
     pub pipeline: PipelineSummary,
     /// The inputs as role → path.
@@ -206,6 +210,7 @@ impl ResultDocument {
         );
         doc.gnss_sdr = outcome.gnss_sdr.clone();
         doc.signals = outcome.session.signals.clone();
+        doc.channel_ranking = Some(outcome.session.channel_ranking);
         doc.warnings.extend(carrier_range_warning(&doc.calibration, &doc.signals));
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
@@ -295,6 +300,7 @@ impl ResultDocument {
             calibration,
             channels,
             signals: Vec::new(),
+            channel_ranking: None,
             selection,
             pipeline,
             inputs: inputs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
