@@ -58,6 +58,7 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 ///   the g-induced phase error is left to estimate from.
 /// - `phase_units`: [`phase_units`].
 /// - `carrier_gain`: [`carrier_gain`].
+/// - `phase_sign`: [`phase_sign`].
 /// - `imu_stuck`, `imu_clipped`: the runs of identical IMU samples
 ///   [`gsens_session::find_flat_runs`] found, and the epochs left out.
 pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
@@ -166,8 +167,86 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
     }
     w.extend(phase_units(outcome, c));
     w.extend(carrier_gain(&outcome.session.channels));
+    w.extend(phase_sign(outcome, c));
     w.extend(flat_run_warnings(&outcome.imu_flat_runs, outcome.imu_flat_run_epochs));
     w
+}
+
+/// Largest Doppler rate magnitude a static antenna sees from a GPS satellite
+/// at L1 \[Hz/s\]: at zenith, ρ̈ = v²/ρ − g_sat ≈ 0.18 m/s² (Kaplan & Hegarty,
+/// *Understanding GPS*, 2nd ed., §3.4: 0.936 Hz/s at L1).
+const MAX_STATIC_DOPPLER_RATE_HZ_PER_S: f64 = 0.936;
+
+/// Normal quantile of the `phase_sign` test: a false-alarm probability of
+/// 10⁻³ (one-sided) while the sign is right and the oscillator holds.
+const PHASE_SIGN_FALSE_ALARM: f64 = 1e-3;
+
+/// Epochs' channel-averaged phase error over the whole session: its mean
+/// \[rad\] and the mean's standard error from the means of consecutive blocks
+/// of `block_s` (the residuals' correlation span; blocks keep the loop's
+/// colour and the shaking's leftovers in the error); `None` with fewer than
+/// 8 blocks.
+pub(crate) fn mean_phase_level_rad(
+    phase_err_rad: &[Option<f64>],
+    log_interval_s: f64,
+    block_s: f64,
+) -> Option<(f64, f64)> {
+    let per_block = ((block_s / log_interval_s).round() as usize).max(1);
+    let means: Vec<f64> = phase_err_rad
+        .chunks(per_block)
+        .filter_map(|b| {
+            let (n, sum) = b.iter().flatten().fold((0usize, 0.0), |(n, s), v| (n + 1, s + v));
+            (2 * n >= b.len() && b.len() == per_block).then(|| sum / n as f64)
+        })
+        .collect();
+    let m = means.len();
+    if m < 8 {
+        return None;
+    }
+    let mean = means.iter().sum::<f64>() / m as f64;
+    let var = means.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (m - 1) as f64;
+    Some((mean, (var / m as f64).sqrt()))
+}
+
+/// `phase_sign`: the phase error logged with the opposite sign
+/// (θ_replica − θ_signal), which turns Γ̂ into −Γ with nothing else to show.
+///
+/// With a static antenna every satellite's Doppler rate ḟ is ≤ 0 (the range
+/// accelerates away: ρ̈ = (|v|² − ρ̇²)/ρ + û·a_sat > 0 over a GPS pass, at most
+/// 0.936 Hz/s at L1), and a loop F = c0 + c1/s (2nd order; one with c2 > 0
+/// has no such error and is not tested) tracks a Doppler ramp with the
+/// steady-state error φ = 2π·ḟ/c1 (from L(s)·ḟ/s² at s → 0; signal leading
+/// the replica is φ > 0). The channel offsets sum to zero, so the mean of the
+/// averaged phase is the mean of the tracks' means: ≤ 0. The oscillator's
+/// own drift ẏ adds −2π·f_c·ẏ/c1 to every channel alike; the shaking adds
+/// only its net change over the session. A mean above zero by more than
+/// Φ⁻¹(1 − 10⁻³) standard errors therefore means the sign is flipped, or
+/// the oscillator's frequency fell by at least c1·mean/(2π·f_L1) per second
+/// (a TCXO warming up; no OCXO), which the message names.
+pub(crate) fn phase_sign(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
+    let coeffs = c.loop_used.coeffs().ok().filter(|k| k.c2_per_s3 == 0.0 && k.c1_per_s2 > 0.0)?;
+    let block_s = outcome.settings.estimate.hac_lag_s;
+    let s = &outcome.session;
+    let (mean, se) = mean_phase_level_rad(&s.phase_err_rad, s.log_interval_s, block_s)?;
+    let z_crit = Normal::standard().inverse_cdf(1.0 - PHASE_SIGN_FALSE_ALARM);
+    if !(mean > z_crit * se) {
+        return None;
+    }
+    let c1 = coeffs.c1_per_s2;
+    let drift_per_s = c1 * mean / (TAU * gsens_core::units::GPS_L1_HZ);
+    let lowest = TAU * -MAX_STATIC_DOPPLER_RATE_HZ_PER_S / c1;
+    Some(Warning {
+        code: "phase_sign",
+        message: format!(
+            "the channels' mean phase error is {mean:+.3} ± {se:.3} rad (z = {:+.1}, beyond {z_crit:.2}): with a \
+             static antenna each satellite's Doppler rate is ≤ 0, so this loop's mean phase error lies between \
+             {lowest:.3} and 0 rad; the phase error looks logged with the opposite sign (θ_replica − θ_signal), which \
+             makes Γ̂ come out as −Γ: negate phase_err_rad. Only an oscillator whose frequency fell by more than \
+             {:.1e} per second during the session (a TCXO warming up) could give this with the right sign",
+            mean / se,
+            drift_per_s
+        ),
+    })
 }
 
 /// The variance of one logged phase error \[rad²\] that thermal noise alone
@@ -435,4 +514,31 @@ fn flat_run_warnings(runs: &FlatRuns, masked_epochs: usize) -> Vec<Warning> {
         });
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mean_phase_level_rad;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// The level of a constant plus white noise: the mean within 3 standard
+    /// errors, and the standard error σ/√N within the spread of a block
+    /// estimate (40 blocks: ±11 % for one σ); gaps and a short tail block are
+    /// left out; too few blocks give nothing.
+    #[test]
+    fn mean_phase_level_is_the_mean_and_its_standard_error() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+        let noise = Normal::new(0.0, 0.1).unwrap();
+        let n = 4000 + 30;
+        let mut phase: Vec<Option<f64>> = (0..n).map(|_| Some(-0.08 + noise.sample(&mut rng))).collect();
+        for p in &mut phase[1000..1010] {
+            *p = None;
+        }
+        let (mean, se) = mean_phase_level_rad(&phase, 0.025, 2.5).unwrap();
+        let want_se = 0.1 / (4000f64).sqrt();
+        assert!((mean + 0.08).abs() < 3.0 * want_se, "{mean}");
+        assert!((se / want_se - 1.0).abs() < 0.35, "{se} vs {want_se}");
+        assert_eq!(mean_phase_level_rad(&phase[..700], 0.025, 2.5), None);
+    }
 }
