@@ -149,7 +149,10 @@
 //!    Doppler-rate steady-state error do not trigger). A row with
 //!    `|d − ℓ| > k·σ_i` ([`ScreeningConfig::deviation_k`]) starts an event, which
 //!    lasts until the deviation has stayed within bounds for
-//!    [`ScreeningConfig::settle_s`]. A Costas loop slipping by π, or a pilot
+//!    [`ScreeningConfig::settle_s`]; an event with a single row beyond the
+//!    bound is the discriminator's noise (an atan output's tail is far heavier
+//!    than Gaussian at low C/N0, see [`ScreeningConfig::deviation_k`]) and is
+//!    dropped. A Costas loop slipping by π, or a pilot
 //!    loop by 2π, logs such a fast excursion: its discriminator wraps, the loop
 //!    pulls in to the next stable point, and its filter state needs a loop time
 //!    constant to recover. The event and [`ScreeningConfig::guard_s`] on each
