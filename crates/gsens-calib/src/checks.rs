@@ -229,9 +229,7 @@ pub(crate) fn phase_sign(outcome: &Outcome, c: &Calibration) -> Option<Warning> 
     let s = &outcome.session;
     let (mean, se) = mean_phase_level_rad(&s.phase_err_rad, s.log_interval_s, block_s)?;
     let z_crit = Normal::standard().inverse_cdf(1.0 - PHASE_SIGN_FALSE_ALARM);
-    if !(mean > z_crit * se) {
-        return None;
-    }
+    (mean > z_crit * se).then_some(())?;
     let c1 = coeffs.c1_per_s2;
     let drift_per_s = c1 * mean / (TAU * gsens_core::units::GPS_L1_HZ);
     let lowest = TAU * -MAX_STATIC_DOPPLER_RATE_HZ_PER_S / c1;
@@ -456,7 +454,7 @@ pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
              f_true/f_given over the channels averaged",
             high.len(),
             tested.len(),
-            CARRIER_GAIN_FALSE_ALARM * 100.0,
+            Decimal(CARRIER_GAIN_FALSE_ALARM * 100.0),
             high.join("; ")
         ),
     })

@@ -5,6 +5,7 @@
 use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
 use crate::{Calibration, DISCRIMINATOR_LINEAR_RANGE_RAD};
 use gsens_core::LoopModel;
+use gsens_core::units::Decimal;
 use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::import::TrackSummary;
 use gsens_session::{ChannelRanking, ChannelSummary, SelectionConfig, SignalSummary};
@@ -381,7 +382,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
                 j.sigma_natural_frequency_hz.unwrap_or(f64::NAN),
                 j.loop_test_z.unwrap_or(f64::NAN),
                 j.loop_test_threshold_z,
-                j.loop_test_false_alarm * 100.0,
+                Decimal(j.loop_test_false_alarm * 100.0),
                 j.fitted_loop,
                 // Only the observable axes have a number to show.
                 (0..3)

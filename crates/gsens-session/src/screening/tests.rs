@@ -426,7 +426,7 @@ fn lone_tail_rows_are_not_slips() {
         for j in 0..t.t_s.len() {
             let k = ((t.t_s[j] - 100.0) / T).round() as usize;
             let lone = t.channel == 4 && k % 400 == 200;
-            let slip = t.channel == 0 && k >= 2400 && k < 2400 + 40;
+            let slip = t.channel == 0 && (2400..2440).contains(&k);
             let extra = if lone { 1.3 * if k % 800 == 200 { 1.0 } else { -1.0 } } else { 0.0 };
             let s = if slip { slip_shape((k - 2400) as f64 * T) } else { 0.0 };
             rows.push(TrackingRow {
