@@ -33,8 +33,8 @@ pub fn cn0_dbhz_to_ratio_hz(cn0_dbhz: f64) -> f64 {
 
 /// Significant digits a computed number keeps in a message: f64 arithmetic
 /// (sums, products, least-squares fits) leaves noise in the last few of its
-/// 15–17, which is no part of the value (0.001·25 may come out as
-/// 0.025000000000000026).
+/// 15–17, which is no part of the value (0.1 + 0.2 is 0.30000000000000004;
+/// a 40 Hz log's interval fitted to its time stamps, 0.025000000000000026).
 pub const MESSAGE_SIGNIFICANT_DIGITS: i32 = 12;
 
 /// A computed number as a message shows it: rounded to
