@@ -4,7 +4,7 @@
 use crate::pipeline::Outcome;
 use crate::{Calibration, LoopSummary, Warning};
 use gsens_core::LoggedPhase;
-use gsens_core::units::STANDARD_GRAVITY_MPS2;
+use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2};
 use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::f64::consts::{PI, TAU};
@@ -58,6 +58,7 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 ///   the g-induced phase error is left to estimate from.
 /// - `phase_units`: [`phase_units`].
 /// - `carrier_gain`: [`carrier_gain`].
+/// - `phase_sign`: [`phase_sign`].
 /// - `imu_stuck`, `imu_clipped`: the runs of identical IMU samples
 ///   [`gsens_session::find_flat_runs`] found, and the epochs left out.
 pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
@@ -72,7 +73,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
             let cause = if (median - 1.0).abs() < GRAVITY_TOLERANCE {
                 format!("the IMU log looks like it is in g: multiply fx, fy, fz by {g0} to get m/s²")
             } else if (median / (1e3 * g0) - 1.0).abs() < GRAVITY_TOLERANCE {
-                format!("the IMU log looks like it is in mg: multiply fx, fy, fz by {} to get m/s²", g0 / 1e3)
+                format!("the IMU log looks like it is in mg: multiply fx, fy, fz by {} to get m/s²", Decimal(g0 / 1e3))
             } else {
                 "check the IMU log's units and scale factor (imu.csv holds specific force in m/s²)".into()
             };
@@ -98,10 +99,10 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                 "the tracking log's interval is {} s and it lasts {:.0} s ({:.1} h) for a session shaken by hand: \
                  its time stamps look like milliseconds ({} ms would be a usual log interval); divide t_s by 1000 \
                  (and the IMU's if it is in milliseconds too)",
-                c.log_interval_s,
+                Decimal(c.log_interval_s),
                 span_s(&outcome.session.t_s),
                 span_s(&outcome.session.t_s) / 3600.0,
-                c.log_interval_s
+                Decimal(c.log_interval_s)
             ),
         });
     } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
@@ -114,7 +115,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                 "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
                  resolved; log at least every {longest_s:.3} s",
-                c.log_interval_s,
+                Decimal(c.log_interval_s),
             ),
         });
     }
@@ -143,9 +144,11 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
         w.push(Warning {
             code: "time_units",
             message: format!(
-                "the IMU's sample interval is {imu_h} s: its time stamps look like milliseconds ({imu_h} ms would \
+                "the IMU's sample interval is {} s: its time stamps look like milliseconds ({} ms would \
                  be a usual IMU interval), so the tracking epochs see the specific force of a few samples \
-                 stretched over the session; divide the IMU's t_s by 1000"
+                 stretched over the session; divide the IMU's t_s by 1000",
+                Decimal(imu_h),
+                Decimal(imu_h)
             ),
         });
     } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
@@ -154,17 +157,94 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
         w.push(Warning {
             code: "imu_rate",
             message: format!(
-                "the IMU's sample interval {imu_h} s gives {:.1} samples per period of the loop's peak response \
+                "the IMU's sample interval {} s gives {:.1} samples per period of the loop's peak response \
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the motion that excites the loop is not \
                  resolved; log the IMU at least every {longest_s:.3} s",
+                Decimal(imu_h),
                 1.0 / (f_peak * imu_h)
             ),
         });
     }
     w.extend(phase_units(outcome, c));
     w.extend(carrier_gain(&outcome.session.channels));
+    w.extend(phase_sign(outcome, c));
     w.extend(flat_run_warnings(&outcome.imu_flat_runs, outcome.imu_flat_run_epochs));
     w
+}
+
+/// Largest Doppler rate magnitude a static antenna sees from a GPS satellite
+/// at L1 \[Hz/s\]: at zenith, ρ̈ = v²/ρ − g_sat ≈ 0.18 m/s² (Kaplan & Hegarty,
+/// *Understanding GPS*, 2nd ed., §3.4: 0.936 Hz/s at L1).
+const MAX_STATIC_DOPPLER_RATE_HZ_PER_S: f64 = 0.936;
+
+/// Normal quantile of the `phase_sign` test: a false-alarm probability of
+/// 10⁻³ (one-sided) while the sign is right and the oscillator holds.
+const PHASE_SIGN_FALSE_ALARM: f64 = 1e-3;
+
+/// Epochs' channel-averaged phase error over the whole session: its mean
+/// \[rad\] and the mean's standard error from the means of consecutive blocks
+/// of `block_s` (the residuals' correlation span; blocks keep the loop's
+/// colour and the shaking's leftovers in the error); `None` with fewer than
+/// 8 blocks.
+pub(crate) fn mean_phase_level_rad(
+    phase_err_rad: &[Option<f64>],
+    log_interval_s: f64,
+    block_s: f64,
+) -> Option<(f64, f64)> {
+    let per_block = ((block_s / log_interval_s).round() as usize).max(1);
+    let means: Vec<f64> = phase_err_rad
+        .chunks(per_block)
+        .filter_map(|b| {
+            let (n, sum) = b.iter().flatten().fold((0usize, 0.0), |(n, s), v| (n + 1, s + v));
+            (2 * n >= b.len() && b.len() == per_block).then(|| sum / n as f64)
+        })
+        .collect();
+    let m = means.len();
+    if m < 8 {
+        return None;
+    }
+    let mean = means.iter().sum::<f64>() / m as f64;
+    let var = means.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (m - 1) as f64;
+    Some((mean, (var / m as f64).sqrt()))
+}
+
+/// `phase_sign`: the phase error logged with the opposite sign
+/// (θ_replica − θ_signal), which turns Γ̂ into −Γ with nothing else to show.
+///
+/// With a static antenna every satellite's Doppler rate ḟ is ≤ 0 (the range
+/// accelerates away: ρ̈ = (|v|² − ρ̇²)/ρ + û·a_sat > 0 over a GPS pass, at most
+/// 0.936 Hz/s at L1), and a loop F = c0 + c1/s (2nd order; one with c2 > 0
+/// has no such error and is not tested) tracks a Doppler ramp with the
+/// steady-state error φ = 2π·ḟ/c1 (from L(s)·ḟ/s² at s → 0; signal leading
+/// the replica is φ > 0). The channel offsets sum to zero, so the mean of the
+/// averaged phase is the mean of the tracks' means: ≤ 0. The oscillator's
+/// own drift ẏ adds −2π·f_c·ẏ/c1 to every channel alike; the shaking adds
+/// only its net change over the session. A mean above zero by more than
+/// Φ⁻¹(1 − 10⁻³) standard errors therefore means the sign is flipped, or
+/// the oscillator's frequency fell by at least c1·mean/(2π·f_L1) per second
+/// (a TCXO warming up; no OCXO), which the message names.
+pub(crate) fn phase_sign(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
+    let coeffs = c.loop_used.coeffs().ok().filter(|k| k.c2_per_s3 == 0.0 && k.c1_per_s2 > 0.0)?;
+    let block_s = outcome.settings.estimate.hac_lag_s;
+    let s = &outcome.session;
+    let (mean, se) = mean_phase_level_rad(&s.phase_err_rad, s.log_interval_s, block_s)?;
+    let z_crit = Normal::standard().inverse_cdf(1.0 - PHASE_SIGN_FALSE_ALARM);
+    (mean > z_crit * se).then_some(())?;
+    let c1 = coeffs.c1_per_s2;
+    let drift_per_s = c1 * mean / (TAU * gsens_core::units::GPS_L1_HZ);
+    let lowest = TAU * -MAX_STATIC_DOPPLER_RATE_HZ_PER_S / c1;
+    Some(Warning {
+        code: "phase_sign",
+        message: format!(
+            "the channels' mean phase error is {mean:+.3} ± {se:.3} rad (z = {:+.1}, beyond {z_crit:.2}): with a \
+             static antenna each satellite's Doppler rate is ≤ 0, so this loop's mean phase error lies between \
+             {lowest:.3} and 0 rad; the phase error looks logged with the opposite sign (θ_replica − θ_signal), which \
+             makes Γ̂ come out as −Γ: negate phase_err_rad. Only an oscillator whose frequency fell by more than \
+             {:.1e} per second during the session (a TCXO warming up) could give this with the right sign",
+            mean / se,
+            drift_per_s
+        ),
+    })
 }
 
 /// The variance of one logged phase error \[rad²\] that thermal noise alone
@@ -374,7 +454,7 @@ pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
              f_true/f_given over the channels averaged",
             high.len(),
             tested.len(),
-            CARRIER_GAIN_FALSE_ALARM * 100.0,
+            Decimal(CARRIER_GAIN_FALSE_ALARM * 100.0),
             high.join("; ")
         ),
     })
@@ -432,4 +512,31 @@ fn flat_run_warnings(runs: &FlatRuns, masked_epochs: usize) -> Vec<Warning> {
         });
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mean_phase_level_rad;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// The level of a constant plus white noise: the mean within 3 standard
+    /// errors, and the standard error σ/√N within the spread of a block
+    /// estimate (40 blocks: ±11 % for one σ); gaps and a short tail block are
+    /// left out; too few blocks give nothing.
+    #[test]
+    fn mean_phase_level_is_the_mean_and_its_standard_error() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+        let noise = Normal::new(0.0, 0.1).unwrap();
+        let n = 4000 + 30;
+        let mut phase: Vec<Option<f64>> = (0..n).map(|_| Some(-0.08 + noise.sample(&mut rng))).collect();
+        for p in &mut phase[1000..1010] {
+            *p = None;
+        }
+        let (mean, se) = mean_phase_level_rad(&phase, 0.025, 2.5).unwrap();
+        let want_se = 0.1 / (4000f64).sqrt();
+        assert!((mean + 0.08).abs() < 3.0 * want_se, "{mean}");
+        assert!((se / want_se - 1.0).abs() < 0.35, "{se} vs {want_se}");
+        assert_eq!(mean_phase_level_rad(&phase[..700], 0.025, 2.5), None);
+    }
 }

@@ -5,9 +5,10 @@
 use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
 use crate::{Calibration, DISCRIMINATOR_LINEAR_RANGE_RAD};
 use gsens_core::LoopModel;
+use gsens_core::units::Decimal;
 use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::import::TrackSummary;
-use gsens_session::{ChannelSummary, SelectionConfig, SignalSummary};
+use gsens_session::{ChannelRanking, ChannelSummary, SelectionConfig, SignalSummary};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -80,7 +81,8 @@ pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f
         .filter_map(|(a, _)| a.shaking_frequency_hz)
         .reduce(f64::max)?;
     let offset = j.sigma_imu_time_offset_s.map(|s| core::f64::consts::TAU * f_hz * s);
-    let scale = j.sigma_natural_frequency_hz.zip(j.natural_frequency_hz).map(|(s, f)| s / f);
+    // The loop Γ̂ is under: the data's fit combined with the stated loop's tolerance.
+    let scale = j.sigma_used_natural_frequency_hz.zip(j.used_natural_frequency_hz).map(|(s, f)| s / f);
     let x = offset.into_iter().chain(scale).reduce(f64::max)?;
     Some((x, offset, scale))
 }
@@ -194,6 +196,10 @@ pub struct ResultDocument {
     pub signals: Vec<SignalSummary>,
     /// The channel selection used.
     pub selection: SelectionConfig,
+    /// How the tracks were ranked for the selection's `max_channels`: `cn0`
+    /// (mean C/N0) or `noise` (C/N0 did not vary between them); `null` for a
+    /// document built [`from_parts`](Self::from_parts).
+    pub channel_ranking: Option<ChannelRanking>,
     /// The session-level settings.
     pub pipeline: PipelineSummary,
     /// The inputs as role → path.
@@ -231,6 +237,7 @@ impl ResultDocument {
         );
         doc.gnss_sdr = outcome.gnss_sdr.clone();
         doc.signals = outcome.session.signals.clone();
+        doc.channel_ranking = Some(outcome.session.channel_ranking);
         doc.warnings.extend(carrier_range_warning(&doc.calibration, &doc.signals));
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
@@ -327,6 +334,7 @@ impl ResultDocument {
             calibration,
             channels,
             signals: Vec::new(),
+            channel_ranking: None,
             selection,
             pipeline,
             inputs: inputs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
@@ -407,7 +415,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
                 j.sigma_natural_frequency_hz.unwrap_or(f64::NAN),
                 j.loop_test_z.unwrap_or(f64::NAN),
                 j.loop_test_threshold_z,
-                j.loop_test_false_alarm * 100.0,
+                Decimal(j.loop_test_false_alarm * 100.0),
                 j.fitted_loop,
                 // Only the observable axes have a number to show.
                 (0..3)

@@ -2,6 +2,7 @@
 
 use gsens_core::LoopError;
 use gsens_core::RegressorError;
+use gsens_core::units::Decimal;
 
 /// Why a calibration (or one of its searches) could not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -14,10 +15,10 @@ pub enum CalibError {
     #[error("{0}")]
     Intervals(RegressorError),
     /// The discrete loop at this interval is unstable.
-    #[error("the loop (Bn, order) is unstable when updated every {0} s; is the loop update interval right?")]
+    #[error("the loop (Bn, order) is unstable when updated every {} s; is the loop update interval right?", Decimal(*.0))]
     UnstableAtInterval(f64),
     /// A setting outside its range.
-    #[error("setting {name} = {} is out of range: expected {expected}", Number(*value))]
+    #[error("setting {name} = {} is out of range: expected {expected}", Decimal(*value))]
     Setting {
         /// The setting's name (as in the result document's `settings`).
         name: &'static str,
@@ -70,19 +71,4 @@ pub enum CalibError {
     /// The loop has no natural frequency to identify.
     #[error("the loop has no natural frequency to identify")]
     NoNaturalFrequency,
-}
-
-/// A number as a message shows it: as written for ordinary magnitudes, in
-/// exponent form beyond them (`1e300`, not three hundred digits).
-struct Number(f64);
-
-impl core::fmt::Display for Number {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let a = self.0.abs();
-        if a != 0.0 && a.is_finite() && !(1e-4..1e12).contains(&a) {
-            write!(f, "{:e}", self.0)
-        } else {
-            write!(f, "{}", self.0)
-        }
-    }
 }

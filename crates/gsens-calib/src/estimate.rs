@@ -155,22 +155,11 @@ pub fn calibrate(series: &EpochSeries, settings: &EstimateSettings) -> Result<Ca
         .collect();
     let (mut c, _) = calibrate_all_axes(&EpochSeries { accel_mps2: &masked, ..*series }, settings)?;
     for &i in &unobservable {
-        c.observable[i] = false;
+        c.make_unobservable(i, "");
         c.excitation_rms[i] = all.excitation_rms[i];
         c.gamma_raw_hz_per_mps2[i] = all.gamma_raw_hz_per_mps2[i];
         c.sigma_white_hz_per_mps2[i] = all.sigma_white_hz_per_mps2[i];
         c.axes[i] = all.axes[i].clone();
-        c.gamma_hz_per_mps2[i] = None;
-        c.sigma_hz_per_mps2[i] = None;
-        c.sigma_statistical_hz_per_mps2[i] = None;
-        c.sigma_imu_hz_per_mps2[i] = None;
-        c.gamma_ppb_per_g[i] = None;
-        c.sigma_ppb_per_g[i] = None;
-        c.crlb_hz_per_mps2[i] = None;
-        for j in 0..3 {
-            c.covariance_hz_per_mps2_sq[i][j] = None;
-            c.covariance_hz_per_mps2_sq[j][i] = None;
-        }
     }
     c.condition_number = all.condition_number;
     Ok(c)
@@ -323,9 +312,12 @@ fn calibrate_all_axes(
         obs.excitation_rms,
         settings.criteria.min_excitation_rms,
     );
+    // σ exactly 0 is no uncertainty but no information (the estimator's
+    // covariance dropped the axis, e.g. the pseudo-inverse's cut).
+    let no_information: Vec<usize> = (0..3).filter(|&i| observable[i] && sigma_stat[i] == Some(0.0)).collect();
     let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
     let normal = *batch.normal_equations();
-    let calibration = Calibration {
+    let mut calibration = Calibration {
         gamma_hz_per_mps2: gamma_out,
         sigma_hz_per_mps2: sigma,
         sigma_statistical_hz_per_mps2: sigma_stat,
@@ -363,6 +355,9 @@ fn calibrate_all_axes(
         loop_used,
         settings: *settings,
     };
+    for i in no_information {
+        calibration.make_unobservable(i, "its σ came out 0: the estimator's covariance holds no information on it");
+    }
     Ok((calibration, normal))
 }
 

@@ -463,11 +463,13 @@ fn solve(
     let (noise, spectra) =
         rayon::join(|| gls::fit_ar(&slices, max_order), || gls::ColumnSpectra::new(&full_columns, &segments));
     let middle = spectra.middle(&noise);
-    let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::zeros(p, p));
+    // A singular normal matrix leaves σ undefined (NaN), never 0: the axes
+    // then come out unobservable (`Calibration::include_nuisance`).
+    let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::from_element(p, p, f64::NAN));
     let cov = &jtj_inv * &middle * &jtj_inv;
     // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
     let a3 = jac.columns(0, na).into_owned();
-    let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::zeros(na, na));
+    let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::from_element(na, na, f64::NAN));
     // Entry (i, j) of the middle depends on columns i and j alone: the Γ
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();
@@ -514,7 +516,8 @@ fn describe(
         Some(k) if cov3[(k, k)] > 0.0 => (cov[(k, k)] / cov3[(k, k)]).max(1.0),
         _ => 1.0,
     });
-    let sd = |i: usize| cov[(i, i)].max(0.0).sqrt();
+    // No variance (a singular fit, or rounding below 0) is no σ: NaN, not 0.
+    let sd = |i: usize| if cov[(i, i)] > 0.0 { cov[(i, i)].sqrt() } else { f64::NAN };
     let wn_stated = stated.natural_frequency_hz();
     let fitted_free = data.and_then(|(ln_s, _)| scaled_loop(stated, ln_s.exp(), sol.zeta).natural_frequency_hz());
     let sigma_data_ln = data.map(|(_, v)| v.max(0.0).sqrt());
@@ -546,7 +549,11 @@ fn describe(
         stated_loop_rejected: rejected,
         loop_tolerance: tolerance,
         used_natural_frequency_hz: fit_loop.then(|| used.natural_frequency_hz()).flatten(),
-        sigma_used_natural_frequency_hz: sol.loop_idx.zip(used.natural_frequency_hz()).map(|(l, f)| sd(l) * f),
+        // 0 for a loop held exact (a tolerance of 0).
+        sigma_used_natural_frequency_hz: sol
+            .loop_idx
+            .zip(used.natural_frequency_hz())
+            .map(|(l, f)| cov[(l, l)].max(0.0).sqrt() * f),
         imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + sol.dtau),
         sigma_imu_time_offset_s: sol.tau_idx.map(sd),
         offset_max_abs_s: spec.offset_max_abs_s,

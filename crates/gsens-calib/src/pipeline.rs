@@ -5,6 +5,7 @@
 use crate::document::{GnssSdrConversion, ResultDocument};
 use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit};
 use gsens_core::LoopModel;
+use gsens_core::units::Decimal;
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
@@ -431,7 +432,7 @@ fn input(role: &str, path: &Path) -> (String, String) {
 /// [`with_gnss_sdr_loop`]'s `last` logged phase states).
 pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<TrackingLog, FormatError> {
     let rows = resample(imported, imported.interval_s);
-    let name = format!("{} (GNSS-SDR dumps on a {} ms grid)", dir.display(), imported.interval_s * 1e3);
+    let name = format!("{} (GNSS-SDR dumps on a {} ms grid)", dir.display(), Decimal(imported.interval_s * 1e3));
     TrackingLog::from_rows(&name, &rows)
 }
 

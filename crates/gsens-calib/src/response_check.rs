@@ -109,6 +109,7 @@
 
 use crate::search::batch_pass;
 use crate::{CalibError, EpochSeries, EstimateSettings};
+use gsens_core::units::Decimal;
 use gsens_core::{Complex, HighPass, LoggedPhase, LoopModel};
 use rustfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -258,7 +259,7 @@ impl ResponseCheck {
             sig.abs(),
             if self.consistent { "consistent with the model" } else { "NOT consistent with the model" },
             self.threshold_sigma,
-            100.0 * self.settings.false_alarm,
+            Decimal(100.0 * self.settings.false_alarm),
             self.bins_tested,
         )
     }

@@ -99,6 +99,27 @@ pub struct HistoryPoint {
 }
 
 impl Calibration {
+    /// Makes axis `i` unobservable: Γ̂, σ, the CRLB and its covariance row and
+    /// column `null`, its verdict saying `why`. A σ of exactly 0 (or not a
+    /// number) is no uncertainty but the absence of information on the axis.
+    pub(crate) fn make_unobservable(&mut self, i: usize, why: &str) {
+        self.observable[i] = false;
+        self.gamma_hz_per_mps2[i] = None;
+        self.sigma_hz_per_mps2[i] = None;
+        self.sigma_statistical_hz_per_mps2[i] = None;
+        self.sigma_imu_hz_per_mps2[i] = None;
+        self.gamma_ppb_per_g[i] = None;
+        self.sigma_ppb_per_g[i] = None;
+        self.crlb_hz_per_mps2[i] = None;
+        for j in 0..3 {
+            self.covariance_hz_per_mps2_sq[i][j] = None;
+            self.covariance_hz_per_mps2_sq[j][i] = None;
+        }
+        let v = &mut self.axes[i];
+        v.observable = false;
+        v.text = format!("{}: unobservable — {why}", v.axis);
+    }
+
     /// Takes in the joint fit's uncertainty. The batch estimator (and RLS
     /// without forgetting, the same solution) gets the Γ block of the joint
     /// sandwich itself; the others their own statistical covariance scaled by
@@ -133,7 +154,10 @@ impl Calibration {
                 self.covariance_hz_per_mps2_sq[i][j] = stat[i][j].map(|v| v + imu_ij);
             }
             if let (Some(var), Some(total)) = (stat[i][i], self.sigma_hz_per_mps2[i]) {
-                let s = var.max(0.0).sqrt();
+                if !(var > 0.0 && var.is_finite()) {
+                    continue;
+                }
+                let s = var.sqrt();
                 self.sigma_statistical_hz_per_mps2[i] = Some(s);
                 let new_total = s.hypot(imu[i]);
                 self.sigma_hz_per_mps2[i] = Some(new_total);
@@ -142,11 +166,90 @@ impl Calibration {
                 }
             }
         }
+        // A variance of 0 (or none) is no σ: the joint fit holds no
+        // information on the axis once the loop and the offset are free.
+        for i in 0..3 {
+            if self.observable[i] && !stat[i][i].is_some_and(|v| v > 0.0 && v.is_finite()) {
+                self.make_unobservable(
+                    i,
+                    "with the loop and the IMU time offset fitted too, the data hold no information on it (the \
+                     joint fit's variance is 0 or undefined): state the loop and the offset, or shake along it",
+                );
+            }
+        }
         if let Some(offset_s) = fit.imu_time_offset_s {
             self.imu_time_offset_estimated = true;
             self.imu_time_offset_sigma_s = fit.sigma_imu_time_offset_s;
             self.imu_time_offset_s = offset_s;
         }
         self.joint_fit = Some(fit.clone());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit};
+    use gsens_core::{DiscretePll, LoopSpec};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    use std::f64::consts::TAU;
+
+    /// 60 s at 40 Hz, the three axes shaken at once at 0.7, 0.9 and 1.1 Hz,
+    /// the phase from the paper's loop plus 0.05 rad of white noise.
+    fn session() -> (Vec<f64>, Vec<Option<f64>>, Vec<[f64; 3]>) {
+        let (t_log, gamma) = (0.025, [0.09, 0.08, -0.08]);
+        let mut pll = DiscretePll::new(LoopSpec::PAPER.coeffs().unwrap(), t_log);
+        pll.settle(9.80665 * gamma[2]);
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(7);
+        let noise = Normal::new(0.0, 0.05).unwrap();
+        let (mut t_s, mut phase, mut accel) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..2400 {
+            let t = k as f64 * t_log;
+            let a = [2.0 * (TAU * 0.7 * t).sin(), 2.0 * (TAU * 0.9 * t).sin(), 9.80665 + 2.0 * (TAU * 1.1 * t).sin()];
+            let df: f64 = (0..3).map(|i| a[i] * gamma[i]).sum();
+            t_s.push(t);
+            phase.push(Some(pll.step(df) + noise.sample(&mut rng)));
+            accel.push(a);
+        }
+        (t_s, phase, accel)
+    }
+
+    /// A joint fit with no variance on an axis (the sandwich of a singular
+    /// fit: 0 from a zero-filled inverse, NaN from this one) leaves that axis
+    /// unobservable, saying why, instead of reporting σ = 0.
+    #[test]
+    fn an_axis_the_joint_fit_has_no_variance_for_is_unobservable_not_sigma_zero() {
+        let (t_s, phase, accel) = session();
+        let series = EpochSeries {
+            log_interval_s: 0.025,
+            t_s: &t_s,
+            phase_err_rad: &phase,
+            accel_mps2: &accel,
+            imu_time_offset_s: 0.0,
+        };
+        let settings = EstimateSettings::default();
+        let c = calibrate(&series, &settings).unwrap();
+        assert!(c.observable.iter().all(|&o| o), "{:?}", c.axes);
+        let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s: Some(0.05) };
+        let fit = joint_fit(&series, &settings, spec).unwrap();
+        for no_variance in [0.0, f64::NAN] {
+            let mut fit = fit.clone();
+            for j in 0..3 {
+                fit.gamma_covariance_hz_per_mps2_sq[1][j] = no_variance;
+                fit.gamma_covariance_hz_per_mps2_sq[j][1] = no_variance;
+            }
+            let mut c = c.clone();
+            c.include_nuisance(&fit);
+            assert_eq!((c.observable[1], c.gamma_hz_per_mps2[1], c.sigma_hz_per_mps2[1]), (false, None, None));
+            assert!(c.covariance_hz_per_mps2_sq[0][1].is_none() && c.covariance_hz_per_mps2_sq[1][1].is_none());
+            assert!(c.axes[1].text.starts_with("y: unobservable — with the loop and the IMU time offset fitted"));
+            for i in [0, 2] {
+                assert!(c.observable[i] && c.sigma_hz_per_mps2[i].is_some_and(|s| s > 0.0), "{:?}", c.axes[i]);
+            }
+        }
+        // Untouched, every σ is positive.
+        let mut c = c.clone();
+        c.include_nuisance(&fit);
+        assert!(c.sigma_hz_per_mps2.iter().all(|s| s.is_some_and(|s| s > 0.0)));
     }
 }

@@ -190,7 +190,7 @@ impl EstimatorArgs {
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Channels")]
 pub struct SelectionArgs {
-    /// Average the N channels with the highest mean C/N0 (0 = all that pass the masks).
+    /// Average the N channels with the highest mean C/N0, or the least noisy when C/N0 does not vary between them (0 = all that pass the masks).
     #[arg(long, default_value_t = 4)]
     pub channels: usize,
     /// Drop rows below this C/N0 [dB-Hz].

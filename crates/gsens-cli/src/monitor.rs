@@ -3,6 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use gsens_core::units::Decimal;
 use gsens_gnss_sdr::conf::{GnssSdrConf, TrackingConf};
 use gsens_gnss_sdr::import::ImportSettings;
 use gsens_gnss_sdr::monitor::{
@@ -126,13 +127,13 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
         grid.len(),
         tracks.len(),
         a.out.display(),
-        recorder.interval_s(),
+        Decimal(recorder.interval_s()),
         settle_s,
         a.raw.as_ref().map_or(String::new(), |p| format!(", datagrams → {}", p.display())),
         a.out.display(),
         stage.order,
         stage.bw_hz,
-        f64::from(stage.symbols) * 1e-3,
+        Decimal(f64::from(stage.symbols) * 1e-3),
     ))?;
     Ok(())
 }

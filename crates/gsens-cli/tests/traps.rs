@@ -65,6 +65,8 @@ fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
     rewrite(&dir, "tracking.csv", "phase_deg.csv", |c, x| if c == 5 { x.to_degrees() } else { x });
     rewrite(&dir, "imu.csv", "imu_late.csv", |c, x| if c == 0 { x + 0.4 } else { x });
     rewrite(&dir, "imu.csv", "imu_ms.csv", |c, x| if c == 0 { x * 1e3 } else { x });
+    rewrite(&dir, "tracking.csv", "phase_flipped.csv", |c, x| if c == 5 { -x } else { x });
+    rewrite(&dir, "tracking.csv", "cn0_constant.csv", |c, x| if c == 3 { 45.0 } else { x });
 
     let right: Vec<&str> = RIGHT_LOOP.iter().copied().chain(["--logged-phase", "mean"]).collect();
     let with = |extra: &[&'static str]| -> Vec<&'static str> {
@@ -94,6 +96,8 @@ fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
         ("phase in degrees", "imu.csv", "phase_deg.csv", right.clone()),
         ("IMU clock 0.4 s late", "imu_late.csv", "tracking.csv", right.clone()),
         ("IMU stamps in ms", "imu_ms.csv", "tracking.csv", right.clone()),
+        ("phase error of opposite sign", "imu.csv", "phase_flipped.csv", right.clone()),
+        ("a constant C/N0 column", "imu.csv", "cn0_constant.csv", right.clone()),
         ("gradient gain 50", "imu.csv", "tracking.csv", {
             let mut v = right.clone();
             v.extend_from_slice(&["--method", "gradient", "--gain-k", "50"]);
@@ -114,6 +118,13 @@ fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
         }
     }
     assert!(failures.is_empty(), "confidently wrong: {failures:?}");
+    // The sign is caught by its own check; a constant C/N0 column, ranked by
+    // the channels' noise instead, loses nothing.
+    let (code, _, _, codes) = estimate(&dir, "imu.csv", "phase_flipped.csv", &right, truth);
+    assert_eq!((code, codes.as_str()), (3, "phase_sign"));
+    let (code, err, z, codes) = estimate(&dir, "imu.csv", "cn0_constant.csv", &right, truth);
+    assert!(code == 0 && err < 0.02 && z < 3.0, "constant C/N0: exit {code}, {err}, |z| {z:.2}, [{codes}]");
+    assert_eq!(json(&dir.join("out.json"))["channel_ranking"], "noise");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -13,6 +13,7 @@ use crate::math::{TAU, exp, ln, round, sqrt};
 use crate::pll::gnss_sdr::{A2, A3, B3, BN_OVER_WN_ORDER2, BN_OVER_WN_ORDER3, GnssSdrPll, GnssSdrStage};
 use crate::pll::pocket_sdr::{PocketSdrPll, PocketSdrStage};
 use crate::pll::{Complex, DiscretePll, LoopError, LoopFilterCoeffs, LoopSpec, ModelLoop};
+use crate::units::Decimal;
 
 /// Lowest frequency searched for the peak of |L| \[Hz\].
 const SEARCH_LO_HZ: f64 = 1e-3;
@@ -340,13 +341,17 @@ impl core::fmt::Display for LoopModel {
                     LoopSpec::ThirdOrder { bn_hz, a3, b3 } => {
                         write!(f, "3rd order, Bn {} Hz, a3 {a3}, b3 {b3}", Short(bn_hz))?
                     }
-                    LoopSpec::Coefficients(c) => {
-                        write!(f, "filter c0 {} /s, c1 {} /s², c2 {} /s³", c.c0_per_s, c.c1_per_s2, c.c2_per_s3)?
-                    }
+                    LoopSpec::Coefficients(c) => write!(
+                        f,
+                        "filter c0 {} /s, c1 {} /s², c2 {} /s³",
+                        Decimal(c.c0_per_s),
+                        Decimal(c.c1_per_s2),
+                        Decimal(c.c2_per_s3)
+                    )?,
                 }
                 nat(f)?;
                 match interval_s {
-                    Some(t) => write!(f, ", updated every {t} s"),
+                    Some(t) => write!(f, ", updated every {} s", Decimal(*t)),
                     None => write!(f, ", continuous"),
                 }
             }
@@ -354,7 +359,9 @@ impl core::fmt::Display for LoopModel {
                 write!(
                     f,
                     "GNSS-SDR dll_pll_veml, order {}, Bn {} Hz, {} ms integrations",
-                    stage.order, stage.bw_hz, stage.symbols
+                    stage.order,
+                    Decimal(stage.bw_hz),
+                    stage.symbols
                 )?;
                 nat(f)
             }
@@ -363,7 +370,7 @@ impl core::fmt::Display for LoopModel {
                     f,
                     "PocketSDR pocket_trk PLL, 3rd order, b_pll {} Hz, {} ms updates",
                     Short(stage.bw_hz),
-                    stage.interval_s * 1e3
+                    Decimal(stage.interval_s * 1e3)
                 )?;
                 nat(f)
             }

@@ -30,7 +30,9 @@ impl core::fmt::Display for RegressorError {
         match self {
             RegressorError::NotAMultiple { log_interval_s, loop_interval_s } => write!(
                 f,
-                "the log interval {log_interval_s} s is not an integer multiple of the loop interval {loop_interval_s} s"
+                "the log interval {} s is not an integer multiple of the loop interval {} s",
+                Decimal(*log_interval_s),
+                Decimal(*loop_interval_s)
             ),
             RegressorError::BadInterval => write!(f, "loop and log intervals must be finite and positive"),
         }
@@ -197,3 +199,4 @@ pub fn compensate_interpolation(accel: &mut [[f64; 3]], c: f64) {
         prev = cur;
     }
 }
+use crate::units::Decimal;

@@ -31,9 +31,63 @@ pub fn cn0_dbhz_to_ratio_hz(cn0_dbhz: f64) -> f64 {
     crate::math::pow10(cn0_dbhz / 10.0)
 }
 
+/// Significant digits a computed number keeps in a message: f64 arithmetic
+/// (sums, products, least-squares fits) leaves noise in the last few of its
+/// 15–17, which is no part of the value (0.1 + 0.2 is 0.30000000000000004;
+/// a 40 Hz log's interval fitted to its time stamps, 0.025000000000000026).
+pub const MESSAGE_SIGNIFICANT_DIGITS: i32 = 12;
+
+/// A computed number as a message shows it: rounded to
+/// [`MESSAGE_SIGNIFICANT_DIGITS`] significant digits, or to 6 decimals where
+/// that keeps more (a GPS time of 1.4e9 s to the µs), and printed in its
+/// shortest form (`0.025`, `1`, `3.3`), in exponent form beyond
+/// [1e-4, 1e12) (`1e300`, not three hundred digits); zero and non-finite
+/// values as they are. For values read from a file or an option, which
+/// print as written, plain `{}` is right.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Decimal(pub f64);
+
+impl core::fmt::Display for Decimal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() {
+            return write!(f, "{x}");
+        }
+        // Scale by an exact power of ten, so that the integer over (or
+        // times) it is the decimal's correctly rounded f64 and Display
+        // prints the decimal.
+        let exp10 = libm::floor(libm::log10(libm::fabs(x))) as i32;
+        let shift = (MESSAGE_SIGNIFICANT_DIGITS - 1 - exp10).max(6);
+        let r = if shift >= 0 {
+            let p = libm::pow(10.0, f64::from(shift));
+            libm::round(x * p) / p
+        } else {
+            libm::round(x / libm::pow(10.0, f64::from(-shift))) * libm::pow(10.0, f64::from(-shift))
+        };
+        let r = if r.is_finite() { r } else { x };
+        if (1e-4..1e12).contains(&libm::fabs(r)) { write!(f, "{r}") } else { write!(f, "{r:e}") }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn decimal_drops_arithmetic_noise_and_keeps_written_digits() {
+        // 0.025000000000000026 is what a fitted 40 Hz log interval came out as.
+        assert_eq!(format!("{}", Decimal(0.025000000000000026)), "0.025");
+        assert_eq!(format!("{}", Decimal(0.1 + 0.2)), "0.3");
+        assert_eq!(format!("{}", Decimal(25.0 * 0.001 * 1e3)), "25");
+        assert_eq!(format!("{}", Decimal(-2.976367123)), "-2.976367123");
+        assert_eq!(format!("{}", Decimal(1391428818.125)), "1391428818.125");
+        assert_eq!(format!("{}", Decimal(1391428818.0 + 0.025 * 3.0)), "1391428818.075");
+        assert_eq!(format!("{}", Decimal(2.5e13 + 0.1)), "2.50000000000001e13");
+        assert_eq!(format!("{}", Decimal(1e300)), "1e300");
+        assert_eq!(format!("{}", Decimal(-1.5e-7)), "-1.5e-7");
+        assert_eq!(format!("{}", Decimal(0.0)), "0");
+        assert_eq!(format!("{}", Decimal(f64::NAN)), "NaN");
+    }
     #[test]
     fn ppb_round_trip_and_paper_value() {
         // docs/conventions.md: 0.09 Hz/(m/s²) at L1 ≈ 0.56 ppb/g.

@@ -33,6 +33,7 @@
 //! integer ones as a C++ stream reads an `int` (`25.5` is 25); so does this
 //! reader. How the rule is applied: [`crate::import`].
 
+use gsens_core::units::Decimal;
 use std::path::Path;
 
 use serde::Serialize;
@@ -408,8 +409,8 @@ impl GnssSdrConf {
                     format!(
                         "{key} = {v}: above 1/(2T) = {} Hz for a loop updated every T = {} ms (no carrier loop is \
                          that wide)",
-                        0.5 / t_s,
-                        t_s * 1e3
+                        Decimal(0.5 / t_s),
+                        Decimal(t_s * 1e3)
                     ),
                 );
             }

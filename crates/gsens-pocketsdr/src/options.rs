@@ -12,6 +12,7 @@
 //! number is an error naming the file, line and key (where `pocket_trk`
 //! would have read 0 or a prefix); other keys are kept as text.
 
+use gsens_core::units::Decimal;
 use std::path::Path;
 
 use serde::Serialize;
@@ -81,9 +82,9 @@ impl Setting {
     /// The value with its unit and source, e.g. `5 Hz (PocketSDR's default)`.
     pub fn with_unit(&self, unit: &str) -> String {
         match &self.source {
-            SettingSource::Default => format!("{} {unit} (PocketSDR's default)", self.value),
-            SettingSource::File { file, line } => format!("{} {unit} ({file}:{line})", self.value),
-            SettingSource::Log => format!("{} {unit} (measured from the log)", self.value),
+            SettingSource::Default => format!("{} {unit} (PocketSDR's default)", Decimal(self.value)),
+            SettingSource::File { file, line } => format!("{} {unit} ({file}:{line})", Decimal(self.value)),
+            SettingSource::Log => format!("{} {unit} (measured from the log)", Decimal(self.value)),
         }
     }
 }

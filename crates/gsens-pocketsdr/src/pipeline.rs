@@ -1,5 +1,6 @@
 //! The estimate from a `pocket_trk` log with PocketSDR's own loop.
 
+use gsens_core::units::Decimal;
 use std::path::Path;
 
 use gsens_calib::{Outcome, PipelineSettings, calibrate_logs};
@@ -22,7 +23,7 @@ pub struct PocketSdrOutcome {
 /// The tracking log of a converted PocketSDR log (every channel already on
 /// the log's common epochs).
 pub fn pocketsdr_tracking_log(imported: &Imported) -> Result<TrackingLog, FormatError> {
-    let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, imported.interval_s());
+    let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, Decimal(imported.interval_s()));
     TrackingLog::from_rows(&name, &imported.rows)
 }
 

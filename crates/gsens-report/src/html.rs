@@ -5,6 +5,7 @@
 //! Every string that comes from the user (paths, titles, reasons) is escaped.
 
 use crate::{AXES, ReportData};
+use gsens_core::units::Decimal;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -339,7 +340,7 @@ pub fn render_html(d: &ReportData) -> String {
     let _ = writeln!(h, "<h2 id=\"settings\">Settings</h2>");
     let mut rows = vec![
         ("receiver loop".to_string(), c.loop_used.to_string()),
-        ("log interval [s]".to_string(), format!("{}", c.log_interval_s)),
+        ("log interval [s]".to_string(), Decimal(c.log_interval_s).to_string()),
         ("loop updates per log epoch (model)".to_string(), c.model_substeps.to_string()),
         (
             "IMU time offset [s]".to_string(),

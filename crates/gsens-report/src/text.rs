@@ -3,6 +3,7 @@
 use crate::AXES;
 use gsens_calib::ResultDocument;
 use gsens_core::LoggedPhase;
+use gsens_core::units::Decimal;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
 use gsens_gnss_sdr::import::TrackSummary;
 use gsens_session::Weighting;
@@ -143,7 +144,7 @@ pub fn render_text(doc: &ResultDocument) -> String {
                 format!(
                     "consistent with the stated loop (|z| ≤ {:.2}, {} % false alarms)",
                     j.loop_test_threshold_z,
-                    100.0 * j.loop_test_false_alarm
+                    Decimal(100.0 * j.loop_test_false_alarm)
                 )
             }
         );
@@ -283,8 +284,12 @@ fn verdict_line(doc: &ResultDocument) -> String {
 pub fn render_gnss_sdr_tracks(tracks: &[TrackSummary], interval_s: f64) -> String {
     let mut s = String::new();
     let used = tracks.iter().filter(|t| t.used).count();
-    let _ =
-        writeln!(s, "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept", tracks.len(), interval_s * 1e3);
+    let _ = writeln!(
+        s,
+        "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept",
+        tracks.len(),
+        Decimal(interval_s * 1e3)
+    );
     // Which record layout (blocks, GNSS-SDR versions) each dump was read with.
     let mut files: Vec<(&str, &str)> = Vec::new();
     for t in tracks {

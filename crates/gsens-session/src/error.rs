@@ -1,5 +1,6 @@
 //! The error types of the crate.
 
+use gsens_core::units::Decimal;
 use gsens_io::{Column, FormatError};
 
 /// Everything that can be wrong when preparing a session from a tracking log
@@ -30,8 +31,12 @@ pub enum SessionError {
     },
     /// A time stamp is farther than 10% of the log interval from the uniform epoch grid.
     #[error(
-        "{file}: line {line}, {column}: time stamp {t_s} s is {offset_s} s off the epoch grid t0 + k*T \
-         (t0 = {t0_s} s, T = {log_interval_s} s, nearest grid time {grid_t_s} s; tolerance 10% of T)"
+        "{file}: line {line}, {column}: time stamp {t_s} s is {} s off the epoch grid t0 + k*T \
+         (t0 = {} s, T = {} s, nearest grid time {} s; tolerance 10% of T)",
+        Decimal(*offset_s),
+        Decimal(*t0_s),
+        Decimal(*log_interval_s),
+        Decimal(*grid_t_s)
     )]
     OffGrid {
         /// Source name.
@@ -53,8 +58,9 @@ pub enum SessionError {
     },
     /// Two distinct time stamps fall on the same grid epoch.
     #[error(
-        "{file}: line {line}, {column}: time stamp {t_s} s falls on the same epoch of the grid (T = {log_interval_s} s) \
-         as {previous_t_s} s on line {previous_line}"
+        "{file}: line {line}, {column}: time stamp {t_s} s falls on the same epoch of the grid (T = {} s) \
+         as {previous_t_s} s on line {previous_line}",
+        Decimal(*log_interval_s)
     )]
     GridCollision {
         /// Source name.
@@ -74,7 +80,8 @@ pub enum SessionError {
     },
     /// The epoch grid (gaps included) would be unreasonably long.
     #[error(
-        "{file}: the usable span holds {epochs} epochs of {log_interval_s} s (gaps included): more than the limit of {limit}"
+        "{file}: the usable span holds {epochs} epochs of {} s (gaps included): more than the limit of {limit}",
+        Decimal(*log_interval_s)
     )]
     GridTooLarge {
         /// Source name.
@@ -88,9 +95,11 @@ pub enum SessionError {
     },
     /// The IMU and tracking logs do not overlap in time.
     #[error(
-        "{imu_file} and {tracking_file} do not overlap in time: the IMU covers [{imu_start_s}, {imu_end_s}] s \
+        "{imu_file} and {tracking_file} do not overlap in time: the IMU covers [{}, {}] s \
          (time stamps minus imu_time_offset_s = {imu_time_offset_s} s), the tracking epochs cover \
-         [{tracking_start_s}, {tracking_end_s}] s. {hint}"
+         [{tracking_start_s}, {tracking_end_s}] s. {hint}",
+        Decimal(*imu_start_s),
+        Decimal(*imu_end_s)
     )]
     NoOverlap {
         /// IMU source name.

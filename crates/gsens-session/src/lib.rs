@@ -43,7 +43,11 @@
 //! Rows outside the usable span (see below), below the elevation mask (rows of
 //! unknown elevation pass) or below the C/N0 threshold are dropped; then the
 //! `max_channels` tracks (a track: one channel, one PRN) with the highest mean
-//! C/N0 over their remaining rows are used.
+//! C/N0 over their remaining rows are used. When C/N0 does not rank them (the
+//! candidates' mean C/N0 within [`CN0_RANKING_RESOLUTION_DB`] of each other:
+//! a constant column, or rounding), the least noisy are used instead, by the
+//! screening's robust σ of each track's deviation from the others
+//! ([`ChannelRanking::Noise`]; [`PreparedSession::channel_ranking`] says which).
 //!
 //! Before the ranking, the rows that pass the masks are screened track by track
 //! ([`SelectionConfig::screening`], on by default; see [Screening](#screening)):
@@ -145,7 +149,10 @@
 //!    Doppler-rate steady-state error do not trigger). A row with
 //!    `|d − ℓ| > k·σ_i` ([`ScreeningConfig::deviation_k`]) starts an event, which
 //!    lasts until the deviation has stayed within bounds for
-//!    [`ScreeningConfig::settle_s`]. A Costas loop slipping by π, or a pilot
+//!    [`ScreeningConfig::settle_s`]; an event with a single row beyond the
+//!    bound is the discriminator's noise (an atan output's tail is far heavier
+//!    than Gaussian at low C/N0, see [`ScreeningConfig::deviation_k`]) and is
+//!    dropped. A Costas loop slipping by π, or a pilot
 //!    loop by 2π, logs such a fast excursion: its discriminator wraps, the loop
 //!    pulls in to the next stable point, and its filter state needs a loop time
 //!    constant to recover. The event and [`ScreeningConfig::guard_s`] on each
@@ -235,6 +242,7 @@ pub use imu_screening::{
 };
 pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
-    ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession, SelectionConfig, SignalSummary, Weighting,
-    overlap_hint, prepare_session, prepare_session_files, prepare_session_from, reinterpolate_imu,
+    CN0_RANKING_RESOLUTION_DB, ChannelRanking, ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession,
+    SelectionConfig, SignalSummary, Weighting, overlap_hint, prepare_session, prepare_session_files,
+    prepare_session_from, reinterpolate_imu,
 };

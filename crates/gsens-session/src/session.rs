@@ -9,6 +9,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use gsens_core::average_phase_rad;
+use gsens_core::units::Decimal;
 use gsens_io::{ImuSeries, TrackingLog, read_imu_file, read_tracking_file};
 
 use crate::error::SessionError;
@@ -39,12 +40,33 @@ pub enum Weighting {
     Cn0,
 }
 
+/// Below this spread of the candidates' mean C/N0 \[dB\] C/N0 does not rank
+/// them: it is the resolution receivers log C/N0 at (PocketSDR's `$CH`
+/// lines carry one decimal), so a smaller spread is a constant column or
+/// the logging's rounding, not a difference in signal strength.
+pub const CN0_RANKING_RESOLUTION_DB: f64 = 0.1;
+
+/// How the tracks were ranked for [`SelectionConfig::max_channels`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChannelRanking {
+    /// By mean C/N0 over the rows kept, highest first (the paper's choice).
+    Cn0,
+    /// By measured noise, lowest first: the screening's robust σ of each
+    /// track's deviation from the others ([`TrackScreening::deviation_sigma_rad`]),
+    /// because the candidates' mean C/N0 spread less than
+    /// [`CN0_RANKING_RESOLUTION_DB`] (a constant C/N0 column ranks nothing).
+    Noise,
+}
+
 /// Which channels enter the average, and how.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SelectionConfig {
     /// Use at most this many tracks, those with the highest mean C/N0 (after
-    /// the masks); `None`: all that pass the masks. Default `Some(4)` (the paper).
+    /// the masks), or the least noisy where C/N0 does not vary
+    /// ([`ChannelRanking`]); `None`: all that pass the masks. Default
+    /// `Some(4)` (the paper).
     pub max_channels: Option<usize>,
     /// Drop the rows whose C/N0 is below this [dB-Hz]. Default `None`.
     pub min_cn0_dbhz: Option<f64>,
@@ -150,6 +172,8 @@ pub struct PreparedSession {
     pub signals: Vec<SignalSummary>,
     /// The selection settings used.
     pub selection: SelectionConfig,
+    /// How the tracks were ranked for the `max_channels` cut.
+    pub channel_ranking: ChannelRanking,
     /// The IMU time offset used \[s\] (IMU time stamp minus true time).
     pub imu_time_offset_s: f64,
 }
@@ -510,11 +534,28 @@ pub fn prepare_session_from(
         }
     };
     let mut ranked: Vec<usize> = (0..tracks.len()).filter(|&i| kept_of(i).0 > 0).collect();
+    // Where C/N0 does not vary between the candidates, their measured noise
+    // ranks them (a track without a σ, never compared with two others, last).
+    let noise_of =
+        |i: usize| candidate_of[i].and_then(|c| screened.summaries[c].deviation_sigma_rad).unwrap_or(f64::INFINITY);
+    let spread_db = ranked
+        .iter()
+        .map(|&i| mean_cn0(i))
+        .fold(None, |r: Option<(f64, f64)>, v| Some(r.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v)))));
+    let noise_known = ranked.iter().any(|&i| noise_of(i).is_finite());
+    let channel_ranking = match spread_db {
+        Some((lo, hi)) if ranked.len() > 1 && hi - lo < CN0_RANKING_RESOLUTION_DB && noise_known => {
+            ChannelRanking::Noise
+        }
+        _ => ChannelRanking::Cn0,
+    };
     ranked.sort_by(|&a, &b| {
-        mean_cn0(b)
-            .total_cmp(&mean_cn0(a))
-            .then(tracks[a].channel.cmp(&tracks[b].channel))
-            .then(tracks[a].prn.cmp(&tracks[b].prn))
+        match channel_ranking {
+            ChannelRanking::Cn0 => mean_cn0(b).total_cmp(&mean_cn0(a)),
+            ChannelRanking::Noise => noise_of(a).total_cmp(&noise_of(b)),
+        }
+        .then(tracks[a].channel.cmp(&tracks[b].channel))
+        .then(tracks[a].prn.cmp(&tracks[b].prn))
     });
     let n_used = selection.max_channels.map_or(ranked.len(), |n| n.min(ranked.len()));
     let mut reasons: Vec<String> = vec![String::new(); tracks.len()];
@@ -524,13 +565,30 @@ pub fn prepare_session_from(
             used[i] = true;
             reasons[i] = "used".to_owned();
         } else {
-            reasons[i] =
-                format!("not among the {} strongest (mean C/N0 {:.1} dB-Hz, rank {})", n_used, mean_cn0(i), rank + 1);
+            reasons[i] = match channel_ranking {
+                ChannelRanking::Cn0 => format!(
+                    "not among the {} strongest (mean C/N0 {:.1} dB-Hz, rank {})",
+                    n_used,
+                    mean_cn0(i),
+                    rank + 1
+                ),
+                ChannelRanking::Noise => format!(
+                    "not among the {} least noisy (C/N0 does not vary between the tracks; deviation σ {:.4} rad, \
+                     rank {})",
+                    n_used,
+                    noise_of(i),
+                    rank + 1
+                ),
+            };
         }
     }
     for (i, s) in stats.iter().enumerate() {
         if s.in_span == 0 {
-            reasons[i] = format!("no rows in the usable span [{}, {}] s (overlap with the IMU)", span.0, span.1);
+            reasons[i] = format!(
+                "no rows in the usable span [{}, {}] s (overlap with the IMU)",
+                Decimal(span.0),
+                Decimal(span.1)
+            );
         } else if s.above_mask == 0 {
             reasons[i] = format!(
                 "all {} rows in the usable span below the elevation mask of {} deg",
@@ -728,6 +786,7 @@ pub fn prepare_session_from(
         channels,
         signals,
         selection: selection.clone(),
+        channel_ranking,
         imu_time_offset_s,
     })
 }

@@ -413,3 +413,39 @@ fn per_track_splits_rows_by_track() {
     let parts: Vec<Vec<u32>> = parts.into_iter().map(|p| p.to_vec()).collect();
     assert_eq!(parts, vec![vec![0, 1], vec![], vec![2, 3, 4, 5, 6]]);
 }
+
+/// Lone rows far out (as an atan discriminator's output of one short
+/// integration has at low C·T: its tail is erfc(√(C·T)·sin x), not
+/// Gaussian) are no slip; a slip's excursion, several rows long, still is.
+#[test]
+fn lone_tail_rows_are_not_slips() {
+    let log = faulty_log(NONE);
+    let mut rows: Vec<TrackingRow> = Vec::new();
+    let mut w = TrackingWriter::new(Vec::new()).unwrap();
+    for t in log.tracks() {
+        for j in 0..t.t_s.len() {
+            let k = ((t.t_s[j] - 100.0) / T).round() as usize;
+            let lone = t.channel == 4 && k % 400 == 200;
+            let slip = t.channel == 0 && (2400..2440).contains(&k);
+            let extra = if lone { 1.3 * if k % 800 == 200 { 1.0 } else { -1.0 } } else { 0.0 };
+            let s = if slip { slip_shape((k - 2400) as f64 * T) } else { 0.0 };
+            rows.push(TrackingRow {
+                t_s: t.t_s[j],
+                channel: t.channel,
+                prn: t.prn,
+                cn0_dbhz: t.cn0_dbhz[j],
+                elev_deg: None,
+                phase_err_rad: t.phase_err_rad[j] + extra + s,
+            });
+        }
+    }
+    rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
+    for r in &rows {
+        w.write_row(r).unwrap();
+    }
+    let log = read_tracking(w.finish().unwrap().as_slice(), "tracking.csv").unwrap();
+    let s = prepare(&log, ScreeningConfig::default());
+    let ch = |c: u32| s.channels.iter().find(|x| x.channel == c).unwrap();
+    assert_eq!((ch(4).screening.slips, ch(4).screening.rows_slip), (0, 0), "{:?}", ch(4).screening);
+    assert_eq!(ch(0).screening.slips, 1, "{:?}", ch(0).screening);
+}

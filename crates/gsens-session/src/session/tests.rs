@@ -631,3 +631,59 @@ fn given_and_lent_logs_give_the_same_session() {
     assert_eq!(format!("{given:?}"), format!("{lent:?}"));
     assert_eq!(lent.channels.iter().filter(|c| c.epochs > 0).count(), 6);
 }
+
+/// Standard normal deviates from a splitmix64 stream (Box–Muller).
+fn gaussians(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    let mut uniform = move || {
+        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    move || (-2.0 * (1.0 - uniform()).ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos()
+}
+
+/// Six channels on a common signal, each with its own white noise
+/// (`sigma_rad[ch]`), C/N0 from `cn0(ch)`.
+fn noisy_log(sigma_rad: [f64; 6], cn0: impl Fn(u32) -> f64) -> TrackingLog {
+    let mut noise = gaussians(3);
+    let mut rows = Vec::new();
+    for k in 0..2000 {
+        for ch in 0..6u32 {
+            rows.push(row(tk(k), ch, cn0(ch), None, common(k) + sigma_rad[ch as usize] * noise()));
+        }
+    }
+    log_from(&rows)
+}
+
+fn used_channels(s: &PreparedSession) -> Vec<u32> {
+    s.channels.iter().filter(|c| c.used).map(|c| c.channel).collect()
+}
+
+/// A constant C/N0 column ranks nothing: the four tracks with the lowest
+/// measured noise are used, and the session says so. A spread of C/N0 below
+/// the logging's resolution is no ranking either; above it, C/N0 ranks.
+#[test]
+fn without_c_n0_differences_the_least_noisy_tracks_are_used() {
+    let sigma_rad = [0.03, 0.3, 0.04, 0.25, 0.05, 0.06];
+    let imu = wide_imu();
+    let cfg = SelectionConfig::default();
+    let s = prep(&noisy_log(sigma_rad, |_| 45.0), &imu, &cfg).unwrap();
+    assert_eq!(s.channel_ranking, ChannelRanking::Noise);
+    assert_eq!(used_channels(&s), [0, 2, 4, 5]);
+    let noisy = s.channels.iter().find(|c| c.channel == 1).unwrap();
+    assert!(noisy.reason.starts_with("not among the 4 least noisy"), "{}", noisy.reason);
+    // Each track's deviation σ measures its own noise (and a share of the others').
+    for c in &s.channels {
+        let sd = c.screening.deviation_sigma_rad.unwrap();
+        let own = sigma_rad[c.channel as usize];
+        assert!(sd > 0.85 * own && sd < 1.2 * own + 0.03, "{c:?}");
+    }
+    let s = prep(&noisy_log(sigma_rad, |ch| 45.0 + 0.01 * ch as f64), &imu, &cfg).unwrap();
+    assert_eq!((s.channel_ranking, used_channels(&s)), (ChannelRanking::Noise, vec![0, 2, 4, 5]));
+    // C/N0 that differs ranks by C/N0 (here against the noise: the paper's rule).
+    let s = prep(&noisy_log(sigma_rad, |ch| 40.0 + ch as f64), &imu, &cfg).unwrap();
+    assert_eq!((s.channel_ranking, used_channels(&s)), (ChannelRanking::Cn0, vec![2, 3, 4, 5]));
+}
