@@ -289,18 +289,23 @@ def simulate(cfg: dict) -> dict:
     }
 
 
-def write_session(out_dir: str, s: dict) -> None:
-    """imu.csv, tracking.csv and truth.json in gsens's formats."""
+def write_session(out_dir: str, s: dict, decimals: int | None = None) -> None:
+    """imu.csv, tracking.csv and truth.json in gsens's formats; the specific
+    force and the phase error rounded to `decimals` places if given (small
+    files: 6 places are 1e-6 rad and m/s², far below the noise)."""
     os.makedirs(out_dir, exist_ok=True)
+    imu, log = s["imu"], s["log"]
+    if decimals is not None:
+        imu, log = np.round(imu, decimals), np.round(log, decimals)
     # Python floats print the shortest decimal that reads back to the same bits.
     with open(os.path.join(out_dir, "imu.csv"), "w") as f:
         f.write("t_s,fx_mps2,fy_mps2,fz_mps2\n")
-        for t, (x, y, z) in zip(s["t_imu"].tolist(), s["imu"].tolist()):
+        for t, (x, y, z) in zip(s["t_imu"].tolist(), imu.tolist()):
             f.write(f"{t!r},{x!r},{y!r},{z!r}\n")
     prns, cn0, elev = s["prns"].tolist(), s["cn0"].tolist(), s["elev_deg"].tolist()
     with open(os.path.join(out_dir, "tracking.csv"), "w") as f:
         f.write("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n")
-        for t, phis in zip(s["t_log"].tolist(), s["log"].tolist()):
+        for t, phis in zip(s["t_log"].tolist(), log.tolist()):
             for c, p in enumerate(phis):
                 f.write(f"{t!r},{c},{prns[c]},{cn0[c]!r},{elev[c]!r},{p!r}\n")
     with open(os.path.join(out_dir, "truth.json"), "w") as f:
@@ -328,6 +333,7 @@ def parse_args(argv: list[str]) -> dict:
     p.add_argument("--imu-noise-mps2", type=float, default=0.02)
     p.add_argument("--osc-rw-hz-per-sqrt-s", type=float, default=0.005)
     p.add_argument("--preroll-s", type=float, default=15.0)
+    p.add_argument("--decimals", type=int, help="round the specific force and phase error to this many places")
     a = p.parse_args(argv)
     cfg = {
         "seed": a.seed,
@@ -352,7 +358,7 @@ def parse_args(argv: list[str]) -> dict:
             cfg.update(json.load(f))
     if len(cfg["gamma_hz_per_mps2"]) != 3:
         p.error("--gamma needs three values")
-    return {"out": a.out, **cfg}
+    return {"out": a.out, "decimals": a.decimals, **cfg}
 
 
 def main(argv: list[str]) -> int:
@@ -362,7 +368,7 @@ def main(argv: list[str]) -> int:
     except ValueError as err:
         print(f"indep_sim: {err}", file=sys.stderr)
         return 2
-    write_session(cfg["out"], s)
+    write_session(cfg["out"], s, cfg["decimals"])
     return 0
 
 

@@ -18,6 +18,7 @@
 
 mod calibrator;
 mod compensate;
+mod discriminator;
 mod estimator;
 mod filter;
 mod loop_model;
@@ -37,6 +38,7 @@ pub use estimator::{
     BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, NormalEquations, RANK_TOL,
     RecursiveLeastSquares, hac_covariance,
 };
+pub use discriminator::{Discriminator, RANGE_FALSE_ALARM, RANGE_MARGIN_SIGMAS, discriminator_variance_rad2};
 pub use filter::HighPass;
 pub use loop_model::{LoopModel, LoopPeak};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
