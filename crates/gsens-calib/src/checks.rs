@@ -470,3 +470,45 @@ fn flat_run_warnings(runs: &FlatRuns, masked_epochs: usize) -> Vec<Warning> {
     }
     w
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Level board, z up, shaken along x at 0.9 Hz with `amp` m/s² where `shaking(t)`, 40 Hz epochs.
+    fn board(seconds: f64, amp: f64, shaking: impl Fn(f64) -> bool) -> Vec<[f64; 3]> {
+        let n = (seconds * 40.0) as usize;
+        (0..n)
+            .map(|k| {
+                let t = k as f64 / 40.0;
+                let a = if shaking(t) { amp * (TAU * 0.9 * t).sin() } else { 0.0 };
+                [a, 0.0, STANDARD_GRAVITY_MPS2]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn rest_stretches_give_gravity_under_a_shake_whose_median_magnitude_is_not() {
+        // Shaken at 12 m/s² except for 3 s at each end.
+        let accel = board(60.0, 12.0, |t| (3.0..57.0).contains(&t));
+        let (m, how) = magnitude_at_rest(&accel, 0.025).unwrap();
+        assert!((m - STANDARD_GRAVITY_MPS2).abs() < 1e-9, "{m}");
+        assert!(how.contains("6 stretches"), "{how}");
+        let mut norms: Vec<f64> = accel.iter().map(|a| (a[0] * a[0] + a[2] * a[2]).sqrt()).collect();
+        norms.sort_by(f64::total_cmp);
+        assert!(norms[norms.len() / 2] > 1.1 * STANDARD_GRAVITY_MPS2);
+    }
+
+    #[test]
+    fn without_rest_the_mean_vector_gives_gravity_and_a_log_in_g_gives_one() {
+        // 50 s of shaking, 45 whole cycles at 0.9 Hz: the kinematic part averages out.
+        let accel = board(50.0, 12.0, |_| true);
+        let (m, how) = magnitude_at_rest(&accel, 0.025).unwrap();
+        assert!((m / STANDARD_GRAVITY_MPS2 - 1.0).abs() < 1e-3, "{m}");
+        assert!(how.contains("mean vector"), "{how}");
+        let in_g: Vec<[f64; 3]> =
+            board(60.0, 12.0, |t| t > 5.0).iter().map(|a| a.map(|v| v / STANDARD_GRAVITY_MPS2)).collect();
+        let (m, how) = magnitude_at_rest(&in_g, 0.025).unwrap();
+        assert!((m - 1.0).abs() < 1e-9 && how.contains("at rest"), "{m} {how}");
+    }
+}

@@ -2,8 +2,8 @@
 //! text report and the bindings all serialize (keys in
 //! `docs/conventions.md#result-document`).
 
-use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
 use crate::Calibration;
+use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::import::TrackSummary;

@@ -99,7 +99,8 @@ pub struct CalibrationOptions {
     /// Screening: rows more than this below the channel's median C/N0 \[dB\] (0 = no test).
     pub cn0_drop_db: f64,
     /// Screening: rows with |phase error| beyond this \[rad\] (0 = no limit;
-    /// `None`: the discriminator's unambiguous range, π/2 for atan Costas).
+    /// `None`: half the discriminator's unambiguous range, π/4 for atan
+    /// Costas, π/2 for atan2; see [`gsens_session::ScreeningConfig`]).
     pub max_abs_phase_rad: Option<f64>,
     /// The receiver's carrier-phase discriminator (default atan Costas,
     /// atan(Q/I), what GPS L1 C/A receivers use).
@@ -199,7 +200,7 @@ impl CalibrationOptions {
 
     /// The channel selection (a 0 of `channels`, `cn0_drop_db` or
     /// `max_abs_phase_rad` switches that limit off; `max_abs_phase_rad`
-    /// unset is the discriminator's unambiguous range).
+    /// unset is half the discriminator's unambiguous range).
     pub fn selection(&self) -> SelectionConfig {
         let mut s = SelectionConfig {
             max_channels: (self.channels > 0).then_some(self.channels),
@@ -210,7 +211,7 @@ impl CalibrationOptions {
         };
         s.screening.enabled = self.screening;
         s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);
-        let limit = self.max_abs_phase_rad.unwrap_or(self.discriminator.unambiguous_range_rad());
+        let limit = self.max_abs_phase_rad.unwrap_or(0.5 * self.discriminator.unambiguous_range_rad());
         s.screening.max_abs_phase_rad = (limit > 0.0).then_some(limit);
         s
     }

@@ -124,12 +124,12 @@ impl Default for PipelineSettings {
 impl PipelineSettings {
     /// States the receiver's discriminator: the estimate's range check uses
     /// it, and the screening's linear-range limit moves with it where it was
-    /// the previous discriminator's unambiguous range (a limit set otherwise,
-    /// or none, is kept).
+    /// half the previous discriminator's unambiguous range, the default (a
+    /// limit set otherwise, or none, is kept).
     pub fn set_discriminator(&mut self, discriminator: Discriminator) {
         let limit = &mut self.selection.screening.max_abs_phase_rad;
-        if *limit == Some(self.estimate.discriminator.unambiguous_range_rad()) {
-            *limit = Some(discriminator.unambiguous_range_rad());
+        if *limit == Some(0.5 * self.estimate.discriminator.unambiguous_range_rad()) {
+            *limit = Some(0.5 * discriminator.unambiguous_range_rad());
         }
         self.estimate.discriminator = discriminator;
     }

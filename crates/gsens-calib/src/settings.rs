@@ -2,10 +2,10 @@
 //! and the error model. Reported with every estimate.
 
 use crate::CalibError;
-use gsens_core::{Discriminator, LoggedPhase};
 use gsens_core::LoopModel;
 use gsens_core::LoopSpec;
 use gsens_core::ObservabilityCriteria;
+use gsens_core::{Discriminator, LoggedPhase};
 use serde::{Deserialize, Serialize};
 
 /// Which estimator produces Γ̂.

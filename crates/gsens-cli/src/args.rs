@@ -224,7 +224,7 @@ pub struct SelectionArgs {
     /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
     #[arg(long, default_value_t = 6.0, value_parser = finite_non_negative)]
     pub cn0_drop_db: f64,
-    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default: the discriminator's unambiguous range, π/2 for atan-costas, π for atan2).
+    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default: half the discriminator's unambiguous range, π/4 for atan-costas, π/2 for atan2).
     #[arg(long, value_parser = finite_non_negative)]
     pub max_abs_phase_rad: Option<f64>,
 }

@@ -34,11 +34,11 @@ pub use pll::pocket_sdr;
 
 pub use calibrator::{Calibrator, FedEpoch, PrefilteredCalibrator, average_phase_rad, warmup_epochs};
 pub use compensate::{Compensator, compensated_phase_rad};
+pub use discriminator::{Discriminator, RANGE_FALSE_ALARM, RANGE_MARGIN_SIGMAS, discriminator_variance_rad2};
 pub use estimator::{
     BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, NormalEquations, RANK_TOL,
     RecursiveLeastSquares, hac_covariance,
 };
-pub use discriminator::{Discriminator, RANGE_FALSE_ALARM, RANGE_MARGIN_SIGMAS, discriminator_variance_rad2};
 pub use filter::HighPass;
 pub use loop_model::{LoopModel, LoopPeak};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};

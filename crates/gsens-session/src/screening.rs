@@ -37,10 +37,12 @@ pub struct ScreeningConfig {
     /// below this is excluded entirely. Default 0.9.
     pub min_track_gain: f64,
     /// Rows with |φ| above this, plus the track's noise margin, are excluded
-    /// \[rad\]; `None`: no limit. Default π/2, the unambiguous range of the
-    /// atan(Q/I) Costas discriminator of GPS L1 C/A receivers (π for an atan2
-    /// discriminator: `gsens_core::Discriminator::unambiguous_range_rad`,
-    /// which a calibration pipeline sets from its discriminator). The margin is z·σ (σ the
+    /// \[rad\]; `None`: no limit. Default π/4, half the unambiguous range of
+    /// the atan(Q/I) Costas discriminator of GPS L1 C/A receivers: a channel
+    /// alone beyond half the range is leaving it (a channel out of lock
+    /// logs outputs spread over the whole range, beyond half of it half the
+    /// time). For an atan2 discriminator, π/2 (a calibration pipeline sets
+    /// it from its discriminator). The margin is z·σ (σ the
     /// track's deviation σ, z the normal quantile at a 1 % false-alarm
     /// probability over its rows): a noisy track's rows are not excluded for
     /// noise that crosses the limit.
@@ -81,7 +83,7 @@ impl Default for ScreeningConfig {
             gain_window_s: 10.0,
             min_gain: 0.8,
             min_track_gain: 0.9,
-            max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_2),
+            max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_4),
             cn0_drop_db: Some(6.0),
             max_excluded_fraction: 0.5,
             min_sigma_rad: 0.005,

@@ -298,9 +298,7 @@ fn a_lone_excursion_beyond_the_linear_range_is_excluded_a_common_one_kept() {
         }
     }
     let log = read_tracking(w.finish().unwrap().as_slice(), "tracking.csv").unwrap();
-    // A limit below the excursions (an atan Costas log cannot pass its π/2 default).
-    let limit = ScreeningConfig { max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_4), ..ScreeningConfig::default() };
-    let s = prepare(&log, limit);
+    let s = prepare(&log, ScreeningConfig::default());
     let c0 = &s.channels[0].screening;
     assert!(c0.rows_phase_range >= 20 && c0.rows_phase_range <= 20 + 2 * 20 + 2, "{c0:?}");
     for c in &s.channels[1..] {
@@ -381,9 +379,7 @@ fn noise_crossing_the_linear_range_is_not_an_excursion() {
         }
     }
     let log = read_tracking(w.finish().unwrap().as_slice(), "tracking.csv").unwrap();
-    // A limit the noise crosses (the default π/2 it would not).
-    let limit = ScreeningConfig { max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_4), ..ScreeningConfig::default() };
-    let s = prepare(&log, limit);
+    let s = prepare(&log, ScreeningConfig::default());
     for c in &s.channels {
         assert_eq!(c.screening.rows_phase_range, 0, "{:?}", c.screening);
     }

@@ -593,9 +593,7 @@ fn linear_range_test_uses_each_channels_own_carrier() {
             let p = if (1000..1040).contains(&k) { logged } else { wiggle };
             rows.push((row(tk(k), 9, 45.0, None, p), carrier));
         }
-        let mut cfg = SelectionConfig::default();
-        cfg.screening.max_abs_phase_rad = Some(core::f64::consts::FRAC_PI_4);
-        let s = prep(&mixed_log(&rows), &wide_imu(), &cfg).unwrap();
+        let s = prep(&mixed_log(&rows), &wide_imu(), &SelectionConfig::default()).unwrap();
         s.channels.iter().find(|c| c.channel == 9).unwrap().screening.rows_phase_range
     };
     // 0.7 rad is within π/4 as logged, though 0.7·1575.42/1176.45 = 0.94 rad on L1's scale.
