@@ -82,7 +82,7 @@ fn a_second_order_session_peaking_near_1_15_rad_is_trusted_and_its_shake_is_not_
     let doc = trusted_near("second-order-1.15rad", 1.15);
     assert!(!codes(&doc).contains(&"imu_units"));
     // What the median |f| over the epochs would have said: beyond 10 % of g₀ under a 12 m/s² shake.
-    let imu = gsens_io::read_imu_file(&fixture("second-order-1.15rad").join("imu.csv")).unwrap();
+    let imu = gsens_io::read_imu_file(fixture("second-order-1.15rad").join("imu.csv")).unwrap();
     let mut norms: Vec<f64> = imu.accel_mps2.iter().map(|a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()).collect();
     norms.sort_by(f64::total_cmp);
     let median = norms[norms.len() / 2];
@@ -145,7 +145,7 @@ fn an_atan2_discriminator_widens_the_range_by_pi_over_2() {
 #[test]
 fn an_imu_log_in_g_is_still_imu_units() {
     let dir = fixture("second-order-1.15rad");
-    let imu = gsens_io::read_imu_file(&dir.join("imu.csv")).unwrap();
+    let imu = gsens_io::read_imu_file(dir.join("imu.csv")).unwrap();
     let tmp = std::env::temp_dir().join(format!("gsens-disc-imu-g-{}.csv", std::process::id()));
     let mut text = String::from("t_s,fx_mps2,fy_mps2,fz_mps2\n");
     let g0 = gsens_core::units::STANDARD_GRAVITY_MPS2;
