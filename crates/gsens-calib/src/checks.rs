@@ -9,11 +9,55 @@ use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::f64::consts::{PI, TAU};
 
-/// How far the median specific-force magnitude may stray from g₀ before the
-/// IMU's units or scale are doubted: gravity varies by ±0.3 % over the Earth,
-/// consumer accelerometers' scale and bias add a few per cent; 10 % is
+/// How far the specific force's magnitude at rest may stray from g₀ before
+/// the IMU's units or scale are doubted: gravity varies by ±0.3 % over the
+/// Earth, consumer accelerometers' scale and bias add a few per cent; 10 % is
 /// neither.
 const GRAVITY_TOLERANCE: f64 = 0.10;
+
+/// Length of the windows searched for rest \[s\]: about one period of hand
+/// shaking (1–2 s), so a shaken window's motion does not pass for rest.
+const REST_WINDOW_S: f64 = 1.0;
+
+/// A window is at rest when the RMS of its specific force about the window's
+/// mean vector is at most this fraction of the mean's magnitude: a quarter of
+/// [`GRAVITY_TOLERANCE`], so motion at rest moves the magnitude by less than
+/// the tolerance can notice. A ratio, so the test holds in any unit (m/s², g, mg).
+const REST_MAX_RELATIVE_RMS: f64 = GRAVITY_TOLERANCE / 4.0;
+
+/// The specific force's magnitude where the board is at rest, and how it was
+/// found: the median of |mean vector| over the [`REST_WINDOW_S`] windows
+/// (of consecutive epochs) at rest ([`REST_MAX_RELATIVE_RMS`]); without any,
+/// the magnitude of the session's mean vector, in which a hand's
+/// acceleration averages out (the board starts and ends at rest, ∫a dt = Δv
+/// = 0) while gravity stays. Not the median |f| over all epochs: under strong
+/// shaking |g + a| is mostly above g (10.9 m/s² at 12 m/s² amplitude).
+fn magnitude_at_rest(accel: &[[f64; 3]], interval_s: f64) -> Option<(f64, String)> {
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let mean = |w: &[[f64; 3]]| {
+        let n = w.len() as f64;
+        w.iter().fold([0.0; 3], |s, a| [s[0] + a[0] / n, s[1] + a[1] / n, s[2] + a[2] / n])
+    };
+    if accel.is_empty() {
+        return None;
+    }
+    let len = ((REST_WINDOW_S / interval_s).round() as usize).max(4);
+    let mut rest: Vec<f64> = accel
+        .chunks_exact(len)
+        .filter_map(|w| {
+            let m = mean(w);
+            let ms = w.iter().map(|a| norm([a[0] - m[0], a[1] - m[1], a[2] - m[2]]).powi(2)).sum::<f64>() / len as f64;
+            (ms.sqrt() <= REST_MAX_RELATIVE_RMS * norm(m)).then(|| norm(m))
+        })
+        .collect();
+    if rest.is_empty() {
+        let m = norm(mean(accel));
+        return Some((m, "the magnitude of its mean vector over the session (no stretch at rest)".into()));
+    }
+    let mid = rest.len() / 2;
+    let median = *rest.select_nth_unstable_by(mid, f64::total_cmp).1;
+    Some((median, format!("its median magnitude over the {} stretches of {REST_WINDOW_S} s at rest", rest.len())))
+}
 
 /// Fewer log samples than this per period of the loop's peak response cannot
 /// resolve the g-induced phase error (2 is Nyquist; 4 keeps the phase of
@@ -43,9 +87,9 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 /// The warnings about the inputs of the calibration `c` of `outcome`, whose
 /// loop is summarized by `loop_summary`.
 ///
-/// - `imu_units`: the median |f| over the epochs is gravity, g₀ = 9.80665
-///   m/s², within 10 % for any board shaken by hand (the shaking averages
-///   out of the median). Near 1 it is in g, otherwise the scale is wrong.
+/// - `imu_units`: the specific force's magnitude at rest
+///   ([`magnitude_at_rest`]) is gravity, g₀ = 9.80665 m/s², within 10 %.
+///   Near 1 it is in g, near 1000·g₀ in mg, otherwise the scale is wrong.
 /// - `log_rate`: the log must sample the loop's peak response f_peak at
 ///   least 4 times per period, T_log ≤ 1/(4·f_peak).
 /// - `time_units`: a tracking log interval or an IMU sample interval of 1 s
@@ -63,11 +107,7 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 ///   [`gsens_session::find_flat_runs`] found, and the epochs left out.
 pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
     let mut w = Vec::new();
-    let accel_mps2 = &outcome.session.accel_mps2;
-    let mut norms: Vec<f64> = accel_mps2.iter().map(|a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()).collect();
-    if !norms.is_empty() {
-        let mid = norms.len() / 2;
-        let median = *norms.select_nth_unstable_by(mid, f64::total_cmp).1;
+    if let Some((median, how)) = magnitude_at_rest(&outcome.session.accel_mps2, outcome.session.log_interval_s) {
         let g0 = STANDARD_GRAVITY_MPS2;
         if (median / g0 - 1.0).abs() > GRAVITY_TOLERANCE {
             let cause = if (median - 1.0).abs() < GRAVITY_TOLERANCE {
@@ -80,7 +120,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
             w.push(Warning {
                 code: "imu_units",
                 message: format!(
-                    "the specific force's median magnitude is {median:.4} where gravity gives {g0} m/s²: {cause}; \
+                    "the specific force at rest, {how}, is {median:.4} where gravity gives {g0} m/s²: {cause}; \
                      Γ̂ scales inversely with it"
                 ),
             });
@@ -252,21 +292,18 @@ pub(crate) fn phase_sign(outcome: &Outcome, c: &Calibration) -> Option<Warning> 
 /// integrates for `t_s` and logs one value per `n` integrations (`mean`: the
 /// mean of the n discriminator outputs; `last`: the latest one).
 ///
-/// A Costas/atan discriminator's output for one integration of length T has
-/// σ_d² = 1/(2·T·C/N0)·(1 + 1/(2·T·C/N0)) (the second factor the squaring
-/// loss; Kaplan & Hegarty, *Understanding GPS*, 2nd ed., §5.6, whose loop
-/// jitter Bn/(C/N0)·(1 + 1/(2·T·C/N0)) is this times 2·Bn·T). The logged
-/// value is that noise less the part the replica follows: for `last` the
-/// variance is σ_d²·(1 + 2·Bn·T) (the replica's jitter is independent of the
-/// current integration's noise, the loop having a one-update latency), for
-/// `mean` about σ_d²/n (the loop removes only the part below ~Bn of the
-/// averaged noise's bandwidth 1/(2·n·T), a fraction Bn·n·T ≈ 8 % at 3 Hz and
-/// 25 ms). Both within 10 % of σ_d²·(1 or 1/n), which is what is returned.
-/// The loop's jitter alone (Kaplan's formula) would under-predict a `mean`
-/// log of 25 × 1 ms by a factor 2.6 in σ, close to the 2π of a log in cycles.
+/// One discriminator output has σ_d² ([`gsens_core::discriminator_variance_rad2`]).
+/// The logged value is that noise less the part the replica follows: for
+/// `last` the variance is σ_d²·(1 + 2·Bn·T) (the replica's jitter is
+/// independent of the current integration's noise, the loop having a
+/// one-update latency), for `mean` about σ_d²/n (the loop removes only the
+/// part below ~Bn of the averaged noise's bandwidth 1/(2·n·T), a fraction
+/// Bn·n·T ≈ 8 % at 3 Hz and 25 ms). Both within 10 % of σ_d²·(1 or 1/n),
+/// which is what is returned. The loop's jitter alone (Kaplan's formula)
+/// would under-predict a `mean` log of 25 × 1 ms by a factor 2.6 in σ,
+/// close to the 2π of a log in cycles.
 pub(crate) fn logged_phase_variance_rad2(cn0_hz: f64, t_s: f64, n: u32, logged: LoggedPhase) -> f64 {
-    let snr = 2.0 * t_s * cn0_hz;
-    let per_output = (1.0 + 1.0 / snr) / snr;
+    let per_output = gsens_core::discriminator_variance_rad2(cn0_hz, t_s);
     match logged {
         LoggedPhase::Last => per_output,
         LoggedPhase::Mean => per_output / f64::from(n.max(1)),
@@ -516,7 +553,7 @@ fn flat_run_warnings(runs: &FlatRuns, masked_epochs: usize) -> Vec<Warning> {
 
 #[cfg(test)]
 mod tests {
-    use super::mean_phase_level_rad;
+    use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
 
@@ -538,5 +575,42 @@ mod tests {
         assert!((mean + 0.08).abs() < 3.0 * want_se, "{mean}");
         assert!((se / want_se - 1.0).abs() < 0.35, "{se} vs {want_se}");
         assert_eq!(mean_phase_level_rad(&phase[..700], 0.025, 2.5), None);
+    }
+
+    /// Level board, z up, shaken along x at 0.9 Hz with `amp` m/s² where `shaking(t)`, 40 Hz epochs.
+    fn board(seconds: f64, amp: f64, shaking: impl Fn(f64) -> bool) -> Vec<[f64; 3]> {
+        let n = (seconds * 40.0) as usize;
+        (0..n)
+            .map(|k| {
+                let t = k as f64 / 40.0;
+                let a = if shaking(t) { amp * (TAU * 0.9 * t).sin() } else { 0.0 };
+                [a, 0.0, STANDARD_GRAVITY_MPS2]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn rest_stretches_give_gravity_under_a_shake_whose_median_magnitude_is_not() {
+        // Shaken at 12 m/s² except for 3 s at each end.
+        let accel = board(60.0, 12.0, |t| (3.0..57.0).contains(&t));
+        let (m, how) = magnitude_at_rest(&accel, 0.025).unwrap();
+        assert!((m - STANDARD_GRAVITY_MPS2).abs() < 1e-9, "{m}");
+        assert!(how.contains("6 stretches"), "{how}");
+        let mut norms: Vec<f64> = accel.iter().map(|a| (a[0] * a[0] + a[2] * a[2]).sqrt()).collect();
+        norms.sort_by(f64::total_cmp);
+        assert!(norms[norms.len() / 2] > 1.1 * STANDARD_GRAVITY_MPS2);
+    }
+
+    #[test]
+    fn without_rest_the_mean_vector_gives_gravity_and_a_log_in_g_gives_one() {
+        // 50 s of shaking, 45 whole cycles at 0.9 Hz: the kinematic part averages out.
+        let accel = board(50.0, 12.0, |_| true);
+        let (m, how) = magnitude_at_rest(&accel, 0.025).unwrap();
+        assert!((m / STANDARD_GRAVITY_MPS2 - 1.0).abs() < 1e-3, "{m}");
+        assert!(how.contains("mean vector"), "{how}");
+        let in_g: Vec<[f64; 3]> =
+            board(60.0, 12.0, |t| t > 5.0).iter().map(|a| a.map(|v| v / STANDARD_GRAVITY_MPS2)).collect();
+        let (m, how) = magnitude_at_rest(&in_g, 0.025).unwrap();
+        assert!((m - 1.0).abs() < 1e-9 && how.contains("at rest"), "{m} {how}");
     }
 }

@@ -2,8 +2,8 @@
 //! text report and the bindings all serialize (keys in
 //! `docs/conventions.md#result-document`).
 
+use crate::Calibration;
 use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
-use crate::{Calibration, DISCRIMINATOR_LINEAR_RANGE_RAD};
 use gsens_core::LoopModel;
 use gsens_core::units::Decimal;
 use gsens_gnss_sdr::ImportSettings;
@@ -238,7 +238,6 @@ impl ResultDocument {
         doc.gnss_sdr = outcome.gnss_sdr.clone();
         doc.signals = outcome.session.signals.clone();
         doc.channel_ranking = Some(outcome.session.channel_ranking);
-        doc.warnings.extend(carrier_range_warning(&doc.calibration, &doc.signals));
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
         if let Some(first) = outcome.imu_spikes_t_s.first() {
@@ -357,28 +356,6 @@ impl ResultDocument {
     }
 }
 
-/// `discriminator_range` for a channel on a carrier above L1: Γ̂'s predicted
-/// phase error is on L1's scale, a channel on f_c logs f_c/f_L1 times it
-/// (GLONASS G1 +1.7 to +1.9 %), so the highest used carrier is checked
-/// against the linear range (the L1 check itself is in the calibration's
-/// own warnings).
-fn carrier_range_warning(c: &Calibration, signals: &[SignalSummary]) -> Option<Warning> {
-    let lin = DISCRIMINATOR_LINEAR_RANGE_RAD;
-    let top = signals.iter().filter(|s| s.tracks_used > 0).min_by(|a, b| a.scale_to_l1.total_cmp(&b.scale_to_l1))?;
-    let peak = c.predicted_peak_phase_err_rad / top.scale_to_l1;
-    (c.predicted_peak_phase_err_rad <= lin && peak > lin).then(|| Warning {
-        code: "discriminator_range",
-        message: format!(
-            "the predicted g-induced phase error reaches {peak:.2} rad on the {} channels ({} Hz, {:.4} times \
-             L1's), beyond the discriminator's linear range ({lin:.2} rad): shake more gently or the loss of \
-             discriminator gain biases Γ̂ low",
-            top.signal,
-            top.carrier_hz,
-            1.0 / top.scale_to_l1
-        ),
-    })
-}
-
 /// The warnings a calibration's own numbers raise.
 fn warnings(c: &Calibration) -> Vec<Warning> {
     let mut w = Vec::new();
@@ -392,13 +369,19 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
             ),
         });
     }
-    let (peak, lin) = (c.predicted_peak_phase_err_rad, DISCRIMINATOR_LINEAR_RANGE_RAD);
+    // The range is on L1's scale and already narrowed for the weakest channel's noise and the highest carrier.
+    let (peak, lin) = (c.predicted_peak_phase_err_rad, c.discriminator_linear_range_rad);
     if peak > lin {
+        let d = c.settings.discriminator;
         w.push(Warning {
             code: "discriminator_range",
             message: format!(
                 "the predicted g-induced phase error reaches {peak:.2} rad, beyond the discriminator's linear range \
-                 ({lin:.2} rad): shake more gently or the loss of discriminator gain biases Γ̂ low"
+                 ({lin:.2} rad: {d}'s ±{:.2} rad less {:.2} σ of thermal noise at the weakest channel's C/N0, on \
+                 L1's scale): shake more gently or the phase error wraps and biases Γ̂ low (or state the receiver's \
+                 discriminator, --discriminator)",
+                d.unambiguous_range_rad(),
+                gsens_core::RANGE_MARGIN_SIGMAS
             ),
         });
     }

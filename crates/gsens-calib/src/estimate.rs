@@ -342,7 +342,7 @@ fn calibrate_all_axes(
         huber,
         axes,
         predicted_peak_phase_err_rad: peak_phase,
-        discriminator_linear_range_rad: verdict::DISCRIMINATOR_LINEAR_RANGE_RAD,
+        discriminator_linear_range_rad: settings.discriminator.unambiguous_range_rad(),
         rms_before_rad: (ss_before / m).sqrt(),
         rms_after_rad: (ss_after / m).sqrt(),
         rms_g_induced_rad: (ss_g / m).sqrt(),

@@ -92,4 +92,4 @@ pub use response_check::{
 pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};
 pub use settings::{EstimateSettings, Method, Robust};
-pub use verdict::{AxisVerdict, DISCRIMINATOR_LINEAR_RANGE_RAD};
+pub use verdict::{AxisVerdict, session_linear_range_rad};

@@ -5,7 +5,7 @@
 
 use crate::settings::check_range;
 use crate::{CalibError, EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
-use gsens_core::{KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopModel, LoopSpec};
+use gsens_core::{Discriminator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopModel, LoopSpec};
 use gsens_session::{SelectionConfig, Weighting};
 use serde::{Deserialize, Serialize};
 
@@ -98,8 +98,13 @@ pub struct CalibrationOptions {
     pub screening: bool,
     /// Screening: rows more than this below the channel's median C/N0 \[dB\] (0 = no test).
     pub cn0_drop_db: f64,
-    /// Screening: rows with |phase error| beyond this \[rad\] (0 = no limit).
-    pub max_abs_phase_rad: f64,
+    /// Screening: rows with |phase error| beyond this \[rad\] (0 = no limit;
+    /// `None`: half the discriminator's unambiguous range, π/4 for atan
+    /// Costas, π/2 for atan2; see [`gsens_session::ScreeningConfig`]).
+    pub max_abs_phase_rad: Option<f64>,
+    /// The receiver's carrier-phase discriminator (default atan Costas,
+    /// atan(Q/I), what GPS L1 C/A receivers use).
+    pub discriminator: Discriminator,
     /// The IMU time offset.
     pub time_offset: TimeOffsetOption,
     /// Search range ± of `time_offset = "auto"` \[s\].
@@ -141,7 +146,8 @@ impl Default for CalibrationOptions {
             weights: Weighting::Equal,
             screening: true,
             cn0_drop_db: 6.0,
-            max_abs_phase_rad: core::f64::consts::FRAC_PI_4,
+            max_abs_phase_rad: None,
+            discriminator: Discriminator::AtanCostas,
             time_offset: TimeOffsetOption::default(),
             time_offset_max_s: 0.25,
             loop_check: true,
@@ -192,12 +198,14 @@ impl CalibrationOptions {
             imu_misalignment_sigma_rad: self.imu_misalignment_sigma_mrad * 1e-3,
             highpass_hz: self.highpass_hz,
             robust: self.robust,
+            discriminator: self.discriminator,
             ..EstimateSettings::default()
         }
     }
 
     /// The channel selection (a 0 of `channels`, `cn0_drop_db` or
-    /// `max_abs_phase_rad` switches that limit off).
+    /// `max_abs_phase_rad` switches that limit off; `max_abs_phase_rad`
+    /// unset is half the discriminator's unambiguous range).
     pub fn selection(&self) -> SelectionConfig {
         let mut s = SelectionConfig {
             max_channels: (self.channels > 0).then_some(self.channels),
@@ -208,7 +216,8 @@ impl CalibrationOptions {
         };
         s.screening.enabled = self.screening;
         s.screening.cn0_drop_db = (self.cn0_drop_db > 0.0).then_some(self.cn0_drop_db);
-        s.screening.max_abs_phase_rad = (self.max_abs_phase_rad > 0.0).then_some(self.max_abs_phase_rad);
+        let limit = self.max_abs_phase_rad.unwrap_or(0.5 * self.discriminator.unambiguous_range_rad());
+        s.screening.max_abs_phase_rad = (limit > 0.0).then_some(limit);
         s
     }
 
@@ -223,7 +232,7 @@ impl CalibrationOptions {
             ("imu_misalignment_sigma_mrad", self.imu_misalignment_sigma_mrad),
             ("highpass_hz", self.highpass_hz),
             ("cn0_drop_db", self.cn0_drop_db),
-            ("max_abs_phase_rad", self.max_abs_phase_rad),
+            ("max_abs_phase_rad", self.max_abs_phase_rad.unwrap_or(0.0)),
             ("time_offset_max_s", self.time_offset_max_s),
         ] {
             check_range(name, value, false)?;

@@ -3,9 +3,11 @@
 //! estimate Γ, and describe it all in one [`ResultDocument`].
 
 use crate::document::{GnssSdrConversion, ResultDocument};
-use crate::{CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit};
-use gsens_core::LoopModel;
+use crate::{
+    CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit, session_linear_range_rad,
+};
 use gsens_core::units::Decimal;
+use gsens_core::{Discriminator, LoopModel};
 use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
@@ -134,6 +136,20 @@ impl Default for PipelineSettings {
             loop_stated: true,
             despike_imu: true,
         }
+    }
+}
+
+impl PipelineSettings {
+    /// States the receiver's discriminator: the estimate's range check uses
+    /// it, and the screening's linear-range limit moves with it where it was
+    /// half the previous discriminator's unambiguous range, the default (a
+    /// limit set otherwise, or none, is kept).
+    pub fn set_discriminator(&mut self, discriminator: Discriminator) {
+        let limit = &mut self.selection.screening.max_abs_phase_rad;
+        if *limit == Some(0.5 * self.estimate.discriminator.unambiguous_range_rad()) {
+            *limit = Some(0.5 * discriminator.unambiguous_range_rad());
+        }
+        self.estimate.discriminator = discriminator;
     }
 }
 
@@ -393,6 +409,10 @@ fn calibrate_prepared(
     if let Some(fit) = joint {
         calibration.include_nuisance(&fit);
     }
+    // The channels' C/N0 is known here, not to the estimator: the range narrows by their noise.
+    let interval_s = calibration.loop_used.interval_s().unwrap_or(session.log_interval_s);
+    calibration.discriminator_linear_range_rad =
+        session_linear_range_rad(&session.channels, estimate.discriminator, interval_s);
     Ok(Outcome {
         session,
         calibration,
@@ -446,6 +466,9 @@ pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) 
     let mut settings = settings.clone();
     settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
     settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
+    // dll_pll_veml_tracking's PLL on GPS L1 C/A: pll_cloop_two_quadrant_atan
+    // (its four-quadrant pll_four_quadrant_atan only with track_pilot, and L1 C/A has no pilot).
+    settings.set_discriminator(Discriminator::AtanCostas);
     settings.loop_stated = true;
     settings.loop_tolerance.get_or_insert(0.0);
     settings

@@ -20,8 +20,9 @@
 //!   *Understanding GPS*, 2nd ed., eq. 5.6).
 //!
 //! The usual rule of thumb (Kaplan & Hegarty, §5.6.1) keeps lock while
-//! 3σ + θₑ ≤ 45° (π/4, the two-quadrant arctangent discriminator's linear
-//! range, [`crate::DISCRIMINATOR_LINEAR_RANGE_RAD`]), θₑ the dynamic stress
+//! 3σ + θₑ ≤ 45° ([`COSTAS_LOCK_RULE_RAD`]: half the two-quadrant
+//! arctangent's ±π/2, a margin for the non-Gaussian tails of the loop's
+//! jitter over a long track), θₑ the dynamic stress
 //! error: for a 2nd-order loop and a line-of-sight Doppler rate ḟ, the
 //! steady-state error 2π·ḟ/ωn² (a static receiver sees up to ≈ 0.9 Hz/s at
 //! L1 from the satellites' motion alone). With Gaussian φ about θₑ the chance
@@ -35,7 +36,11 @@
 use gsens_core::{LoopModel, LoopSpec};
 use statrs::distribution::{ContinuousCDF, Normal};
 
-use crate::DISCRIMINATOR_LINEAR_RANGE_RAD;
+/// Kaplan & Hegarty's rule of thumb for keeping a Costas loop in lock,
+/// 3σ + θₑ ≤ 45° \[rad\]: a lock criterion for the loop's whole jitter over a
+/// track, not the discriminator's linear range under shaking
+/// ([`gsens_core::Discriminator::linear_range_rad`]).
+pub const COSTAS_LOCK_RULE_RAD: f64 = core::f64::consts::FRAC_PI_4;
 
 /// A vibration environment.
 #[derive(Debug, Clone, PartialEq)]
@@ -193,7 +198,7 @@ pub fn jitter(receiver_loop: &LoopModel, bn_hz: f64, interval_s: f64, input: &Pr
         _ => 0.0,
     };
     let normal = Normal::standard();
-    let range = DISCRIMINATOR_LINEAR_RANGE_RAD;
+    let range = COSTAS_LOCK_RULE_RAD;
     Jitter {
         bn_hz,
         thermal_rad: thermal_sq.sqrt(),

@@ -60,7 +60,12 @@ pub struct Calibration {
     pub axes: [AxisVerdict; 3],
     /// Largest predicted g-induced phase error |φ_aᵀΓ̂| over the log \[rad\].
     pub predicted_peak_phase_err_rad: f64,
-    /// The discriminator's linear range assumed for the check \[rad\] (π/4).
+    /// The discriminator's linear range the peak is checked against \[rad\],
+    /// on L1's scale: from a session's logs, the smallest over the used
+    /// channels of [`gsens_core::Discriminator::linear_range_rad`] at the
+    /// channel's C/N0 and the loop's update interval, times f_L1/f_c; from an
+    /// epoch series alone (no C/N0 known), the noise-free unambiguous range
+    /// (π/2 for atan Costas, π for atan2).
     pub discriminator_linear_range_rad: f64,
     /// RMS of the averaged phase error over the used epochs \[rad\].
     pub rms_before_rad: f64,

@@ -2,10 +2,10 @@
 //! and the error model. Reported with every estimate.
 
 use crate::CalibError;
-use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
 use gsens_core::LoopSpec;
 use gsens_core::ObservabilityCriteria;
+use gsens_core::{Discriminator, LoggedPhase};
 use serde::{Deserialize, Serialize};
 
 /// Which estimator produces Γ̂.
@@ -84,6 +84,12 @@ pub struct EstimateSettings {
     pub criteria: ObservabilityCriteria,
     /// Robust estimation against outlying epochs (default none).
     pub robust: Robust,
+    /// The receiver's carrier-phase discriminator, whose linear range the
+    /// predicted peak phase error is checked against (default atan Costas,
+    /// what GPS L1 C/A receivers use; absent in documents written before it
+    /// existed, which read as atan Costas).
+    #[serde(default)]
+    pub discriminator: Discriminator,
 }
 
 impl Default for EstimateSettings {
@@ -100,6 +106,7 @@ impl Default for EstimateSettings {
             imu_misalignment_sigma_rad: 0.0,
             criteria: ObservabilityCriteria::default(),
             robust: Robust::None,
+            discriminator: Discriminator::AtanCostas,
         }
     }
 }

@@ -4,13 +4,37 @@
 //! peak of its periodogram over 0.1–5 Hz, by FFT), the fraction of the loop's peak sensitivity |L| reached
 //! there, the unexplained excitation from the information matrix, and whether
 //! the predicted g-induced phase error stays in the discriminator's linear
-//! range (the Costas rule of thumb: 3σ of the phase error below 45°).
+//! range ([`session_linear_range_rad`]).
 
-use gsens_core::LoopModel;
+use gsens_core::{Discriminator, LoopModel};
+use gsens_session::ChannelSummary;
 use serde::{Deserialize, Serialize};
 
-/// The linear range assumed for the discriminator \[rad\]: π/4.
-pub const DISCRIMINATOR_LINEAR_RANGE_RAD: f64 = core::f64::consts::FRAC_PI_4;
+/// The discriminator's linear range for a session \[rad\], on L1's scale
+/// (comparable with the predicted peak |φ_aᵀΓ̂|): the smallest over the used
+/// channels of
+///
+/// ```text
+/// R_lin,i · f_L1/f_c,i,   R_lin,i = Discriminator::linear_range_rad(C/N0_i, T)
+/// ```
+///
+/// (R less 3.09 thermal σ of one output at the channel's median C/N0 and the
+/// loop's update interval T): the weakest channel, and a channel on a carrier
+/// above L1, which logs f_c/f_L1 times L1's phase error, meet the limit
+/// first. Without a used channel: the noise-free range R.
+pub fn session_linear_range_rad(channels: &[ChannelSummary], discriminator: Discriminator, interval_s: f64) -> f64 {
+    channels
+        .iter()
+        .filter(|c| c.used)
+        .map(|c| {
+            let cn0_dbhz = c.screening.median_cn0_dbhz.unwrap_or(c.mean_cn0_dbhz);
+            let to_l1 = gsens_core::units::GPS_L1_HZ / c.carrier_hz;
+            discriminator.linear_range_rad(10f64.powf(cn0_dbhz / 10.0), interval_s) * to_l1
+        })
+        .filter(|r| r.is_finite())
+        .reduce(f64::min)
+        .unwrap_or(discriminator.unambiguous_range_rad())
+}
 
 /// What the data say about one axis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -81,6 +81,18 @@ pub struct LoopArgs {
     /// What a log row holds when the loop runs faster than the log (default: last).
     #[arg(long, value_enum)]
     pub logged_phase: Option<LoggedArg>,
+    /// The receiver's carrier-phase discriminator, whose linear range bounds the g-induced phase error (GNSS-SDR and PocketSDR sessions: theirs, atan-costas for GPS L1 C/A).
+    #[arg(long, value_enum, default_value_t = DiscriminatorArg::AtanCostas)]
+    pub discriminator: DiscriminatorArg,
+}
+
+/// The carrier-phase discriminator.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum DiscriminatorArg {
+    /// atan(Q/I), the two-quadrant Costas discriminator of GPS L1 C/A receivers: linear within ±π/2.
+    AtanCostas,
+    /// atan2(Q, I), a four-quadrant PLL discriminator (pilot signals): linear within ±π.
+    Atan2,
 }
 
 /// What a log row holds when the loop runs faster than the log.
@@ -105,6 +117,10 @@ impl LoopArgs {
             LoggedArg::Last => gsens_core::LoggedPhase::Last,
             LoggedArg::Mean => gsens_core::LoggedPhase::Mean,
         });
+        o.discriminator = match self.discriminator {
+            DiscriminatorArg::AtanCostas => gsens_core::Discriminator::AtanCostas,
+            DiscriminatorArg::Atan2 => gsens_core::Discriminator::Atan2,
+        };
     }
 
     fn options(&self) -> CalibrationOptions {
@@ -208,9 +224,9 @@ pub struct SelectionArgs {
     /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
     #[arg(long, default_value_t = 6.0, value_parser = finite_non_negative)]
     pub cn0_drop_db: f64,
-    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default π/4).
-    #[arg(long, default_value_t = std::f64::consts::FRAC_PI_4, value_parser = finite_non_negative)]
-    pub max_abs_phase_rad: f64,
+    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default: half the discriminator's unambiguous range, π/4 for atan-costas, π/2 for atan2).
+    #[arg(long, value_parser = finite_non_negative)]
+    pub max_abs_phase_rad: Option<f64>,
 }
 
 /// Channel weighting.

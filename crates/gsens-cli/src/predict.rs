@@ -250,7 +250,7 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
             bn_hz: &bns,
             without_rad: &without,
             with_rad: &with,
-            threshold_rad: gsens_calib::DISCRIMINATOR_LINEAR_RANGE_RAD,
+            threshold_rad: gsens_calib::predict::COSTAS_LOCK_RULE_RAD,
             label: &label,
         };
         fig_lock_margin(&data, Format::of_path(path).unwrap_or(Format::Png), DEFAULT_SIZE)?

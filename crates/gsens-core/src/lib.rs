@@ -18,6 +18,7 @@
 
 mod calibrator;
 mod compensate;
+mod discriminator;
 mod estimator;
 mod filter;
 mod loop_model;
@@ -33,6 +34,7 @@ pub use pll::pocket_sdr;
 
 pub use calibrator::{Calibrator, FedEpoch, PrefilteredCalibrator, average_phase_rad, warmup_epochs};
 pub use compensate::{Compensator, compensated_phase_rad};
+pub use discriminator::{Discriminator, RANGE_FALSE_ALARM, RANGE_MARGIN_SIGMAS, discriminator_variance_rad2};
 pub use estimator::{
     BatchLeastSquares, GammaEstimate, GammaEstimator, GradientObserver, NormalEquations, RANK_TOL,
     RecursiveLeastSquares, hac_covariance,

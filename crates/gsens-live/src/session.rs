@@ -3,7 +3,7 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use gsens_calib::{DISCRIMINATOR_LINEAR_RANGE_RAD, Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
+use gsens_calib::{Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
 use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 
 use crate::guidance::{Instruction, LoopBand, Protocol, Situation, instruct};
@@ -542,13 +542,15 @@ impl LiveSession {
         let peak_phase_rad =
             self.phase_window.iter().filter(|e| e.2 > 0).map(|&(_, s, n)| (s / n as f64).abs()).fold(0.0, f64::max);
         let rest_more_s = if self.rest_done { 0.0 } else { (self.config.rest_s - self.rest_s).max(0.0) };
+        // The batch estimate narrows it by the channels' noise; the guidance warns well before either.
+        let range_rad = self.config.settings.estimate.discriminator.unambiguous_range_rad();
         let situation = Situation {
             data_s: self.data_s(),
             rest_more_s,
             shaken: shaking.axis.map(|a| (a, shaking.frequency_hz)),
             several_axes: shaking.several_axes,
             peak_phase_rad,
-            range_rad: DISCRIMINATOR_LINEAR_RANGE_RAD,
+            range_rad,
             axes: axes.map(|a| (a.meets_target, a.more_s)),
             protocol: self.protocol(),
             shaken_by_rate_s: self.shaken_by_rate_s,
@@ -566,7 +568,7 @@ impl LiveSession {
             shaking,
             band: self.band,
             peak_phase_rad,
-            range_rad: DISCRIMINATOR_LINEAR_RANGE_RAD,
+            range_rad,
             channels,
             batch,
             batch_error,

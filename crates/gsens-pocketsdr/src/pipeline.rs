@@ -46,6 +46,8 @@ pub fn calibrate_pocketsdr(
     let mut settings = settings.clone();
     settings.estimate.receiver_loop = LoopModel::PocketSdr(imported.stage);
     settings.estimate.logged_phase = LoggedPhase::Last;
+    // pocket_trk's err_phas on L1CA: atan(Q/I), the two-quadrant Costas discriminator.
+    settings.set_discriminator(gsens_core::Discriminator::AtanCostas);
     settings.loop_stated = true;
     // PocketSDR's loop is known exactly from its options: tested, not fitted.
     settings.loop_tolerance.get_or_insert(0.0);

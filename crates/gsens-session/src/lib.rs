@@ -182,8 +182,8 @@
 //!    [`ScreeningConfig::min_track_gain`] by more than two standard errors is
 //!    excluded entirely. Too large a gain is not tested.
 //! 4. **Linear range.** Rows with `|φ|` above
-//!    [`ScreeningConfig::max_abs_phase_rad`] (default π/4, the rule of thumb's
-//!    3σ < 45° for keeping a Costas loop locked) by more than the track's
+//!    [`ScreeningConfig::max_abs_phase_rad`] (default π/4, half the atan
+//!    Costas discriminator's unambiguous range; π/2 for atan2) by more than the track's
 //!    noise explains (z·σ, z the normal quantile at a 1 % false-alarm
 //!    probability over the track's rows) while the common level at that
 //!    epoch (`φ − d`, the others' median plus the track's offset) is within

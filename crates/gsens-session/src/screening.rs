@@ -48,7 +48,12 @@ pub struct ScreeningConfig {
     /// below this is excluded entirely. Default 0.9.
     pub min_track_gain: f64,
     /// Rows with |φ| above this, plus the track's noise margin, are excluded
-    /// \[rad\]; `None`: no limit. Default π/4. The margin is z·σ (σ the
+    /// \[rad\]; `None`: no limit. Default π/4, half the unambiguous range of
+    /// the atan(Q/I) Costas discriminator of GPS L1 C/A receivers: a channel
+    /// alone beyond half the range is leaving it (a channel out of lock
+    /// logs outputs spread over the whole range, beyond half of it half the
+    /// time). For an atan2 discriminator, π/2 (a calibration pipeline sets
+    /// it from its discriminator). The margin is z·σ (σ the
     /// track's deviation σ, z the normal quantile at a 1 % false-alarm
     /// probability over its rows): a noisy track's rows are not excluded for
     /// noise that crosses the limit.
