@@ -69,8 +69,12 @@ pub const JOINT_LINEAR_LIMIT_RAD: f64 = 0.2;
 
 /// The linearity of the joint fit: x = max(2π·f·σ_τ, σ_ln s) (see
 /// [`JOINT_LINEAR_LIMIT_RAD`]), f the highest dominant shaking frequency of
-/// the observable axes; with it the offset's and the scale's parts. `None`
-/// when the fit estimated neither or no observable axis has a frequency.
+/// the observable axes; with it the offset's and the scale's parts. σ_τ and
+/// σ_ln s are those of the fit the result rests on: a loop combined with its
+/// tolerance rests on the free fit's covariance (the data alone), so its
+/// linearization must hold; a loop held exact rests on the held fit (σ_τ
+/// alone). `None` when the fit estimated neither or no observable axis has a
+/// frequency.
 pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f64>)> {
     let j = c.joint_fit.as_ref()?;
     let f_hz = c
@@ -80,9 +84,16 @@ pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f
         .filter(|(_, o)| **o)
         .filter_map(|(a, _)| a.shaking_frequency_hz)
         .reduce(f64::max)?;
-    let offset = j.sigma_imu_time_offset_s.map(|s| core::f64::consts::TAU * f_hz * s);
-    // The loop Γ̂ is under: the data's fit combined with the stated loop's tolerance.
-    let scale = j.sigma_used_natural_frequency_hz.zip(j.used_natural_frequency_hz).map(|(s, f)| s / f);
+    let offset = j
+        .linearization_sigma_imu_time_offset_s
+        .or(j.sigma_imu_time_offset_s)
+        .map(|s| core::f64::consts::TAU * f_hz * s);
+    // The loop's scale in the fit the result rests on: the data's own (free)
+    // fit when it was combined with a tolerance, none when held exact.
+    let scale = match j.loop_tolerance {
+        Some(t) if t == 0.0 && !j.stated_loop_rejected => None,
+        _ => j.sigma_natural_frequency_hz.zip(j.natural_frequency_hz).map(|(s, f)| s / f),
+    };
     let x = offset.into_iter().chain(scale).reduce(f64::max)?;
     Some((x, offset, scale))
 }

@@ -98,6 +98,10 @@ pub struct JointFit {
     pub imu_time_offset_s: Option<f64>,
     /// Its 1σ \[s\].
     pub sigma_imu_time_offset_s: Option<f64>,
+    /// 1σ of the offset in the fit whose linearization Γ̂ and σ rest on \[s\]:
+    /// the free fit's (the data alone) when it was combined with a loop
+    /// tolerance through its covariance, the held fit's for an exact loop.
+    pub linearization_sigma_imu_time_offset_s: Option<f64>,
     /// The offset's search range ± \[s\] (around the series' own offset).
     pub offset_max_abs_s: Option<f64>,
     /// Whether the offset ended at the edge of its search range.
@@ -195,13 +199,20 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     let Some(tol) = tolerance else {
         let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None)?;
         let data = free.ln_s_and_variance();
-        return Ok(describe(series, &stated, spec, &axes, &free, data, None));
+        let evidence = LoopEvidence { data, tolerance: None, linearization_sigma_tau_s: free.sigma_tau_s() };
+        return Ok(describe(series, &stated, spec, &axes, &free, evidence));
     };
     let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), None)?;
     let (ln_s, c_ss) = free.ln_s_and_variance().unwrap_or((0.0, 0.0));
     let z = ln_s / (c_ss + tol * tol).sqrt();
-    if !(c_ss > 0.0) || !(z.abs() <= LOOP_TEST_Z) {
-        return Ok(describe(series, &stated, spec, &axes, &free, Some((ln_s, c_ss)), Some(tol)));
+    // No variance of ln ŝ (NaN included) or a rejected loop: the free fit.
+    if c_ss.is_nan() || c_ss <= 0.0 || z.is_nan() || z.abs() > LOOP_TEST_Z {
+        let evidence = LoopEvidence {
+            data: Some((ln_s, c_ss)),
+            tolerance: Some(tol),
+            linearization_sigma_tau_s: free.sigma_tau_s(),
+        };
+        return Ok(describe(series, &stated, spec, &axes, &free, evidence));
     }
     let w = tol * tol / (c_ss + tol * tol);
     let (ln_s_post, var_post) = (w * ln_s, w * c_ss);
@@ -217,7 +228,10 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     let held = JointSpec { natural_frequency: false, loop_tolerance: None, ..spec };
     let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.dtau))?;
     let posterior = free.posterior(&refit, ln_s_post, var_post);
-    Ok(describe(series, &stated, spec, &axes, &posterior, Some((ln_s, c_ss)), Some(tol)))
+    // Held exact, the free fit's linearization is not used: the held fit's σ_τ is what must hold.
+    let linearization_sigma_tau_s = if tol == 0.0 { posterior.sigma_tau_s() } else { free.sigma_tau_s() };
+    let evidence = LoopEvidence { data: Some((ln_s, c_ss)), tolerance: Some(tol), linearization_sigma_tau_s };
+    Ok(describe(series, &stated, spec, &axes, &posterior, evidence))
 }
 
 /// A solved joint fit: the parameters and their sandwich covariance.
@@ -243,6 +257,11 @@ struct Solution {
 }
 
 impl Solution {
+    /// 1σ of the offset, when it was estimated \[s\].
+    fn sigma_tau_s(&self) -> Option<f64> {
+        self.tau_idx.map(|t| self.cov[(t, t)].max(0.0).sqrt())
+    }
+
     /// ln ŝ and its variance, when the natural frequency was estimated.
     fn ln_s_and_variance(&self) -> Option<(f64, f64)> {
         self.loop_idx.map(|l| (self.ln_s, self.cov[(l, l)]))
@@ -496,18 +515,26 @@ fn solve(
     })
 }
 
-/// The [`JointFit`] of a solution: `data` is the free fit's ln ŝ and its
-/// variance (the loop test's), `tolerance` the prior's width it was combined
-/// with.
+/// What the loop test and the linearity check of a solution rest on.
+struct LoopEvidence {
+    /// The free fit's ln ŝ and its variance (the loop test's).
+    data: Option<(f64, f64)>,
+    /// The prior's width the free fit was combined with.
+    tolerance: Option<f64>,
+    /// σ of the offset in the fit whose linearization the result rests on.
+    linearization_sigma_tau_s: Option<f64>,
+}
+
+/// The [`JointFit`] of a solution with its [`LoopEvidence`].
 fn describe(
     series: &EpochSeries,
     stated: &LoopModel,
     spec: JointSpec,
     axes: &[usize],
     sol: &Solution,
-    data: Option<(f64, f64)>,
-    tolerance: Option<f64>,
+    evidence: LoopEvidence,
 ) -> JointFit {
+    let LoopEvidence { data, tolerance, linearization_sigma_tau_s } = evidence;
     let cov = &sol.cov;
     let cov3 = &sol.cov3;
     // Row/column of axis i in the fit (None: left out as unobservable).
@@ -556,6 +583,7 @@ fn describe(
             .map(|(l, f)| cov[(l, l)].max(0.0).sqrt() * f),
         imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + sol.dtau),
         sigma_imu_time_offset_s: sol.tau_idx.map(sd),
+        linearization_sigma_imu_time_offset_s: linearization_sigma_tau_s,
         offset_max_abs_s: spec.offset_max_abs_s,
         offset_at_limit,
         correlation_loop_offset: correlation,

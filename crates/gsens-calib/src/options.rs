@@ -237,7 +237,7 @@ impl CalibrationOptions {
         ] {
             check_range(name, value, false)?;
         }
-        if let Some(t) = self.loop_tolerance.filter(|t| !(*t >= 0.0)) {
+        if let Some(t) = self.loop_tolerance.filter(|t| t.is_nan() || *t < 0.0) {
             let expected = "at least 0: a relative 1σ (0.02 = 2 %), 0 for a loop known exactly, inf for a loop known only by its shape";
             return Err(CalibError::Setting { name: "loop_tolerance", value: t, expected });
         }

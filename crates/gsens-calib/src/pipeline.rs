@@ -345,7 +345,7 @@ fn calibrate_prepared(
     let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;
     let tolerance = settings.loop_tolerance.unwrap_or(DEFAULT_LOOP_TOLERANCE);
-    if !(tolerance >= 0.0) {
+    if tolerance.is_nan() || tolerance < 0.0 {
         return Err(CalibError::Setting {
             name: "loop_tolerance",
             value: tolerance,

@@ -235,7 +235,8 @@ mod tests {
         let settings = EstimateSettings::default();
         let c = calibrate(&series, &settings).unwrap();
         assert!(c.observable.iter().all(|&o| o), "{:?}", c.axes);
-        let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s: Some(0.05) };
+        let spec =
+            JointSpec { natural_frequency: true, damping: false, offset_max_abs_s: Some(0.05), loop_tolerance: None };
         let fit = joint_fit(&series, &settings, spec).unwrap();
         for no_variance in [0.0, f64::NAN] {
             let mut fit = fit.clone();

@@ -26,6 +26,15 @@ impl LoopBand {
         1.0 / self.peak_hz
     }
 
+    /// Which of the two-rate protocol's rates shaking at `f_hz` counts as (0
+    /// slow, 1 fast): the slow one up to the rates' geometric mean,
+    /// √(0.7·1.6) = 1.06 times the peak, so that shaking at the peak itself
+    /// counts as the slow rate rather than as either by chance.
+    pub fn rate_of(&self, f_hz: f64) -> usize {
+        let [slow, fast] = gsens_core::TWO_RATE_FACTORS;
+        usize::from(f_hz > self.peak_hz * (slow * fast).sqrt())
+    }
+
     /// The two-rate protocol's periods, slow then fast
     /// ([`gsens_core::LoopPeak::two_rate_periods_s`]) \[s\].
     pub fn two_rate_periods_s(&self) -> [f64; 2] {
@@ -185,7 +194,7 @@ pub struct Situation {
     pub axes: [(bool, Option<f64>); 3],
     /// The protocol guided.
     pub protocol: Protocol,
-    /// Per axis, the seconds shaken below and above the loop's peak frequency.
+    /// Per axis, the seconds shaken at the slow and at the fast rate ([`LoopBand::rate_of`]).
     pub shaken_by_rate_s: [[f64; 2]; 3],
 }
 
@@ -234,7 +243,7 @@ pub fn instruct(s: &Situation, band: &LoopBand) -> Instruction {
         // Two rates: shaking on the side of the peak that already leads.
         Some((axis, Some(f_hz)))
             if aim(axis).1.is_some_and(|r| {
-                let now = usize::from(f_hz > band.peak_hz);
+                let now = band.rate_of(f_hz);
                 let by_rate = s.shaken_by_rate_s[axis];
                 now != r && by_rate[now] - by_rate[r] > TWO_RATE_LEAD_S
             }) =>
@@ -326,5 +335,8 @@ mod tests {
         s.axes[0] = (true, Some(0.0));
         assert_eq!(instruct(&s, &b).to_string(), "x has enough: shake y, about 1.6 s per cycle");
         assert!(Protocol::TwoRates.why().contains("two rates"));
+        // Shaking at the peak counts as the slow rate, not as either by chance.
+        assert_eq!((b.rate_of(b.peak_hz * 0.99), b.rate_of(b.peak_hz * 1.01)), (0, 0));
+        assert_eq!((b.rate_of(1.0 / slow), b.rate_of(1.0 / fast)), (0, 1));
     }
 }

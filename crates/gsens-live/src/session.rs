@@ -213,7 +213,8 @@ pub struct LiveSession {
     phase_window: VecDeque<(f64, f64, u32)>,
     first_t_s: Option<f64>,
     shaken_s: [f64; 3],
-    /// Per axis, seconds shaken below and above the loop's peak frequency.
+    /// Per axis, seconds shaken at the slow and at the fast rate
+    /// ([`LoopBand::rate_of`]).
     shaken_by_rate_s: [[f64; 2]; 3],
     rest_s: f64,
     rest_done: bool,
@@ -339,7 +340,7 @@ impl LiveSession {
                     Some(i) if dt < 1.0 => {
                         self.shaken_s[i] += dt;
                         if let Some(f_hz) = shaking.frequency_hz {
-                            self.shaken_by_rate_s[i][usize::from(f_hz > self.band.peak_hz)] += dt;
+                            self.shaken_by_rate_s[i][self.band.rate_of(f_hz)] += dt;
                         }
                         self.rest_done = true;
                     }
