@@ -185,7 +185,7 @@ fn live_names_the_warnings_of_an_untrustworthy_session() {
     let named = |l: &&str| l.rsplit_once("| NOT TRUSTWORTHY (").is_some_and(|(_, c)| c.contains("imu_units"));
     assert!(batches.iter().all(named), "{}", batches.join("\n"));
     // The warning with its fix, once while live, once more in the end report.
-    assert_eq!(text.matches("warning [imu_units]: the specific force's median magnitude").count(), 2, "{text}");
+    assert_eq!(text.matches("warning [imu_units]: the specific force at rest").count(), 2, "{text}");
     let end = &text[text.find("ended: ").unwrap()..];
     assert!(end.contains("verdict: NOT TRUSTWORTHY (imu_units)"), "{end}");
     assert!(err.contains("gsens_gamma.h not written: the estimate is not trustworthy (imu_units)"), "{err}");

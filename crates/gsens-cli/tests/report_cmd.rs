@@ -153,7 +153,7 @@ fn an_untrustworthy_report_says_so_in_every_file_and_writes_no_header() {
     assert_eq!(v["warnings"][0]["code"], "imu_units", "{}", v["warnings"]);
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("id=\"verdict\" role=\"alert\">NOT TRUSTWORTHY (imu_units)"));
-    assert!(html.contains("<li><code>imu_units</code>: the specific force&#39;s median magnitude"));
+    assert!(html.contains("<li><code>imu_units</code>: the specific force at rest"));
     assert!(!html.contains("Γ̂ is complete"), "the green note on an untrustworthy estimate");
     assert_eq!(html.matches("class=\"num untrusted\"").count(), 6);
 
@@ -162,6 +162,6 @@ fn an_untrustworthy_report_says_so_in_every_file_and_writes_no_header() {
     let h = std::fs::read_to_string(out.join("gsens_gamma.h")).unwrap();
     assert!(h.contains("#define GSENS_GAMMA_TRUSTWORTHY 0\n"), "{h}");
     assert!(h.contains(" * VERDICT: NOT TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 0): imu_units."), "{h}");
-    assert!(h.contains(" *   imu_units: the specific force's median magnitude"), "{h}");
+    assert!(h.contains(" *   imu_units: the specific force at rest"), "{h}");
     std::fs::remove_dir_all(&dir).ok();
 }

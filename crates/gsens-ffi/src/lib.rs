@@ -153,7 +153,7 @@ pub struct GsensCalibratorConfig {
     /// coloured (loop-filtered thermal noise, oscillator phase noise), which
     /// a streaming estimator cannot measure: set it to σ/σ_white of `gsens
     /// estimate` on a log of the same receiver and shaking (its result
-    /// document's `sigma_hz_per_mps2` over `sigma_white_hz_per_mps2`: 2.6 to
+    /// document's `sigma_hz_per_mps2` over `sigma_white_hz_per_mps2`: 2.5 to
     /// 2.8 on the default simulated session) for an honest σ.
     pub sigma_colour_factor: f64,
 }

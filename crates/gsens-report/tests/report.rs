@@ -236,11 +236,11 @@ fn compile_and_run(header: &str, name: &str) -> Option<String> {
     Some(String::from_utf8(run.stdout).unwrap())
 }
 
-/// A session shaken 3× harder than [`session`]: the predicted g-induced phase
+/// A session shaken 6× harder than [`session`]: the predicted g-induced phase
 /// error passes the discriminator's linear range, so the document calls the
 /// estimate untrustworthy (`discriminator_range`), and every output says so.
 fn untrustworthy() -> (common::Session, ResultDocument) {
-    let s = session_shaken([true; 3], 9.0);
+    let s = session_shaken([true; 3], 18.0);
     let doc = document(&s.calibration, Some(TRUTH));
     assert!(!doc.trustworthy, "{:?}", doc.warnings);
     assert_eq!(doc.untrusted_codes(), ["discriminator_range"], "{:?}", doc.warnings);
@@ -309,7 +309,7 @@ fn an_untrustworthy_header_says_so_and_compiles() {
     assert!(comment.contains(" *   discriminator_range: the predicted g-induced phase error reaches"), "{h}");
     // The whole message is there, wrapped, in ASCII.
     let joined: String = comment.lines().map(|l| l.trim_start_matches(" *").trim()).collect::<Vec<_>>().join(" ");
-    assert!(joined.contains("shake more gently or the loss of discriminator gain biases Gamma-hat low"), "{h}");
+    assert!(joined.contains("shake more gently or the phase error wraps and biases Gamma-hat low"), "{h}");
     let warnings = &comment[comment.find(" * Warnings:").unwrap()..];
     assert!(warnings.lines().all(|l| l.len() <= 92), "{h}");
     assert!(h.contains("#define GSENS_GAMMA_TRUSTWORTHY 0\n"));
