@@ -51,10 +51,27 @@ pub fn run(args: &DemoArgs) -> Result<crate::Status> {
         LoggedPhaseMode::Mean => "mean",
     };
     let (i, t) = (imu.display(), tracking.display());
+    let mut flags =
+        format!("--order {} --bn-hz {} --loop-interval-s {} --logged-phase {logged}", l.order, l.bn_hz, l.interval_s);
+    let e = &settings.estimate;
+    if e.carrier_hz != gsens_core::units::GPS_L1_HZ {
+        flags += &format!(" --carrier-hz {}", e.carrier_hz);
+    }
+    // The scenario's IMU error model enters σ as it would a datasheet's.
+    if e.imu_scale_sigma > 0.0 {
+        flags += &format!(" --imu-scale-sigma-ppm {}", gsens_core::units::Decimal(e.imu_scale_sigma * 1e6));
+    }
+    if e.imu_misalignment_sigma_rad > 0.0 {
+        flags += &format!(
+            " --imu-misalignment-sigma-mrad {}",
+            gsens_core::units::Decimal(e.imu_misalignment_sigma_rad * 1e3)
+        );
+    }
+    for arg in analysis_flags_given() {
+        flags += &format!(" {arg}");
+    }
     crate::out(&format!(
-        "estimating from {i} and {t} (the command line: gsens estimate --imu {i} --tracking {t} --order {} --bn-hz {} \
-         --loop-interval-s {} --logged-phase {logged})\n\n",
-        l.order, l.bn_hz, l.interval_s
+        "estimating from {i} and {t} (the command line: gsens estimate --imu {i} --tracking {t} {flags})\n\n"
     ))?;
     let doc = outcome.document(Some(truth.sensitivity.gamma_hz_per_mps2));
     crate::out(&gsens_report::render_text(&doc))?;
@@ -72,6 +89,26 @@ pub fn run(args: &DemoArgs) -> Result<crate::Status> {
         )?;
     }
     Ok(crate::Status::of(&doc))
+}
+
+/// The demo's own arguments that are estimation options (all but the
+/// scenario, the seed and the output paths), as given: what `gsens estimate`
+/// needs besides the loop to repeat the demo's estimate.
+fn analysis_flags_given() -> Vec<String> {
+    const DEMO_ONLY: [&str; 5] = ["--scenario", "--seed", "--out", "--json", "--figures"];
+    let mut args = std::env::args().skip_while(|a| a != "demo").skip(1);
+    let mut kept = Vec::new();
+    while let Some(arg) = args.next() {
+        let name = arg.split('=').next().unwrap_or_default();
+        if DEMO_ONLY.contains(&name) {
+            if !arg.contains('=') {
+                args.next();
+            }
+        } else {
+            kept.push(arg);
+        }
+    }
+    kept
 }
 
 /// The figures of the demo's calibration plus the Allan deviation of the

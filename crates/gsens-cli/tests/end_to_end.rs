@@ -74,7 +74,7 @@ fn same_seed_same_bytes() {
 fn demo_shows_estimate_next_to_truth() {
     let dir = std::env::temp_dir().join(format!("gsens-demo-test-{}", std::process::id()));
     let doc = dir.join("demo.json");
-    let text = gsens(&["demo", "--out", dir.to_str().unwrap(), "--json", doc.to_str().unwrap()]);
+    let text = gsens(&["demo", "--out", dir.to_str().unwrap(), "--json", doc.to_str().unwrap(), "--warmup-s", "3"]);
     let truth = vec3(&json(&dir.join("truth.json"))["gamma_hz_per_mps2"]);
     let v = json(&doc);
     assert_eq!(vec3(&v["truth_gamma_hz_per_mps2"]), truth);
@@ -93,6 +93,36 @@ fn demo_shows_estimate_next_to_truth() {
     let pct = 100.0 * norm([0, 1, 2].map(|i| gamma[i] - truth[i])) / norm(truth);
     assert!(text.contains(&format!("= {pct:.2} % of |Γ|")), "{pct:.2}: {text}");
     assert!(pct < 2.0, "{pct}");
+
+    // The command line the demo prints gives its estimate: Γ̂, σ and the
+    // covariance (which carries the scenario's IMU error model) to 1e-9.
+    let command = text.split("(the command line: gsens ").nth(1).and_then(|r| r.split(")\n").next());
+    let mut args: Vec<String> =
+        command.expect("the demo prints its command line").split(' ').map(String::from).collect();
+    let again = dir.join("again.json");
+    args.extend(["--json".to_string(), again.to_str().unwrap().to_string()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    assert!(args.contains(&"--warmup-s") && args.contains(&"--imu-scale-sigma-ppm"), "{args:?}");
+    let _ = gsens(&args);
+    let w = json(&again);
+    let flat = |v: &serde_json::Value| -> Vec<f64> {
+        let mut out = Vec::new();
+        let mut stack = vec![v.clone()];
+        while let Some(x) = stack.pop() {
+            match x {
+                serde_json::Value::Array(a) => stack.extend(a),
+                x => out.push(x.as_f64().expect("a number")),
+            }
+        }
+        out
+    };
+    for key in ["gamma_hz_per_mps2", "sigma_hz_per_mps2", "covariance_hz_per_mps2_sq"] {
+        let (a, b) = (flat(&v[key]), flat(&w[key]));
+        assert_eq!(a.len(), b.len(), "{key}");
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-9 * x.abs().max(1e-30), "{key}: demo {x} vs its command {y}");
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

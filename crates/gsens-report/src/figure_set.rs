@@ -173,8 +173,12 @@ impl<'a> FigureInputs<'a> {
                 id: "measured_response",
                 title: "The loop's response measured from the session".into(),
                 caption: "The response of the averaged phase error to the modelled excitation aᵀΓ̂, estimated from \
-                          the session (Welch cross-spectrum, ±2σ from the coherence; the bins the check tests in red), \
-                          beside the model's. Points off the model curve mean the stated loop is not the receiver's."
+                          the session (Welch cross-spectrum), beside the model's. Red: the bins the check tests (the \
+                          shaken band), each with a bar as long as the deviation the check allows; a red bar that \
+                          misses its black dot (the model through the same segments, window leakage included, which \
+                          is what Ĥ is compared with, not the smooth curve) means the stated loop is not the \
+                          receiver's. Grey: other bins with significant coherence, ±2σ from the coherence; they are \
+                          not tested, and with little excitation they scatter about the curve."
                     .into(),
                 render: Box::new(move |f| fig_measured_response(m, f, (DEFAULT_SIZE.0, 720))),
             });

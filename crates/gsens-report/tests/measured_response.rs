@@ -49,6 +49,14 @@ fn measured_response_renders() {
         assert!((p.phase_deg - d.model_phase_deg[i]).abs() < 90.0, "{} Hz: not unwrapped", p.f_hz);
     }
 
+    // The red bars are the check's own limits: on a session the model fits,
+    // every tested point's bar reaches its model point.
+    for p in d.points.iter().filter(|p| p.tested) {
+        let miss = (p.magnitude_rad_per_hz - p.model_magnitude_rad_per_hz).abs() / p.magnitude_bar_rad_per_hz();
+        assert!(miss < 1.0, "{} Hz: bar misses the model point ({miss:.2} of its length)", p.f_hz);
+        assert!((p.phase_deg - p.model_phase_deg).abs() < p.phase_bar_deg(), "{} Hz: phase bar misses", p.f_hz);
+    }
+
     for (size, name) in [((1000, 640), "measured_response"), ((480, 320), "measured_response_small")] {
         let png = fig_measured_response(&d, Format::Png, size).unwrap();
         png.write_to(out_dir().join(format!("{name}.png"))).unwrap();
@@ -74,6 +82,34 @@ fn measured_response_renders() {
     }
 }
 
+/// A loop stated 40 % too wide fails the check, and the figure shows it: a
+/// tested point whose bar (the deviation the check allows) misses its model
+/// point.
+#[test]
+fn a_wrong_loop_shows_as_a_bar_missing_its_model_point() {
+    let s = session([true; 3]);
+    let c = &s.calibration;
+    let series = EpochSeries {
+        log_interval_s: 0.025,
+        t_s: &s.t_s,
+        phase_err_rad: &s.phase_err_rad,
+        accel_mps2: &s.accel_mps2,
+        imu_time_offset_s: 0.0,
+    };
+    let right = EstimateSettings::default();
+    let mut wrong = right;
+    wrong.receiver_loop = right.receiver_loop.with_bn_scaled(1.4);
+    let check = measure_response(&series, &wrong, &c.gamma_raw_hz_per_mps2).unwrap();
+    assert!(!check.consistent, "{}", check.summary());
+    let model = wrong.loop_at(0.025);
+    let d = MeasuredResponseData::from_check(&check, &model, 0.025, LoggedPhase::Last, 200, model.to_string());
+    let missed = d.points.iter().filter(|p| p.tested).any(|p| {
+        (p.magnitude_rad_per_hz - p.model_magnitude_rad_per_hz).abs() > p.magnitude_bar_rad_per_hz()
+            || (p.phase_deg - p.model_phase_deg).abs() > p.phase_bar_deg()
+    });
+    assert!(missed, "no tested bar misses its model point although the check failed: {}", check.summary());
+}
+
 #[test]
 fn measured_response_rejects_empty_data() {
     let d = MeasuredResponseData {
@@ -95,6 +131,7 @@ fn measured_response_rejects_empty_data() {
         model_magnitude_rad_per_hz: 0.6,
         model_phase_deg: -121.0,
         tested: true,
+        allowed_deviation_rad_per_hz: Some(0.05),
     };
     let bad = MeasuredResponseData { points: vec![p], ..d.clone() };
     assert!(matches!(fig_measured_response(&bad, Format::Png, (800, 600)), Err(RenderError::NoData(_))));

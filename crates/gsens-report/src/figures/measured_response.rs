@@ -34,6 +34,31 @@ pub struct MeasuredPoint {
     pub model_phase_deg: f64,
     /// Whether the check tested this bin (the shaken band).
     pub tested: bool,
+    /// For a tested bin, the largest deviation of Ĥ from Ĥ_m the check
+    /// allows, t_max·σ_dev (`ResponseCheck::threshold_sigma` times
+    /// `ResponseBin::sigma_deviation_rad_per_hz`) \[rad/Hz\]: a tested point
+    /// further than this from its model point fails the check.
+    pub allowed_deviation_rad_per_hz: Option<f64>,
+}
+
+impl MeasuredPoint {
+    /// Half-length of the magnitude bar: for a tested bin the deviation the
+    /// check allows, otherwise [`MEASURED_BAND_SIGMA`] standard errors from
+    /// the coherence \[rad/Hz\].
+    pub fn magnitude_bar_rad_per_hz(&self) -> f64 {
+        self.allowed_deviation_rad_per_hz.unwrap_or(MEASURED_BAND_SIGMA * self.sigma_magnitude_rad_per_hz)
+    }
+
+    /// Half-length of the phase bar \[deg\], at most 90°: for a tested bin
+    /// the allowed deviation across Ĥ_m as an angle, atan(allowed/|Ĥ_m|),
+    /// otherwise [`MEASURED_BAND_SIGMA`] standard errors from the coherence.
+    pub fn phase_bar_deg(&self) -> f64 {
+        let deg = match self.allowed_deviation_rad_per_hz {
+            Some(a) => (a / self.model_magnitude_rad_per_hz).atan().to_degrees(),
+            None => MEASURED_BAND_SIGMA * self.sigma_phase_deg,
+        };
+        deg.min(90.0)
+    }
 }
 
 /// The measured response and the model to plot.
@@ -104,6 +129,9 @@ impl MeasuredResponseData {
                     model_magnitude_rad_per_hz: b.model_magnitude_rad_per_hz,
                     model_phase_deg: unwrap(b.model_phase_rad.to_degrees(), reference),
                     tested: b.tested,
+                    allowed_deviation_rad_per_hz: b
+                        .tested
+                        .then(|| check.threshold_sigma * b.sigma_deviation_rad_per_hz),
                 }
             })
             .collect();
@@ -149,10 +177,16 @@ impl Plot for MeasuredResponseData {
         let k = MEASURED_BAND_SIGMA;
         let mut entries = vec![
             ("model |L| (loop and logging)".to_string(), Mark::Line(model_color, 3)),
-            (format!("measured Ĥ ±{k:.0}σ, tested bins (shaken band)"), Mark::Dot(tested_color)),
+            (
+                "measured Ĥ, tested bins (shaken band), bar: the deviation the check allows".to_string(),
+                Mark::Dot(tested_color),
+            ),
         ];
         if self.points.iter().any(|p| !p.tested) {
-            entries.push(("measured Ĥ, other bins with significant coherence".to_string(), Mark::Dot(other_color)));
+            entries.push((
+                format!("measured Ĥ ±{k:.0}σ, other bins with significant coherence (not tested)"),
+                Mark::Dot(other_color),
+            ));
         }
         entries.push(("model through the same segments (what Ĥ is tested against)".to_string(), Mark::Dot(ref_color)));
         entries.push((self.verdict.clone(), Mark::Band(verdict_color)));
@@ -166,7 +200,7 @@ impl Plot for MeasuredResponseData {
             .model_magnitude_rad_per_hz
             .iter()
             .cloned()
-            .chain(self.points.iter().filter(in_x).map(|p| p.magnitude_rad_per_hz + k * p.sigma_magnitude_rad_per_hz))
+            .chain(self.points.iter().filter(in_x).map(|p| p.magnitude_rad_per_hz + p.magnitude_bar_rad_per_hz()))
             .filter(|v| v.is_finite())
             .fold(0.0, f64::max)
             * 1.1;
@@ -195,8 +229,8 @@ impl Plot for MeasuredResponseData {
         ))?;
         for p in self.points.iter().filter(in_x) {
             let (lo, hi) = (
-                (p.magnitude_rad_per_hz - k * p.sigma_magnitude_rad_per_hz).max(0.0),
-                (p.magnitude_rad_per_hz + k * p.sigma_magnitude_rad_per_hz).min(ymax),
+                (p.magnitude_rad_per_hz - p.magnitude_bar_rad_per_hz()).max(0.0),
+                (p.magnitude_rad_per_hz + p.magnitude_bar_rad_per_hz()).min(ymax),
             );
             chart.draw_series(error_bar(p.f_hz, lo, hi, color(p).stroke_width(bar_w)))?;
             chart.draw_series(std::iter::once(Circle::new(
@@ -215,9 +249,12 @@ impl Plot for MeasuredResponseData {
             .model_phase_deg
             .iter()
             .cloned()
-            .chain(self.points.iter().filter(in_x).flat_map(|p| {
-                [p.phase_deg - k * p.sigma_phase_deg.min(90.0), p.phase_deg + k * p.sigma_phase_deg.min(90.0)]
-            }))
+            .chain(
+                self.points
+                    .iter()
+                    .filter(in_x)
+                    .flat_map(|p| [p.phase_deg - p.phase_bar_deg(), p.phase_deg + p.phase_bar_deg()]),
+            )
             .filter(|v| v.is_finite());
         let (plo, phi) = phases.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)));
         let pr = (plo / 45.0).floor() * 45.0..((phi / 45.0).ceil() * 45.0).max((plo / 45.0).floor() * 45.0 + 45.0);
@@ -238,7 +275,7 @@ impl Plot for MeasuredResponseData {
             model_color.stroke_width(width),
         ))?;
         for p in self.points.iter().filter(in_x) {
-            let s = k * p.sigma_phase_deg.min(90.0);
+            let s = p.phase_bar_deg();
             let (lo, hi) = ((p.phase_deg - s).max(pr.start), (p.phase_deg + s).min(pr.end));
             chart.draw_series(error_bar(p.f_hz, lo, hi, color(p).stroke_width(bar_w)))?;
             chart.draw_series(std::iter::once(Circle::new((p.f_hz, p.phase_deg), dot, color(p).filled())))?;
