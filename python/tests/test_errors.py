@@ -27,9 +27,16 @@ def test_a_bad_csv_cell_names_file_line_and_column_as_the_cli_does(gsens_bin, tm
     assert message in cli_error(gsens_bin, "--imu", str(bad), "--tracking", str(tmp_path / "tracking.csv"))
 
 
-def test_a_missing_file(gsens_bin, tmp_path):
+def test_a_missing_file(gsens_bin, tmp_path, session):
+    write_csv(tmp_path / "tracking.csv", session.tracking)
     with pytest.raises(gsens.GsensError, match="nope.csv: cannot read"):
+        gsens.estimate(tmp_path / "nope.csv", tmp_path / "tracking.csv")
+    # Both missing: the one the command line names.
+    with pytest.raises(gsens.GsensError) as raised:
         gsens.estimate(tmp_path / "nope.csv", tmp_path / "t.csv")
+    message = str(raised.value)
+    assert "cannot read" in message
+    assert message in cli_error(gsens_bin, "--imu", str(tmp_path / "nope.csv"), "--tracking", str(tmp_path / "t.csv"))
 
 
 def test_an_unknown_or_out_of_range_setting(session):

@@ -82,8 +82,8 @@ pub use joint::{
 pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
 pub use pipeline::{
     DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
-    RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_logs, calibrate_owned_logs,
-    gnss_sdr_tracking_log, series_of, with_gnss_sdr_loop,
+    RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_gnss_sdr_with_log,
+    calibrate_logs, calibrate_owned_logs, gnss_sdr_tracking_log, series_of, with_gnss_sdr_loop,
 };
 pub use response_check::{
     ResponseBin, ResponseCheck, ResponseCheckError, ResponseSettings, epoch_response, measure_response,

@@ -485,6 +485,18 @@ pub fn calibrate_gnss_sdr(
     imu: &Path,
     settings: &PipelineSettings,
 ) -> Result<Outcome, PipelineError> {
+    calibrate_gnss_sdr_with_log(dumps_dir, import, imu, settings).map(|(outcome, _)| outcome)
+}
+
+/// [`calibrate_gnss_sdr`], with the tracking log the dumps became
+/// ([`gnss_sdr_tracking_log`]): the rows the estimate was made from, for
+/// what needs them besides the estimate (the C/N0 of a report's figures).
+pub fn calibrate_gnss_sdr_with_log(
+    dumps_dir: &Path,
+    import: &ImportSettings,
+    imu: &Path,
+    settings: &PipelineSettings,
+) -> Result<(Outcome, TrackingLog), PipelineError> {
     let imported = import_dir(dumps_dir, import)?;
     let tracking_log = gnss_sdr_tracking_log(dumps_dir, &imported)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
@@ -499,5 +511,5 @@ pub fn calibrate_gnss_sdr(
     let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
     outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];
-    Ok(outcome)
+    Ok((outcome, tracking_log))
 }

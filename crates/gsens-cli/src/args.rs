@@ -2,7 +2,8 @@
 //! they become library objects: a calibration's options become
 //! `gsens_calib::CalibrationOptions` (the names the Python module takes too,
 //! which build `gsens_calib::PipelineSettings`); the converters' become
-//! `gsens_gnss_sdr::ImportSettings` and `gsens_pocketsdr::ImportSettings`.
+//! `gsens_gnss_sdr::ImportSettings` and `gsens_pocketsdr::ImportSettings`;
+//! the input options become `gsens_inputs::Inputs`.
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
@@ -10,6 +11,7 @@ use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffset
 use gsens_core::LoopModel;
 use gsens_core::{KAPLAN_A3, KAPLAN_B3};
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
+use gsens_inputs::{Inputs, Log};
 use gsens_session::Weighting;
 use std::path::{Path, PathBuf};
 
@@ -402,7 +404,7 @@ impl ConversionArgs {
     }
 }
 
-/// Options of `gsens estimate` for GNSS-SDR tracking dumps.
+/// Options of `gsens estimate` and `gsens report` for GNSS-SDR tracking dumps.
 #[derive(Args, Debug, Clone)]
 pub struct GnssSdrArgs {
     /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead of --tracking.
@@ -456,7 +458,7 @@ impl PocketSdrConversionArgs {
     }
 }
 
-/// Options of `gsens estimate` for PocketSDR logs.
+/// Options of `gsens estimate` and `gsens report` for PocketSDR logs.
 #[derive(Args, Debug, Clone)]
 pub struct PocketSdrArgs {
     /// A pocket_trk log (-log FILE, its $CH lines) to use instead of --tracking; PocketSDR's
@@ -465,6 +467,54 @@ pub struct PocketSdrArgs {
     pub pocketsdr: Option<PathBuf>,
     #[command(flatten)]
     pub conversion: PocketSdrConversionArgs,
+}
+
+/// Where a calibration's logs come from (`estimate`, `report`): an IMU log
+/// with a tracking log, GNSS-SDR dumps or a PocketSDR log.
+#[derive(Args, Debug, Clone)]
+pub struct InputArgs {
+    /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
+    #[arg(long)]
+    pub imu: PathBuf,
+    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr, --pocketsdr).
+    #[arg(long, required_unless_present_any = ["gnss_sdr", "pocketsdr"], conflicts_with_all = ["gnss_sdr", "pocketsdr"])]
+    pub tracking: Option<PathBuf>,
+    #[command(flatten)]
+    pub gnss_sdr: GnssSdrArgs,
+    #[command(flatten)]
+    pub pocketsdr: PocketSdrArgs,
+}
+
+impl InputArgs {
+    /// The inputs the options name, with their conversion settings.
+    pub fn inputs(&self) -> Result<Inputs> {
+        let imu = self.imu.clone();
+        if let Some(log) = &self.pocketsdr.pocketsdr {
+            let import = self.pocketsdr.conversion.import_settings()?;
+            return Ok(Inputs::PocketSdr { imu, log: log.clone(), import });
+        }
+        if self.pocketsdr.conversion.given() {
+            bail!("--pocketsdr-conf, --pocketsdr-settle-s and --pocketsdr-toff-s need --pocketsdr LOG");
+        }
+        let g = &self.gnss_sdr;
+        let conf = g.gnss_sdr_conf.as_deref();
+        Ok(match (&g.gnss_sdr, &self.tracking, conf) {
+            (Some(dir), _, _) => Inputs::GnssSdrDumps {
+                imu,
+                dumps_dir: dir.clone(),
+                import: g.conversion.import_settings(conf)?,
+                conf: conf.map(Path::to_path_buf),
+            },
+            (None, Some(t), Some(conf)) => Inputs::GnssSdrRows {
+                imu: Log::File(imu),
+                tracking: Log::File(t.clone()),
+                import: g.conversion.import_settings(Some(conf))?,
+                conf: conf.to_path_buf(),
+            },
+            (None, Some(t), None) => Inputs::Csv { imu: Log::File(imu), tracking: Log::File(t.clone()) },
+            (None, None, _) => bail!("--tracking is required (or --gnss-sdr, or --pocketsdr)"),
+        })
+    }
 }
 
 /// A number option that must be finite and ≥ 0 (clap's parser: the error

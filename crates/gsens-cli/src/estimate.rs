@@ -1,19 +1,16 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{AnalysisArgs, GnssSdrArgs, LoopArgs, PocketSdrArgs};
+use crate::args::{AnalysisArgs, InputArgs, LoopArgs};
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::{Outcome, PipelineSettings, calibrate_files, calibrate_gnss_sdr};
+use gsens_calib::PipelineSettings;
+use gsens_inputs::{Calibrated, Inputs, InputsError};
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct EstimateArgs {
-    /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
-    #[arg(long)]
-    pub imu: PathBuf,
-    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr, --pocketsdr).
-    #[arg(long, required_unless_present_any = ["gnss_sdr", "pocketsdr"], conflicts_with_all = ["gnss_sdr", "pocketsdr"])]
-    pub tracking: Option<PathBuf>,
+    #[command(flatten)]
+    pub inputs: InputArgs,
     /// Write the result document (JSON) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -24,10 +21,6 @@ pub struct EstimateArgs {
     pub epochs_out: Option<PathBuf>,
     #[command(flatten)]
     pub calibration: CalibrationArgs,
-    #[command(flatten)]
-    pub gnss_sdr: GnssSdrArgs,
-    #[command(flatten)]
-    pub pocketsdr: PocketSdrArgs,
 }
 
 /// The options that decide a calibration from logs (`estimate` and `report`).
@@ -57,65 +50,31 @@ impl CalibrationArgs {
     }
 }
 
-/// Runs the calibration the options describe: from tracking.csv, or from
-/// GNSS-SDR dumps (printing what became of each track).
-pub fn calibrate(
-    imu: &Path,
-    tracking: Option<&Path>,
-    gnss_sdr: Option<&GnssSdrArgs>,
-    settings: &PipelineSettings,
-) -> Result<Outcome> {
-    match (gnss_sdr.and_then(|g| g.gnss_sdr.as_ref().map(|d| (g, d))), tracking) {
-        (Some((gnss_sdr, dir)), _) => {
-            let conf = gnss_sdr.gnss_sdr_conf.as_deref();
-            let mut outcome = calibrate_gnss_sdr(dir, &gnss_sdr.conversion.import_settings(conf)?, imu, settings)?;
-            if let Some(g) = &outcome.gnss_sdr {
-                crate::out(&gsens_report::render_gnss_sdr_tracks(&g.tracks, outcome.session.log_interval_s))?;
-            }
-            crate::out(&format!("GNSS-SDR loop: {}, modelled exactly\n", outcome.calibration.loop_used))?;
-            let conf = conf.map(|p| p.display().to_string()).unwrap_or_default();
-            outcome.inputs.push(("gnss_sdr_conf".into(), conf));
-            Ok(outcome)
-        }
-        (None, Some(t)) => match gnss_sdr.and_then(|g| g.gnss_sdr_conf.as_deref().map(|c| (g, c))) {
-            // Rows from a GNSS-SDR run by another path than its dumps: its loop, from its configuration.
-            Some((g, conf)) => {
-                if settings.loop_stated {
-                    anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
+/// Runs the calibration of `inputs` (keeping the tracking log the estimate
+/// was made from when `keep_tracking`), printing what became of each track of
+/// a receiver's log and which receiver loop was modelled.
+pub fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
+    let calibrated =
+        if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) }.map_err(
+            |e| match e {
+                InputsError::LoopStatedTwice { .. } => {
+                    anyhow::anyhow!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like")
                 }
-                let settings = gsens_calib::with_gnss_sdr_loop(settings, &g.conversion.import_settings(Some(conf))?);
-                let mut outcome = calibrate_files(t, imu, &settings)?;
-                crate::out(&format!("GNSS-SDR loop: {}, modelled exactly\n", outcome.calibration.loop_used))?;
-                outcome.inputs.push(("gnss_sdr_conf".into(), conf.display().to_string()));
-                Ok(outcome)
-            }
-            None => Ok(calibrate_files(t, imu, settings)?),
-        },
-        (None, None) => anyhow::bail!("--tracking is required (or --gnss-sdr)"),
+                e => e.into(),
+            },
+        )?;
+    if let Some(summary) = calibrated.track_summary() {
+        crate::out(&summary)?;
     }
-}
-
-/// Calibrates from a PocketSDR log with PocketSDR's loop modelled exactly,
-/// printing what became of each track.
-fn calibrate_pocketsdr(imu: &Path, log: &Path, args: &PocketSdrArgs, settings: &PipelineSettings) -> Result<Outcome> {
-    let import = args.conversion.import_settings()?;
-    let r = gsens_pocketsdr::calibrate_pocketsdr(log, &import, imu, settings)?;
-    crate::out(&gsens_pocketsdr::render_summary(&r.imported))?;
-    crate::out(&format!("PocketSDR loop: {}, modelled exactly\n", r.outcome.calibration.loop_used))?;
-    Ok(r.outcome)
+    if let Some(note) = calibrated.loop_note() {
+        crate::out(&format!("{note}\n"))?;
+    }
+    Ok(calibrated)
 }
 
 pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings()?;
-    let outcome = match &args.pocketsdr.pocketsdr {
-        Some(log) => calibrate_pocketsdr(&args.imu, log, &args.pocketsdr, &settings)?,
-        None => {
-            if args.pocketsdr.conversion.given() {
-                anyhow::bail!("--pocketsdr-conf, --pocketsdr-settle-s and --pocketsdr-toff-s need --pocketsdr LOG");
-            }
-            calibrate(&args.imu, args.tracking.as_deref(), Some(&args.gnss_sdr), &settings)?
-        }
-    };
+    let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
     if let Some(path) = &args.json {

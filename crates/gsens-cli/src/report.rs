@@ -2,8 +2,9 @@
 //! result document as JSON, the compensation parameters as a C header, and the
 //! figures as PNG and SVG.
 
+use crate::args::InputArgs;
 use crate::estimate::{CalibrationArgs, calibrate};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::Outcome;
 use gsens_io::TrackingLog;
@@ -12,12 +13,8 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
-    /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
-    #[arg(long)]
-    pub imu: PathBuf,
-    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad.
-    #[arg(long)]
-    pub tracking: PathBuf,
+    #[command(flatten)]
+    pub inputs: InputArgs,
     /// truth.json of a simulated session: the true Γ is drawn dashed and the errors reported.
     #[arg(long)]
     pub truth: Option<PathBuf>,
@@ -81,20 +78,23 @@ pub fn settings_and_loop_note(
 }
 
 pub fn run(args: &ReportArgs) -> Result<crate::Status> {
-    let (settings, loop_note) = settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    let inputs = args.inputs.inputs()?;
+    // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
+    let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
+    let (settings, loop_note) = settings_and_loop_note(&args.calibration, truth_loop)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
     }
     let bar = crate::spinner();
     bar.set_message("reading the logs and estimating Γ");
-    let mut outcome = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;
+    let calibrated = calibrate(inputs, &settings, true)?;
+    bar.finish_and_clear();
+    let mut outcome = calibrated.outcome;
     if let Some(t) = &args.truth {
         outcome.inputs.push(("truth".into(), t.display().to_string()));
     }
-    bar.set_message("reading the tracking log for C/N0");
-    let tracking = gsens_io::read_tracking_file(&args.tracking)?;
-    bar.finish_and_clear();
+    let tracking = calibrated.tracking.context("the calibration kept no tracking log")?;
     write_report(&outcome, &tracking, truth, &args.out, &args.title, args.header)
 }
 

@@ -1,11 +1,13 @@
 //! `gsens.estimate`: the calibration pipeline on arrays or files, and its result.
 
-use crate::convert::{LogSource, imu_series, options, py_of_json, tracking_log};
+use crate::convert::{ColumnData, LogSource, imu_series, options, py_of_json, tracking_log};
 use crate::{GsensError, error};
 use gsens_calib::{CalibrationOptions, Outcome, ResultDocument};
+use gsens_inputs::{Inputs, InputsError, Log};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// Estimates Γ from an IMU log and a tracking log (or GNSS-SDR dumps, or a
@@ -37,11 +39,11 @@ pub(crate) fn estimate(
         LogSource::Path(p) => Ok(p.clone()),
         LogSource::Columns(_) => Err(GsensError::new_err(format!("imu: give the IMU log as a file with {why}"))),
     };
-    let outcome = match (tracking, gnss_sdr, pocketsdr) {
+    let inputs = match (tracking, gnss_sdr, pocketsdr) {
         (Some(_), Some(_), _) | (Some(_), _, Some(_)) | (None, Some(_), Some(_)) => {
             return Err(GsensError::new_err("give one of tracking, gnss_sdr and pocketsdr"));
         }
-        (None, Some(dir), None) => {
+        (None, Some(dumps_dir), None) => {
             let Some(conf) = gnss_sdr_conf else {
                 return Err(GsensError::new_err(
                     "gnss_sdr needs gnss_sdr_conf (the configuration the dumps were made with)",
@@ -49,60 +51,48 @@ pub(crate) fn estimate(
             };
             let imu = imu_path("gnss_sdr")?;
             let import = gsens_gnss_sdr::ImportSettings::from_conf(Some(&conf), None).map_err(error)?;
-            py.detach(|| gsens_calib::calibrate_gnss_sdr(&dir, &import, &imu, &pipeline)).map_err(error)?
+            Inputs::GnssSdrDumps { imu, dumps_dir, import, conf: Some(conf) }
         }
         (None, None, Some(log)) => {
             let imu = imu_path("pocketsdr")?;
             let import =
                 gsens_pocketsdr::ImportSettings::from_options_file(pocketsdr_conf.as_deref()).map_err(error)?;
-            py.detach(|| gsens_pocketsdr::calibrate_pocketsdr(&log, &import, &imu, &pipeline)).map_err(error)?.outcome
+            Inputs::PocketSdr { imu, log, import }
         }
         (Some(t), None, None) => {
-            let tracking = LogSource::extract(t, "tracking")?;
-            let pipeline = match gnss_sdr_conf {
+            let tracking = log_of(LogSource::extract(t, "tracking")?, "tracking", tracking_log)?;
+            let imu = log_of(imu, "imu", imu_series)?;
+            match gnss_sdr_conf {
                 // Rows from a GNSS-SDR run: its loop, from its configuration.
                 Some(conf) => {
-                    if options.loop_stated() {
-                        return Err(GsensError::new_err(
-                            "gnss_sdr_conf states the receiver loop: leave out order, bn_hz and the like",
-                        ));
-                    }
                     let import = gsens_gnss_sdr::ImportSettings::from_conf(Some(&conf), None).map_err(error)?;
-                    gsens_calib::with_gnss_sdr_loop(&pipeline, &import)
+                    Inputs::GnssSdrRows { imu, tracking, import, conf }
                 }
-                None => pipeline,
-            };
-            calibrate_sources(py, imu, tracking, &pipeline)?
+                None => Inputs::Csv { imu, tracking },
+            }
         }
         (None, None, None) => return Err(GsensError::new_err("tracking is required (or gnss_sdr, or pocketsdr)")),
     };
-    Ok(Estimate::of(outcome))
+    let calibrated = py.detach(|| inputs.calibrate(&pipeline)).map_err(|e| match e {
+        InputsError::LoopStatedTwice { .. } => {
+            GsensError::new_err("gnss_sdr_conf states the receiver loop: leave out order, bn_hz and the like")
+        }
+        e => error(e),
+    })?;
+    Ok(Estimate::of(calibrated.outcome))
 }
 
-/// The pipeline on two logs, each a file or columns.
-fn calibrate_sources(
-    py: Python<'_>,
-    imu: LogSource,
-    tracking: LogSource,
-    settings: &gsens_calib::PipelineSettings,
-) -> PyResult<Outcome> {
-    let (imu_name, imu_series) = match &imu {
-        LogSource::Path(p) => (p.display().to_string(), gsens_io::read_imu_file(p).map_err(error)?),
-        LogSource::Columns(c) => ("imu".to_string(), imu_series(c, "imu")?),
-    };
-    let tracking_log = match &tracking {
-        LogSource::Path(p) => gsens_io::read_tracking_file(p).map_err(error)?,
-        LogSource::Columns(c) => tracking_log(c, "tracking")?,
-    };
-    let mut outcome = py
-        .detach(|| gsens_calib::calibrate_owned_logs(tracking_log, &imu_series, &imu_name, settings))
-        .map_err(error)?;
-    let name = |s: &LogSource, fallback: &str| match s {
-        LogSource::Path(p) => p.display().to_string(),
-        LogSource::Columns(_) => fallback.to_string(),
-    };
-    outcome.inputs = vec![("imu".into(), name(&imu, "arrays")), ("tracking".into(), name(&tracking, "arrays"))];
-    Ok(outcome)
+/// A log as the library takes it: a file as it is, columns as the series
+/// they name (`name` in errors).
+fn log_of<T>(
+    source: LogSource<'_>,
+    name: &str,
+    convert: impl FnOnce(&HashMap<String, ColumnData<'_>>, &str) -> PyResult<T>,
+) -> PyResult<Log<T>> {
+    Ok(match source {
+        LogSource::Path(p) => Log::File(p),
+        LogSource::Columns(c) => Log::Memory { name: name.to_string(), log: convert(&c, name)? },
+    })
 }
 
 /// The options' defaults, by name (what `estimate` takes as keywords).
