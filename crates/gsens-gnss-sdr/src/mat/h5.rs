@@ -33,6 +33,10 @@ const NODE_BUDGET: usize = 100_000;
 const MAX_EXPANSION: usize = 1100;
 /// The most dimensions a dataspace may have (the format's own limit).
 const MAX_RANK: usize = 32;
+/// The most members a root group may have here: a tracking dump has some 25.
+const MAX_MEMBERS: usize = 4096;
+/// The longest member name read: MATLAB's variable names have at most 63 bytes.
+const MAX_NAME: usize = 1024;
 
 /// An array's element type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -284,16 +288,21 @@ impl<'a> H5File<'a> {
         let names = self.local_heap(heap)?;
         let mut entries = Vec::new();
         self.group_node(btree, None, &mut entries)?;
+        if entries.len() > MAX_MEMBERS {
+            return Err(format!(
+                "the root group holds {} members, more than the {MAX_MEMBERS} read here",
+                entries.len()
+            ));
+        }
         entries
             .into_iter()
             .map(|(offset, header)| {
                 let tail = usize::try_from(offset).ok().and_then(|o| names.get(o..)).ok_or_else(|| {
                     format!("a member's name is at offset {offset} of a local heap of {} bytes", names.len())
                 })?;
-                let end = tail
-                    .iter()
-                    .position(|&b| b == 0)
-                    .ok_or_else(|| format!("a member's name at heap offset {offset} runs off the local heap"))?;
+                let end = tail.iter().take(MAX_NAME + 1).position(|&b| b == 0).ok_or_else(|| {
+                    format!("a member's name at heap offset {offset} runs off the local heap or past {MAX_NAME} bytes")
+                })?;
                 let name = std::str::from_utf8(&tail[..end])
                     .map_err(|_| format!("a member's name at heap offset {offset} is not UTF-8"))?;
                 Ok((name.to_owned(), header))
@@ -398,6 +407,7 @@ impl<'a> H5File<'a> {
                 let flags = r.u8()?;
                 r.skip(3)?;
                 let data = r.take(usize::from(len))?;
+                self.spend(1, what)?;
                 if kind == 0x10 {
                     let mut c = Reader::new(data, "continuation message");
                     let (at, len) = (c.u64()?, c.u64()?);
@@ -542,22 +552,23 @@ impl<'a> H5File<'a> {
         if chunk_dims.contains(&0) {
             return Err(format!("{what}'s chunks have a zero dimension: {chunk_dims:?}"));
         }
-        let limit = self.buf.len().saturating_mul(MAX_EXPANSION).max(1 << 20);
         let chunk_bytes = chunk_dims
             .iter()
             .try_fold(esize as u64, |a, &d| a.checked_mul(d))
-            .filter(|&b| b <= limit as u64)
-            .ok_or_else(|| format!("{what}'s chunks of {chunk_dims:?} are larger than a file of its size can hold"))?
-            as usize;
+            .filter(|&b| b <= self.data_budget.get())
+            .and_then(|b| usize::try_from(b).ok())
+            .ok_or_else(|| format!("{what}'s chunks of {chunk_dims:?} are larger than a file of its size can hold"))?;
         let mut chunks = Vec::new();
         self.chunk_node(btree, None, rank, &mut chunks)?;
         let mut out = vec![0u8; total];
         let mut filled = vec![false; total / esize];
-        // Every chunk read costs its size; the budget stops files whose chunks repeat without end
-        // and still lets a small dataset sit in one large chunk.
-        let mut work = total.saturating_mul(4).max(1 << 24);
         for Chunk { size, mask, offset, addr } in chunks {
-            work = work.checked_sub(chunk_bytes).ok_or_else(|| format!("{what} has more chunks than fit its size"))?;
+            // Every chunk costs its size from the file's data budget: chunks that repeat without
+            // end, in one dataset or across many, are refused.
+            let left = self.data_budget.get();
+            self.data_budget.set(left.checked_sub(chunk_bytes as u64).ok_or_else(|| {
+                format!("{what}'s chunks, with the data read before them, hold more than a file of its size can")
+            })?);
             let raw = self.at(addr, u64::from(size), &format!("a chunk of {what}"))?;
             let owned;
             let data = if deflate && mask & 1 == 0 {
