@@ -1,6 +1,6 @@
 //! GNSS-SDR tracking dumps: the `.dat` files its DLL/PLL tracking writes with
 //! `Tracking_1C.dump=true`, one per channel (`<dump_filename><channel>.dat`),
-//! and (with the `mat` feature, module `mat`) the `.mat` copies it makes of
+//! and (module [`crate::mat`]) the `.mat` copies it makes of
 //! them at the end of a run (`dump_mat=true`, the default).
 //!
 //! # Format
@@ -730,16 +730,13 @@ pub fn is_mat(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mat"))
 }
 
-/// Reads and decodes a dump file (see [`parse_dump`]); a `.mat` file with the
-/// `mat` feature (`crate::mat`), else an error that names the feature.
+/// Reads and decodes a dump file (see [`parse_dump`]); a `.mat` file through
+/// [`crate::mat`].
 pub fn read_dump(path: impl AsRef<Path>, layout: Option<&DumpLayout>) -> Result<TrackingDump, GnssSdrError> {
     let path = path.as_ref();
     let name = path.display().to_string();
     if is_mat(path) {
-        #[cfg(feature = "mat")]
         return crate::mat::read_mat_dump(path, layout);
-        #[cfg(not(feature = "mat"))]
-        return Err(GnssSdrError::MatFeatureOff { file: name });
     }
     let bytes = std::fs::read(path).map_err(|e| GnssSdrError::Io { file: name.clone(), error: e })?;
     parse_dump(&bytes, &name, layout)
@@ -783,7 +780,7 @@ pub fn find_dumps(dir: &Path, prefix: Option<&str>) -> Result<Vec<(u32, PathBuf)
             return Err(GnssSdrError::ChannelNumberOutOfRange { file: p.display().to_string(), digits: digits.into() });
         }
     }
-    // A .mat only where its channel has no .dat (the same records, read without HDF5).
+    // A .mat only where its channel has no .dat (the same records, read more slowly).
     let dat_channels: Vec<u32> = out.iter().filter(|(_, p)| !is_mat(p)).map(|(c, _)| *c).collect();
     out.retain(|(c, p)| !is_mat(p) || !dat_channels.contains(c));
     if out.is_empty() {

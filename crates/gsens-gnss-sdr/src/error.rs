@@ -154,16 +154,6 @@ pub enum GnssSdrError {
         /// What is wrong.
         reason: String,
     },
-    /// A `.mat` tracking dump given to a build without the `mat` feature.
-    #[error(
-        "{file}: a .mat tracking dump (MATLAB v7.3 = HDF5), but this gsens was built without the `mat` feature; \
-         rebuild with `cargo build --features mat` (needs the system's libhdf5, Debian libhdf5-dev), or give the \
-         run's .dat dump instead"
-    )]
-    MatFeatureOff {
-        /// The `.mat` file.
-        file: String,
-    },
     /// A dump's file name ends in a channel number beyond any receiver's.
     #[error("{file}: the channel number its name ends in ({digits}) is beyond 4294967295: not a tracking dump's name")]
     ChannelNumberOutOfRange {

@@ -10,8 +10,9 @@
 //!   every record layout from 0.0.17 to 0.0.21 (and the Kalman, FPGA, GLONASS,
 //!   GPU and TCP blocks), recognised from the file itself, with errors that
 //!   name the file, record and byte offset;
-//! - `mat` (feature `mat`): the `.mat` copies of the dumps (MATLAB v7.3 =
-//!   HDF5, `dump_mat=true`), read to exactly the records of the `.dat`;
+//! - [`mat`]: the `.mat` copies of the dumps (MATLAB v7.3 = HDF5,
+//!   `dump_mat=true`), read by a built-in reader of the part of HDF5 they use
+//!   to exactly the records of the `.dat`;
 //! - [`import`]: dumps → the `tracking.csv` schema (φ in rad, time at the
 //!   middle of each integration), each track judged by GNSS-SDR's own lock
 //!   detector replayed with the configuration's settings, with a reason;
@@ -25,7 +26,6 @@ pub mod conf;
 pub mod dump;
 pub mod error;
 pub mod import;
-#[cfg(feature = "mat")]
 pub mod mat;
 pub mod monitor;
 

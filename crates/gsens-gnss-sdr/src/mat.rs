@@ -1,10 +1,17 @@
-//! GNSS-SDR's `.mat` tracking dumps (feature `mat`): at the end of a run with
+//! GNSS-SDR's `.mat` tracking dumps: at the end of a run with
 //! `Tracking_1C.dump=true` and `dump_mat=true` (the default) each tracking
 //! block reads its `.dat` dump back and writes `<dump_filename><channel>.mat`,
 //! a MATLAB v7.3 file — an HDF5 file with a 512-byte user block — holding one
 //! 1 × N array per record field, named as the fields of
 //! [`crate::dump::DumpLayout`] (`save_matfile` in
-//! `dll_pll_veml_tracking.cc`).
+//! `dll_pll_veml_tracking.cc`, through matio: each array chunked and
+//! deflated).
+//!
+//! The file is read by a reader of exactly the part of HDF5 that matio writes
+//! for such arrays (superblock 0 or 1, a symbol-table root group, version-1
+//! object headers, compact, contiguous or chunked data, deflate), written in
+//! Rust here, so no HDF5 library is needed; anything else in the file is
+//! refused with an error naming what was found.
 //!
 //! The reader finds the layout whose field names are exactly the file's
 //! variables, packs the arrays back into that layout's little-endian records
@@ -15,9 +22,12 @@
 //! checks, the same conversion, the same records bit for bit as the run's
 //! `.dat`.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
-use hdf5::types::{FloatSize, IntSize, TypeDescriptor};
+mod h5;
+
+use h5::{Array, ElemType, H5File};
 
 use crate::dump::{DumpLayout, FieldType, TrackingDump, parse_dump};
 use crate::error::GnssSdrError;
@@ -32,6 +42,20 @@ enum Column {
 }
 
 impl Column {
+    /// The elements of `ty` that `bytes` holds, little-endian.
+    fn from_le_bytes(ty: ElemType, bytes: &[u8]) -> Column {
+        fn each<const N: usize, T>(bytes: &[u8], f: fn([u8; N]) -> T) -> Vec<T> {
+            bytes.chunks_exact(N).map(|c| f(c.try_into().expect("chunks of N bytes"))).collect()
+        }
+        match ty {
+            ElemType::F32 => Column::F32(each(bytes, f32::from_le_bytes)),
+            ElemType::F64 => Column::F64(each(bytes, f64::from_le_bytes)),
+            ElemType::U32 => Column::U32(each(bytes, u32::from_le_bytes)),
+            ElemType::U64 => Column::U64(each(bytes, u64::from_le_bytes)),
+            ElemType::I32 => Column::I32(each(bytes, i32::from_le_bytes)),
+        }
+    }
+
     fn len(&self) -> usize {
         match self {
             Column::F32(v) => v.len(),
@@ -90,8 +114,15 @@ fn mat_err(file: &str, reason: impl Into<String>) -> GnssSdrError {
 pub fn read_mat_dump(path: impl AsRef<Path>, layout: Option<&DumpLayout>) -> Result<TrackingDump, GnssSdrError> {
     let path = path.as_ref();
     let name = path.display().to_string();
-    let file = hdf5::File::open(path).map_err(|e| mat_err(&name, format!("not a MATLAB v7.3 (HDF5) file: {e}")))?;
-    let mut vars = file.member_names().map_err(|e| mat_err(&name, format!("cannot list its variables: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| GnssSdrError::Io { file: name.clone(), error: e })?;
+    parse_mat_dump(&bytes, &name, layout)
+}
+
+/// Decodes the bytes of a `.mat` tracking dump named `name` (see [`read_mat_dump`]).
+pub fn parse_mat_dump(bytes: &[u8], name: &str, layout: Option<&DumpLayout>) -> Result<TrackingDump, GnssSdrError> {
+    let file = H5File::open(bytes).map_err(|e| mat_err(name, format!("not a MATLAB v7.3 (HDF5) file: {e}")))?;
+    let members = file.members().map_err(|e| mat_err(name, format!("cannot list its variables: {e}")))?;
+    let mut vars: Vec<String> = members.iter().map(|(n, _)| n.clone()).collect();
     vars.sort();
     let layout = match layout {
         Some(l) => l.clone(),
@@ -124,7 +155,7 @@ pub fn read_mat_dump(path: impl AsRef<Path>, layout: Option<&DumpLayout>) -> Res
                         .collect::<Vec<_>>()
                         .join("; ");
                     return Err(mat_err(
-                        &name,
+                        name,
                         format!(
                             "its variables [{}] are the fields of no known tracking-dump layout ({tried})",
                             vars.join(", ")
@@ -133,19 +164,41 @@ pub fn read_mat_dump(path: impl AsRef<Path>, layout: Option<&DumpLayout>) -> Res
                 }
                 1 => fitting.pop().expect("one"),
                 // Same names, other meanings (0.0.17 and kf-cc): the records decide, as for a `.dat`.
-                _ => return read_fitting(&file, &name, &fitting),
+                _ => return read_fitting(&file, &members, name, &fitting),
             }
         }
     };
-    read_fitting(&file, &name, std::slice::from_ref(&layout))
+    read_fitting(&file, &members, name, std::slice::from_ref(&layout))
 }
 
 /// Packs the arrays into the records of each of `layouts` (same field names)
 /// and returns the first whose records are plausible.
-fn read_fitting(file: &hdf5::File, name: &str, layouts: &[DumpLayout]) -> Result<TrackingDump, GnssSdrError> {
+fn read_fitting(
+    file: &H5File<'_>,
+    members: &[(String, u64)],
+    name: &str,
+    layouts: &[DumpLayout],
+) -> Result<TrackingDump, GnssSdrError> {
+    // Each variable read once, whichever layouts share it.
+    let mut columns = BTreeMap::new();
+    for (field, _) in layouts.iter().flat_map(|l| &l.fields) {
+        if columns.contains_key(field.as_str()) {
+            continue;
+        }
+        let &(_, addr) = members
+            .iter()
+            .find(|(n, _)| n == field)
+            .ok_or_else(|| mat_err(name, format!("variable `{field}` is not in the file")))?;
+        let Array { shape, ty, bytes } =
+            file.dataset(addr, &format!("variable `{field}`")).map_err(|e| mat_err(name, e))?;
+        if shape.iter().filter(|&&d| d != 1).count() > 1 {
+            return Err(mat_err(name, format!("variable `{field}` is a {shape:?} array, not a 1 × N row")));
+        }
+        columns.insert(field.as_str(), Column::from_le_bytes(ty, &bytes));
+    }
     let mut last = None;
     for layout in layouts {
-        let bytes = pack(file, name, layout)?;
+        let bytes = pack(&columns, name, layout)?;
         match parse_dump(&bytes, name, Some(layout)) {
             Ok(d) => return Ok(d),
             Err(e) => last = Some(e),
@@ -154,30 +207,10 @@ fn read_fitting(file: &hdf5::File, name: &str, layouts: &[DumpLayout]) -> Result
     Err(last.expect("at least one layout"))
 }
 
-/// The arrays of `file` as the `.dat` records of `layout`.
-fn pack(file: &hdf5::File, name: &str, layout: &DumpLayout) -> Result<Vec<u8>, GnssSdrError> {
-    let mut columns = Vec::with_capacity(layout.fields.len());
-    for (field, _) in &layout.fields {
-        let ds = file.dataset(field).map_err(|e| mat_err(name, format!("variable `{field}`: {e}")))?;
-        let ty = ds.dtype().and_then(|t| t.to_descriptor()).map_err(|e| mat_err(name, format!("`{field}`: {e}")))?;
-        let read_err = |e: hdf5::Error| mat_err(name, format!("variable `{field}`: cannot read: {e}"));
-        let col = match ty {
-            TypeDescriptor::Float(FloatSize::U4) => Column::F32(ds.read_raw().map_err(read_err)?),
-            TypeDescriptor::Float(FloatSize::U8) => Column::F64(ds.read_raw().map_err(read_err)?),
-            TypeDescriptor::Unsigned(IntSize::U4) => Column::U32(ds.read_raw().map_err(read_err)?),
-            TypeDescriptor::Unsigned(IntSize::U8) => Column::U64(ds.read_raw().map_err(read_err)?),
-            TypeDescriptor::Integer(IntSize::U4) => Column::I32(ds.read_raw().map_err(read_err)?),
-            other => {
-                return Err(mat_err(name, format!("variable `{field}` is of type {other:?}, not a dump field's")));
-            }
-        };
-        let shape = ds.shape();
-        if shape.iter().filter(|&&d| d != 1).count() > 1 {
-            return Err(mat_err(name, format!("variable `{field}` is a {shape:?} array, not a 1 × N row")));
-        }
-        columns.push(col);
-    }
-    let n = columns.first().map_or(0, Column::len);
+/// The arrays of the file (by variable name) as the `.dat` records of `layout`.
+fn pack(arrays: &BTreeMap<&str, Column>, name: &str, layout: &DumpLayout) -> Result<Vec<u8>, GnssSdrError> {
+    let columns: Vec<&Column> = layout.fields.iter().map(|(f, _)| &arrays[f.as_str()]).collect();
+    let n = columns.first().map_or(0, |c| c.len());
     if let Some(((field, _), c)) = layout.fields.iter().zip(&columns).find(|(_, c)| c.len() != n) {
         return Err(mat_err(
             name,
