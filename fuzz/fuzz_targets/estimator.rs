@@ -68,6 +68,8 @@ struct Options {
     screening: bool,
     cn0_drop_db: Value,
     max_abs_phase_rad: Value,
+    atan2_discriminator: bool,
+    loop_tolerance: Value,
     time_offset: Option<Value>,
     time_offset_max_s: Value,
     loop_check: bool,
@@ -102,7 +104,13 @@ impl Options {
             weights: if self.cn0_weights { gsens_session::Weighting::Cn0 } else { gsens_session::Weighting::Equal },
             screening: self.screening,
             cn0_drop_db: self.cn0_drop_db.or(d.cn0_drop_db),
-            max_abs_phase_rad: self.max_abs_phase_rad.or(d.max_abs_phase_rad),
+            max_abs_phase_rad: self.max_abs_phase_rad.opt(d.max_abs_phase_rad),
+            discriminator: if self.atan2_discriminator {
+                gsens_core::Discriminator::Atan2
+            } else {
+                gsens_core::Discriminator::AtanCostas
+            },
+            loop_tolerance: self.loop_tolerance.opt(d.loop_tolerance),
             time_offset: match self.time_offset {
                 None => d.time_offset,
                 Some(Value::Default) => TimeOffsetOption::Word("none".into()),
