@@ -31,6 +31,14 @@ pub struct DemoArgs {
 }
 
 pub fn run(args: &DemoArgs) -> Result<crate::Status> {
+    args.analysis.check()?;
+    crate::outputs::maybe_file("--json", args.json.as_deref())?;
+    if let Some(d) = &args.out {
+        crate::outputs::dir("--out", d)?;
+    }
+    if let Some(d) = &args.figures {
+        crate::outputs::dir("--figures", d)?;
+    }
     let scenario = args.scenario.load()?;
     let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
     crate::out(&format!(

@@ -82,6 +82,7 @@ pub fn settings_and_loop_note(
 
 pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     let (settings, loop_note) = settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    crate::outputs::dir("--out", &args.out)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
@@ -122,11 +123,11 @@ pub fn write_report(
     crate::out(&format!("\nreport: {} (with {beside} and figures/ beside it)\n", files.html.display()))?;
     if files.header.is_none() {
         let codes = doc.untrusted_codes();
-        eprintln!(
+        crate::err(&format!(
             "gsens_gamma.h not written: the estimate is not trustworthy ({}); --write-untrusted-header writes it \
-             anyway, marked GSENS_GAMMA_TRUSTWORTHY 0",
+             anyway, marked GSENS_GAMMA_TRUSTWORTHY 0\n",
             codes.join(", ")
-        );
+        ));
     }
     Ok(crate::Status::of(&doc))
 }
