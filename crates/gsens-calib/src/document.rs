@@ -377,7 +377,7 @@ impl ResultDocument {
 
     /// Orders the warnings by cause (the logs' units and time base first,
     /// then sampling and alignment, the loop, the shaking; stable within
-    /// each), and, when a [`UNIT_WARNINGS`] code is raised, replaces the
+    /// each), and, when a `UNIT_WARNINGS` code is raised, replaces the
     /// shaking advice of `discriminator_range`, `nothing_observable` and the
     /// axes' verdicts, which would follow from the wrong unit, by a pointer
     /// to it.

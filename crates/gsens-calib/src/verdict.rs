@@ -86,7 +86,7 @@ pub const ADVISED_BELOW_FRACTION: f64 = 0.5;
 
 impl AxisVerdict {
     /// Whether the verdict's text advises how to shake (an unobservable
-    /// axis, or one shaken below [`ADVISED_BELOW_FRACTION`] of the peak).
+    /// axis, or one shaken below `ADVISED_BELOW_FRACTION` of the peak).
     pub fn advises_shaking(&self) -> bool {
         !self.observable || self.fraction_of_peak_sensitivity.is_some_and(|q| q < ADVISED_BELOW_FRACTION)
     }

@@ -358,16 +358,16 @@ impl AnalysisArgs {
 #[command(next_help_heading = "GNSS-SDR dumps")]
 pub struct ConversionArgs {
     /// Sampling rate of the tracking [Hz] when the configuration does not give it.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub gnss_sdr_fs_hz: Option<f64>,
     /// C/N0 threshold of GNSS-SDR's lock detector (Tracking_1C.cn0_min) [dB-Hz]: a record below
     /// it counts as a code-lock failure [default: the conf's cn0_min, GNSS-SDR's 25 when absent].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gnss_sdr_min_cn0_dbhz: Option<f64>,
     /// Carrier lock test threshold of GNSS-SDR's lock detector (Tracking_1C.carrier_lock_th): a
     /// record below it counts as a carrier-lock failure [default: the conf's carrier_lock_th,
     /// GNSS-SDR's 0.7 when absent].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gnss_sdr_min_lock_test: Option<f64>,
     /// Carrier-lock failures (net of passes) after which GNSS-SDR's lock detector declares a loss
     /// of lock (Tracking_1C.max_carrier_lock_fail) [default: the conf's, GNSS-SDR's 5000 when absent].
@@ -379,7 +379,7 @@ pub struct ConversionArgs {
     pub gnss_sdr_max_lock_fail: Option<u32>,
     /// Seconds dropped after a channel switches to the narrow loop (default: derived from the
     /// narrow loop's slowest mode).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gnss_sdr_settle_s: Option<f64>,
     /// Record layout of the dumps: a known one's name (gnss-sdr-0.0.17, gnss-sdr-0.0.21,
     /// gnss-sdr-kf-cc, gnss-sdr-legacy-88) to force it, or `name:type,...` for versions the
@@ -453,10 +453,10 @@ pub struct PocketSdrConversionArgs {
     pub pocketsdr_conf: Option<PathBuf>,
     /// Seconds dropped after a track's 1 s FLL pull-in [default: five time constants of the
     /// PLL's slowest mode, 5.2 s at 5 Hz].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub pocketsdr_settle_s: Option<f64>,
     /// pocket_trk's -toff: seconds it skipped at the start of the IF file.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub pocketsdr_toff_s: f64,
 }
 

@@ -20,7 +20,7 @@ pub struct ImportMonitorArgs {
     #[arg(long, default_value = "127.0.0.1:1234")]
     pub listen: String,
     /// Sampling rate [Hz] (default: the configuration's, else each message's own `fs`).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub fs_hz: Option<f64>,
     /// The GNSS-SDR configuration of the run: its loop (for the settling time dropped after each
     /// track's start) and TrackingMonitor.decimation_factor.
@@ -33,10 +33,10 @@ pub struct ImportMonitorArgs {
     #[arg(long)]
     pub raw: Option<PathBuf>,
     /// Stop after this many seconds without a datagram (counted from the start too) [s].
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub idle_timeout_s: f64,
     /// Seconds dropped from each track's start (default: the narrow loop's settling time).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub settle_s: Option<f64>,
 }
 
