@@ -40,6 +40,17 @@ pub fn maybe_file(flag: &str, path: Option<&Path>) -> Result<()> {
     path.map_or(Ok(()), |p| file(flag, p))
 }
 
+/// Checks an optional file option whose file may lie in the directory
+/// `made`, which the command creates before writing it (`demo --json` in
+/// its `--out`): there the directory is checked as [`dir`] does.
+pub fn maybe_file_in(flag: &str, path: Option<&Path>, made: Option<&Path>) -> Result<()> {
+    let Some(path) = path else { return Ok(()) };
+    match made.filter(|m| parent_of(path).starts_with(m)) {
+        Some(_) => dir(flag, parent_of(path)),
+        None => file(flag, path),
+    }
+}
+
 /// Checks that the directory `path` of option `flag` exists or can be
 /// created, and accepts files: its nearest existing ancestor must be a
 /// directory that does.
@@ -71,6 +82,10 @@ mod tests {
         let e = file("--json", &tmp.join("missing/r.json")).unwrap_err().to_string();
         assert!(e.starts_with("--json ") && e.contains("does not exist"), "{e}");
         assert!(dir("--out", &tmp.join("a/b/c")).is_ok());
+        // In a directory the command makes first.
+        let made = tmp.join("made");
+        assert!(maybe_file_in("--json", Some(&made.join("r.json")), Some(&made)).is_ok());
+        assert!(maybe_file_in("--json", Some(&tmp.join("other/r.json")), Some(&made)).is_err());
         std::fs::write(tmp.join("f"), "").unwrap();
         let e = dir("--out", &tmp.join("f/sub")).unwrap_err().to_string();
         assert!(e.starts_with("--out ") && e.contains("not a directory"), "{e}");
