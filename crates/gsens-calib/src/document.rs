@@ -117,6 +117,40 @@ pub fn two_rate_advice(loop_used: &LoopModel) -> String {
     }
 }
 
+/// Warning codes of the logs' units and time base: a wrong unit or time
+/// stamp explains most other findings (a phase in degrees drives the
+/// predicted error past the discriminator's range, an IMU in g or stamped
+/// in milliseconds leaves the axes unobservable), so they come first and
+/// the shaking advice that would follow from them is not given.
+pub const UNIT_WARNINGS: &[&str] = &["time_units", "imu_units", "phase_units"];
+
+/// The advice of `discriminator_range` (its message ends with it).
+const DISCRIMINATOR_ADVICE: &str = "shake more gently or the phase error wraps and biases Γ̂ low (or state the \
+                                    receiver's discriminator, --discriminator)";
+
+/// Where a warning comes in the document, by cause: the logs' units and time
+/// base (and what a wrong phase or IMU unit causes in the discriminator
+/// check), then how the logs were sampled and aligned, then the loop, then
+/// the shaking and the estimate, and last what was only reported.
+fn cause_rank(code: &str, units_flagged: bool) -> u8 {
+    match code {
+        "time_units" | "imu_units" | "phase_units" | "phase_sign" | "carrier_gain" => 0,
+        "discriminator_range" if units_flagged => 1,
+        "log_rate" | "imu_rate" | "highpass" | "time_offset_at_limit" => 2,
+        "response_unchecked" => 3,
+        c if c.starts_with("loop_") => 3,
+        c if INFORMATIONAL_WARNINGS.contains(&c) => 5,
+        _ => 4,
+    }
+}
+
+/// Sorts `warnings` by cause ([`cause_rank`]), keeping the order in which
+/// they were raised within a cause.
+pub fn sort_by_cause(warnings: &mut [Warning]) {
+    let units_flagged = warnings.iter().any(|w| UNIT_WARNINGS.contains(&w.code));
+    warnings.sort_by_key(|w| cause_rank(w.code, units_flagged));
+}
+
 /// Warning codes that report something gsens already corrected for (the
 /// estimate stays trustworthy); every other code means the estimate may be
 /// wrong beyond its σ.
@@ -281,13 +315,26 @@ impl ResultDocument {
             }),
         }
         if let Some(ch) = &outcome.chosen_loop {
+            let logged = match ch.logged_phase {
+                gsens_core::LoggedPhase::Last => "last",
+                gsens_core::LoggedPhase::Mean => "mean",
+            };
+            let mut flags = format!("--order {}", ch.model.order());
+            if let Some(bn) = ch.model.bn_hz() {
+                flags += &format!(" --bn-hz {}", Decimal((bn * 100.0).round() / 100.0));
+            }
+            if let Some(t) = ch.model.interval_s() {
+                flags += &format!(" --loop-interval-s {}", Decimal(t));
+            }
+            flags += &format!(" --logged-phase {logged}");
             doc.warnings.push(Warning {
                 code: "loop_not_stated",
                 message: format!(
                     "no receiver loop was stated: of {} typical receiver loops the data fit best {} with the log \
                      holding the {} discriminator output (the runner-up, {}, fits with {:.2} times the residual). \
                      Γ̂ is given under it, but a chosen loop is not a checked one: state the receiver's loop (order, \
-                     bandwidth, update interval, what its log holds) to get a trustworthy estimate",
+                     bandwidth, update interval, what its log holds; the loop found would be {flags}) from the \
+                     receiver's settings to get a trustworthy estimate",
                     ch.candidates,
                     ch.model,
                     match ch.logged_phase {
@@ -310,7 +357,9 @@ impl ResultDocument {
         untrusted_codes(&self.warnings)
     }
 
-    /// Sets [`ResultDocument::trustworthy`] from the warnings and the axes.
+    /// Sets [`ResultDocument::trustworthy`] from the warnings and the axes,
+    /// and puts the warnings in the order of their causes
+    /// ([`ResultDocument::order_by_cause`]).
     pub fn judge(&mut self) {
         let c = &self.calibration;
         let any_axis = (0..3).any(|i| c.gamma_hz_per_mps2[i].is_some() && c.sigma_hz_per_mps2[i].is_some());
@@ -322,7 +371,55 @@ impl ResultDocument {
                     .into(),
             });
         }
+        self.order_by_cause();
         self.trustworthy = !self.warnings.iter().any(Warning::affects_trust);
+    }
+
+    /// Orders the warnings by cause (the logs' units and time base first,
+    /// then sampling and alignment, the loop, the shaking; stable within
+    /// each), and, when a `UNIT_WARNINGS` code is raised, replaces the
+    /// shaking advice of `discriminator_range`, `nothing_observable` and the
+    /// axes' verdicts, which would follow from the wrong unit, by a pointer
+    /// to it.
+    pub fn order_by_cause(&mut self) {
+        let units: Vec<&'static str> =
+            self.warnings.iter().map(|w| w.code).filter(|c| UNIT_WARNINGS.contains(c)).collect();
+        sort_by_cause(&mut self.warnings);
+        if units.is_empty() {
+            return;
+        }
+        let mut codes: Vec<&str> = Vec::new();
+        for c in units {
+            if !codes.contains(&c) {
+                codes.push(c);
+            }
+        }
+        let codes = codes.join(", ");
+        for w in &mut self.warnings {
+            match w.code {
+                "discriminator_range" => {
+                    if let Some(finding) = w.message.strip_suffix(DISCRIMINATOR_ADVICE) {
+                        w.message = format!(
+                            "{finding}the unit found above ({codes}) explains it: fix the unit and estimate again \
+                             before changing the shaking"
+                        );
+                    }
+                }
+                "nothing_observable" => {
+                    w.message = format!(
+                        "no axis is observable, as the unit or time stamp found above ({codes}) would make it: fix \
+                         that and estimate again before changing the shaking"
+                    );
+                }
+                _ => {}
+            }
+        }
+        for a in &mut self.calibration.axes {
+            if a.advises_shaking() {
+                let state = if a.observable { "observable" } else { "not observable" };
+                a.text = format!("{}: {state}; the shaking is not judged while the {codes} warning stands", a.axis);
+            }
+        }
     }
 
     /// The document of a calibration estimated from an epoch series the
@@ -389,8 +486,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
             message: format!(
                 "the predicted g-induced phase error reaches {peak:.2} rad, beyond the discriminator's linear range \
                  ({lin:.2} rad: {d}'s ±{:.2} rad less {:.2} σ of thermal noise at the weakest channel's C/N0, on \
-                 L1's scale): shake more gently or the phase error wraps and biases Γ̂ low (or state the receiver's \
-                 discriminator, --discriminator)",
+                 L1's scale): {DISCRIMINATOR_ADVICE}",
                 d.unambiguous_range_rad(),
                 gsens_core::RANGE_MARGIN_SIGMAS
             ),
@@ -450,4 +546,36 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
         });
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn codes(raised: &[&'static str]) -> Vec<&'static str> {
+        let mut w: Vec<Warning> = raised.iter().map(|&code| Warning { code, message: String::new() }).collect();
+        sort_by_cause(&mut w);
+        w.iter().map(|w| w.code).collect()
+    }
+
+    /// The orders the checks raise them in for an IMU stamped in
+    /// milliseconds and for both logs so, and a phase in degrees: the unit
+    /// first, then the time base and the loop, then the shaking.
+    #[test]
+    fn warnings_come_by_cause() {
+        assert_eq!(
+            codes(&["loop_offset_unresolved", "time_units", "nothing_observable"]),
+            ["time_units", "loop_offset_unresolved", "nothing_observable"]
+        );
+        assert_eq!(
+            codes(&["time_offset_at_limit", "loop_rejected", "time_units", "imu_spikes", "time_units"]),
+            ["time_units", "time_units", "time_offset_at_limit", "loop_rejected", "imu_spikes"]
+        );
+        // The discriminator's range follows from a wrong phase unit, and is a shaking matter without one.
+        assert_eq!(
+            codes(&["discriminator_range", "loop_rejected", "phase_units"]),
+            ["phase_units", "discriminator_range", "loop_rejected"]
+        );
+        assert_eq!(codes(&["discriminator_range", "loop_rejected"]), ["loop_rejected", "discriminator_range"]);
+    }
 }

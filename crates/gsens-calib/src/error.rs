@@ -60,6 +60,17 @@ pub enum CalibError {
         /// The warm-up \[s\].
         warmup_s: f64,
     },
+    /// The warm-up leaves no epoch of the log to estimate from.
+    #[error(
+        "the warm-up of {warmup_s} s (warmup_s, --warmup-s) is not shorter than the log ({log_s:.1} s): no epoch is \
+         left to estimate from; give a warm-up of a few seconds (the default is 2 s)"
+    )]
+    WarmupBeyondLog {
+        /// The warm-up \[s\].
+        warmup_s: f64,
+        /// The log's span \[s\].
+        log_s: f64,
+    },
     /// The log is too short for the time-offset search.
     #[error("the log is too short to search a time offset of ±{max_abs_s} s ({epochs} usable epochs)")]
     TooShortForOffsetSearch {

@@ -341,6 +341,11 @@ fn calibrate_prepared(
         }
         .into());
     }
+    if let Some((t0, t1)) = session.t_s.first().zip(session.t_s.last())
+        && settings.estimate.warmup_s >= t1 - t0
+    {
+        return Err(CalibError::WarmupBeyondLog { warmup_s: settings.estimate.warmup_s, log_s: t1 - t0 }.into());
+    }
     // A stuck or clipped stretch would enter every regressor: its epochs become gaps before any search.
     let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;

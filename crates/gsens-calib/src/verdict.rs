@@ -80,6 +80,18 @@ fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
     Some(k as f64 * df)
 }
 
+/// Below this fraction of the loop's peak sensitivity an observable axis's
+/// verdict advises shaking closer to the peak.
+pub const ADVISED_BELOW_FRACTION: f64 = 0.5;
+
+impl AxisVerdict {
+    /// Whether the verdict's text advises how to shake (an unobservable
+    /// axis, or one shaken below `ADVISED_BELOW_FRACTION` of the peak).
+    pub fn advises_shaking(&self) -> bool {
+        !self.observable || self.fraction_of_peak_sensitivity.is_some_and(|q| q < ADVISED_BELOW_FRACTION)
+    }
+}
+
 /// The verdict for every axis.
 pub fn axis_verdicts(
     accel_mps2: &[[f64; 3]],
@@ -101,7 +113,7 @@ pub fn axis_verdicts(
         let frac = f.map(|f| response(f) / peak).filter(|q| q.is_finite());
         let text = if observable[i] {
             match (f, frac) {
-                (Some(f), Some(q)) if q < 0.5 => format!(
+                (Some(f), Some(q)) if q < ADVISED_BELOW_FRACTION => format!(
                     "{}: observable, but shaken at {f:.2} Hz where the loop has only {:.0} % of its peak sensitivity; \
                      shaking closer to {peak_hz:.2} Hz (period {:.1} s) gives more",
                     names[i],

@@ -66,19 +66,19 @@ pub struct LoopArgs {
     #[arg(long, value_parser = clap::value_parser!(u8).range(2..=3))]
     pub order: Option<u8>,
     /// One-sided noise bandwidth Bn of the receiver's PLL [Hz] (default 3).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub bn_hz: Option<f64>,
     /// Damping ratio ζ (2nd-order loop).
-    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2)]
+    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = positive)]
     pub zeta: f64,
     /// a3 of the 3rd-order loop (Kaplan: 1.1).
-    #[arg(long, default_value_t = KAPLAN_A3)]
+    #[arg(long, default_value_t = KAPLAN_A3, allow_negative_numbers = true, value_parser = positive)]
     pub a3: f64,
     /// b3 of the 3rd-order loop (Kaplan: 2.4).
-    #[arg(long, default_value_t = KAPLAN_B3)]
+    #[arg(long, default_value_t = KAPLAN_B3, allow_negative_numbers = true, value_parser = positive)]
     pub b3: f64,
     /// The receiver's loop update interval [s] (default: the log interval).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub loop_interval_s: Option<f64>,
     /// What a log row holds when the loop runs faster than the log (default: last).
     #[arg(long, value_enum)]
@@ -156,23 +156,23 @@ pub struct MethodChoice {
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Estimator")]
 pub struct EstimatorArgs {
-    /// Gain k of the gradient observer.
-    #[arg(long, default_value_t = 0.5)]
-    pub gain_k: f64,
-    /// Forgetting factor λ of the RLS estimator (1 = none).
-    #[arg(long, default_value_t = 1.0)]
-    pub lambda: f64,
+    /// Gain k of the gradient observer (--method gradient only) [default: 0.5].
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    pub gain_k: Option<f64>,
+    /// Forgetting factor λ of the RLS estimator, in (0, 1] (--method rls only) [default: 1, none].
+    #[arg(long, allow_negative_numbers = true, value_parser = forgetting_factor)]
+    pub lambda: Option<f64>,
     /// Seconds at the start that only drive the loop models (their start-up transient).
-    #[arg(long, default_value_t = 2.0, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub warmup_s: f64,
     /// 1σ scale-factor error of the IMU [ppm] (from its datasheet), added to Γ̂'s uncertainty.
-    #[arg(long, default_value_t = 0.0, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub imu_scale_sigma_ppm: f64,
     /// 1σ axis misalignment of the IMU [mrad], added to Γ̂'s uncertainty.
-    #[arg(long, default_value_t = 0.0, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub imu_misalignment_sigma_mrad: f64,
     /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off).
-    #[arg(long, default_value_t = 0.05, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub highpass_hz: f64,
     /// Robust estimation against outlying epochs: `huber` (IRLS; batch method only) or `none`.
     #[arg(long, value_enum, default_value_t = RobustArg::None)]
@@ -189,10 +189,30 @@ pub enum RobustArg {
 }
 
 impl EstimatorArgs {
+    /// Refuses a method's parameter given for methods that do not use it
+    /// (`methods`: every method the options will run).
+    pub fn check_methods(&self, methods: &[MethodArg]) -> Result<()> {
+        let names = || methods.iter().map(|m| format!("{m:?}").to_lowercase()).collect::<Vec<_>>().join(", ");
+        if self.lambda.is_some() && !methods.contains(&MethodArg::Rls) {
+            bail!(
+                "--lambda is the RLS estimator's forgetting factor: it needs --method rls (the method is {})",
+                names()
+            );
+        }
+        if self.gain_k.is_some() && !methods.contains(&MethodArg::Gradient) {
+            bail!("--gain-k is the gradient observer's gain: it needs --method gradient (the method is {})", names());
+        }
+        Ok(())
+    }
+
     /// Sets the estimator's options (the method's parameters, the error model).
     pub fn apply(&self, o: &mut CalibrationOptions) {
-        o.gain_k = self.gain_k;
-        o.lambda = self.lambda;
+        if let Some(k) = self.gain_k {
+            o.gain_k = k;
+        }
+        if let Some(l) = self.lambda {
+            o.lambda = l;
+        }
         o.warmup_s = self.warmup_s;
         o.imu_scale_sigma_ppm = self.imu_scale_sigma_ppm;
         o.imu_misalignment_sigma_mrad = self.imu_misalignment_sigma_mrad;
@@ -212,22 +232,22 @@ pub struct SelectionArgs {
     #[arg(long, default_value_t = 4)]
     pub channels: usize,
     /// Drop rows below this C/N0 [dB-Hz].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = finite)]
     pub min_cn0_dbhz: Option<f64>,
     /// Drop rows below this elevation [deg] (rows without elevation pass).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = elevation_deg)]
     pub elevation_mask_deg: Option<f64>,
     /// Weights of the per-epoch channel average.
     #[arg(long, value_enum, default_value_t = WeightsArg::Equal)]
     pub weights: WeightsArg,
     /// Per-channel screening before averaging: cycle slips, losses of lock, C/N0 drops, |φ| beyond the linear range.
-    #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
+    #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
     pub screening: bool,
     /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
-    #[arg(long, default_value_t = 6.0, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = 6.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub cn0_drop_db: f64,
     /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default: half the discriminator's unambiguous range, π/4 for atan-costas, π/2 for atan2).
-    #[arg(long, value_parser = finite_non_negative)]
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub max_abs_phase_rad: Option<f64>,
 }
 
@@ -261,15 +281,15 @@ impl SelectionArgs {
 #[command(next_help_heading = "Systematic errors")]
 pub struct SystematicArgs {
     /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
-    #[arg(long, default_value = "auto", allow_hyphen_values = true)]
+    #[arg(long, default_value = "auto", allow_hyphen_values = true, value_parser = time_offset)]
     pub time_offset: TimeOffset,
     /// Search range ± of `--time-offset auto` [s].
-    #[arg(long, default_value_t = 0.25, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = 0.25, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub time_offset_max_s: f64,
     /// Test the stated loop against the data: its natural frequency is estimated jointly with Γ and the time offset, a
     /// stated loop the data reject is flagged, and Γ̂ is given under the fitted loop with the loop's uncertainty in its
     /// σ. `off` takes the stated loop as exact.
-    #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
+    #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
     pub loop_check: bool,
     /// Kept for old scripts: the loop check is on by default (see --loop-check).
     #[arg(long, hide = true)]
@@ -283,10 +303,10 @@ pub struct SystematicArgs {
     /// test's reach, about 2 % on the paper's session, then biases Γ̂ unseen); `inf`: only the loop's shape is
     /// known. Default: 0 for a loop modelled from the receiver's configuration (--gnss-sdr, --pocketsdr), 0.02
     /// for a loop stated by --order/--bn-hz.
-    #[arg(long, value_name = "FRACTION", value_parser = non_negative_or_inf)]
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, value_parser = non_negative_or_inf)]
     pub loop_tolerance: Option<f64>,
     /// Replace isolated IMU spikes (single samples no hand motion can produce) by their neighbours' mean.
-    #[arg(long, default_value = "on", value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
+    #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
     pub imu_despike: bool,
 }
 
@@ -320,6 +340,11 @@ impl SystematicArgs {
 }
 
 impl AnalysisArgs {
+    /// Refuses options the chosen method ignores.
+    pub fn check(&self) -> Result<()> {
+        self.estimator.check_methods(&[self.method.method])
+    }
+
     /// The options of a calibration with the loop at its default.
     pub fn options(&self) -> CalibrationOptions {
         let mut o = CalibrationOptions { method: self.method.method.name(), ..CalibrationOptions::default() };
@@ -335,16 +360,16 @@ impl AnalysisArgs {
 #[command(next_help_heading = "GNSS-SDR dumps")]
 pub struct ConversionArgs {
     /// Sampling rate of the tracking [Hz] when the configuration does not give it.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub gnss_sdr_fs_hz: Option<f64>,
     /// C/N0 threshold of GNSS-SDR's lock detector (Tracking_1C.cn0_min) [dB-Hz]: a record below
     /// it counts as a code-lock failure [default: the conf's cn0_min, GNSS-SDR's 25 when absent].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gnss_sdr_min_cn0_dbhz: Option<f64>,
     /// Carrier lock test threshold of GNSS-SDR's lock detector (Tracking_1C.carrier_lock_th): a
     /// record below it counts as a carrier-lock failure [default: the conf's carrier_lock_th,
     /// GNSS-SDR's 0.7 when absent].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gnss_sdr_min_lock_test: Option<f64>,
     /// Carrier-lock failures (net of passes) after which GNSS-SDR's lock detector declares a loss
     /// of lock (Tracking_1C.max_carrier_lock_fail) [default: the conf's, GNSS-SDR's 5000 when absent].
@@ -356,7 +381,7 @@ pub struct ConversionArgs {
     pub gnss_sdr_max_lock_fail: Option<u32>,
     /// Seconds dropped after a channel switches to the narrow loop (default: derived from the
     /// narrow loop's slowest mode).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gnss_sdr_settle_s: Option<f64>,
     /// Record layout of the dumps: a known one's name (gnss-sdr-0.0.17, gnss-sdr-0.0.21,
     /// gnss-sdr-kf-cc, gnss-sdr-legacy-88) to force it, or `name:type,...` for versions the
@@ -430,10 +455,10 @@ pub struct PocketSdrConversionArgs {
     pub pocketsdr_conf: Option<PathBuf>,
     /// Seconds dropped after a track's 1 s FLL pull-in [default: five time constants of the
     /// PLL's slowest mode, 5.2 s at 5 Hz].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub pocketsdr_settle_s: Option<f64>,
     /// pocket_trk's -toff: seconds it skipped at the start of the IF file.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub pocketsdr_toff_s: f64,
 }
 
@@ -517,15 +542,59 @@ impl InputArgs {
     }
 }
 
-/// A number option that must be finite and ≥ 0 (clap's parser: the error
-/// names the option and the value).
+// clap's parsers of number options: clap's error names the option and the
+// value, the parser's message the range. Options that take such numbers also
+// allow a leading minus, so that `-3` reaches the range check instead of
+// being read as an option.
+
 /// A number ≥ 0, or `inf`.
-fn non_negative_or_inf(text: &str) -> Result<f64, String> {
+pub fn non_negative_or_inf(text: &str) -> Result<f64, String> {
     let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number (or inf)"))?;
     if x >= 0.0 { Ok(x) } else { Err(format!("{x} is not a number ≥ 0 (or inf)")) }
 }
 
-fn finite_non_negative(text: &str) -> Result<f64, String> {
+/// A finite number ≥ 0.
+pub fn finite_non_negative(text: &str) -> Result<f64, String> {
     let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
     if x.is_finite() && x >= 0.0 { Ok(x) } else { Err(format!("{x} is not a finite number ≥ 0")) }
+}
+
+/// A finite number > 0.
+pub fn positive(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if x.is_finite() && x > 0.0 { Ok(x) } else { Err(format!("{x} is not a finite number > 0")) }
+}
+
+/// A finite number.
+pub fn finite(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if x.is_finite() { Ok(x) } else { Err(format!("{x} is not a finite number")) }
+}
+
+/// A forgetting factor, in (0, 1].
+fn forgetting_factor(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if x > 0.0 && x <= 1.0 { Ok(x) } else { Err(format!("{x} is not in (0, 1] (1: no forgetting)")) }
+}
+
+/// An elevation, in [−90, 90] degrees.
+fn elevation_deg(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if (-90.0..=90.0).contains(&x) { Ok(x) } else { Err(format!("{x} is not an elevation in [-90, 90] degrees")) }
+}
+
+/// The largest IMU time offset that can be stated \[s\]: an IMU's latency
+/// is milliseconds to a few hundred; more is a clock on another time base.
+pub const MAX_STATED_TIME_OFFSET_S: f64 = 1.0;
+
+/// `auto`, `none` or seconds within ±[`MAX_STATED_TIME_OFFSET_S`].
+fn time_offset(text: &str) -> Result<TimeOffset, String> {
+    let t: TimeOffset = text.trim().parse().map_err(|e| format!("{e}"))?;
+    match t {
+        TimeOffset::Fixed { imu_time_offset_s: s } if s.abs() > MAX_STATED_TIME_OFFSET_S => Err(format!(
+            "{s} s is beyond ±{MAX_STATED_TIME_OFFSET_S} s: an IMU's latency is milliseconds to a few hundred, more \
+             is a clock on another time base; stamp both logs by one clock (shift the IMU's t_s) instead"
+        )),
+        t => Ok(t),
+    }
 }

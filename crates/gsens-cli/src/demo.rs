@@ -31,8 +31,14 @@ pub struct DemoArgs {
 }
 
 pub fn run(args: &DemoArgs) -> Result<crate::Status> {
-    let scenario = args.scenario.load()?;
+    args.analysis.check()?;
     let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
+    crate::outputs::maybe_file_in("--json", args.json.as_deref(), Some(&dir))?;
+    crate::outputs::dir("--out", &dir)?;
+    if let Some(d) = &args.figures {
+        crate::outputs::dir("--figures", d)?;
+    }
+    let scenario = args.scenario.load()?;
     crate::out(&format!(
         "simulating {:.0} s of the {} (seed {}) into {} …\n",
         scenario.duration_s(),

@@ -27,7 +27,7 @@ pub struct EstimateArgs {
 #[derive(Args, Debug, Clone)]
 pub struct CalibrationArgs {
     /// Carrier frequency [Hz] for ppb/g (default GPS L1).
-    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ)]
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub carrier_hz: f64,
     #[command(flatten)]
     pub loop_args: LoopArgs,
@@ -44,8 +44,10 @@ impl CalibrationArgs {
         o
     }
 
-    /// The pipeline settings (every value checked).
+    /// The pipeline settings (every value checked; options the method
+    /// ignores refused).
     pub fn settings(&self) -> Result<PipelineSettings> {
+        self.analysis.check()?;
         Ok(self.options().pipeline_settings()?)
     }
 }
@@ -74,6 +76,8 @@ pub fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: boo
 
 pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings()?;
+    crate::outputs::maybe_file("--json", args.json.as_deref())?;
+    crate::outputs::maybe_file("--epochs-out", args.epochs_out.as_deref())?;
     let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;

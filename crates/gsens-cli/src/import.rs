@@ -42,12 +42,14 @@ pub struct ImportPocketSdrArgs {
 
 fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
     let settings = a.conversion.import_settings()?;
+    crate::outputs::file("--out", &a.out)?;
+    crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
     let imported = gsens_pocketsdr::import_file(&a.log, &settings)?;
     crate::out(&gsens_pocketsdr::render_summary(&imported))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     gsens_io::write_tracking_csv(file, &imported.rows)?;
     crate::out(&format!(
-        "wrote {} rows → {}; estimate with PocketSDR's loop model: gsens estimate --pocketsdr {}{} \
+        "wrote {} rows → {}; estimate with PocketSDR's loop model: gsens estimate --imu <imu.csv> --pocketsdr {}{} \
          (b_pll {} Hz, rows = the single 1 ms discriminator output at each epoch)\n",
         imported.rows.len(),
         a.out.display(),
@@ -98,6 +100,8 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     // whatever the configuration says.
     gsens_gnss_sdr::find_dumps(&a.dump_dir, None)?;
     let settings = a.conversion.import_settings(a.conf.as_deref())?;
+    crate::outputs::file("--out", &a.out)?;
+    crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
     let imported = import_dir(&a.dump_dir, &settings)?;
     crate::out(&gsens_report::render_gnss_sdr_tracks(&imported.tracks, imported.interval_s))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
@@ -112,8 +116,8 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     };
     let stage = settings.stage();
     crate::out(&format!(
-        "wrote {} rows → {}{}; estimate with the GNSS-SDR loop model: gsens estimate --gnss-sdr {} --gnss-sdr-conf \
-         <conf> (order {}, Bn {} Hz, {} ms)\n",
+        "wrote {} rows → {}{}; estimate with the GNSS-SDR loop model: gsens estimate --imu <imu.csv> --gnss-sdr {} \
+         --gnss-sdr-conf {} (order {}, Bn {} Hz, {} ms)\n",
         rows,
         a.out.display(),
         if common_grid {
@@ -122,6 +126,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
             " (times at the middle of each integration; not for gsens estimate --tracking)"
         },
         a.dump_dir.display(),
+        a.conf.as_ref().map_or("<conf>".to_string(), |c| c.display().to_string()),
         stage.order,
         stage.bw_hz,
         stage.symbols

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 pub struct LiveArgs {
     /// Read one merged stream from standard input: lines `imu,t_s,fx_mps2,fy_mps2,fz_mps2`
     /// and `trk,t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad` (`gsens replay` writes it).
-    #[arg(long, conflicts_with_all = ["follow_imu", "follow_tracking"], required_unless_present = "follow_imu")]
+    #[arg(long, conflicts_with_all = ["follow_imu", "follow_tracking"])]
     pub stdin: bool,
     /// Receive GNSS-SDR's tracking monitor on this address (its TrackingMonitor.client_addresses
     /// and udp_port, e.g. 127.0.0.1:1234), with --follow-imu and --gnss-sdr-conf.
@@ -32,22 +32,23 @@ pub struct LiveArgs {
     #[arg(long)]
     pub follow_imu: Option<PathBuf>,
     /// Follow a growing tracking.csv, with --follow-imu.
-    #[arg(long, requires = "follow_imu", required_unless_present_any = ["stdin", "gnss_sdr_monitor"])]
+    #[arg(long, requires = "follow_imu")]
     pub follow_tracking: Option<PathBuf>,
     /// With --follow-* and --gnss-sdr-monitor: end when no input has grown for this long [s]
     /// (0: only on a key or the target).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
     /// received in received/), and at the end the report of `gsens report`
     /// (report.html, report.json, gsens_gamma.h as `gsens report` writes it, figures/).
     #[arg(long)]
     pub out: PathBuf,
-    /// End when every axis's σ is at most this [Hz/(m/s²)].
-    #[arg(long, default_value_t = 1e-3)]
+    /// End when every axis's σ is at most this [Hz/(m/s²)]; ending before (the input ended, a key,
+    /// --idle-timeout-s) exits with status 4.
+    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub target_sigma: f64,
     /// Re-run the estimate every this many seconds of data [s].
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub batch_every_s: f64,
     /// Plain lines instead of the terminal screen (also when standard output is not a terminal).
     #[arg(long)]
@@ -326,14 +327,30 @@ impl Plain {
     }
 }
 
+/// Checks that the options name one input and that the files followed exist.
+fn check_inputs(args: &LiveArgs) -> Result<()> {
+    let given = args.stdin
+        || (args.follow_imu.is_some() && (args.follow_tracking.is_some() || args.gnss_sdr_monitor.is_some()));
+    if !given {
+        anyhow::bail!(
+            "no input: give --stdin (the merged stream `gsens replay` writes), --follow-imu IMU.CSV with \
+             --follow-tracking TRACKING.CSV (growing files), or --follow-imu IMU.CSV with --gnss-sdr-monitor ADDR \
+             and --gnss-sdr-conf CONF (GNSS-SDR's tracking monitor)"
+        );
+    }
+    for (flag, path) in [("--follow-imu", &args.follow_imu), ("--follow-tracking", &args.follow_tracking)] {
+        if let Some(p) = path.as_ref().filter(|p| !p.is_file()) {
+            let what = if p.exists() { "not a file" } else { "no such file (start the logger first)" };
+            anyhow::bail!("{flag} {}: {what}", p.display());
+        }
+    }
+    Ok(())
+}
+
 pub fn run(args: &LiveArgs) -> Result<crate::Status> {
-    if !(args.target_sigma.is_finite() && args.target_sigma > 0.0) {
-        anyhow::bail!("--target-sigma {}: must be positive [Hz/(m/s²)]", args.target_sigma);
-    }
-    if !(args.batch_every_s.is_finite() && args.batch_every_s > 0.0) {
-        anyhow::bail!("--batch-every-s {}: must be positive [s]", args.batch_every_s);
-    }
+    check_inputs(args)?;
     let (mut settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    crate::outputs::dir("--out", &args.out)?;
     let monitor_setup =
         args.gnss_sdr_conf.as_deref().map(|conf| crate::monitor::monitor_setup(Some(conf), None, None)).transpose()?;
     if let Some(setup) = &monitor_setup {
@@ -395,12 +412,22 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         band.band_hz[1],
         session.protocol().why()
     ))?;
+    if !session.config().settings.loop_stated {
+        crate::out(
+            "warning [loop_not_stated]: no receiver loop was stated: the estimates will use the typical loop the \
+             data fit best and cannot be trustworthy; state the receiver's loop (--order, --bn-hz, \
+             --loop-interval-s, --logged-phase) from its settings\n",
+        )?;
+    }
     let mut screen = if args.plain || !std::io::stdout().is_terminal() {
         Screen::Plain(Plain { last: None, warned: Vec::new() })
     } else {
         Screen::Tui { terminal: gsens_tui::Terminal::new()?, last_draw: None, worker: None }
     };
     let mut ended = vec![false; sources.len()];
+    // Records of several line sources (files followed) are given in time order.
+    let mut merger =
+        (sources.len() > 1 && sources.iter().all(|s| s.parse.is_some())).then(|| Merger::new(sources.len()));
     let mut next_plain_t_s = f64::NEG_INFINITY;
     let end_reason = loop {
         // Every message waiting (the first waited for up to 20 ms), then the estimate and the screen.
@@ -421,7 +448,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
                 },
             };
             let plain = matches!(screen, Screen::Plain(_));
-            if let Some(r) = handle(msg, &mut session, &mut kept, &sources, &mut ended, plain)? {
+            if let Some(r) = handle(msg, &mut session, &mut kept, &sources, &mut ended, plain, merger.as_mut())? {
                 reason = Some(r);
                 break;
             }
@@ -496,6 +523,7 @@ fn handle(
     sources: &[Source],
     ended: &mut [bool],
     plain: bool,
+    mut merger: Option<&mut Merger>,
 ) -> Result<Option<String>> {
     let say = |n: &Notice| if plain { crate::out(&format!("notice: {n}\n")) } else { Ok(()) };
     match msg {
@@ -507,18 +535,15 @@ fn handle(
             writeln!(received, "{text}")?;
             let name = &sources[source].name;
             match parse(&text) {
-                Ok(LineKind::Data(x)) => {
-                    let pushed = session.push(name, line, x);
-                    if let Some(n) = &pushed.notice {
-                        say(n)?;
-                    }
-                    if pushed.used {
-                        match x {
-                            Input::Imu { t_s, accel_mps2 } => kept.imu.write_sample(t_s, &accel_mps2)?,
-                            Input::Tracking(r) => kept.tracking.write_row(&r)?,
+                Ok(LineKind::Data(x)) => match merger.as_deref_mut() {
+                    Some(m) => {
+                        m.put(source, line, x);
+                        for (source, line, x) in m.ready(ended) {
+                            push_line_record(session, kept, &sources[source].name, line, x, &say)?;
                         }
                     }
-                }
+                    None => push_line_record(session, kept, name, line, x, &say)?,
+                },
                 Ok(LineKind::Skip) => {}
                 Err(e) => {
                     let n = Notice { source: name.clone(), line, message: format!("{e}: line not used") };
@@ -559,6 +584,11 @@ fn handle(
                 session.notice(&n);
                 say(&n)?;
             }
+            if let Some(m) = merger {
+                for (source, line, x) in m.ready(ended) {
+                    push_line_record(session, kept, &sources[source].name, line, x, &say)?;
+                }
+            }
             if ended.iter().all(|&e| e) {
                 return Ok(Some("the input ended".to_string()));
             }
@@ -567,8 +597,78 @@ fn handle(
     Ok(None)
 }
 
+/// Gives one record of a line source to the session, and keeps it when used.
+fn push_line_record(
+    session: &mut LiveSession,
+    kept: &mut Kept,
+    name: &str,
+    line: u64,
+    x: Input,
+    say: &dyn Fn(&Notice) -> Result<()>,
+) -> Result<()> {
+    let pushed = session.push(name, line, x);
+    if let Some(n) = &pushed.notice {
+        say(n)?;
+    }
+    if pushed.used {
+        match x {
+            Input::Imu { t_s, accel_mps2 } => kept.imu.write_sample(t_s, &accel_mps2)?,
+            Input::Tracking(r) => kept.tracking.write_row(&r)?,
+        }
+    }
+    Ok(())
+}
+
+/// Records of several sources put in time order. A file followed from its
+/// start is read in one go, so without this the session would get all of
+/// one file before the other's first line, judge the rest and the shaking on
+/// a stream that is all IMU and see the tracking far behind. A record waits
+/// until every other source that has not ended has read one at least as
+/// late; the earliest waiting record goes first.
+struct Merger {
+    held: Vec<std::collections::VecDeque<(u64, Input)>>,
+    /// Per source, the latest time read.
+    seen_t_s: Vec<f64>,
+}
+
+impl Merger {
+    fn new(sources: usize) -> Self {
+        Merger { held: vec![Default::default(); sources], seen_t_s: vec![f64::NEG_INFINITY; sources] }
+    }
+
+    fn put(&mut self, source: usize, line: u64, input: Input) {
+        self.seen_t_s[source] = self.seen_t_s[source].max(input.t_s());
+        self.held[source].push_back((line, input));
+    }
+
+    /// The records that may go now, in time order.
+    fn ready(&mut self, ended: &[bool]) -> Vec<(usize, u64, Input)> {
+        let mut out = Vec::new();
+        loop {
+            let earliest = (0..self.held.len())
+                .filter_map(|s| self.held[s].front().map(|r| (s, r.1.t_s())))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            let Some((s, t)) = earliest else { break };
+            let reached = (0..self.held.len()).all(|o| o == s || ended[o] || self.seen_t_s[o] >= t);
+            if !reached {
+                break;
+            }
+            let (line, input) = self.held[s].pop_front().expect("a front record");
+            out.push((s, line, input));
+        }
+        out
+    }
+}
+
 fn finish(session: LiveSession, kept: Kept, truth: Option<[f64; 3]>, args: &LiveArgs) -> Result<crate::Status> {
     let met = session.target_met();
+    let (imu_n, trk_n) = session.view().received;
+    if imu_n == 0 || trk_n == 0 {
+        anyhow::bail!(
+            "nothing to estimate from: {imu_n} IMU samples and {trk_n} tracking rows were received (the notices \
+             above say why lines were not used)"
+        );
+    }
     drop(kept.imu.finish()?);
     drop(kept.tracking.finish()?);
     let imu_path = args.out.join("imu.csv");
@@ -589,7 +689,9 @@ fn finish(session: LiveSession, kept: Kept, truth: Option<[f64; 3]>, args: &Live
             "the target σ ({} Hz/(m/s²)) was not met on every axis: shake longer, or lower the target\n",
             args.target_sigma
         ))?;
-        return Ok(crate::Status::Untrustworthy);
+        if status == crate::Status::Done {
+            return Ok(crate::Status::TargetMissed);
+        }
     }
     Ok(status)
 }

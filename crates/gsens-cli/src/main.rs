@@ -11,6 +11,7 @@ mod import;
 mod live;
 mod monitor;
 mod montecarlo;
+mod outputs;
 mod predict;
 mod replay;
 mod report;
@@ -40,7 +41,7 @@ enum Command {
     /// Simulate a calibration session (the paper's experiment by default),
     /// estimate Γ from it and show the estimate next to the truth.
     Demo(demo::DemoArgs),
-    /// Estimate Γ from receiver logs (imu.csv + tracking.csv, or GNSS-SDR dumps).
+    /// Estimate Γ from receiver logs (imu.csv + tracking.csv, GNSS-SDR dumps or a PocketSDR log).
     Estimate(estimate::EstimateArgs),
     /// Simulate a calibration session and write imu.csv, tracking.csv, truth.json.
     Simulate(simulate::SimulateArgs),
@@ -51,7 +52,8 @@ enum Command {
     /// Estimate Γ and write a report: one self-contained HTML file, the same as JSON,
     /// a C header for firmware and the figures (PNG, SVG).
     Report(report::ReportArgs),
-    /// Convert another receiver's logs to gsens's (GNSS-SDR tracking dumps → tracking.csv).
+    /// Convert another receiver's logs to gsens's tracking.csv: GNSS-SDR tracking dumps, GNSS-SDR's
+    /// tracking monitor (UDP), PocketSDR pocket_trk logs.
     Import(import::ImportArgs),
     /// Calibrate while the board is shaken: live guidance (which axis, how fast, how long),
     /// Γ̂ converging, the trust checks; ends at the target σ with the report of `gsens report`.
@@ -77,6 +79,9 @@ pub enum Status {
     /// An estimate was produced (and every file written) but it is not
     /// trustworthy: exit status 3.
     Untrustworthy,
+    /// `gsens live` ended (input ended, a key, the idle timeout) before every
+    /// axis met the target σ; the estimate is trustworthy: exit status 4.
+    TargetMissed,
 }
 
 impl Status {
@@ -93,6 +98,12 @@ pub fn out(text: &str) -> anyhow::Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
         r => Ok(r?),
     }
+}
+
+/// Writes `text` to standard error; a closed pipe (`gsens live 2>&1 | head`)
+/// or any other failure to write is ignored (unlike `eprintln!`, which panics).
+pub fn err(text: &str) {
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
 }
 
 /// A bar on stderr (drawn only on a terminal) for work counted in thousandths.
@@ -149,11 +160,12 @@ fn main() -> ExitCode {
     match result {
         Ok(Status::Done) => ExitCode::SUCCESS,
         Ok(Status::Untrustworthy) => ExitCode::from(3),
+        Ok(Status::TargetMissed) => ExitCode::from(4),
         Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) => {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            err(&format!("error: {e:#}\n"));
             ExitCode::from(2)
         }
     }

@@ -20,7 +20,7 @@ pub struct ImportMonitorArgs {
     #[arg(long, default_value = "127.0.0.1:1234")]
     pub listen: String,
     /// Sampling rate [Hz] (default: the configuration's, else each message's own `fs`).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub fs_hz: Option<f64>,
     /// The GNSS-SDR configuration of the run: its loop (for the settling time dropped after each
     /// track's start) and TrackingMonitor.decimation_factor.
@@ -33,10 +33,10 @@ pub struct ImportMonitorArgs {
     #[arg(long)]
     pub raw: Option<PathBuf>,
     /// Stop after this many seconds without a datagram (counted from the start too) [s].
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub idle_timeout_s: f64,
     /// Seconds dropped from each track's start (default: the narrow loop's settling time).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub settle_s: Option<f64>,
 }
 
@@ -50,6 +50,8 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
     if let Some(fs) = a.fs_hz.filter(|f| !(f.is_finite() && *f > 0.0)) {
         bail!("--fs-hz must be positive, got {fs}");
     }
+    crate::outputs::file("--out", &a.out)?;
+    crate::outputs::maybe_file("--raw", a.raw.as_deref())?;
     let MonitorSetup { import: settings, decimation, fs_hz } =
         monitor_setup(a.gnss_sdr_conf.as_deref(), a.fs_hz, a.settle_s)?;
     let settle_s = settings.settle_time_s();
@@ -65,7 +67,7 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
         }
         None => None,
     };
-    eprintln!("listening on {} (stops after {} s without a datagram)", rx.local_addr()?, a.idle_timeout_s);
+    crate::err(&format!("listening on {} (stops after {} s without a datagram)\n", rx.local_addr()?, a.idle_timeout_s));
     let mut recorder = Recorder::new(decimation);
     let mut shown = [0usize; 4];
     let mut last = Instant::now();
@@ -91,9 +93,9 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
                         };
                         shown[kind] += 1;
                         if shown[kind] <= NOTICES_SHOWN {
-                            eprintln!("{n}");
+                            crate::err(&format!("{n}\n"));
                         } else if shown[kind] == NOTICES_SHOWN + 1 {
-                            eprintln!("(further notices of this kind are only counted)");
+                            crate::err("(further notices of this kind are only counted)\n");
                         }
                     }
                 }
@@ -163,11 +165,11 @@ pub fn monitor_setup(
     };
     let fs_hz = fs_hz.or(tracking.fs_hz);
     if tracking.extend_correlation_symbols != 20 {
-        eprintln!(
+        crate::err(&format!(
             "note: Tracking_1C.extend_correlation_symbols = {}: the monitor's prompt is the 20 ms data bit's, so φ is \
-             the phase of that sum, not the {} ms discriminator output",
+             the phase of that sum, not the {} ms discriminator output\n",
             tracking.extend_correlation_symbols, tracking.extend_correlation_symbols
-        );
+        ));
     }
     let mut import = ImportSettings::new(fs_hz.unwrap_or(1.0), tracking);
     import.settle_s = settle_s;

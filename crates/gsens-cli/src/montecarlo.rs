@@ -35,6 +35,8 @@ pub struct MonteCarloArgs {
 }
 
 pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
+    args.estimator.check_methods(&args.methods)?;
+    crate::outputs::maybe_file("--json", args.json.as_deref())?;
     let scenario = args.scenario.load()?;
     let mut options = gsens_calib::CalibrationOptions::default();
     args.estimator.apply(&mut options);

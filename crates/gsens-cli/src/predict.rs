@@ -23,6 +23,17 @@ pub enum OscillatorArg {
     None,
 }
 
+impl std::fmt::Display for OscillatorArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            OscillatorArg::Ocxo => "OCXO",
+            OscillatorArg::Tcxo => "TCXO",
+            OscillatorArg::TcxoLowQuality => "low-quality TCXO",
+            OscillatorArg::None => "noise-free",
+        })
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct PredictArgs {
     /// Γ̂ and its covariance from a result document (`gsens estimate --json`, `report.json`).
@@ -96,6 +107,8 @@ fn parse_tone(text: &str) -> Result<(f64, [f64; 3])> {
 }
 
 pub fn run(args: &PredictArgs) -> Result<crate::Status> {
+    crate::outputs::maybe_file("--json", args.json.as_deref())?;
+    crate::outputs::maybe_file("--figure", args.figure.as_deref())?;
     let (gamma, covariance) = match (&args.from, &args.gamma, &args.sigma) {
         (Some(path), _, _) => crate::estimate::gamma_of_document(path)?,
         (None, Some(g), Some(s)) => {
@@ -150,7 +163,7 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
     let delay_s = args.latency_s + 0.5 / args.imu_rate_hz;
     let bn_grid: Vec<f64> = (1..=200).map(|k| 0.1 * k as f64).collect();
     crate::out(&format!(
-        "loop: 2nd order, Bn {} Hz, ζ {:.3}, T {} s; oscillator {:?}; C/N0 {} dB-Hz; feed-forward delay {:.4} s \
+        "loop: 2nd order, Bn {} Hz, ζ {:.3}, T {} s; oscillator {}; C/N0 {} dB-Hz; feed-forward delay {:.4} s \
          (latency {} s + half the IMU's {} Hz sample); lock while 3σ + θe ≤ 45°, θe the dynamic stress of a {} Hz/s \
          Doppler rate\n\n",
         args.bn_hz,
@@ -245,7 +258,7 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
             without.push(3.0 * j.total_rad[0] + j.dynamic_stress_rad);
             with.push(3.0 * j.total_rad[1] + j.dynamic_stress_rad);
         }
-        let label = format!("vibration level {level}, {:?} oscillator, C/N0 {} dB-Hz", args.oscillator, args.cn0_dbhz);
+        let label = format!("vibration level {level}, {} oscillator, C/N0 {} dB-Hz", args.oscillator, args.cn0_dbhz);
         let data = LockMarginData {
             bn_hz: &bns,
             without_rad: &without,

@@ -26,6 +26,9 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
     if !(args.speed.is_finite() && args.speed >= 0.0) {
         anyhow::bail!("--speed {}: must be 0 (as fast as possible) or positive", args.speed);
     }
+    if let Some(d) = &args.out {
+        crate::outputs::dir("--out", d)?;
+    }
     let inputs = read_session_dir(&args.dir).map_err(anyhow::Error::msg)?;
     let Some(first) = inputs.first() else { anyhow::bail!("{}: no records to replay", args.dir.display()) };
     let t0 = first.t_s();

@@ -82,6 +82,7 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
     let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
     let (settings, loop_note) = settings_and_loop_note(&args.calibration, truth_loop)?;
+    crate::outputs::dir("--out", &args.out)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
@@ -122,11 +123,11 @@ pub fn write_report(
     crate::out(&format!("\nreport: {} (with {beside} and figures/ beside it)\n", files.html.display()))?;
     if files.header.is_none() {
         let codes = doc.untrusted_codes();
-        eprintln!(
+        crate::err(&format!(
             "gsens_gamma.h not written: the estimate is not trustworthy ({}); --write-untrusted-header writes it \
-             anyway, marked GSENS_GAMMA_TRUSTWORTHY 0",
+             anyway, marked GSENS_GAMMA_TRUSTWORTHY 0\n",
             codes.join(", ")
-        );
+        ));
     }
     Ok(crate::Status::of(&doc))
 }

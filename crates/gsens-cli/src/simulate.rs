@@ -64,6 +64,8 @@ pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Tru
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let scenario = args.scenario.load()?;
+    crate::outputs::dir("--out", &args.out)?;
+    crate::outputs::maybe_file_in("--iq", args.iq.as_deref(), Some(&args.out))?;
     if let Some(iq) = &args.iq {
         return run_iq(&scenario, args, iq);
     }

@@ -41,6 +41,8 @@ pub struct ValidateArgs {
 }
 
 pub fn run(args: &ValidateArgs) -> Result<crate::Status> {
+    crate::outputs::maybe_file("--json", args.json.as_deref())?;
+    crate::outputs::maybe_file("--figure", args.figure.as_deref())?;
     let scenario = args.scenario.load()?;
     let seed = args.scenario.seed;
     let gamma_hat = match (&args.gamma, &args.from) {

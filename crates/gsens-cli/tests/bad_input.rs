@@ -173,12 +173,61 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
         ),
         "{stdout}"
     );
-    // A stage's error says its cause once (it was printed twice, as message and as source).
-    let (code, stderr) = estimate(&imu, &trk, &["--order", "2", "--bn-hz", "3", "--warmup-s", "1e300"]);
+    // A warm-up as long as the log is named with the option and the log's length, once.
+    let (code, stderr) = estimate(&imu, &trk, &["--order", "2", "--bn-hz", "3", "--warmup-s", "500"]);
     assert_eq!(code, 2, "{stderr}");
-    let cause = "the log is too short to search a time offset";
-    assert!(stderr.contains("fitting the loop and the IMU time offset: ") && stderr.contains(cause), "{stderr}");
+    let cause = "the warm-up of 500 s (warmup_s, --warmup-s) is not shorter than the log (";
+    assert!(stderr.contains(cause), "{stderr}");
     assert_eq!(stderr.matches(cause).count(), 1, "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Options are checked as they are parsed, before any file is read (the
+/// logs named here do not exist): each error names the option and its
+/// range, a negative number is read as the value it is, a method's
+/// parameter given to another method is refused, and an output that cannot
+/// be written is named before the work.
+#[test]
+fn options_are_checked_before_any_file_is_read() {
+    let dir = std::env::temp_dir().join(format!("gsens-options-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (imu, trk) = (dir.join("missing-imu.csv"), dir.join("missing-tracking.csv"));
+    let file = dir.join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let under_file = format!("{}/r.json", file.display());
+    for (args, said) in [
+        (&["--bn-hz", "-3"][..], "invalid value '-3' for '--bn-hz <BN_HZ>': -3 is not a finite number > 0"),
+        (&["--bn-hz", "0"][..], "for '--bn-hz <BN_HZ>': 0 is not a finite number > 0"),
+        (&["--zeta", "0"][..], "'--zeta <ZETA>': 0 is not a finite number > 0"),
+        (&["--loop-interval-s", "-0.001"][..], "'--loop-interval-s <LOOP_INTERVAL_S>': -0.001 is not"),
+        (&["--carrier-hz", "-1575.42e6"][..], "'--carrier-hz <CARRIER_HZ>'"),
+        (&["--method", "rls", "--lambda", "2"][..], "'--lambda <LAMBDA>': 2 is not in (0, 1]"),
+        (&["--lambda", "0.99"][..], "--lambda is the RLS estimator's forgetting factor: it needs --method rls"),
+        (
+            &["--gain-k", "2", "--method", "rls"][..],
+            "--gain-k is the gradient observer's gain: it needs --method gradient",
+        ),
+        (&["--time-offset", "5"][..], "5 s is beyond ±1 s"),
+        (&["--json", "/nonexistent-gsens-dir/r.json"][..], "--json /nonexistent-gsens-dir/r.json: the directory"),
+        (&["--epochs-out", &under_file][..], "--epochs-out"),
+    ] {
+        let (code, stderr) = estimate(&imu, &trk, args);
+        assert_eq!(code, 2, "{args:?}: {stderr}");
+        assert!(stderr.contains(said), "{args:?}: {stderr}");
+        assert!(!stderr.contains("missing-imu.csv"), "{args:?}: a log was read first: {stderr}");
+    }
+    // A converter's option takes a negative number as its value, and its own check names it.
+    let o = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["import", "pocketsdr", "missing.log", "--pocketsdr-toff-s", "-1"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(2) && e.contains("--pocketsdr-toff-s must be ≥ 0, got -1"), "{e}");
+    // Every on/off option's help says on|off, never clap's true/false beside a default of `on`.
+    let help = Command::new(env!("CARGO_BIN_EXE_gsens")).args(["estimate", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("--loop-check <on|off>") && help.contains("--screening <on|off>"), "{help}");
+    assert!(!help.contains("possible values: true, false"), "{help}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -78,6 +78,16 @@ fn the_default_output_is_what_estimate_tracking_reads() {
     let out =
         common::gsens(&["import", "gnss-sdr", &s(&dumps), "--conf", &s(&conf), "--record-times", "--out", &s(&raw)]);
     assert!(out.contains("not for gsens estimate --tracking"), "{out}");
+    // The hint is a whole command: the IMU log too, and the configuration given.
+    let hint = format!("gsens estimate --imu <imu.csv> --gnss-sdr {} --gnss-sdr-conf {}", s(&dumps), s(&conf));
+    assert!(out.contains(&hint), "{out}");
+    // The help names every source.
+    let help = common::gsens(&["import", "--help"]);
+    for source in ["gnss-sdr", "pocketsdr", "gnss-sdr-monitor"] {
+        assert!(help.contains(source), "{help}");
+    }
+    let help = common::gsens(&["--help"]);
+    assert!(help.contains("PocketSDR") && help.contains("tracking monitor"), "{help}");
     assert!(
         std::fs::read_to_string(&raw)
             .unwrap()

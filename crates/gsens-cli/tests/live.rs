@@ -192,3 +192,75 @@ fn live_names_the_warnings_of_an_untrustworthy_session() {
     assert!(!out.join("gsens_gamma.h").exists() && out.join("report.html").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// What a first-time user of `gsens live` runs into: no input option, a
+/// mistyped file to follow (each refused at once, saying what is needed),
+/// and the output cut short by `head` (ends quietly, never a panic; the
+/// missing loop is said at the start).
+#[test]
+fn live_refuses_missing_inputs_and_ends_quietly_on_a_closed_pipe() {
+    let dir = temp_dir("live-newcomer");
+    let out = dir.join("live");
+    let e = fails(&["live", "--plain", "--out", &s(&out)]);
+    assert!(e.contains("no input: give --stdin") && e.contains("--follow-imu IMU.CSV with --follow-tracking"), "{e}");
+    let sim = dir.join("sim");
+    gsens(&["simulate", "--out", &s(&sim), "--seed", "1"]);
+    let typo = dir.join("imu-typo.csv");
+    let args = ["live", "--plain", "--follow-imu", &s(&typo), "--follow-tracking", &s(&sim.join("tracking.csv"))];
+    let e = fails(&[&args[..], &["--out", &s(&out)]].concat());
+    assert!(e.contains(&format!("--follow-imu {}: no such file", typo.display())), "{e}");
+    // `2>&1 | head -4`, three times: the pipe closes under live while it prints.
+    let gsens_bin = env!("CARGO_BIN_EXE_gsens");
+    for run in 0..3 {
+        let script = format!(
+            "{gsens_bin} replay {} --speed 0 | {gsens_bin} live --stdin --plain --out {} 2>&1 | head -4; \
+             echo \"status ${{PIPESTATUS[1]}}\"",
+            s(&sim),
+            s(&dir.join(format!("piped{run}")))
+        );
+        let o = Command::new("bash").args(["-c", &script]).output().unwrap();
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.trim_end().ends_with("status 0"), "run {run}: {text}");
+        assert!(!text.contains("panicked"), "run {run}: {text}");
+        // No loop stated: said on the second line, not only in the final report.
+        assert!(text.lines().nth(1).is_some_and(|l| l.starts_with("warning [loop_not_stated]")), "{text}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Files followed from their start give the session the records in time
+/// order, as `--stdin` does: the same guidance (the rest first) and the
+/// same estimates on the same data; a session that ends before the target
+/// σ exits with 4 when its estimate is trustworthy (3 is for an
+/// untrustworthy one).
+#[test]
+fn following_whole_files_guides_as_stdin_and_a_missed_target_exits_4() {
+    let dir = temp_dir("live-whole-files");
+    let sim = dir.join("sim");
+    gsens(&["simulate", "--out", &s(&sim), "--seed", "1"]);
+    let truth = s(&sim.join("truth.json"));
+    let piped = replay_into_live(&sim, &["--target-sigma", "1e-6", "--out", &s(&dir.join("a")), "--truth", &truth]);
+    let followed = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["live", "--plain", "--target-sigma", "1e-6", "--idle-timeout-s", "2", "--truth", &truth])
+        .args(["--follow-imu", &s(&sim.join("imu.csv")), "--follow-tracking", &s(&sim.join("tracking.csv"))])
+        .args(["--out", &s(&dir.join("b"))])
+        .output()
+        .unwrap();
+    let lines = |o: &std::process::Output| -> Vec<String> {
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        text.lines()
+            .take_while(|l| !l.starts_with("ended: "))
+            .filter(|l| l.starts_with('['))
+            .map(String::from)
+            .collect()
+    };
+    let (a, b) = (lines(&piped), lines(&followed));
+    assert!(a.iter().take(2).any(|l| l.contains("rest: measuring")), "{}", a.join("\n"));
+    assert_eq!(a, b, "--stdin and --follow-* differ");
+    for o in [&piped, &followed] {
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains("verdict: TRUSTWORTHY") && text.contains("was not met on every axis"), "{text}");
+        assert_eq!(o.status.code(), Some(4), "{text}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -52,6 +52,7 @@ fn predicts_from_a_result_document_and_refuses_bad_input() {
     // At level 2 (3σ of 0.9 rad) the uncompensated loop fails the 3σ rule, the compensated one keeps lock.
     assert_eq!(rows[1]["keeps_lock"], serde_json::json!([false, true]), "{text}");
     assert!(text.contains("NO / yes"), "{text}");
+    assert!(text.contains("oscillator OCXO;"), "{text}");
 
     let psd = dir.join("v.csv");
     std::fs::write(&psd, "f_hz,psd_x,psd_y,psd_z\n5,0.01,0.01,0.04\n2,0.2,0.2,0.8\n").unwrap();

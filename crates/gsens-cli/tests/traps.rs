@@ -158,3 +158,50 @@ fn an_offset_the_data_do_not_resolve_is_flagged() {
     assert_eq!((code, codes.as_str()), (3, "phase_units"), "{message}");
     assert!(message.contains("2π") && message.contains("mean of the 25 loop updates"), "{message}");
 }
+
+/// Warnings come by cause: a unit or time-base problem first (it explains
+/// the rest), then the loop, then the shaking; and the shaking advice that a
+/// wrong unit would produce ("shake harder" for an IMU stamped in
+/// milliseconds, "shake more gently" for a phase in degrees) is not given
+/// while the unit is flagged.
+#[test]
+fn unit_problems_come_first_and_silence_the_shaking_advice() {
+    let dir = temp_dir("traps-order");
+    gsens(&["simulate", "--out", &s(&dir), "--seed", "21"]);
+    let truth = vec3(&json(&dir.join("truth.json"))["gamma_imu_axes_hz_per_mps2"]);
+    rewrite(&dir, "imu.csv", "imu_ms.csv", |c, x| if c == 0 { x * 1e3 } else { x });
+    rewrite(&dir, "tracking.csv", "tracking_ms.csv", |c, x| if c == 0 { x * 1e3 } else { x });
+    rewrite(&dir, "tracking.csv", "phase_deg.csv", |c, x| if c == 5 { x.to_degrees() } else { x });
+    let right: Vec<&str> = RIGHT_LOOP.iter().copied().chain(["--logged-phase", "mean"]).collect();
+    for (name, imu, tracking, first) in [
+        ("IMU stamps in ms", "imu_ms.csv", "tracking.csv", "time_units"),
+        ("both logs in ms", "imu_ms.csv", "tracking_ms.csv", "time_units"),
+        ("phase in degrees", "imu.csv", "phase_deg.csv", "phase_units"),
+    ] {
+        let (code, _, _, codes) = estimate(&dir, imu, tracking, &right, truth);
+        eprintln!("{name}: exit {code} [{codes}]");
+        assert_eq!((code, codes.split(',').next().unwrap()), (3, first), "{name}: [{codes}]");
+        let doc = json(&dir.join("out.json"));
+        for w in doc["warnings"].as_array().unwrap() {
+            let (code, message) = (w["code"].as_str().unwrap(), w["message"].as_str().unwrap());
+            if matches!(code, "discriminator_range" | "nothing_observable") {
+                assert!(!message.contains("shake"), "{name}: {code}: {message}");
+                assert!(message.contains(first), "{name}: {code}: {message}");
+            }
+        }
+        for a in doc["axes"].as_array().unwrap() {
+            let text = a["text"].as_str().unwrap();
+            assert!(!text.contains("shake") && !text.contains("closer to"), "{name}: {text}");
+        }
+    }
+    // No loop stated: the warning gives the loop found as the options that would state it.
+    let (code, _, _, codes) = estimate(&dir, "imu.csv", "tracking.csv", &[], truth);
+    assert!(code == 3 && codes.contains("loop_not_stated"), "[{codes}]");
+    let doc = json(&dir.join("out.json"));
+    let w = doc["warnings"].as_array().unwrap().iter().find(|w| w["code"] == "loop_not_stated").unwrap();
+    let message = w["message"].as_str().unwrap().to_string();
+    let flags = message.split_once("the loop found would be ").map_or("", |(_, f)| f);
+    assert!(flags.starts_with("--order 2 --bn-hz "), "{message}");
+    assert!(flags.contains(" --loop-interval-s ") && flags.contains(" --logged-phase "), "{message}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -131,7 +131,7 @@ impl MeasuredResponseData {
                     tested: b.tested,
                     allowed_deviation_rad_per_hz: b
                         .tested
-                        .then(|| check.threshold_sigma * b.sigma_deviation_rad_per_hz),
+                        .then_some(check.threshold_sigma * b.sigma_deviation_rad_per_hz),
                 }
             })
             .collect();
