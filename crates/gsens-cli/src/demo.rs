@@ -57,7 +57,7 @@ pub fn run(args: &DemoArgs) -> Result<crate::Status> {
     let settings = options.pipeline_settings_around(scenario_settings(&scenario, &options.estimate_settings())?)?;
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
-    let outcome = calibrate_files(&tracking, &imu, &settings)?;
+    let outcome = crate::observed(|| calibrate_files(&tracking, &imu, &settings))?;
     let logged = match scenario.log.phase {
         LoggedPhaseMode::Last => "last",
         LoggedPhaseMode::Mean => "mean",

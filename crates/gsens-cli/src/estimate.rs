@@ -68,7 +68,8 @@ pub fn calibrate(
     match (gnss_sdr.and_then(|g| g.gnss_sdr.as_ref().map(|d| (g, d))), tracking) {
         (Some((gnss_sdr, dir)), _) => {
             let conf = gnss_sdr.gnss_sdr_conf.as_deref();
-            let mut outcome = calibrate_gnss_sdr(dir, &gnss_sdr.conversion.import_settings(conf)?, imu, settings)?;
+            let import = gnss_sdr.conversion.import_settings(conf)?;
+            let mut outcome = crate::observed(|| calibrate_gnss_sdr(dir, &import, imu, settings))?;
             if let Some(g) = &outcome.gnss_sdr {
                 crate::out(&gsens_report::render_gnss_sdr_tracks(&g.tracks, outcome.session.log_interval_s))?;
             }
@@ -84,12 +85,12 @@ pub fn calibrate(
                     anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
                 }
                 let settings = gsens_calib::with_gnss_sdr_loop(settings, &g.conversion.import_settings(Some(conf))?);
-                let mut outcome = calibrate_files(t, imu, &settings)?;
+                let mut outcome = crate::observed(|| calibrate_files(t, imu, &settings))?;
                 crate::out(&format!("GNSS-SDR loop: {}, modelled exactly\n", outcome.calibration.loop_used))?;
                 outcome.inputs.push(("gnss_sdr_conf".into(), conf.display().to_string()));
                 Ok(outcome)
             }
-            None => Ok(calibrate_files(t, imu, settings)?),
+            None => Ok(crate::observed(|| calibrate_files(t, imu, settings))?),
         },
         (None, None) => anyhow::bail!("--tracking is required (or --gnss-sdr)"),
     }
@@ -99,7 +100,7 @@ pub fn calibrate(
 /// printing what became of each track.
 fn calibrate_pocketsdr(imu: &Path, log: &Path, args: &PocketSdrArgs, settings: &PipelineSettings) -> Result<Outcome> {
     let import = args.conversion.import_settings()?;
-    let r = gsens_pocketsdr::calibrate_pocketsdr(log, &import, imu, settings)?;
+    let r = crate::observed(|| gsens_pocketsdr::calibrate_pocketsdr(log, &import, imu, settings))?;
     crate::out(&gsens_pocketsdr::render_summary(&r.imported))?;
     crate::out(&format!("PocketSDR loop: {}, modelled exactly\n", r.outcome.calibration.loop_used))?;
     Ok(r.outcome)

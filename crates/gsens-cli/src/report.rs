@@ -86,12 +86,11 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
     }
-    let bar = crate::spinner();
-    bar.set_message("reading the logs and estimating Γ");
     let mut outcome = calibrate(&args.imu, Some(&args.tracking), None, &settings)?;
     if let Some(t) = &args.truth {
         outcome.inputs.push(("truth".into(), t.display().to_string()));
     }
+    let bar = crate::spinner();
     bar.set_message("reading the tracking log for C/N0");
     let tracking = gsens_io::read_tracking_file(&args.tracking)?;
     bar.finish_and_clear();
