@@ -42,5 +42,10 @@ rm -rf "$target_dir/wheels"
 "$venv/bin/python" -m pip install -q --force-reinstall --no-deps "$target_dir"/wheels/gsens-*.whl
 
 echo "== pytest python/tests"
+# pytest keeps the tmp_path folders of its last runs under the temporary
+# directory; here they go to a folder of this run's own, removed on exit.
+pytest_tmp=$(mktemp -d "${TMPDIR:-/tmp}/gsens-pytest-XXXXXX")
+trap 'rm -rf "$pytest_tmp"' EXIT
 # Run from outside the source tree so that `import gsens` is the installed wheel.
-GSENS_BIN="$target_dir/debug/gsens" "$venv/bin/python" -m pytest -q "$PWD/python/tests" --rootdir "$PWD/python" -p no:cacheprovider
+GSENS_BIN="$target_dir/debug/gsens" "$venv/bin/python" -m pytest -q "$PWD/python/tests" --rootdir "$PWD/python" \
+  -p no:cacheprovider --basetemp "$pytest_tmp/basetemp"

@@ -114,6 +114,18 @@ def default_settings() -> Dict[str, Any]:
     return _gsens.options_defaults()
 
 
+def _pandas(caller: str):
+    """The pandas module, or an ImportError that says how to install it."""
+    try:
+        import pandas
+    except ImportError as e:
+        raise ImportError(
+            f"gsens: {caller}() returns a pandas DataFrame and pandas is not installed: "
+            "pip install gsens[pandas] (or pip install pandas)"
+        ) from e
+    return pandas
+
+
 @dataclass(frozen=True)
 class Simulation:
     """A simulated session: the logs as columns of arrays, and the truth."""
@@ -133,16 +145,12 @@ class Simulation:
         return np.asarray(self.truth["gamma_hz_per_mps2"], dtype=np.float64)
 
     def imu_frame(self):
-        """The IMU log as a pandas DataFrame."""
-        import pandas
-
-        return pandas.DataFrame(self.imu)
+        """The IMU log as a pandas DataFrame (needs pandas: ``pip install gsens[pandas]``)."""
+        return _pandas("imu_frame").DataFrame(self.imu)
 
     def tracking_frame(self):
-        """The tracking log as a pandas DataFrame."""
-        import pandas
-
-        return pandas.DataFrame(self.tracking)
+        """The tracking log as a pandas DataFrame (needs pandas: ``pip install gsens[pandas]``)."""
+        return _pandas("tracking_frame").DataFrame(self.tracking)
 
     def estimate_settings(self) -> Dict[str, Any]:
         """The loop settings that describe this session's receiver (for :func:`estimate`)."""

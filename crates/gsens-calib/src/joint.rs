@@ -188,21 +188,17 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
     // The stated loop's pass: it decides the axes and starts the fit.
     let (fed0, ne) = batch_pass(series, settings)?;
-    let in_solve = gsens_core::axes_in_solve(&ne, &settings.criteria);
-    let mut axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
-    if axes.is_empty() {
-        axes = vec![0, 1, 2];
-    }
+    let axes = fit_axes(&ne, settings);
     let stated = settings.loop_at(series.log_interval_s);
     let fit_loop = spec.natural_frequency && stated.natural_frequency_hz().is_some();
     let tolerance = spec.loop_tolerance.filter(|t| fit_loop && t.is_finite());
     let Some(tol) = tolerance else {
-        let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None)?;
+        let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None, true)?;
         let data = free.ln_s_and_variance();
         let evidence = LoopEvidence { data, tolerance: None, linearization_sigma_tau_s: free.sigma_tau_s() };
         return Ok(describe(series, &stated, spec, &axes, &free, evidence));
     };
-    let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), None)?;
+    let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), None, true)?;
     let (ln_s, c_ss) = free.ln_s_and_variance().unwrap_or((0.0, 0.0));
     let z = ln_s / (c_ss + tol * tol).sqrt();
     // No variance of ln ŝ (NaN included) or a rejected loop: the free fit.
@@ -226,12 +222,20 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         Cow::Owned(triad_pass(series, settings, &at_post.receiver_loop)?)
     };
     let held = JointSpec { natural_frequency: false, loop_tolerance: None, ..spec };
-    let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.dtau))?;
+    let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.dtau), true)?;
     let posterior = free.posterior(&refit, ln_s_post, var_post);
     // Held exact, the free fit's linearization is not used: the held fit's σ_τ is what must hold.
     let linearization_sigma_tau_s = if tol == 0.0 { posterior.sigma_tau_s() } else { free.sigma_tau_s() };
     let evidence = LoopEvidence { data: Some((ln_s, c_ss)), tolerance: Some(tol), linearization_sigma_tau_s };
     Ok(describe(series, &stated, spec, &axes, &posterior, evidence))
+}
+
+/// The axes a joint fit solves for: those the stated loop's pass observes
+/// (all three when it observes none).
+fn fit_axes(ne: &gsens_core::NormalEquations, settings: &EstimateSettings) -> Vec<usize> {
+    let in_solve = gsens_core::axes_in_solve(ne, &settings.criteria);
+    let axes: Vec<usize> = (0..3).filter(|&i| in_solve[i]).collect();
+    if axes.is_empty() { vec![0, 1, 2] } else { axes }
 }
 
 /// A solved joint fit: the parameters and their sandwich covariance.
@@ -311,7 +315,9 @@ impl Solution {
 
 /// Gauss–Newton on Γ (on `axes`) and the nuisance parameters `spec` asks
 /// for, from `fed0`, the series as `settings`' loop fed it, and the offset
-/// `start_dtau_s` (None: the global search's under that loop).
+/// `start_dtau_s` (None: the global search's under that loop). Without
+/// `covariance` the sandwich is left out (its matrices NaN): the parameters
+/// and the RSS are the same.
 fn solve(
     series: &EpochSeries,
     settings: &EstimateSettings,
@@ -319,6 +325,7 @@ fn solve(
     axes: &[usize],
     fed0: Cow<'_, [FedEpoch]>,
     start_dtau_s: Option<f64>,
+    covariance: bool,
 ) -> Result<Solution, CalibError> {
     let t = series.log_interval_s;
     let stated = settings.loop_at(t);
@@ -455,6 +462,29 @@ fn solve(
         }
     };
 
+    let mut next = na..;
+    let loop_idx = fit_loop.then(|| next.next()).flatten();
+    let zeta_idx = fit_zeta.then(|| next.next()).flatten();
+    let tau_idx = spec.offset_max_abs_s.and_then(|_| next.next());
+    let solution = |cov: DMatrix<f64>, cov3: DMatrix<f64>| Solution {
+        gamma,
+        gamma_stated,
+        ln_s,
+        zeta,
+        dtau,
+        cov,
+        cov3,
+        loop_idx,
+        zeta_idx,
+        tau_idx,
+        rss_rad2: resid.norm_squared(),
+        epochs: used.len(),
+        iterations,
+    };
+    if !covariance {
+        return Ok(solution(DMatrix::from_element(p, p, f64::NAN), DMatrix::from_element(na, na, f64::NAN)));
+    }
+
     // The sandwich with an AR model of the residuals (over the used epochs'
     // contiguous runs).
     let mut mask = vec![false; n];
@@ -493,26 +523,7 @@ fn solve(
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();
     let cov3 = &a3_inv * middle3 * &a3_inv;
-
-    let mut next = na..;
-    let loop_idx = fit_loop.then(|| next.next()).flatten();
-    let zeta_idx = fit_zeta.then(|| next.next()).flatten();
-    let tau_idx = spec.offset_max_abs_s.and_then(|_| next.next());
-    Ok(Solution {
-        gamma,
-        gamma_stated,
-        ln_s,
-        zeta,
-        dtau,
-        cov,
-        cov3,
-        loop_idx,
-        zeta_idx,
-        tau_idx,
-        rss_rad2: resid.norm_squared(),
-        epochs: used.len(),
-        iterations,
-    })
+    Ok(solution(cov, cov3))
 }
 
 /// What the loop test and the linearity check of a solution rest on.
@@ -638,6 +649,14 @@ pub struct ChosenLoop {
     pub runner_up: String,
 }
 
+/// How many candidates, the best of the window's ranking, are fitted on the
+/// whole series ([`choose_loop`]). Candidates a session tells apart by
+/// less than a percent of residual trade places between a window and the
+/// whole series: with two finalists and a 120 s window the 1-hour benchmark
+/// log (BENCHMARKS.md) chose another loop than the search over the whole
+/// series; three and 200 s keep its choice.
+pub const LOOP_FINALISTS: usize = 3;
+
 /// Chooses the receiver loop when none was stated: every order (2nd with
 /// ζ = 1/√2, 3rd with Kaplan's a3, b3), update interval among
 /// [`TYPICAL_LOOP_INTERVALS_S`] that divide the log interval (and the log
@@ -646,10 +665,31 @@ pub struct ChosenLoop {
 /// the smallest residual wins. The discrete choices are not tested with a
 /// stated false-alarm rate, so the caller must say the loop was chosen, not
 /// checked.
+///
+/// Every candidate is fitted on the whole series, the candidates in
+/// parallel and without the covariance (the residual decides). Progress:
+/// one step per candidate fitted, to the observer of [`crate::progress`].
 pub fn choose_loop(
     series: &EpochSeries,
     settings: &EstimateSettings,
     offset_max_abs_s: Option<f64>,
+) -> Result<ChosenLoop, CalibError> {
+    // The window's ranking is not used: on a 400 s session it left the
+    // whole series' best loop out of the finalists (the test below).
+    choose_loop_ranked_on(series, settings, offset_max_abs_s, usize::MAX)
+}
+
+/// [`choose_loop`] with a ranking window of `window_epochs` epochs: a series
+/// longer than 1.5 windows ranks every candidate on the window where the
+/// shaking reaches every shaken axis best, fits the [`LOOP_FINALISTS`] best of
+/// that ranking on the whole series and chooses among them. Not used: where
+/// candidates differ by a fraction of a percent of residual the window's
+/// shortlist can leave out the whole series' best.
+pub(crate) fn choose_loop_ranked_on(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    offset_max_abs_s: Option<f64>,
+    window_epochs: usize,
 ) -> Result<ChosenLoop, CalibError> {
     let t = series.log_interval_s;
     let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(3.0);
@@ -660,7 +700,7 @@ pub fn choose_loop(
         .collect();
     intervals.push(t);
     let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s, loop_tolerance: None };
-    let mut tried: Vec<(f64, LoopModel, gsens_core::LoggedPhase)> = Vec::new();
+    let mut candidates: Vec<EstimateSettings> = Vec::new();
     for order in [2u8, 3] {
         let loop_spec = match order {
             2 => LoopSpec::SecondOrder { bn_hz, zeta: core::f64::consts::FRAC_1_SQRT_2 },
@@ -676,12 +716,48 @@ pub fn choose_loop(
                 let mut s = *settings;
                 s.receiver_loop = LoopModel::kaplan(loop_spec, Some(interval));
                 s.logged_phase = lp;
-                if let Ok(fit) = joint_fit(series, &s, spec) {
-                    tried.push((fit.rss_rad2, fit.fitted(&s.loop_at(t)), lp));
-                }
+                candidates.push(s);
             }
         }
     }
+    let window = ranking_window(series, window_epochs);
+    let progress = crate::progress::current();
+    let steps = candidates.len() + if window.is_some() { LOOP_FINALISTS.min(candidates.len()) } else { 0 };
+    crate::progress::stage("choosing the receiver loop", Some(steps as u64));
+    // Each candidate's RSS and fitted loop on `on`, in the candidates' order (None: not fitted).
+    let fit_all = |on: &EpochSeries, which: &[usize]| -> Vec<Option<(f64, LoopModel)>> {
+        which
+            .par_iter()
+            .map(|&i| {
+                let fit = candidate_fit(on, &candidates[i], spec).ok();
+                if let Some(p) = &progress {
+                    p.step();
+                }
+                fit
+            })
+            .collect()
+    };
+    let all: Vec<usize> = (0..candidates.len()).collect();
+    let (ranked, finalists) = match &window {
+        Some(w) => {
+            let coarse = fit_all(w, &all);
+            let mut order: Vec<(f64, usize)> =
+                coarse.iter().enumerate().filter_map(|(i, f)| f.as_ref().map(|(rss, _)| (*rss, i))).collect();
+            order.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut finalists: Vec<usize> = order.iter().take(LOOP_FINALISTS).map(|&(_, i)| i).collect();
+            // In the candidates' order, as a whole-series search would meet them (ties).
+            finalists.sort_unstable();
+            (order.len(), finalists)
+        }
+        None => (0, all),
+    };
+    let fine = fit_all(series, &finalists);
+    let mut tried: Vec<(f64, LoopModel, gsens_core::LoggedPhase)> = finalists
+        .iter()
+        .zip(fine)
+        .filter_map(|(&i, f)| f.map(|(rss, model)| (rss, model, candidates[i].logged_phase)))
+        .collect();
+    let candidates_tried = if window.is_some() { ranked } else { tried.len() };
     tried.sort_by(|a, b| a.0.total_cmp(&b.0));
     let Some(best) = tried.first().cloned() else {
         return Err(CalibError::Unsupported("no typical receiver loop could be fitted to the data"));
@@ -690,7 +766,7 @@ pub fn choose_loop(
     Ok(ChosenLoop {
         model: best.1,
         logged_phase: best.2,
-        candidates: tried.len(),
+        candidates: candidates_tried,
         runner_up_rss_ratio: runner.map_or(f64::INFINITY, |r| r.0 / best.0),
         runner_up: runner
             .map(|r| {
@@ -699,4 +775,137 @@ pub fn choose_loop(
             })
             .unwrap_or_default(),
     })
+}
+
+/// A candidate loop's free joint fit (no tolerance) without its covariance:
+/// the RSS and the loop fitted, as [`JointFit::rss_rad2`] and
+/// [`JointFit::fitted`] of [`joint_fit`] give them.
+fn candidate_fit(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    spec: JointSpec,
+) -> Result<(f64, LoopModel), CalibError> {
+    let (fed0, ne) = batch_pass(series, settings)?;
+    let axes = fit_axes(&ne, settings);
+    let stated = settings.loop_at(series.log_interval_s);
+    let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None, false)?;
+    let evidence = LoopEvidence { data: free.ln_s_and_variance(), tolerance: None, linearization_sigma_tau_s: None };
+    let fit = describe(series, &stated, spec, &axes, &free, evidence);
+    Ok((free.rss_rad2, fit.fitted(&stated)))
+}
+
+/// The window of `epochs` epochs of `series` that ranks the candidate loops
+/// of [`choose_loop`], when the series is longer than 1.5 × `epochs` (None
+/// otherwise): among windows starting every `epochs`/16 epochs, the one whose
+/// share of each shaken axis's shaking (the sum of squared first differences
+/// of its specific force, over the epochs with a phase) is the largest for
+/// the axis it reaches least. An axis with under 1 % of the most shaken
+/// axis's shaking counts as not shaken.
+pub(crate) fn ranking_window<'a>(series: &EpochSeries<'a>, epochs: usize) -> Option<EpochSeries<'a>> {
+    let n = series.t_s.len();
+    if epochs < 2 || n.saturating_mul(2) <= epochs.saturating_mul(3) {
+        return None;
+    }
+    // Prefix sums of the squared differences per axis.
+    let mut prefix = vec![[0.0f64; 3]; n + 1];
+    for k in 0..n {
+        let mut next = prefix[k];
+        if k > 0 && series.phase_err_rad[k].is_some() {
+            for (i, v) in next.iter_mut().enumerate() {
+                let d = series.accel_mps2[k][i] - series.accel_mps2[k - 1][i];
+                if d.is_finite() {
+                    *v += d * d;
+                }
+            }
+        }
+        prefix[k + 1] = next;
+    }
+    let total = prefix[n];
+    let most = total.iter().copied().fold(0.0, f64::max);
+    let shaken: Vec<usize> = (0..3).filter(|&i| total[i] > 0.01 * most).collect();
+    if shaken.is_empty() {
+        return None;
+    }
+    let step = (epochs / 16).max(1);
+    let score = |start: usize| -> f64 {
+        let end = start + epochs;
+        shaken.iter().map(|&i| (prefix[end][i] - prefix[start][i]) / total[i]).fold(f64::INFINITY, f64::min)
+    };
+    let mut best = (f64::NEG_INFINITY, 0);
+    let mut start = 0;
+    while start + epochs <= n {
+        let v = score(start);
+        if v > best.0 {
+            best = (v, start);
+        }
+        start += step;
+    }
+    let r = best.1..best.1 + epochs;
+    Some(EpochSeries {
+        log_interval_s: series.log_interval_s,
+        t_s: &series.t_s[r.clone()],
+        phase_err_rad: &series.phase_err_rad[r.clone()],
+        accel_mps2: &series.accel_mps2[r],
+        imu_time_offset_s: series.imu_time_offset_s,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gsens_core::DiscretePll;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// 400 s at 40 Hz of the paper's loop run at the log rate, driven by
+    /// Δf = aᵀΓ with x, y, z shaken in turn for 20 s each at 0.9 Hz, white
+    /// phase noise: (t, φ, a).
+    fn long_session() -> (Vec<f64>, Vec<Option<f64>>, Vec<[f64; 3]>) {
+        let t_log = 0.025;
+        let gamma = [0.09, 0.08, -0.08];
+        let mut pll = DiscretePll::new(LoopSpec::PAPER.coeffs().expect("a valid loop"), t_log);
+        pll.settle(9.80665 * gamma[2]);
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(4);
+        let noise = Normal::new(0.0, 0.02).expect("a valid σ");
+        let (mut t_s, mut phase, mut accel) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..16_000 {
+            let t = k as f64 * t_log;
+            let mut a = [0.0, 0.0, 9.80665];
+            let axis = ((t / 20.0) as usize) % 4;
+            if axis < 3 {
+                a[axis] += 3.0 * (core::f64::consts::TAU * 0.9 * t).sin();
+            }
+            let phi = pll.step((0..3).map(|i| a[i] * gamma[i]).sum());
+            t_s.push(t);
+            phase.push(Some(phi + noise.sample(&mut rng)));
+            accel.push(a);
+        }
+        (t_s, phase, accel)
+    }
+
+    /// The search over the whole series finds the session's loop; ranked on a
+    /// window of 8 000 of the 16 000 epochs first, it does not.
+    #[test]
+    fn the_coarse_ranking_keeps_the_whole_series_choice() {
+        let (t_s, phase, accel) = long_session();
+        let series = EpochSeries {
+            log_interval_s: 0.025,
+            t_s: &t_s,
+            phase_err_rad: &phase,
+            accel_mps2: &accel,
+            imu_time_offset_s: 0.0,
+        };
+        let settings = EstimateSettings::default();
+        let window = ranking_window(&series, 8_000).expect("a window of a long series");
+        assert_eq!(window.t_s.len(), 8_000);
+        assert!(ranking_window(&series, 12_000).is_none(), "no window for a series under 1.5 windows");
+        let whole = choose_loop_ranked_on(&series, &settings, Some(0.1), usize::MAX).unwrap();
+        // The session's loop is the paper's at the log rate: the whole-series search finds it …
+        assert_eq!(whole.model.interval_s(), Some(0.025), "{}", whole.model);
+        assert_eq!(whole.model.order(), 2, "{}", whole.model);
+        assert_eq!(choose_loop(&series, &settings, Some(0.1)).unwrap(), whole);
+        // … a ranking on half of it leaves it out of the three finalists: why choose_loop uses none.
+        let coarse = choose_loop_ranked_on(&series, &settings, Some(0.1), 8_000).unwrap();
+        assert_ne!(coarse.model, whole.model);
+    }
 }

@@ -59,6 +59,7 @@ pub mod montecarlo;
 mod options;
 mod pipeline;
 pub mod predict;
+pub mod progress;
 mod response_check;
 mod result;
 mod robust;
@@ -85,6 +86,7 @@ pub use pipeline::{
     RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_gnss_sdr_with_log,
     calibrate_logs, calibrate_owned_logs, gnss_sdr_tracking_log, series_of, with_gnss_sdr_loop,
 };
+pub use progress::{Progress, observe};
 pub use response_check::{
     ResponseBin, ResponseCheck, ResponseCheckError, ResponseSettings, epoch_response, measure_response,
     measure_response_with, student_t_quantile_two_sided, student_t_two_sided_tail,

@@ -328,6 +328,7 @@ fn calibrate_prepared(
     let imu = &despiked;
     // The session holds what the estimate needs of the log; a log given to
     // the pipeline is freed as soon as its rows are taken.
+    crate::progress::stage("preparing the session", None);
     let mut session = prepare_session_from(tracking, imu, imu_name, &settings.selection, assumed)?;
     // An offset beyond half the log's span leaves no overlap to compare (and
     // an absurd bound would size the search's grid without limit).
@@ -377,6 +378,7 @@ fn calibrate_prepared(
     let mut joint = None;
     if spec.natural_frequency || spec.offset_max_abs_s.is_some() {
         let stage = |error| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", error };
+        crate::progress::stage("fitting the loop and the IMU time offset", None);
         let fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
         if let Some(offset_s) = fit.imu_time_offset_s {
             reinterpolate_imu(&mut session, imu, offset_s);
@@ -409,6 +411,7 @@ fn calibrate_prepared(
                 }
             }))
     };
+    crate::progress::stage("estimating Γ and checking the loop's response", None);
     let (calibration, loop_response) = rayon::join(|| calibrate(&series, &estimate), response_check);
     let (mut calibration, loop_response) = (calibration?, loop_response?);
     if let Some(fit) = joint {
@@ -437,6 +440,7 @@ pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings)
     // The two files are read at once, and the IMU log prepared while the
     // tracking log is still being read; a bad tracking log is still the
     // error reported first.
+    crate::progress::stage("reading the logs", None);
     let (tracking_log, imu_series) = rayon::join(
         || gsens_io::read_tracking_file(tracking),
         || gsens_io::read_imu_file(imu).map(|series| PreparedImu::new(&series, settings)),

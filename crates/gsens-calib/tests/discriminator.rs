@@ -146,7 +146,8 @@ fn an_atan2_discriminator_widens_the_range_by_pi_over_2() {
 fn an_imu_log_in_g_is_still_imu_units() {
     let dir = fixture("second-order-1.15rad");
     let imu = gsens_io::read_imu_file(dir.join("imu.csv")).unwrap();
-    let tmp = std::env::temp_dir().join(format!("gsens-disc-imu-g-{}.csv", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("gsens-disc-imu-g-").tempdir().unwrap();
+    let tmp = scratch.path().join("imu.csv");
     let mut text = String::from("t_s,fx_mps2,fy_mps2,fz_mps2\n");
     let g0 = gsens_core::units::STANDARD_GRAVITY_MPS2;
     for (t, a) in imu.t_s.iter().zip(&imu.accel_mps2) {

@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 pub struct DemoArgs {
     #[command(flatten)]
     pub scenario: crate::args::ScenarioArgs,
-    /// Where the simulated logs go (default: a `gsens-demo` folder in the system's temporary directory).
+    /// Where the simulated logs go, kept (default: a fresh folder in the system's temporary
+    /// directory, removed at the end).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Write the result document (JSON) here.
@@ -32,7 +33,17 @@ pub struct DemoArgs {
 
 pub fn run(args: &DemoArgs) -> Result<crate::Status> {
     args.analysis.check()?;
-    let dir = args.out.clone().unwrap_or_else(|| std::env::temp_dir().join("gsens-demo"));
+    // Without --out the logs go to a folder of this run's own, removed when `scratch` drops.
+    let (dir, scratch) = match &args.out {
+        Some(out) => (out.clone(), None),
+        None => {
+            let scratch = tempfile::Builder::new()
+                .prefix("gsens-demo-")
+                .tempdir()
+                .context("cannot make a folder in the system's temporary directory for the demo's logs")?;
+            (scratch.path().to_path_buf(), Some(scratch))
+        }
+    };
     crate::outputs::maybe_file_in("--json", args.json.as_deref(), Some(&dir))?;
     crate::outputs::dir("--out", &dir)?;
     if let Some(d) = &args.figures {
@@ -40,18 +51,19 @@ pub fn run(args: &DemoArgs) -> Result<crate::Status> {
     }
     let scenario = args.scenario.load()?;
     crate::out(&format!(
-        "simulating {:.0} s of the {} (seed {}) into {} …\n",
+        "simulating {:.0} s of the {} (seed {}) into {}{} …\n",
         scenario.duration_s(),
         if args.scenario.scenario.is_some() { "given scenario" } else { "paper's experiment" },
         args.scenario.seed,
-        dir.display()
+        dir.display(),
+        if scratch.is_some() { " (removed at the end: --out DIR keeps the logs)" } else { "" }
     ))?;
     let truth = simulate_to_dir(&scenario, args.scenario.seed, &dir)?;
     let options = args.analysis.options();
     let settings = options.pipeline_settings_around(scenario_settings(&scenario, &options.estimate_settings())?)?;
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
-    let outcome = calibrate_files(&tracking, &imu, &settings)?;
+    let outcome = crate::observed(|| calibrate_files(&tracking, &imu, &settings))?;
     let logged = match scenario.log.phase {
         LoggedPhaseMode::Last => "last",
         LoggedPhaseMode::Mean => "mean",

@@ -56,15 +56,15 @@ impl CalibrationArgs {
 /// was made from when `keep_tracking`), printing what became of each track of
 /// a receiver's log and which receiver loop was modelled.
 pub fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
-    let calibrated =
-        if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) }.map_err(
-            |e| match e {
-                InputsError::LoopStatedTwice { .. } => {
-                    anyhow::anyhow!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like")
-                }
-                e => e.into(),
-            },
-        )?;
+    let calibrated = crate::observed(|| {
+        if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) }
+    })
+    .map_err(|e| match e {
+        InputsError::LoopStatedTwice { .. } => {
+            anyhow::anyhow!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like")
+        }
+        e => e.into(),
+    })?;
     if let Some(summary) = calibrated.track_summary() {
         crate::out(&summary)?;
     }

@@ -44,7 +44,8 @@ fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
     let settings = a.conversion.import_settings()?;
     crate::outputs::file("--out", &a.out)?;
     crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
-    let imported = gsens_pocketsdr::import_file(&a.log, &settings)?;
+    let imported =
+        crate::with_spinner("reading the PocketSDR log", || gsens_pocketsdr::import_file(&a.log, &settings))?;
     crate::out(&gsens_pocketsdr::render_summary(&imported))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     gsens_io::write_tracking_csv(file, &imported.rows)?;
@@ -102,7 +103,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     let settings = a.conversion.import_settings(a.conf.as_deref())?;
     crate::outputs::file("--out", &a.out)?;
     crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
-    let imported = import_dir(&a.dump_dir, &settings)?;
+    let imported = crate::with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
     crate::out(&gsens_report::render_gnss_sdr_tracks(&imported.tracks, imported.interval_s))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     let common_grid = a.common_grid || !a.record_times;

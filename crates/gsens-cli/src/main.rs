@@ -122,6 +122,46 @@ pub fn spinner() -> ProgressBar {
     bar
 }
 
+/// The pipeline's progress ([`gsens_calib::Progress`]) on stderr, drawn
+/// only on a terminal: the stage in a spinner, a stage with counted steps
+/// (the receiver-loop search's candidates) with a bar.
+struct BarProgress(ProgressBar);
+
+impl gsens_calib::Progress for BarProgress {
+    fn stage(&self, name: &str, steps: Option<u64>) {
+        let template = match steps {
+            Some(_) => "{spinner} {elapsed} {msg} {bar:30} {pos}/{len}",
+            None => "{spinner} {elapsed} {msg}",
+        };
+        self.0.set_style(ProgressStyle::with_template(template).expect("valid template"));
+        self.0.set_position(0);
+        self.0.set_length(steps.unwrap_or(0));
+        self.0.set_message(name.to_string());
+    }
+
+    fn step(&self) {
+        self.0.inc(1);
+    }
+}
+
+/// Runs `f`, a call of the calibration pipeline, with its progress shown
+/// ([`BarProgress`]); the bar is cleared when it returns.
+pub fn observed<R>(f: impl FnOnce() -> R) -> R {
+    let bar = spinner();
+    let result = gsens_calib::observe(std::sync::Arc::new(BarProgress(bar.clone())), f);
+    bar.finish_and_clear();
+    result
+}
+
+/// Runs `f` with a spinner saying `what` (on a terminal), cleared when it returns.
+pub fn with_spinner<R>(what: &str, f: impl FnOnce() -> R) -> R {
+    let bar = spinner();
+    bar.set_message(what.to_string());
+    let result = f();
+    bar.finish_and_clear();
+    result
+}
+
 /// glibc's malloc gives each thread that allocates an arena of its own and
 /// keeps what is freed in it for that thread: the estimate's stages allocate
 /// large buffers on both cores in turn, so with an arena per thread the freed

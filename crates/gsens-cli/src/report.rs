@@ -87,10 +87,7 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
     }
-    let bar = crate::spinner();
-    bar.set_message("reading the logs and estimating Γ");
     let calibrated = calibrate(inputs, &settings, true)?;
-    bar.finish_and_clear();
     let mut outcome = calibrated.outcome;
     if let Some(t) = &args.truth {
         outcome.inputs.push(("truth".into(), t.display().to_string()));

@@ -135,7 +135,8 @@ fn missing_file() {
 /// `time_units` check names; the estimate is then not trustworthy.)
 #[test]
 fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
-    let dir = std::env::temp_dir().join(format!("gsens-bad-options-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-bad-options-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     let sim = Command::new(env!("CARGO_BIN_EXE_gsens")).args(["simulate", "--out"]).arg(&dir).output().unwrap();
     assert!(sim.status.success());
     let (imu, trk) = (dir.join("imu.csv"), dir.join("tracking.csv"));

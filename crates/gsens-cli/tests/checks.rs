@@ -133,7 +133,7 @@ fn hold(lines: &mut [String], cols: &[usize], first: usize, n: usize) {
 /// A second clean session made another way: another seed, the `last`
 /// discriminator output logged, a consumer MEMS IMU (16-bit over ±4 g) at
 /// 100 Hz.
-fn other_clean_session(name: &str) -> std::path::PathBuf {
+fn other_clean_session(name: &str) -> common::TestDir {
     let dir = temp_dir(name);
     let scenario = dir.join("scenario.toml");
     std::fs::write(&scenario, "[log]\nphase = \"last\"\n[imu]\npreset = \"consumer_mems\"\nrate_hz = 100.0\n").unwrap();

@@ -8,7 +8,8 @@ use common::{fails, gsens, json, vec3};
 
 #[test]
 fn simulate_then_estimate_recovers_the_truth() {
-    let dir = std::env::temp_dir().join(format!("gsens-e2e-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-e2e-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     let d = dir.to_str().unwrap();
     gsens(&["simulate", "--out", d, "--seed", "7"]);
     let out = dir.join("estimate.json");
@@ -57,7 +58,8 @@ fn simulate_then_estimate_recovers_the_truth() {
 
 #[test]
 fn same_seed_same_bytes() {
-    let base = std::env::temp_dir().join(format!("gsens-seed-{}", std::process::id()));
+    let base_scratch = tempfile::Builder::new().prefix("gsens-seed-").tempdir().unwrap();
+    let base = base_scratch.path().to_path_buf();
     let (a, b, c) = (base.join("a"), base.join("b"), base.join("c"));
     gsens(&["simulate", "--out", a.to_str().unwrap(), "--seed", "3"]);
     gsens(&["simulate", "--out", b.to_str().unwrap(), "--seed", "3"]);
@@ -72,7 +74,8 @@ fn same_seed_same_bytes() {
 
 #[test]
 fn demo_shows_estimate_next_to_truth() {
-    let dir = std::env::temp_dir().join(format!("gsens-demo-test-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-demo-test-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     let doc = dir.join("demo.json");
     let text = gsens(&["demo", "--out", dir.to_str().unwrap(), "--json", doc.to_str().unwrap(), "--warmup-s", "3"]);
     let truth = vec3(&json(&dir.join("truth.json"))["gamma_hz_per_mps2"]);
@@ -130,7 +133,8 @@ fn demo_shows_estimate_next_to_truth() {
 fn scenario_command_prints_a_parsable_default() {
     let text = gsens(&["scenario"]);
     assert!(text.contains("gamma_hz_per_mps2 = [0.09, 0.08, -0.08]"));
-    let dir = std::env::temp_dir().join(format!("gsens-scn-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-scn-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = -3.0")).unwrap();
@@ -145,7 +149,8 @@ fn scenario_command_prints_a_parsable_default() {
 
 #[test]
 fn response_reports_the_paper_loop_peak() {
-    let dir = std::env::temp_dir().join(format!("gsens-resp-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-resp-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("r.json");
     gsens(&["response", "--json", out.to_str().unwrap()]);
@@ -160,7 +165,8 @@ fn response_reports_the_paper_loop_peak() {
 
 #[test]
 fn session_shaken_only_along_x_and_y_reports_z_unobservable() {
-    let dir = std::env::temp_dir().join(format!("gsens-xy-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-xy-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let text = gsens(&["scenario"]);
     // The z segment shaken with 1 mm/s²: nothing the loop can see.

@@ -12,10 +12,8 @@ fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../gsens-gnss-sdr/tests/fixtures")
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gsens-gnss-sdr-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmp(name: &str) -> common::TestDir {
+    common::temp_dir(&format!("gnss-sdr-{name}"))
 }
 
 #[test]
@@ -107,7 +105,8 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
 #[test]
 fn estimate_from_dumps_of_the_default_1_ms_setting() {
     let f = fixtures().join("ext1");
-    let out = tmp("ext1").join("ext1.json");
+    let d = tmp("ext1");
+    let out = d.join("ext1.json");
     let (imu, conf) = (s(&f.join("imu.csv")), s(&f.join("gnss-sdr.conf")));
     let text = gsens(&["estimate", "--imu", &imu, "--gnss-sdr", &s(&f), "--gnss-sdr-conf", &conf, "--json", &s(&out)]);
     assert!(text.contains("2 tracks, 2 used"), "{text}");

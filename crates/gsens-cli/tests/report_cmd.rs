@@ -25,7 +25,8 @@ fn assert_svg(path: &Path) {
 
 #[test]
 fn report_writes_html_json_header_and_figures() {
-    let dir = std::env::temp_dir().join(format!("gsens-report-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-report-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     let d = dir.to_str().unwrap();
     gsens(&["simulate", "--out", &format!("{d}/sim"), "--seed", "3"]);
     let out = format!("{d}/report");
@@ -108,7 +109,8 @@ fn report_writes_html_json_header_and_figures() {
 
 #[test]
 fn response_plot_and_demo_figures() {
-    let dir = std::env::temp_dir().join(format!("gsens-figs-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-figs-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let png = dir.join("fig3.png");
     let svg = dir.join("fig3.svg");

@@ -21,7 +21,8 @@ elevation_exponent = 1.0
 
 #[test]
 fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
-    let dir = std::env::temp_dir().join(format!("gsens-screening-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-screening-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let scenario = dir.join("weak.toml");
     std::fs::write(&scenario, SCENARIO).unwrap();

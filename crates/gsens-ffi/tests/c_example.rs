@@ -51,7 +51,8 @@ fn build_example(out: &Path) -> PathBuf {
 
 #[test]
 fn the_c_example_gives_the_pipelines_gamma() {
-    let dir = std::env::temp_dir().join(format!("gsens-ffi-c-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-ffi-c-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, &dir, |_| {}).unwrap();
     let truth_loop = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
     let mut settings = gsens_calib::PipelineSettings::default();

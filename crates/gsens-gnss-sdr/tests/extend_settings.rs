@@ -100,7 +100,8 @@ fn a_directory_with_no_usable_record_says_so_in_one_line_per_channel_and_reason(
     // GNSS-SDR's 2 ms dumps with every 7th record dropped, copied over 20 channels (each
     // under its own PRN): every channel is cut into some 400 tracks of a few records, the
     // first ones before bit synchronization, the others shorter than the settling time.
-    let tmp = std::env::temp_dir().join(format!("gsens-no-usable-{}", std::process::id()));
+    let tmp_scratch = tempfile::Builder::new().prefix("gsens-no-usable-").tempdir().unwrap();
+    let tmp = tmp_scratch.path().to_path_buf();
     std::fs::create_dir_all(&tmp).unwrap();
     std::fs::copy(dir("ext2").join("gnss-sdr.conf"), tmp.join("gnss-sdr.conf")).unwrap();
     for ch in 0..20u32 {

@@ -34,7 +34,8 @@ mod tests {
 
     #[test]
     fn a_file_beyond_the_limit_is_refused_unread() {
-        let dir = std::env::temp_dir().join(format!("gsens-io-config-{}", std::process::id()));
+        let dir_scratch = tempfile::Builder::new().prefix("gsens-io-config-").tempdir().unwrap();
+        let dir = dir_scratch.path().to_path_buf();
         std::fs::create_dir_all(&dir).unwrap();
         let small = dir.join("small.toml");
         std::fs::write(&small, "[loop]\nbn_hz = 3.0\n").unwrap();

@@ -83,7 +83,8 @@ mod tests {
 
     #[test]
     fn partial_lines_wait_and_a_rewritten_file_restarts() {
-        let dir = std::env::temp_dir().join(format!("gsens-follow-{}", std::process::id()));
+        let dir_scratch = tempfile::Builder::new().prefix("gsens-follow-").tempdir().unwrap();
+        let dir = dir_scratch.path().to_path_buf();
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("imu.csv");
         let _ = std::fs::remove_file(&path);

@@ -12,7 +12,8 @@ fn ended_at_30_s_the_estimate_holds_its_sigma() {
     let mut z = Vec::new();
     let mut trusted = 0;
     for seed in 1..=8u64 {
-        let dir = std::env::temp_dir().join(format!("gsens-live-early-{}-{seed}", std::process::id()));
+        let dir_scratch = tempfile::Builder::new().prefix("gsens-live-early-").tempdir().unwrap();
+        let dir = dir_scratch.path().to_path_buf();
         let mut scenario = gsens_sim::scenario::Scenario::default();
         scenario.session.duration_s = Some(31.0);
         gsens_sim::simulate_to_dir(&scenario, seed, &dir, |_| {}).unwrap();

@@ -8,7 +8,8 @@ use gsens_live::{Instruction, LiveConfig, LiveSession, read_session_dir};
 
 #[test]
 fn asks_for_x_then_y_then_z_and_stops_at_the_target() {
-    let dir = std::env::temp_dir().join(format!("gsens-live-seq-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-live-seq-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     let scenario = gsens_sim::scenario::Scenario::default();
     gsens_sim::simulate_to_dir(&scenario, 1, &dir, |_| {}).unwrap();
     let inputs = read_session_dir(&dir).unwrap();

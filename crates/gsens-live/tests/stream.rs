@@ -15,23 +15,25 @@
 use gsens_calib::PipelineSettings;
 use gsens_live::{LiveConfig, LiveSession, read_session_dir};
 
-fn session(dir_name: &str) -> (std::path::PathBuf, PipelineSettings) {
-    let dir = std::env::temp_dir().join(format!("gsens-live-{dir_name}-{}", std::process::id()));
-    gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, &dir, |_| {}).unwrap();
+fn session(dir_name: &str) -> (tempfile::TempDir, PipelineSettings) {
+    let scratch = tempfile::Builder::new().prefix(&format!("gsens-live-{dir_name}-")).tempdir().unwrap();
+    let dir = scratch.path();
+    gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, dir, |_| {}).unwrap();
     let truth_loop = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
     let mut settings = PipelineSettings::default();
     settings.estimate.receiver_loop = truth_loop.receiver_loop;
     settings.estimate.logged_phase = truth_loop.logged_phase;
     settings.loop_stated = true;
-    (dir, settings)
+    (scratch, settings)
 }
 
 #[test]
 fn the_stream_ends_at_the_batch_estimate() {
-    let (dir, settings) = session("stream");
+    let (scratch, settings) = session("stream");
+    let dir = scratch.path();
     let mut live = LiveSession::new(LiveConfig::new(settings, 1e-9)).unwrap();
     let mut before_batch = None;
-    for (k, x) in read_session_dir(&dir).unwrap().iter().enumerate() {
+    for (k, x) in read_session_dir(dir).unwrap().iter().enumerate() {
         live.push("replay", k as u64 + 1, *x);
         if before_batch.is_none() && live.data_t_s() >= 60.0 {
             // Before any batch: the stated loop, white-noise σ.
@@ -54,5 +56,4 @@ fn the_stream_ends_at_the_batch_estimate() {
         assert!((g_now - g_batch).abs() <= 0.1 * s_batch, "axis {i}");
         assert!((s_now / s_batch - 1.0).abs() < 0.05, "axis {i}: σ {s_now} vs {s_batch}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

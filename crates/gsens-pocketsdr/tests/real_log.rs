@@ -212,7 +212,8 @@ fn channels_that_come_and_go_and_other_signals() {
 
 #[test]
 fn empty_foreign_and_mismatched_inputs_are_errors_naming_the_file() {
-    let dir = std::env::temp_dir().join(format!("gsens-pocketsdr-{}", std::process::id()));
+    let dir_scratch = tempfile::Builder::new().prefix("gsens-pocketsdr-").tempdir().unwrap();
+    let dir = dir_scratch.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let empty = dir.join("empty.log");
     std::fs::write(&empty, b"").unwrap();

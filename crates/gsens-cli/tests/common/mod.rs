@@ -1,7 +1,7 @@
 //! What every CLI test needs: run `gsens`, read its JSON, a scratch folder.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 /// Runs `gsens` with `args`.
@@ -36,11 +36,27 @@ pub fn vec3(v: &serde_json::Value) -> [f64; 3] {
     [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
 }
 
-/// A fresh scratch folder for test `name` of this process.
-pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("gsens-test-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch folder, removed with everything in it when dropped (at the end
+/// of the test, passed or failed); it derefs to its path.
+pub struct TestDir(tempfile::TempDir);
+
+impl std::ops::Deref for TestDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<Path> for TestDir {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+/// A fresh scratch folder for test `name` in the system's temporary
+/// directory, removed when the returned value is dropped.
+pub fn temp_dir(name: &str) -> TestDir {
+    TestDir(tempfile::Builder::new().prefix(&format!("gsens-test-{name}-")).tempdir().unwrap())
 }
 
 /// A path as a string argument.
