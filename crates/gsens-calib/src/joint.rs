@@ -649,14 +649,6 @@ pub struct ChosenLoop {
     pub runner_up: String,
 }
 
-/// How many candidates, the best of the window's ranking, are fitted on the
-/// whole series ([`choose_loop`]). Candidates a session tells apart by
-/// less than a percent of residual trade places between a window and the
-/// whole series: with two finalists and a 120 s window the 1-hour benchmark
-/// log (BENCHMARKS.md) chose another loop than the search over the whole
-/// series; three and 200 s keep its choice.
-pub const LOOP_FINALISTS: usize = 3;
-
 /// Chooses the receiver loop when none was stated: every order (2nd with
 /// ζ = 1/√2, 3rd with Kaplan's a3, b3), update interval among
 /// [`TYPICAL_LOOP_INTERVALS_S`] that divide the log interval (and the log
@@ -673,23 +665,6 @@ pub fn choose_loop(
     series: &EpochSeries,
     settings: &EstimateSettings,
     offset_max_abs_s: Option<f64>,
-) -> Result<ChosenLoop, CalibError> {
-    // The window's ranking is not used: on a 400 s session it left the
-    // whole series' best loop out of the finalists (the test below).
-    choose_loop_ranked_on(series, settings, offset_max_abs_s, usize::MAX)
-}
-
-/// [`choose_loop`] with a ranking window of `window_epochs` epochs: a series
-/// longer than 1.5 windows ranks every candidate on the window where the
-/// shaking reaches every shaken axis best, fits the [`LOOP_FINALISTS`] best of
-/// that ranking on the whole series and chooses among them. Not used: where
-/// candidates differ by a fraction of a percent of residual the window's
-/// shortlist can leave out the whole series' best.
-pub(crate) fn choose_loop_ranked_on(
-    series: &EpochSeries,
-    settings: &EstimateSettings,
-    offset_max_abs_s: Option<f64>,
-    window_epochs: usize,
 ) -> Result<ChosenLoop, CalibError> {
     let t = series.log_interval_s;
     let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(3.0);
@@ -720,44 +695,22 @@ pub(crate) fn choose_loop_ranked_on(
             }
         }
     }
-    let window = ranking_window(series, window_epochs);
     let progress = crate::progress::current();
-    let steps = candidates.len() + if window.is_some() { LOOP_FINALISTS.min(candidates.len()) } else { 0 };
-    crate::progress::stage("choosing the receiver loop", Some(steps as u64));
-    // Each candidate's RSS and fitted loop on `on`, in the candidates' order (None: not fitted).
-    let fit_all = |on: &EpochSeries, which: &[usize]| -> Vec<Option<(f64, LoopModel)>> {
-        which
-            .par_iter()
-            .map(|&i| {
-                let fit = candidate_fit(on, &candidates[i], spec).ok();
-                if let Some(p) = &progress {
-                    p.step();
-                }
-                fit
-            })
-            .collect()
-    };
-    let all: Vec<usize> = (0..candidates.len()).collect();
-    let (ranked, finalists) = match &window {
-        Some(w) => {
-            let coarse = fit_all(w, &all);
-            let mut order: Vec<(f64, usize)> =
-                coarse.iter().enumerate().filter_map(|(i, f)| f.as_ref().map(|(rss, _)| (*rss, i))).collect();
-            order.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let mut finalists: Vec<usize> = order.iter().take(LOOP_FINALISTS).map(|&(_, i)| i).collect();
-            // In the candidates' order, as a whole-series search would meet them (ties).
-            finalists.sort_unstable();
-            (order.len(), finalists)
-        }
-        None => (0, all),
-    };
-    let fine = fit_all(series, &finalists);
-    let mut tried: Vec<(f64, LoopModel, gsens_core::LoggedPhase)> = finalists
-        .iter()
-        .zip(fine)
-        .filter_map(|(&i, f)| f.map(|(rss, model)| (rss, model, candidates[i].logged_phase)))
+    crate::progress::stage("choosing the receiver loop", Some(candidates.len() as u64));
+    // Each candidate's RSS and fitted loop (None: not fitted), in the candidates' order.
+    let fits: Vec<Option<(f64, LoopModel)>> = candidates
+        .par_iter()
+        .map(|candidate| {
+            let fit = candidate_fit(series, candidate, spec).ok();
+            if let Some(p) = &progress {
+                p.step();
+            }
+            fit
+        })
         .collect();
-    let candidates_tried = if window.is_some() { ranked } else { tried.len() };
+    let mut tried: Vec<(f64, LoopModel, gsens_core::LoggedPhase)> =
+        candidates.iter().zip(fits).filter_map(|(c, f)| f.map(|(rss, model)| (rss, model, c.logged_phase))).collect();
+    let candidates_tried = tried.len();
     tried.sort_by(|a, b| a.0.total_cmp(&b.0));
     let Some(best) = tried.first().cloned() else {
         return Err(CalibError::Unsupported("no typical receiver loop could be fitted to the data"));
@@ -794,62 +747,6 @@ fn candidate_fit(
     Ok((free.rss_rad2, fit.fitted(&stated)))
 }
 
-/// The window of `epochs` epochs of `series` that ranks the candidate loops
-/// of [`choose_loop`], when the series is longer than 1.5 × `epochs` (None
-/// otherwise): among windows starting every `epochs`/16 epochs, the one whose
-/// share of each shaken axis's shaking (the sum of squared first differences
-/// of its specific force, over the epochs with a phase) is the largest for
-/// the axis it reaches least. An axis with under 1 % of the most shaken
-/// axis's shaking counts as not shaken.
-pub(crate) fn ranking_window<'a>(series: &EpochSeries<'a>, epochs: usize) -> Option<EpochSeries<'a>> {
-    let n = series.t_s.len();
-    if epochs < 2 || n.saturating_mul(2) <= epochs.saturating_mul(3) {
-        return None;
-    }
-    // Prefix sums of the squared differences per axis.
-    let mut prefix = vec![[0.0f64; 3]; n + 1];
-    for k in 0..n {
-        let mut next = prefix[k];
-        if k > 0 && series.phase_err_rad[k].is_some() {
-            for (i, v) in next.iter_mut().enumerate() {
-                let d = series.accel_mps2[k][i] - series.accel_mps2[k - 1][i];
-                if d.is_finite() {
-                    *v += d * d;
-                }
-            }
-        }
-        prefix[k + 1] = next;
-    }
-    let total = prefix[n];
-    let most = total.iter().copied().fold(0.0, f64::max);
-    let shaken: Vec<usize> = (0..3).filter(|&i| total[i] > 0.01 * most).collect();
-    if shaken.is_empty() {
-        return None;
-    }
-    let step = (epochs / 16).max(1);
-    let score = |start: usize| -> f64 {
-        let end = start + epochs;
-        shaken.iter().map(|&i| (prefix[end][i] - prefix[start][i]) / total[i]).fold(f64::INFINITY, f64::min)
-    };
-    let mut best = (f64::NEG_INFINITY, 0);
-    let mut start = 0;
-    while start + epochs <= n {
-        let v = score(start);
-        if v > best.0 {
-            best = (v, start);
-        }
-        start += step;
-    }
-    let r = best.1..best.1 + epochs;
-    Some(EpochSeries {
-        log_interval_s: series.log_interval_s,
-        t_s: &series.t_s[r.clone()],
-        phase_err_rad: &series.phase_err_rad[r.clone()],
-        accel_mps2: &series.accel_mps2[r],
-        imu_time_offset_s: series.imu_time_offset_s,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -883,10 +780,10 @@ mod tests {
         (t_s, phase, accel)
     }
 
-    /// The search over the whole series finds the session's loop; ranked on a
-    /// window of 8 000 of the 16 000 epochs first, it does not.
+    /// The search finds the session's loop (the paper's, run at the log rate)
+    /// among the typical ones.
     #[test]
-    fn the_coarse_ranking_keeps_the_whole_series_choice() {
+    fn the_search_finds_the_sessions_loop() {
         let (t_s, phase, accel) = long_session();
         let series = EpochSeries {
             log_interval_s: 0.025,
@@ -895,17 +792,10 @@ mod tests {
             accel_mps2: &accel,
             imu_time_offset_s: 0.0,
         };
-        let settings = EstimateSettings::default();
-        let window = ranking_window(&series, 8_000).expect("a window of a long series");
-        assert_eq!(window.t_s.len(), 8_000);
-        assert!(ranking_window(&series, 12_000).is_none(), "no window for a series under 1.5 windows");
-        let whole = choose_loop_ranked_on(&series, &settings, Some(0.1), usize::MAX).unwrap();
-        // The session's loop is the paper's at the log rate: the whole-series search finds it …
-        assert_eq!(whole.model.interval_s(), Some(0.025), "{}", whole.model);
-        assert_eq!(whole.model.order(), 2, "{}", whole.model);
-        assert_eq!(choose_loop(&series, &settings, Some(0.1)).unwrap(), whole);
-        // … a ranking on half of it leaves it out of the three finalists: why choose_loop uses none.
-        let coarse = choose_loop_ranked_on(&series, &settings, Some(0.1), 8_000).unwrap();
-        assert_ne!(coarse.model, whole.model);
+        let chosen = choose_loop(&series, &EstimateSettings::default(), Some(0.1)).unwrap();
+        assert_eq!(chosen.model.interval_s(), Some(0.025), "{}", chosen.model);
+        assert_eq!(chosen.model.order(), 2, "{}", chosen.model);
+        assert_eq!(chosen.logged_phase, gsens_core::LoggedPhase::Last);
+        assert!(chosen.runner_up_rss_ratio >= 1.0, "{}", chosen.runner_up_rss_ratio);
     }
 }
