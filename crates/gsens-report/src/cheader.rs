@@ -155,14 +155,16 @@ pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
     let _ = writeln!(h, " * fy_mps2, fz_mps2 of imu.csv); at rest, level, z up: a = (0, 0, +9.81) m/s^2.");
     let _ = writeln!(h, " * Sign: phase error = signal phase - replica phase.");
     let _ = writeln!(h, " *");
-    let _ = writeln!(
-        h,
-        " * Estimate: {} over {} epochs at {:.3} Hz; receiver loop {}.",
+    let estimate = format!(
+        "Estimate: {} over {} epochs at {:.3} Hz; receiver loop {}.",
         c.settings.method,
         c.epochs_used,
         1.0 / c.log_interval_s,
         c_comment(&c.loop_used.to_string())
     );
+    for line in wrap(&estimate, 84) {
+        let _ = writeln!(h, " * {line}");
+    }
     let _ = writeln!(
         h,
         " * Phase error RMS {:.4} rad before compensation, {:.4} rad after. 1-sigma values are",
@@ -234,11 +236,11 @@ pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
     let _ = writeln!(h, "#define GSENS_GAMMA_OBSERVABLE_MASK {mask}u");
     let _ = writeln!(
         h,
-        "#define GSENS_GAMMA_HZ_PER_MPS2_INIT {{ GSENS_GAMMA_X_HZ_PER_MPS2, GSENS_GAMMA_Y_HZ_PER_MPS2, GSENS_GAMMA_Z_HZ_PER_MPS2 }}"
+        "#define GSENS_GAMMA_HZ_PER_MPS2_INIT \\\n    {{ GSENS_GAMMA_X_HZ_PER_MPS2, GSENS_GAMMA_Y_HZ_PER_MPS2, GSENS_GAMMA_Z_HZ_PER_MPS2 }}"
     );
     let _ = writeln!(
         h,
-        "#define GSENS_GAMMA_PPB_PER_G_INIT {{ GSENS_GAMMA_X_PPB_PER_G, GSENS_GAMMA_Y_PPB_PER_G, GSENS_GAMMA_Z_PPB_PER_G }}"
+        "#define GSENS_GAMMA_PPB_PER_G_INIT \\\n    {{ GSENS_GAMMA_X_PPB_PER_G, GSENS_GAMMA_Y_PPB_PER_G, GSENS_GAMMA_Z_PPB_PER_G }}"
     );
     let _ = writeln!(h);
     let _ = writeln!(h, "#endif /* GSENS_GAMMA_H */");

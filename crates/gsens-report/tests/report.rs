@@ -192,6 +192,11 @@ fn c_header_compiles_and_round_trips() {
     assert!(h.contains(" * VERDICT: TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 1)"));
     assert!(h.contains("2025-01-31") && h.contains("logs/tracking.csv"));
     assert!(h.contains("Axis convention"));
+    // Lines fit the report's code block: none is wider than 100 characters but
+    // those that quote an input's path.
+    for line in h.lines().filter(|l| !l.contains("logs/")) {
+        assert!(line.chars().count() <= 100, "{} characters: {line}", line.chars().count());
+    }
     let Some(text) = compile_and_run(&h, "cheader") else { return };
     let f: Vec<&str> = text.split_whitespace().collect();
     for i in 0..3 {
