@@ -9,7 +9,6 @@ use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffsetOption};
 use gsens_core::LoopModel;
-use gsens_core::{KAPLAN_A3, KAPLAN_B3};
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
 use gsens_inputs::{Inputs, Log};
 use gsens_session::Weighting;
@@ -68,15 +67,15 @@ pub struct LoopArgs {
     /// One-sided noise bandwidth Bn of the receiver's PLL [Hz] (default 3).
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub bn_hz: Option<f64>,
-    /// Damping ratio ζ (2nd-order loop).
-    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = positive)]
-    pub zeta: f64,
-    /// a3 of the 3rd-order loop (Kaplan: 1.1).
-    #[arg(long, default_value_t = KAPLAN_A3, allow_negative_numbers = true, value_parser = positive)]
-    pub a3: f64,
-    /// b3 of the 3rd-order loop (Kaplan: 2.4).
-    #[arg(long, default_value_t = KAPLAN_B3, allow_negative_numbers = true, value_parser = positive)]
-    pub b3: f64,
+    /// Damping ratio ζ of a 2nd-order loop [default: 1/√2 = 0.707].
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    pub zeta: Option<f64>,
+    /// a3 of a 3rd-order loop (with --order 3) [default: Kaplan's 1.1].
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    pub a3: Option<f64>,
+    /// b3 of a 3rd-order loop (with --order 3) [default: Kaplan's 2.4].
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    pub b3: Option<f64>,
     /// The receiver's loop update interval [s] (default: the log interval).
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub loop_interval_s: Option<f64>,
@@ -107,13 +106,27 @@ pub enum LoggedArg {
 }
 
 impl LoopArgs {
+    /// Refuses a shape parameter of the other order's loop: ζ shapes a
+    /// 2nd-order loop only, a3 and b3 a 3rd-order one.
+    pub fn check(&self) -> Result<()> {
+        let third = self.order == Some(3);
+        if third && self.zeta.is_some() {
+            bail!("--zeta is the damping of a 2nd-order loop: a 3rd-order loop (--order 3) takes --a3 and --b3");
+        }
+        if !third && (self.a3.is_some() || self.b3.is_some()) {
+            bail!("--a3 and --b3 shape a 3rd-order loop: they need --order 3 (a 2nd-order loop takes --zeta)");
+        }
+        Ok(())
+    }
+
     /// Sets the loop's options.
     pub fn apply(&self, o: &mut CalibrationOptions) {
         o.order = self.order;
         o.bn_hz = self.bn_hz;
-        o.zeta = self.zeta;
-        o.a3 = self.a3;
-        o.b3 = self.b3;
+        // Unset shape parameters keep the options' defaults.
+        o.zeta = self.zeta.unwrap_or(o.zeta);
+        o.a3 = self.a3.unwrap_or(o.a3);
+        o.b3 = self.b3.unwrap_or(o.b3);
         o.loop_interval_s = self.loop_interval_s;
         o.logged_phase = self.logged_phase.map(|l| match l {
             LoggedArg::Last => gsens_core::LoggedPhase::Last,

@@ -47,6 +47,7 @@ impl CalibrationArgs {
     /// The pipeline settings (every value checked; options the method
     /// ignores refused).
     pub fn settings(&self) -> Result<PipelineSettings> {
+        self.loop_args.check()?;
         self.analysis.check()?;
         Ok(self.options().pipeline_settings()?)
     }

@@ -47,6 +47,7 @@ pub fn run(args: &ResponseArgs) -> Result<()> {
         args.f_min_hz > 0.0 && args.f_max_hz > args.f_min_hz && args.points >= 2,
         "need 0 < --f-min-hz < --f-max-hz and --points ≥ 2"
     );
+    args.loop_args.check()?;
     crate::outputs::maybe_file("--json", args.json.as_deref())?;
     crate::outputs::maybe_file("--plot", args.plot.as_deref())?;
     let model = args.loop_args.loop_model();

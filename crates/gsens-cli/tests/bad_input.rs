@@ -209,6 +209,8 @@ fn options_are_checked_before_any_file_is_read() {
             "--gain-k is the gradient observer's gain: it needs --method gradient",
         ),
         (&["--time-offset", "5"][..], "5 s is beyond ±1 s"),
+        (&["--order", "3", "--zeta", "0.8"][..], "--zeta is the damping of a 2nd-order loop"),
+        (&["--a3", "1.2"][..], "--a3 and --b3 shape a 3rd-order loop: they need --order 3"),
         (&["--json", "/nonexistent-gsens-dir/r.json"][..], "--json /nonexistent-gsens-dir/r.json: the directory"),
         (&["--epochs-out", &under_file][..], "--epochs-out"),
     ] {
