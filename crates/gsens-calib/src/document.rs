@@ -151,6 +151,41 @@ pub fn sort_by_cause(warnings: &mut [Warning]) {
     warnings.sort_by_key(|w| cause_rank(w.code, units_flagged));
 }
 
+/// The start of the advice that ends `loop_offset_unresolved`'s message.
+const LOOP_OFFSET_ADVICE: &str = " State the IMU's latency (--time-offset)";
+
+/// Replaces the shaking advice of `w` (`discriminator_range`,
+/// `nothing_observable`, `loop_offset_unresolved`), which would follow from
+/// the wrong unit or time stamp of the warnings `unit_codes`, by a pointer
+/// to them.
+fn defer_shaking_advice(w: &mut Warning, unit_codes: &str) {
+    match w.code {
+        "discriminator_range" => {
+            if let Some(finding) = w.message.strip_suffix(DISCRIMINATOR_ADVICE) {
+                w.message = format!(
+                    "{finding}the unit found above ({unit_codes}) explains it: fix the unit and estimate again before \
+                     changing the shaking"
+                );
+            }
+        }
+        "nothing_observable" => {
+            w.message = format!(
+                "no axis is observable, as the unit or time stamp found above ({unit_codes}) would make it: fix \
+                 that and estimate again before changing the shaking"
+            );
+        }
+        "loop_offset_unresolved" => {
+            if let Some((finding, _)) = w.message.split_once(LOOP_OFFSET_ADVICE) {
+                w.message = format!(
+                    "{finding} The unit found above ({unit_codes}) may explain it: fix the unit and estimate again \
+                     before changing the shaking"
+                );
+            }
+        }
+        _ => {}
+    }
+}
+
 /// Warning codes that report something gsens already corrected for (the
 /// estimate stays trustworthy); every other code means the estimate may be
 /// wrong beyond its σ.
@@ -378,7 +413,8 @@ impl ResultDocument {
     /// Orders the warnings by cause (the logs' units and time base first,
     /// then sampling and alignment, the loop, the shaking; stable within
     /// each), and, when a `UNIT_WARNINGS` code is raised, replaces the
-    /// shaking advice of `discriminator_range`, `nothing_observable` and the
+    /// shaking advice of the warnings (`discriminator_range`, `nothing_observable`,
+    /// `loop_offset_unresolved`) and of the
     /// axes' verdicts, which would follow from the wrong unit, by a pointer
     /// to it.
     pub fn order_by_cause(&mut self) {
@@ -396,23 +432,7 @@ impl ResultDocument {
         }
         let codes = codes.join(", ");
         for w in &mut self.warnings {
-            match w.code {
-                "discriminator_range" => {
-                    if let Some(finding) = w.message.strip_suffix(DISCRIMINATOR_ADVICE) {
-                        w.message = format!(
-                            "{finding}the unit found above ({codes}) explains it: fix the unit and estimate again \
-                             before changing the shaking"
-                        );
-                    }
-                }
-                "nothing_observable" => {
-                    w.message = format!(
-                        "no axis is observable, as the unit or time stamp found above ({codes}) would make it: fix \
-                         that and estimate again before changing the shaking"
-                    );
-                }
-                _ => {}
-            }
+            defer_shaking_advice(w, &codes);
         }
         for a in &mut self.calibration.axes {
             if a.advises_shaking() {
@@ -526,8 +546,8 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
             message: format!(
                 "the data do not resolve the IMU time offset and the loop well enough for σ to hold: one σ of them \
                  moves the shaking's phase by {x:.2} rad (offset {}, loop scale {}), beyond the {JOINT_LINEAR_LIMIT_RAD} \
-                 rad the joint fit's linearization holds for, and Γ̂ moves with them. State the IMU's latency \
-                 (--time-offset) if you know it, or shake harder and longer, and at two rates: {}",
+                 rad the joint fit's linearization holds for, and Γ̂ moves with them.{LOOP_OFFSET_ADVICE} if you \
+                 know it, or shake harder and longer, and at two rates: {}",
                 part(offset),
                 part(scale),
                 two_rate_advice(&c.loop_used)
@@ -577,5 +597,20 @@ mod tests {
             ["phase_units", "discriminator_range", "loop_rejected"]
         );
         assert_eq!(codes(&["discriminator_range", "loop_rejected"]), ["loop_rejected", "discriminator_range"]);
+    }
+
+    /// Under a unit warning, `loop_offset_unresolved` keeps its finding and
+    /// points at the unit instead of advising more shaking.
+    #[test]
+    fn a_unit_warning_defers_the_offset_warnings_shaking_advice() {
+        let finding = "the data do not resolve the IMU time offset and the loop, and Γ̂ moves with them.";
+        let mut w = Warning {
+            code: "loop_offset_unresolved",
+            message: format!("{finding}{LOOP_OFFSET_ADVICE} if you know it, or shake harder and longer"),
+        };
+        defer_shaking_advice(&mut w, "time_units");
+        assert!(w.message.starts_with(finding), "{}", w.message);
+        assert!(w.message.contains("(time_units) may explain it"), "{}", w.message);
+        assert!(!w.message.contains("shake"), "{}", w.message);
     }
 }
