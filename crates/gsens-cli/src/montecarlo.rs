@@ -24,7 +24,7 @@ pub struct MonteCarloArgs {
     pub json: Option<PathBuf>,
     /// State the receiver loop's bandwidth this many times the true one (1: right), as a user who got it
     /// wrong would: how often the loop check catches the mistake.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub stated_bn_scale: f64,
     #[command(flatten)]
     pub estimator: EstimatorArgs,

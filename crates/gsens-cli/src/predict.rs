@@ -58,32 +58,32 @@ pub struct PredictArgs {
     #[arg(long, value_enum, default_value = "ocxo")]
     pub oscillator: OscillatorArg,
     /// Carrier [Hz] (GPS L1 by default).
-    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ)]
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub carrier_hz: f64,
     /// C/N0 for the thermal noise [dB-Hz].
-    #[arg(long, default_value_t = 45.0)]
+    #[arg(long, default_value_t = 45.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub cn0_dbhz: f64,
     /// The loop (2nd order): noise bandwidth [Hz].
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub bn_hz: f64,
     /// Damping ratio ζ.
-    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2)]
+    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub zeta: f64,
     /// Loop update interval [s].
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, default_value_t = 0.001, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub loop_interval_s: f64,
     /// The feed-forward: IMU sample rate [Hz] (its hold delays by half a sample).
-    #[arg(long, default_value_t = 40.0)]
+    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub imu_rate_hz: f64,
     /// The feed-forward: latency on top of the hold [s].
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub latency_s: f64,
     /// The IMU's white noise density [m/s²/√Hz].
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub imu_noise_mps2_per_rthz: f64,
     /// The line-of-sight Doppler rate the loop must follow [Hz/s] (its dynamic stress
     /// error enters the lock rule; a static receiver sees up to about 0.9 Hz/s at L1).
-    #[arg(long, default_value_t = 0.9)]
+    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub doppler_rate_hz_per_s: f64,
     /// Write the predictions as JSON here.
     #[arg(long)]
@@ -130,21 +130,6 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
         Some(path) => Vibration::Spectrum(gsens_io::read_vibration_psd_file(path)?),
         None => Vibration::Tones(args.tone.iter().map(|t| parse_tone(t)).collect::<Result<_>>()?),
     };
-    for (name, x, positive) in [
-        ("--carrier-hz", args.carrier_hz, true),
-        ("--bn-hz", args.bn_hz, true),
-        ("--zeta", args.zeta, true),
-        ("--loop-interval-s", args.loop_interval_s, true),
-        ("--imu-rate-hz", args.imu_rate_hz, true),
-        ("--latency-s", args.latency_s, false),
-        ("--imu-noise-mps2-per-rthz", args.imu_noise_mps2_per_rthz, false),
-        ("--cn0-dbhz", args.cn0_dbhz, false),
-        ("--doppler-rate-hz-per-s", args.doppler_rate_hz_per_s, false),
-    ] {
-        if !x.is_finite() || x < 0.0 || (positive && x == 0.0) {
-            anyhow::bail!("{name} {x}: must be finite and {}", if positive { "> 0" } else { "≥ 0" });
-        }
-    }
     let oscillator = match args.oscillator {
         OscillatorArg::Ocxo => Some(OscillatorConfig::ocxo()),
         OscillatorArg::Tcxo => Some(OscillatorConfig::tcxo()),

@@ -29,7 +29,7 @@ pub struct ValidateArgs {
     pub bn_hz: Option<Vec<f64>>,
     /// Delay from an IMU sample to its use in the NCO command [s], on top of the IMU's own
     /// time offset and the hold until its next sample.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
     pub latency_s: f64,
     /// Write every trial (per channel, and the phase trace) as JSON here.
     #[arg(long)]

@@ -261,3 +261,18 @@ fn configuration_files_beyond_a_megabyte_are_refused() {
         );
     }
 }
+
+/// The other commands' number options are checked as they are parsed too,
+/// naming the option and its range.
+#[test]
+fn other_commands_check_their_numbers_as_parsed() {
+    for (args, said) in [
+        (&["validate", "--latency-s", "-1"][..], "'--latency-s <LATENCY_S>': -1 is not a finite number ≥ 0"),
+        (&["simulate", "--out", "unused", "--iq", "unused/s.bin", "--fs-hz", "0"][..], "'--fs-hz <FS_HZ>': 0 is not"),
+        (&["montecarlo", "--stated-bn-scale", "-1"][..], "'--stated-bn-scale <STATED_BN_SCALE>': -1 is not"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.code() == Some(2) && e.contains(said), "{args:?}: {e}");
+    }
+}

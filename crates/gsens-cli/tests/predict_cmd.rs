@@ -60,4 +60,14 @@ fn predicts_from_a_result_document_and_refuses_bad_input() {
     assert!(e.contains("v.csv: line 3") && e.contains("f_hz"), "{e}");
     let e = fails(&["predict", "--gamma", "0.09,0.08,-0.08", "--sigma", "0.001,0.001,0.001", "--tone", "0.9:3,0"]);
     assert!(e.contains("--tone 0.9:3,0"), "{e}");
+    // Ranges are checked as the options are parsed, before the vibration file is read.
+    let missing = dir.join("missing-vibration.csv");
+    for (flag, value, said) in [
+        ("--bn-hz", "-3", "'--bn-hz <BN_HZ>': -3 is not a finite number > 0"),
+        ("--loop-interval-s", "0", "'--loop-interval-s <LOOP_INTERVAL_S>': 0 is not a finite number > 0"),
+        ("--latency-s", "-0.01", "'--latency-s <LATENCY_S>'"),
+    ] {
+        let e = fails(&["predict", "--from", doc.to_str().unwrap(), "--psd", missing.to_str().unwrap(), flag, value]);
+        assert!(e.contains(said) && !e.contains("missing-vibration.csv"), "{flag} {value}: {e}");
+    }
 }
