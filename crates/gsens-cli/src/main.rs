@@ -168,7 +168,7 @@ pub fn with_spinner<R>(what: &str, f: impl FnOnce() -> R) -> R {
 /// buffers of one core's stage are not reused by the other's and the peak RSS
 /// of a 1-hour log grows by some 25 MB over its largest live heap (and every
 /// fresh page is a page fault). One arena for the process: its few large
-/// allocations do not contend for the lock (BENCHMARKS.md, issue 15).
+/// allocations do not contend for the lock (BENCHMARKS.md).
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn one_malloc_arena() {
     // SAFETY: mallopt only sets a malloc parameter; called before any thread starts.

@@ -127,7 +127,7 @@ fn missing_file() {
     assert_eq!(stderr.matches("os error").count(), 1, "{stderr}");
 }
 
-/// Issue 16's hand-found cases: an absurd offset bound hung (its search grid
+/// Cases found by hand: an absurd offset bound hung (its search grid
 /// grew without limit), a NaN C/N0 drop switched the test off, a negative
 /// warm-up was taken. Each is now an error naming the setting and its range.
 /// (A high-pass above the log's Nyquist frequency is not refused here: it is
@@ -144,7 +144,7 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
         (&["--time-offset-max-s", "1e18"][..], "time_offset.max_abs_s"),
         (&["--cn0-drop-db", "nan"][..], "--cn0-drop-db"),
         (&["--warmup-s=-1"][..], "--warmup-s"),
-        // Found by fuzzing (issue 16): a loop updated every nanosecond ran for minutes; the
+        // Found by fuzzing: a loop updated every nanosecond ran for minutes; the
         // others were accepted.
         (&["--loop-interval-s", "1e-9"][..], "loop_interval_s = 1e-9 is out of range: expected at least 0.001 s"),
         (&["--carrier-hz", "1e300"][..], "carrier_hz = 1e300 is out of range"),
@@ -157,7 +157,7 @@ fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
         assert!(started.elapsed().as_secs() < 60, "{args:?} took {:?}", started.elapsed());
     }
     // A high-pass above the loop's band leaves nothing to estimate: the verdict names it (it was
-    // "unobservable: shake harder" with exit 0, found by fuzzing, issue 16).
+    // "unobservable: shake harder" with exit 0, found by fuzzing).
     let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
         .args(["estimate", "--order", "2", "--bn-hz", "3", "--loop-interval-s", "0.001", "--highpass-hz", "25"])
         .arg("--imu")

@@ -1,6 +1,6 @@
 //! Loops built from absurd parameters are refused as unstable, at once:
 //! their state matrices (entries near 1e200) once sent nalgebra's Schur
-//! iteration into a loop that never ended (issue 16: a GNSS-SDR `.conf`
+//! iteration into a loop that never ended (a GNSS-SDR `.conf`
 //! with `pll_bw_narrow_hz=1e200` hung the importer).
 
 use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};

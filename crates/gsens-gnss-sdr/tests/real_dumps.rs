@@ -363,7 +363,7 @@ impl Drop for DirCopy {
     }
 }
 
-/// Found by fuzzing (issue 16): a dump named beyond any channel number was
+/// Found by fuzzing: a dump named beyond any channel number was
 /// silently skipped, and copies of one dump were taken as as many channels.
 #[test]
 fn odd_dump_names_and_copies_are_errors() {

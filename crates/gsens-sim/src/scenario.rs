@@ -738,7 +738,7 @@ mod tests {
             ("[satellites]\nmax_channels = 0\n", "satellites.max_channels"),
             ("[satellites.cn0]\nzenith_cn0_dbhz = 99.0\n", "satellites.cn0.zenith_cn0_dbhz"),
             ("[session]\nstart_utc = \"yesterday\"\n", "session.start_utc"),
-            // Found by fuzzing (issue 16): each was accepted, or ran for minutes.
+            // Found by fuzzing: each was accepted, or ran for minutes.
             ("[session]\nstart_utc = \"2024-02-30T12:00:00Z\"\n", "session.start_utc"),
             ("[session]\nstart_utc = \"2023-02-29T12:00:00Z\"\n", "session.start_utc"),
             ("[session]\nstart_utc = \"2024-04-31T12:00:00Z\"\n", "session.start_utc"),

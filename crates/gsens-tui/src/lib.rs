@@ -1,4 +1,4 @@
-//! The terminal screen of `gsens live` (issue 12).
+//! The terminal screen of `gsens live`.
 //!
 //! - [`draw`]: one screen of a [`gsens_live::LiveView`] for the person
 //!   holding the board: the instruction at the top, then per axis the time
