@@ -193,10 +193,7 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     let fit_loop = spec.natural_frequency && stated.natural_frequency_hz().is_some();
     let tolerance = spec.loop_tolerance.filter(|t| fit_loop && t.is_finite());
     let Some(tol) = tolerance else {
-        let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None, true)?;
-        let data = free.ln_s_and_variance();
-        let evidence = LoopEvidence { data, tolerance: None, linearization_sigma_tau_s: free.sigma_tau_s() };
-        return Ok(describe(series, &stated, spec, &axes, &free, evidence));
+        return free_fit(series, settings, spec, &axes, fed0, true);
     };
     let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), None, true)?;
     let (ln_s, c_ss) = free.ln_s_and_variance().unwrap_or((0.0, 0.0));
@@ -730,21 +727,35 @@ pub fn choose_loop(
     })
 }
 
-/// A candidate loop's free joint fit (no tolerance) without its covariance:
-/// the RSS and the loop fitted, as [`JointFit::rss_rad2`] and
-/// [`JointFit::fitted`] of [`joint_fit`] give them.
+/// The free joint fit (no tolerance) from the stated loop's pass `fed0`
+/// on `axes`; without `covariance` its σ's are NaN (the
+/// parameters and the RSS are the same).
+fn free_fit(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    spec: JointSpec,
+    axes: &[usize],
+    fed0: Vec<FedEpoch>,
+    covariance: bool,
+) -> Result<JointFit, CalibError> {
+    let stated = settings.loop_at(series.log_interval_s);
+    let free = solve(series, settings, spec, axes, Cow::Owned(fed0), None, covariance)?;
+    let data = free.ln_s_and_variance();
+    let evidence = LoopEvidence { data, tolerance: None, linearization_sigma_tau_s: free.sigma_tau_s() };
+    Ok(describe(series, &stated, spec, axes, &free, evidence))
+}
+
+/// A candidate loop's free joint fit without its covariance: the RSS and the
+/// loop fitted, as [`JointFit::rss_rad2`] and [`JointFit::fitted`] of
+/// [`joint_fit`] give them.
 fn candidate_fit(
     series: &EpochSeries,
     settings: &EstimateSettings,
     spec: JointSpec,
 ) -> Result<(f64, LoopModel), CalibError> {
     let (fed0, ne) = batch_pass(series, settings)?;
-    let axes = fit_axes(&ne, settings);
-    let stated = settings.loop_at(series.log_interval_s);
-    let free = solve(series, settings, spec, &axes, Cow::Owned(fed0), None, false)?;
-    let evidence = LoopEvidence { data: free.ln_s_and_variance(), tolerance: None, linearization_sigma_tau_s: None };
-    let fit = describe(series, &stated, spec, &axes, &free, evidence);
-    Ok((free.rss_rad2, fit.fitted(&stated)))
+    let fit = free_fit(series, settings, spec, &fit_axes(&ne, settings), fed0, false)?;
+    Ok((fit.rss_rad2, fit.fitted(&settings.loop_at(series.log_interval_s))))
 }
 
 #[cfg(test)]
