@@ -6,8 +6,6 @@ use crate::Calibration;
 use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
 use gsens_core::LoopModel;
 use gsens_core::units::Decimal;
-use gsens_gnss_sdr::ImportSettings;
-use gsens_gnss_sdr::import::TrackSummary;
 use gsens_session::{ChannelRanking, ChannelSummary, SelectionConfig, SignalSummary};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -205,13 +203,18 @@ pub fn untrusted_codes(warnings: &[Warning]) -> Vec<&'static str> {
     warnings.iter().filter(|w| w.affects_trust()).map(|w| w.code).collect()
 }
 
-/// What the GNSS-SDR conversion did (sessions from GNSS-SDR dumps).
+/// What a receiver's adapter did to turn its files into the logs: which
+/// receiver, the conversion's settings and every track's fate, each as the
+/// adapter serializes them (the calibration does not read them; they are kept
+/// for the reader of the document).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct GnssSdrConversion {
+pub struct SourceConversion {
+    /// The receiver whose files were converted (`gnss-sdr`, `pocketsdr`).
+    pub receiver: String,
     /// The conversion settings (thresholds, the tracking configuration).
-    pub conversion: ImportSettings,
+    pub conversion: serde_json::Value,
     /// Every track found and what became of it.
-    pub tracks: Vec<TrackSummary>,
+    pub tracks: Vec<serde_json::Value>,
 }
 
 /// How the session-level settings were applied.
@@ -287,9 +290,10 @@ pub struct ResultDocument {
     /// The true Γ \[Hz/(m/s²)\] when known (simulated sessions).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth_gamma_hz_per_mps2: Option<[f64; 3]>,
-    /// The GNSS-SDR conversion, for sessions from GNSS-SDR dumps.
+    /// What a receiver's adapter converted, for sessions from a receiver's
+    /// own files (GNSS-SDR dumps, a PocketSDR log).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub gnss_sdr: Option<GnssSdrConversion>,
+    pub source: Option<SourceConversion>,
     /// Report metadata (`report.json`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub report: Option<ReportInfo>,
@@ -315,7 +319,7 @@ impl ResultDocument {
             inputs,
             truth_gamma_hz_per_mps2,
         );
-        doc.gnss_sdr = outcome.gnss_sdr.clone();
+        doc.source = outcome.source.clone();
         doc.signals = outcome.session.signals.clone();
         doc.channel_ranking = Some(outcome.session.channel_ranking);
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
@@ -466,7 +470,7 @@ impl ResultDocument {
             pipeline,
             inputs: inputs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
             truth_gamma_hz_per_mps2,
-            gnss_sdr: None,
+            source: None,
             report: None,
         };
         doc.judge();

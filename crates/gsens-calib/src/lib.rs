@@ -3,10 +3,14 @@
 //! The calibration pipeline of gsens as a library: from receiver logs (or
 //! in-memory series) and settings to one serializable result document.
 //!
-//! [`calibrate_files`], [`calibrate_logs`] and [`calibrate_gnss_sdr`] run
-//! the whole job — read, screen, average, model, estimate, judge — under
-//! [`PipelineSettings`] and return an [`Outcome`], whose
-//! [`Outcome::document`] is the [`ResultDocument`] every output serializes.
+//! [`calibrate_files`] and [`calibrate_logs`] run the whole job — read,
+//! screen, average, model, estimate, judge — under [`PipelineSettings`] and
+//! return an [`Outcome`], whose [`Outcome::document`] is the
+//! [`ResultDocument`] every output serializes. A receiver's own files reach
+//! it through that receiver's adapter crate (`gsens-gnss-sdr`,
+//! `gsens-pocketsdr`), which turns them into these logs and settings and
+//! records what it converted as a [`SourceConversion`]; this crate knows
+//! logs, loops and settings, not where they came from.
 //! The stages, each usable on its own:
 //!
 //! - **session preparation** (`gsens_session`): the epoch grid, channel
@@ -55,7 +59,6 @@ mod estimate;
 mod fft;
 pub mod gls;
 mod joint;
-pub mod montecarlo;
 mod options;
 mod pipeline;
 pub mod predict;
@@ -68,7 +71,7 @@ mod settings;
 mod verdict;
 
 pub use document::{
-    FigureInfo, GnssSdrConversion, INFORMATIONAL_WARNINGS, LoopSummary, PipelineSummary, ReportInfo, ResultDocument,
+    FigureInfo, INFORMATIONAL_WARNINGS, LoopSummary, PipelineSummary, ReportInfo, ResultDocument, SourceConversion,
     Warning, tool_version, two_rate_advice, untrusted_codes,
 };
 pub use error::CalibError;
@@ -83,8 +86,7 @@ pub use joint::{
 pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
 pub use pipeline::{
     DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
-    RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_gnss_sdr, calibrate_gnss_sdr_with_log,
-    calibrate_logs, calibrate_owned_logs, gnss_sdr_tracking_log, series_of, with_gnss_sdr_loop,
+    RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_logs, calibrate_owned_logs, series_of,
 };
 pub use progress::{Progress, observe};
 pub use response_check::{

@@ -2,13 +2,11 @@
 //! averaging), estimate the systematic errors asked for (time offset, loop),
 //! estimate Γ, and describe it all in one [`ResultDocument`].
 
-use crate::document::{GnssSdrConversion, ResultDocument};
+use crate::document::{ResultDocument, SourceConversion};
 use crate::{
     CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit, session_linear_range_rad,
 };
-use gsens_core::units::Decimal;
-use gsens_core::{Discriminator, LoopModel};
-use gsens_gnss_sdr::{GnssSdrError, ImportSettings, Imported, import_dir, resample};
+use gsens_core::Discriminator;
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
     FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session_from,
@@ -163,9 +161,6 @@ pub enum PipelineError {
     /// The session could not be prepared from the logs.
     #[error(transparent)]
     Session(#[from] gsens_session::SessionError),
-    /// GNSS-SDR's dumps or configuration could not be read.
-    #[error(transparent)]
-    GnssSdr(#[from] GnssSdrError),
     /// A stage of the estimation failed.
     // The cause is in the message, not a `source` as well: a chain printed in
     // full (anyhow's `{:#}`) would say it twice.
@@ -192,8 +187,9 @@ pub struct Outcome {
     pub calibration: Calibration,
     /// The settings it ran with.
     pub settings: PipelineSettings,
-    /// What the GNSS-SDR conversion did, for sessions from GNSS-SDR dumps.
-    pub gnss_sdr: Option<GnssSdrConversion>,
+    /// What a receiver's adapter did to turn its files into the logs
+    /// (`None` for logs in gsens's format).
+    pub source: Option<SourceConversion>,
     /// The loop the data chose when none was stated.
     pub chosen_loop: Option<crate::ChosenLoop>,
     /// The loop's response measured from the session against the model
@@ -209,7 +205,7 @@ pub struct Outcome {
     /// Epochs left out of the estimate because their IMU reading touches a
     /// flat run ([`gsens_session::mask_flat_runs`]).
     pub imu_flat_run_epochs: usize,
-    /// The inputs as role → path (`imu`, `tracking`, `gnss_sdr_dumps`, …);
+    /// The inputs as role → path (`imu`, `tracking`, a receiver's files);
     /// empty for logs given in memory. Callers may add their own (`truth`).
     pub inputs: Vec<(String, String)>,
 }
@@ -425,7 +421,7 @@ fn calibrate_prepared(
         session,
         calibration,
         settings: settings.clone(),
-        gnss_sdr: None,
+        source: None,
         chosen_loop,
         loop_response,
         imu_spikes_t_s: spikes_t_s,
@@ -453,72 +449,4 @@ pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings)
 
 fn input(role: &str, path: &Path) -> (String, String) {
     (role.to_string(), path.display().to_string())
-}
-
-/// The tracking log of GNSS-SDR dumps on their common grid (every track
-/// resampled at t = j·T, T = 20 ms the record interval: each row holds the last
-/// of the 20/N loop updates since the previous one, which
-/// [`with_gnss_sdr_loop`]'s `last` logged phase states).
-pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<TrackingLog, FormatError> {
-    let rows = resample(imported, imported.interval_s);
-    let name = format!("{} (GNSS-SDR dumps on a {} ms grid)", dir.display(), Decimal(imported.interval_s * 1e3));
-    TrackingLog::from_rows(&name, &rows)
-}
-
-/// `settings` with GNSS-SDR's own carrier loop of `import` (its configuration)
-/// modelled exactly: the receiver loop is GNSS-SDR's stage, each row holds its
-/// last discriminator output, the loop counts as stated, and it is exact,
-/// with a tolerance of 0 unless one was given. For tracking rows that came from GNSS-SDR by another
-/// path than its dumps (its tracking monitor): a Kaplan model of the same
-/// order and bandwidth at its 20 ms integration is not its loop.
-pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) -> PipelineSettings {
-    let mut settings = settings.clone();
-    settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
-    settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
-    // dll_pll_veml_tracking's PLL on GPS L1 C/A: pll_cloop_two_quadrant_atan
-    // (its four-quadrant pll_four_quadrant_atan only with track_pilot, and L1 C/A has no pilot).
-    settings.set_discriminator(Discriminator::AtanCostas);
-    settings.loop_stated = true;
-    settings.loop_tolerance.get_or_insert(0.0);
-    settings
-}
-
-/// Calibrates from GNSS-SDR tracking dumps (`Tracking_1C.dump=true`) and an
-/// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
-/// logged-phase settings of `settings` are replaced by the ones the dumps
-/// were made with, and the warm-up is at least
-/// [`ImportSettings::models_warmup_s`] (the regressor models' start-up error).
-pub fn calibrate_gnss_sdr(
-    dumps_dir: &Path,
-    import: &ImportSettings,
-    imu: &Path,
-    settings: &PipelineSettings,
-) -> Result<Outcome, PipelineError> {
-    calibrate_gnss_sdr_with_log(dumps_dir, import, imu, settings).map(|(outcome, _)| outcome)
-}
-
-/// [`calibrate_gnss_sdr`], with the tracking log the dumps became
-/// ([`gnss_sdr_tracking_log`]): the rows the estimate was made from, for
-/// what needs them besides the estimate (the C/N0 of a report's figures).
-pub fn calibrate_gnss_sdr_with_log(
-    dumps_dir: &Path,
-    import: &ImportSettings,
-    imu: &Path,
-    settings: &PipelineSettings,
-) -> Result<(Outcome, TrackingLog), PipelineError> {
-    let imported = import_dir(dumps_dir, import)?;
-    let tracking_log = gnss_sdr_tracking_log(dumps_dir, &imported)?;
-    let imu_series = gsens_io::read_imu_file(imu)?;
-    let mut settings = with_gnss_sdr_loop(settings, import);
-    // The regressor models start at the first kept record, possibly while
-    // the board is shaken: their start-up error, computed from the IMU, is
-    // left to the warm-up (ImportSettings::models_warmup_s).
-    if let Some(start_s) = tracking_log.epoch_t_s().first() {
-        let w = import.models_warmup_s(&imu_series, *start_s, settings.estimate.highpass_hz);
-        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
-    }
-    let mut outcome = calibrate_logs(&tracking_log, &imu_series, &imu.display().to_string(), &settings)?;
-    outcome.gnss_sdr = Some(GnssSdrConversion { conversion: import.clone(), tracks: imported.tracks });
-    outcome.inputs = vec![input("imu", imu), input("gnss_sdr_dumps", dumps_dir)];
-    Ok((outcome, tracking_log))
 }

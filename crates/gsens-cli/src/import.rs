@@ -104,7 +104,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     crate::outputs::file("--out", &a.out)?;
     crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
     let imported = crate::with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
-    crate::out(&gsens_report::render_gnss_sdr_tracks(&imported.tracks, imported.interval_s))?;
+    crate::out(&gsens_gnss_sdr::render_tracks(&imported.tracks, imported.interval_s))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     let common_grid = a.common_grid || !a.record_times;
     let rows = if common_grid {
@@ -133,7 +133,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
         stage.symbols
     ))?;
     if let Some(p) = &a.tracks_json {
-        let conversion = gsens_calib::GnssSdrConversion { conversion: settings, tracks: imported.tracks };
+        let conversion = gsens_gnss_sdr::Conversion { conversion: settings, tracks: imported.tracks };
         std::fs::write(p, serde_json::to_string_pretty(&conversion)? + "\n")
             .with_context(|| format!("{}: cannot write", p.display()))?;
     }

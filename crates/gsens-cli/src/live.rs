@@ -358,7 +358,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
             anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
         }
         // The run's own loop, modelled exactly.
-        settings = gsens_calib::with_gnss_sdr_loop(&settings, &setup.import);
+        settings = gsens_gnss_sdr::with_gnss_sdr_loop(&settings, &setup.import);
     }
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let mut config = LiveConfig::new(settings, args.target_sigma);

@@ -1,11 +1,11 @@
 //! `gsens montecarlo`: simulate and estimate many times, in parallel, and
 //! compare each method's spread with the Cramér–Rao bound
-//! (`gsens_calib::montecarlo`).
+//! (`gsens_montecarlo`).
 
 use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs};
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::montecarlo::{monte_carlo, scenario_settings};
+use gsens_montecarlo::{monte_carlo, scenario_settings};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 

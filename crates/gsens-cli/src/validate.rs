@@ -5,8 +5,8 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::montecarlo::scenario_settings;
 use gsens_calib::{EstimateSettings, calibrate_logs};
+use gsens_montecarlo::scenario_settings;
 use gsens_report::figures::{CompensationData, CompensationKind, Format, fig_compensation};
 use gsens_sim::compensation::CompensationSection;
 use gsens_sim::compensation_trial::{RUNS, Trial, run_trial};

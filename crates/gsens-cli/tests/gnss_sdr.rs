@@ -92,9 +92,10 @@ fn estimate_from_gnss_sdr_dumps_within_2_percent() {
         assert_eq!(l["symbols"], 20);
         assert_eq!(v["loop_used"], *l);
         assert!(v["loop"]["description"].as_str().unwrap().starts_with("GNSS-SDR"), "{}", v["loop"]);
-        assert!(v["gnss_sdr"]["tracks"].as_array().unwrap().iter().all(|t| t["used"] == true));
+        assert_eq!(v["source"]["receiver"], "gnss-sdr");
+        assert!(v["source"]["tracks"].as_array().unwrap().iter().all(|t| t["used"] == true));
         // The result document names each dump's layout.
-        let layouts = v["gnss_sdr"]["tracks"].as_array().unwrap().iter().map(|t| t["layout"].as_str().unwrap());
+        let layouts = v["source"]["tracks"].as_array().unwrap().iter().map(|t| t["layout"].as_str().unwrap());
         assert!(layouts.clone().count() > 0 && layouts.clone().all(|l| l.starts_with("gnss-sdr-0.0.17 (GNSS-SDR")));
     }
 }
@@ -139,10 +140,10 @@ fn estimate_from_shaken_dumps_with_low_lock_tests() {
             let t = truth["gamma_hz_per_mps2"][i].as_f64().unwrap();
             assert!(((g - t) / t).abs() < 0.02, "{order} axis {i}: {g} vs {t}");
         }
-        let tracks = v["gnss_sdr"]["tracks"].as_array().unwrap();
+        let tracks = v["source"]["tracks"].as_array().unwrap();
         assert!(tracks.iter().all(|t| t["used"] == true && t["lock"]["loss_of_lock"].is_null()), "{tracks:?}");
         // The lock detector in use is in the document, each value with its source.
-        let lock = &v["gnss_sdr"]["conversion"]["tracking"]["lock"];
+        let lock = &v["source"]["conversion"]["tracking"]["lock"];
         assert_eq!(lock["carrier_lock_th"]["value"], 0.7);
         assert_eq!(lock["carrier_lock_th"]["source"], "gnss_sdr_default");
         assert_eq!(lock["max_lock_fail"]["value"], 50);

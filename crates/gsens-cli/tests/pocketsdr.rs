@@ -107,6 +107,10 @@ fn estimate_from_the_pocketsdr_log_within_its_uncertainty() {
     assert_eq!(v["loop_response"]["consistent"], true);
     assert_eq!(v["inputs"]["pocketsdr_log"], s(&f.join("trk.log")));
     assert_eq!(v["trustworthy"], true);
+    // What the conversion did, in the document's per-receiver block.
+    assert_eq!(v["source"]["receiver"], "pocketsdr");
+    assert_eq!(v["source"]["tracks"].as_array().unwrap().len(), 3);
+    assert_eq!(v["source"]["conversion"]["epoch"]["value"], 0.1);
 }
 
 #[test]

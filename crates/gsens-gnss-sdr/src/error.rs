@@ -192,6 +192,12 @@ pub enum GnssSdrError {
         /// Why each dump was dropped.
         reason: String,
     },
+    /// The converted rows or the IMU log do not hold the formats.
+    #[error(transparent)]
+    Format(#[from] gsens_io::FormatError),
+    /// The calibration failed.
+    #[error(transparent)]
+    Pipeline(#[from] gsens_calib::PipelineError),
 }
 
 /// A record layout spec (`name:type,name:type,…`, see

@@ -67,7 +67,9 @@ use serde::Serialize;
 
 use gsens_core::LinearLoop;
 use gsens_core::gnss_sdr::{BIT_SYMBOLS, GnssSdrPll, GnssSdrStage};
+use gsens_core::units::Decimal;
 use gsens_io::{ImuSeries, TrackingRow};
+use std::fmt::Write as _;
 
 use crate::conf::TrackingConf;
 use crate::dump::{DumpLayout, TrackingDump, find_dumps, read_dump};
@@ -863,6 +865,44 @@ pub fn write_imported_csv<W: std::io::Write>(w: W, rows: &[ImportedRow]) -> std:
         out.write_row_with(&r.tracking_row(), &[r.lock_test])?;
     }
     out.finish()
+}
+
+/// What became of each track of a GNSS-SDR import, as text.
+pub fn render_tracks(tracks: &[TrackSummary], interval_s: f64) -> String {
+    let mut s = String::new();
+    let used = tracks.iter().filter(|t| t.used).count();
+    let _ = writeln!(
+        s,
+        "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept",
+        tracks.len(),
+        Decimal(interval_s * 1e3)
+    );
+    // Which record layout (blocks, GNSS-SDR versions) each dump was read with.
+    let mut files: Vec<(&str, &str)> = Vec::new();
+    for t in tracks {
+        if !files.contains(&(t.file.as_str(), t.layout.as_str())) {
+            files.push((t.file.as_str(), t.layout.as_str()));
+        }
+    }
+    for (file, layout) in files {
+        let _ = writeln!(s, "  {file}: read as {layout}");
+    }
+    for t in tracks {
+        let _ = writeln!(
+            s,
+            "  ch {:>3}  PRN {:>3}  {:>7.2}–{:>7.2} s  narrow from {}  C/N0 {:>5.1} dB-Hz  {:>6}/{:<6} good  {}",
+            t.channel,
+            t.prn,
+            t.start_s,
+            t.end_s,
+            t.switch_s.map(|v| format!("{v:>7.2} s")).unwrap_or_else(|| "      —  ".into()),
+            t.mean_cn0_dbhz,
+            t.good_records,
+            t.modelled_records,
+            t.reason
+        );
+    }
+    s
 }
 
 #[cfg(test)]

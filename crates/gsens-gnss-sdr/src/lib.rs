@@ -16,12 +16,15 @@
 //! - [`import`]: dumps → the `tracking.csv` schema (φ in rad, time at the
 //!   middle of each integration), each track judged by GNSS-SDR's own lock
 //!   detector replayed with the configuration's settings, with a reason;
+//! - [`calibrate`]: the estimate from the dumps with GNSS-SDR's own loop
+//!   modelled exactly (the adapter between these files and `gsens_calib`);
 //! - [`monitor`]: its tracking monitor (`TrackingMonitor.enable_monitor`),
 //!   protobuf over UDP, received live and converted to the same rows;
 //! - the exact models of its carrier loops live in
 //!   [`gsens_core::gnss_sdr`] (no_std, shared with the estimator).
 #![deny(missing_docs)]
 
+pub mod calibrate;
 pub mod conf;
 pub mod dump;
 pub mod error;
@@ -29,7 +32,8 @@ pub mod import;
 pub mod mat;
 pub mod monitor;
 
+pub use calibrate::{Conversion, GnssSdrOutcome, calibrate_gnss_sdr, gnss_sdr_tracking_log, with_gnss_sdr_loop};
 pub use conf::{GnssSdrConf, TrackingConf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
 pub use error::{GnssSdrError, LayoutSpecError};
-pub use import::{ImportSettings, Imported, TrackFate, import_dir, resample};
+pub use import::{ImportSettings, Imported, TrackFate, import_dir, render_tracks, resample};

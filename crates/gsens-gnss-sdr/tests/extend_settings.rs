@@ -9,7 +9,8 @@
 
 use std::path::{Path, PathBuf};
 
-use gsens_calib::{PipelineSettings, calibrate_gnss_sdr};
+use gsens_calib::PipelineSettings;
+use gsens_gnss_sdr::calibrate_gnss_sdr;
 use gsens_gnss_sdr::import::{ImportSettings, TrackFate, import_dir};
 use gsens_gnss_sdr::{GnssSdrError, parse_dump};
 
@@ -74,7 +75,8 @@ fn the_default_setting_and_2_ms_integrations_estimate_within_3_sigma_with_the_de
         let truth_imu = truth(name, "gamma_imu_axes_hz_per_mps2");
         let o =
             calibrate_gnss_sdr(&dir(name), &settings(name), &dir(name).join("imu.csv"), &PipelineSettings::default())
-                .unwrap();
+                .unwrap()
+                .outcome;
         let doc = o.document(None);
         let c = &o.calibration;
         let codes: Vec<&str> = doc.warnings.iter().map(|w| w.code).collect();

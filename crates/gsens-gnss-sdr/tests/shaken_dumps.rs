@@ -7,9 +7,10 @@
 
 use std::path::{Path, PathBuf};
 
-use gsens_calib::{EpochSeries, EstimateSettings, PipelineSettings, calibrate, calibrate_gnss_sdr};
+use gsens_calib::{EpochSeries, EstimateSettings, PipelineSettings, calibrate};
 use gsens_core::gnss_sdr::GnssSdrPll;
 use gsens_core::{LinearLoop, LoopModel};
+use gsens_gnss_sdr::calibrate_gnss_sdr;
 use gsens_gnss_sdr::import::{ImportSettings, Imported, import_dir, resample};
 use gsens_io::{ImuSeries, read_imu_file};
 use gsens_session::{SelectionConfig, prepare_session};
@@ -206,7 +207,9 @@ fn gamma_within_2_percent_and_3_sigma_for_both_loop_orders_with_the_default_sett
     let (truth, truth_imu) = (truth("gamma_hz_per_mps2"), truth("gamma_imu_axes_hz_per_mps2"));
     for order in [2u8, 3] {
         let d = dir().join(format!("order{order}"));
-        let o = calibrate_gnss_sdr(&d, &settings(order), &dir().join("imu.csv"), &PipelineSettings::default()).unwrap();
+        let o = calibrate_gnss_sdr(&d, &settings(order), &dir().join("imu.csv"), &PipelineSettings::default())
+            .unwrap()
+            .outcome;
         let c = &o.calibration;
         for i in 0..3 {
             let (g, sd, crlb) =

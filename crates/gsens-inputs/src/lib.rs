@@ -84,7 +84,7 @@ pub enum Inputs {
     },
     /// Tracking rows that came from a GNSS-SDR run by another path than its
     /// dumps (its tracking monitor), estimated with that run's loop
-    /// ([`gsens_calib::with_gnss_sdr_loop`]); the settings must not state a
+    /// ([`gsens_gnss_sdr::with_gnss_sdr_loop`]); the settings must not state a
     /// loop of their own.
     GnssSdrRows {
         /// The IMU log.
@@ -97,7 +97,7 @@ pub enum Inputs {
         conf: PathBuf,
     },
     /// GNSS-SDR's tracking dumps (`trk_ch_N.dat`) with the loop of the
-    /// configuration they were made with ([`gsens_calib::calibrate_gnss_sdr`]).
+    /// configuration they were made with ([`gsens_gnss_sdr::calibrate_gnss_sdr`]).
     GnssSdrDumps {
         /// The IMU log file.
         imu: PathBuf,
@@ -127,9 +127,12 @@ pub enum InputsError {
     /// A log could not be read.
     #[error(transparent)]
     Format(#[from] FormatError),
-    /// The pipeline failed (GNSS-SDR's dumps included).
+    /// The pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// GNSS-SDR's dumps, their conversion or their calibration failed.
+    #[error(transparent)]
+    GnssSdr(#[from] gsens_gnss_sdr::GnssSdrError),
     /// The PocketSDR log or its conversion failed.
     #[error(transparent)]
     PocketSdr(#[from] PocketSdrError),
@@ -148,9 +151,9 @@ pub enum InputsError {
 pub enum Conversion {
     /// Logs in gsens's format: nothing converted.
     None,
-    /// GNSS-SDR rows or dumps (for dumps, every track's fate is in
-    /// [`Outcome::gnss_sdr`]).
-    GnssSdr,
+    /// GNSS-SDR rows (`None`) or dumps and what became of each of their
+    /// tracks.
+    GnssSdr(Option<Box<gsens_gnss_sdr::Conversion>>),
     /// A PocketSDR log and what became of each of its tracks.
     PocketSdr(Box<gsens_pocketsdr::Imported>),
 }
@@ -175,11 +178,10 @@ impl Calibrated {
     pub fn track_summary(&self) -> Option<String> {
         match &self.conversion {
             Conversion::PocketSdr(imported) => Some(gsens_pocketsdr::render_summary(imported)),
-            Conversion::GnssSdr => self
-                .outcome
-                .gnss_sdr
-                .as_ref()
-                .map(|g| gsens_report::render_gnss_sdr_tracks(&g.tracks, self.outcome.session.log_interval_s)),
+            Conversion::GnssSdr(None) => None,
+            Conversion::GnssSdr(Some(c)) => {
+                Some(gsens_gnss_sdr::render_tracks(&c.tracks, self.outcome.session.log_interval_s))
+            }
             Conversion::None => None,
         }
     }
@@ -188,7 +190,7 @@ impl Calibrated {
     /// modelled exactly`); `None` when the loop is the settings'.
     pub fn loop_note(&self) -> Option<String> {
         let receiver = match self.conversion {
-            Conversion::GnssSdr => "GNSS-SDR",
+            Conversion::GnssSdr(_) => "GNSS-SDR",
             Conversion::PocketSdr(_) => "PocketSDR",
             Conversion::None => return None,
         };
@@ -224,18 +226,19 @@ impl Inputs {
                 if settings.loop_stated {
                     return Err(InputsError::LoopStatedTwice { conf: conf.display().to_string() });
                 }
-                let settings = gsens_calib::with_gnss_sdr_loop(settings, &import);
+                let settings = gsens_gnss_sdr::with_gnss_sdr_loop(settings, &import);
                 let (mut outcome, tracking) = calibrate_logs(imu, tracking, &settings, keep_tracking)?;
                 outcome.inputs.push(path_input("gnss_sdr_conf", &conf));
-                Ok(Calibrated { outcome, conversion: Conversion::GnssSdr, tracking })
+                Ok(Calibrated { outcome, conversion: Conversion::GnssSdr(None), tracking })
             }
             Inputs::GnssSdrDumps { imu, dumps_dir, import, conf } => {
-                let (mut outcome, tracking) =
-                    gsens_calib::calibrate_gnss_sdr_with_log(&dumps_dir, &import, &imu, settings)?;
+                let r = gsens_gnss_sdr::calibrate_gnss_sdr(&dumps_dir, &import, &imu, settings)?;
+                let mut outcome = r.outcome;
                 if let Some(conf) = &conf {
                     outcome.inputs.push(path_input("gnss_sdr_conf", conf));
                 }
-                Ok(Calibrated { outcome, conversion: Conversion::GnssSdr, tracking: keep_tracking.then_some(tracking) })
+                let conversion = Conversion::GnssSdr(Some(Box::new(r.conversion)));
+                Ok(Calibrated { outcome, conversion, tracking: keep_tracking.then_some(r.tracking) })
             }
             Inputs::PocketSdr { imu, log, import } => {
                 let r = gsens_pocketsdr::calibrate_pocketsdr(&log, &import, &imu, settings)?;

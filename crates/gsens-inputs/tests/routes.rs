@@ -27,7 +27,7 @@ fn keeping_the_tracking_log_changes_nothing_and_a_log_in_memory_is_its_file() {
     let settings = PipelineSettings::default();
     let plain = dumps().calibrate(&settings).unwrap();
     let kept = dumps().calibrate_keeping_tracking(&settings).unwrap();
-    assert!(plain.tracking.is_none() && matches!(kept.conversion, Conversion::GnssSdr));
+    assert!(plain.tracking.is_none() && matches!(kept.conversion, Conversion::GnssSdr(Some(_))));
     assert_eq!(json(&plain), json(&kept));
     assert!(kept.track_summary().unwrap().contains("2 tracks, 2 used"));
     assert!(kept.loop_note().unwrap().starts_with("GNSS-SDR loop: GNSS-SDR"));

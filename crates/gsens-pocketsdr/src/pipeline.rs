@@ -3,7 +3,7 @@
 use gsens_core::units::Decimal;
 use std::path::Path;
 
-use gsens_calib::{Outcome, PipelineSettings, calibrate_logs};
+use gsens_calib::{Outcome, PipelineSettings, SourceConversion, calibrate_logs};
 use gsens_core::{LoggedPhase, LoopModel};
 use gsens_io::{FormatError, TrackingLog};
 
@@ -25,6 +25,20 @@ pub struct PocketSdrOutcome {
 pub fn pocketsdr_tracking_log(imported: &Imported) -> Result<TrackingLog, FormatError> {
     let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, Decimal(imported.interval_s()));
     TrackingLog::from_rows(&name, &imported.rows)
+}
+
+impl Imported {
+    /// The result document's record of this conversion (receiver
+    /// `pocketsdr`): the conversion as [`Imported`] serializes it, its tracks
+    /// apart.
+    pub fn source(&self) -> SourceConversion {
+        let mut conversion = serde_json::to_value(self).unwrap_or_default();
+        let tracks = match conversion.as_object_mut().and_then(|o| o.remove("tracks")) {
+            Some(serde_json::Value::Array(tracks)) => tracks,
+            _ => Vec::new(),
+        };
+        SourceConversion { receiver: "pocketsdr".into(), conversion, tracks }
+    }
 }
 
 /// Calibrates from a `pocket_trk` log and an IMU log with PocketSDR's own
@@ -64,5 +78,6 @@ pub fn calibrate_pocketsdr(
     if let Some(f) = &import.options.file {
         outcome.inputs.push(("pocketsdr_options".into(), f.clone()));
     }
+    outcome.source = Some(imported.source());
     Ok(PocketSdrOutcome { outcome, imported })
 }

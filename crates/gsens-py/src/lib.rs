@@ -10,7 +10,7 @@
 //! - `Loop`: the loop abstraction (`gsens_core::LoopModel`):
 //!   response, peak, band, coefficients, and the streaming model on an array;
 //! - `simulate` and `montecarlo`:
-//!   the simulator and the Monte Carlo of `gsens_calib::montecarlo`;
+//!   the simulator and the Monte Carlo of `gsens_montecarlo`;
 //! - `Calibrator`: the streaming calibrator
 //!   (`gsens_calib::streaming_calibrator`).
 //!

@@ -129,12 +129,11 @@ pub(crate) fn montecarlo<'py>(
         let method = serde_json::from_value(serde_json::Value::String(m.clone()))
             .map_err(|e| GsensError::new_err(format!("methods: {e}")))?;
         let o = gsens_calib::CalibrationOptions { method, ..options.clone() };
-        let mut s = gsens_calib::montecarlo::scenario_settings(&scenario, &o.estimate_settings()).map_err(error)?;
+        let mut s = gsens_montecarlo::scenario_settings(&scenario, &o.estimate_settings()).map_err(error)?;
         s.receiver_loop = s.receiver_loop.with_bn_scaled(stated_bn_scale);
         pipelines.push(o.pipeline_settings_around(s).map_err(error)?);
     }
-    let mc = py
-        .detach(|| gsens_calib::montecarlo::monte_carlo(&scenario, &name, runs, seed, &pipelines, || {}))
-        .map_err(error)?;
+    let mc =
+        py.detach(|| gsens_montecarlo::monte_carlo(&scenario, &name, runs, seed, &pipelines, || {})).map_err(error)?;
     py_of_json(py, &serde_json::to_string(&mc).map_err(error)?)
 }

@@ -38,7 +38,7 @@ mod time;
 pub use figure_set::{Figure, FigureInputs, ReportFiles, WriteError, write_figures, write_report_dir};
 pub use figures::{Format, Image, RenderError};
 pub use montecarlo_text::render_montecarlo_text;
-pub use text::{render_gnss_sdr_tracks, render_response_text, render_text};
+pub use text::{render_response_text, render_text};
 pub use time::{utc_date_string, utc_now_string, utc_timestamp_string};
 
 /// Names the Cartesian axes in every output.

@@ -1,7 +1,7 @@
-//! A Monte Carlo ([`gsens_calib::montecarlo`]) as text.
+//! A Monte Carlo ([`gsens_montecarlo`]) as text.
 
 use crate::AXES;
-use gsens_calib::montecarlo::MonteCarlo;
+use gsens_montecarlo::MonteCarlo;
 use std::fmt::Write as _;
 
 /// A Monte Carlo as a table: bias, RMSE, Cramér–Rao bound, their ratio, the

@@ -5,7 +5,6 @@ use gsens_calib::ResultDocument;
 use gsens_core::LoggedPhase;
 use gsens_core::units::Decimal;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
-use gsens_gnss_sdr::import::TrackSummary;
 use gsens_session::Weighting;
 use std::fmt::Write as _;
 
@@ -278,44 +277,6 @@ fn verdict_line(doc: &ResultDocument) -> String {
         let codes = doc.untrusted_codes();
         format!("verdict: NOT TRUSTWORTHY ({}): do not use Γ̂ before the warnings are resolved", codes.join(", "))
     }
-}
-
-/// What became of each track of a GNSS-SDR import, as text.
-pub fn render_gnss_sdr_tracks(tracks: &[TrackSummary], interval_s: f64) -> String {
-    let mut s = String::new();
-    let used = tracks.iter().filter(|t| t.used).count();
-    let _ = writeln!(
-        s,
-        "GNSS-SDR dumps: {} tracks, {used} used, records at {} ms kept",
-        tracks.len(),
-        Decimal(interval_s * 1e3)
-    );
-    // Which record layout (blocks, GNSS-SDR versions) each dump was read with.
-    let mut files: Vec<(&str, &str)> = Vec::new();
-    for t in tracks {
-        if !files.contains(&(t.file.as_str(), t.layout.as_str())) {
-            files.push((t.file.as_str(), t.layout.as_str()));
-        }
-    }
-    for (file, layout) in files {
-        let _ = writeln!(s, "  {file}: read as {layout}");
-    }
-    for t in tracks {
-        let _ = writeln!(
-            s,
-            "  ch {:>3}  PRN {:>3}  {:>7.2}–{:>7.2} s  narrow from {}  C/N0 {:>5.1} dB-Hz  {:>6}/{:<6} good  {}",
-            t.channel,
-            t.prn,
-            t.start_s,
-            t.end_s,
-            t.switch_s.map(|v| format!("{v:>7.2} s")).unwrap_or_else(|| "      —  ".into()),
-            t.mean_cn0_dbhz,
-            t.good_records,
-            t.modelled_records,
-            t.reason
-        );
-    }
-    s
 }
 
 /// A loop's response as a table (f, |L|, phase) with its peak, the shaking

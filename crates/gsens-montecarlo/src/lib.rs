@@ -1,5 +1,9 @@
-//! Monte Carlo: simulate and estimate many times, in parallel, and compare
-//! each method's spread with the Cramér–Rao bound.
+//! Simulated trials: the simulator's sessions through the calibration.
+//!
+//! [`scenario_settings`] states a scenario's receiver as a user who knows it
+//! would; [`monte_carlo`] simulates and estimates many times, in parallel, and
+//! compares each method's spread with the Cramér–Rao bound. The crate sits
+//! above both `gsens_sim` and `gsens_calib`, so that neither knows the other.
 //!
 //! Run i simulates the scenario with seed S + i into memory, prepares the
 //! session exactly as the pipeline prepares files (the same readers'
@@ -16,7 +20,7 @@
 //! within 3σ (the statistical σ the method reported) and the RMS of the error
 //! over that σ.
 
-use crate::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
+use gsens_calib::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
 use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
 use gsens_core::LoopSpec;

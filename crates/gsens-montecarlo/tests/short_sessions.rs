@@ -6,8 +6,8 @@
 //! within 1.15 (50 runs: about 1.5 standard errors of an RMS of 1) and none
 //! is beyond 4σ.
 
-use gsens_calib::montecarlo::{monte_carlo, scenario_settings};
 use gsens_calib::{EstimateSettings, PipelineSettings};
+use gsens_montecarlo::{monte_carlo, scenario_settings};
 use gsens_sim::scenario::Scenario;
 
 /// (z RMS over the trusted runs' observable axes, max |z|, trusted runs).

@@ -1,0 +1,108 @@
+//! The estimate from GNSS-SDR's tracking dumps with GNSS-SDR's own loop: the
+//! dumps converted to the pipeline's tracking log ([`gnss_sdr_tracking_log`]),
+//! the settings given the loop of the configuration they were made with
+//! ([`with_gnss_sdr_loop`]), and what the conversion did kept in the result
+//! document ([`Conversion::source`]).
+
+use gsens_calib::{Outcome, PipelineSettings, SourceConversion, calibrate_logs};
+use gsens_core::units::Decimal;
+use gsens_core::{Discriminator, LoopModel};
+use gsens_io::{FormatError, TrackingLog};
+use serde::Serialize;
+use std::path::Path;
+
+use crate::error::GnssSdrError;
+use crate::import::{ImportSettings, Imported, TrackSummary, import_dir, resample};
+
+/// What a conversion of GNSS-SDR dumps did: its settings and every track's
+/// fate (what `gsens import gnss-sdr --tracks-json` writes, and the result
+/// document's `source` block).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Conversion {
+    /// The conversion settings (thresholds, the tracking configuration).
+    pub conversion: ImportSettings,
+    /// Every track found and what became of it.
+    pub tracks: Vec<TrackSummary>,
+}
+
+impl Conversion {
+    /// The result document's record of this conversion (receiver `gnss-sdr`).
+    pub fn source(&self) -> SourceConversion {
+        SourceConversion {
+            receiver: "gnss-sdr".into(),
+            conversion: serde_json::to_value(&self.conversion).unwrap_or_default(),
+            tracks: self.tracks.iter().map(|t| serde_json::to_value(t).unwrap_or_default()).collect(),
+        }
+    }
+}
+
+/// The tracking log of GNSS-SDR dumps on their common grid (every track
+/// resampled at t = j·T, T = 20 ms the record interval: each row holds the last
+/// of the 20/N loop updates since the previous one, which
+/// [`with_gnss_sdr_loop`]'s `last` logged phase states).
+pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<TrackingLog, FormatError> {
+    let rows = resample(imported, imported.interval_s);
+    let name = format!("{} (GNSS-SDR dumps on a {} ms grid)", dir.display(), Decimal(imported.interval_s * 1e3));
+    TrackingLog::from_rows(&name, &rows)
+}
+
+/// `settings` with GNSS-SDR's own carrier loop of `import` (its configuration)
+/// modelled exactly: the receiver loop is GNSS-SDR's stage, each row holds its
+/// last discriminator output, the loop counts as stated, and it is exact,
+/// with a tolerance of 0 unless one was given. For tracking rows that came from GNSS-SDR by another
+/// path than its dumps (its tracking monitor): a Kaplan model of the same
+/// order and bandwidth at its 20 ms integration is not its loop.
+pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) -> PipelineSettings {
+    let mut settings = settings.clone();
+    settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
+    settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
+    // dll_pll_veml_tracking's PLL on GPS L1 C/A: pll_cloop_two_quadrant_atan
+    // (its four-quadrant pll_four_quadrant_atan only with track_pilot, and L1 C/A has no pilot).
+    settings.set_discriminator(Discriminator::AtanCostas);
+    settings.loop_stated = true;
+    settings.loop_tolerance.get_or_insert(0.0);
+    settings
+}
+
+/// A calibration from GNSS-SDR dumps: the pipeline's outcome, what the
+/// conversion did, and the tracking log the dumps became.
+#[derive(Debug, Clone)]
+pub struct GnssSdrOutcome {
+    /// The calibration (its `source` holds [`Conversion::source`]).
+    pub outcome: Outcome,
+    /// What the conversion did, typed.
+    pub conversion: Conversion,
+    /// The rows the estimate was made from ([`gnss_sdr_tracking_log`]), for
+    /// what needs them besides the estimate (the C/N0 of a report's figures).
+    pub tracking: TrackingLog,
+}
+
+/// Calibrates from GNSS-SDR tracking dumps (`Tracking_1C.dump=true`) and an
+/// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
+/// logged-phase settings of `settings` are replaced by the ones the dumps
+/// were made with ([`with_gnss_sdr_loop`]), and the warm-up is at least
+/// [`ImportSettings::models_warmup_s`] (the regressor models' start-up error).
+pub fn calibrate_gnss_sdr(
+    dumps_dir: &Path,
+    import: &ImportSettings,
+    imu: &Path,
+    settings: &PipelineSettings,
+) -> Result<GnssSdrOutcome, GnssSdrError> {
+    let imported = import_dir(dumps_dir, import)?;
+    let tracking = gnss_sdr_tracking_log(dumps_dir, &imported)?;
+    let imu_series = gsens_io::read_imu_file(imu)?;
+    let mut settings = with_gnss_sdr_loop(settings, import);
+    // The regressor models start at the first kept record, possibly while
+    // the board is shaken: their start-up error, computed from the IMU, is
+    // left to the warm-up (ImportSettings::models_warmup_s).
+    if let Some(start_s) = tracking.epoch_t_s().first() {
+        let w = import.models_warmup_s(&imu_series, *start_s, settings.estimate.highpass_hz);
+        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
+    }
+    let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &settings)?;
+    let conversion = Conversion { conversion: import.clone(), tracks: imported.tracks };
+    outcome.source = Some(conversion.source());
+    outcome.inputs =
+        vec![("imu".into(), imu.display().to_string()), ("gnss_sdr_dumps".into(), dumps_dir.display().to_string())];
+    Ok(GnssSdrOutcome { outcome, conversion, tracking })
+}
