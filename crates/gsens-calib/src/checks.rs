@@ -2,7 +2,7 @@
 //! a likely mistake in how the logs were written and says how to fix it.
 
 use crate::pipeline::Outcome;
-use crate::{Calibration, LoopSummary, Warning};
+use crate::{Calibration, LoopSummary, Warning, WarningCode};
 use gsens_core::LoggedPhase;
 use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2};
 use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
@@ -118,7 +118,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                 "check the IMU log's units and scale factor (imu.csv holds specific force in m/s²)".into()
             };
             w.push(Warning {
-                code: "imu_units",
+                code: WarningCode::ImuUnits,
                 message: format!(
                     "the specific force at rest, {how}, is {median:.4} where gravity gives {g0} m/s²: {cause}; \
                      Γ̂ scales inversely with it"
@@ -134,7 +134,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
     let span_s = |t: &[f64]| t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a);
     if in_ms(c.log_interval_s) {
         w.push(Warning {
-            code: "time_units",
+            code: WarningCode::TimeUnits,
             message: format!(
                 "the tracking log's interval is {} s and it lasts {:.0} s ({:.1} h) for a session shaken by hand: \
                  its time stamps look like milliseconds ({} ms would be a usual log interval); divide t_s by 1000 \
@@ -150,7 +150,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
     {
         let samples = 1.0 / (f_peak * c.log_interval_s);
         w.push(Warning {
-            code: "log_rate",
+            code: WarningCode::LogRate,
             message: format!(
                 "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
@@ -171,7 +171,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
             format!("the log's Nyquist frequency 1/(2T), {nyquist_hz:.2} Hz")
         };
         w.push(Warning {
-            code: "highpass",
+            code: WarningCode::Highpass,
             message: format!(
                 "the high-pass at {highpass_hz} Hz is at or above {limit}: it removes the g-induced phase error \
                  along with the drift it is meant for; use a corner well below the loop's band (the default is \
@@ -182,7 +182,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
     let imu_h = outcome.imu_flat_runs.sample_interval_s;
     if imu_h > 0.0 && in_ms(imu_h) {
         w.push(Warning {
-            code: "time_units",
+            code: WarningCode::TimeUnits,
             message: format!(
                 "the IMU's sample interval is {} s: its time stamps look like milliseconds ({} ms would \
                  be a usual IMU interval), so the tracking epochs see the specific force of a few samples \
@@ -195,7 +195,7 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
         && imu_h > longest_s
     {
         w.push(Warning {
-            code: "imu_rate",
+            code: WarningCode::ImuRate,
             message: format!(
                 "the IMU's sample interval {} s gives {:.1} samples per period of the loop's peak response \
                  ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the motion that excites the loop is not \
@@ -274,7 +274,7 @@ pub(crate) fn phase_sign(outcome: &Outcome, c: &Calibration) -> Option<Warning> 
     let drift_per_s = c1 * mean / (TAU * gsens_core::units::GPS_L1_HZ);
     let lowest = TAU * -MAX_STATIC_DOPPLER_RATE_HZ_PER_S / c1;
     Some(Warning {
-        code: "phase_sign",
+        code: WarningCode::PhaseSign,
         message: format!(
             "the channels' mean phase error is {mean:+.3} ± {se:.3} rad (z = {:+.1}, beyond {z_crit:.2}): with a \
              static antenna each satellite's Doppler rate is ≤ 0, so this loop's mean phase error lies between \
@@ -412,7 +412,7 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
         return None;
     };
     Some(Warning {
-        code: "phase_units",
+        code: WarningCode::PhaseUnits,
         message: format!(
             "{evidence}: the phase error looks like it is in {unit}; {factor}. Γ̂ scales with the phase's unit"
         ),
@@ -481,7 +481,7 @@ pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
         return None;
     }
     Some(Warning {
-        code: "carrier_gain",
+        code: WarningCode::CarrierGain,
         message: format!(
             "{} of {} channels follow the common (oscillator's) signal more than fully, beyond {z_crit:.2} standard \
              errors ({} % false alarms): {}. Scaled by f_L1/f_c, every channel's phase follows the common signal \
@@ -502,7 +502,7 @@ pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
 fn flat_run_warnings(runs: &FlatRuns, masked_epochs: usize) -> Vec<Warning> {
     let axis = ["x", "y", "z"];
     let mut w = Vec::new();
-    for (kind, code) in [(FlatRunKind::Stuck, "imu_stuck"), (FlatRunKind::Clipped, "imu_clipped")] {
+    for (kind, code) in [(FlatRunKind::Stuck, WarningCode::ImuStuck), (FlatRunKind::Clipped, WarningCode::ImuClipped)] {
         let of_kind: Vec<_> = runs.runs.iter().filter(|r| r.kind == kind).collect();
         let Some(first) = of_kind.first() else { continue };
         let samples: usize = of_kind.iter().map(|r| r.samples).sum();

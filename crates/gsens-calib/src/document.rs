@@ -4,14 +4,18 @@
 
 use crate::Calibration;
 use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
+use crate::warning::{
+    DISCRIMINATOR_ADVICE, LOOP_OFFSET_ADVICE, Warning, WarningCode, defer_shaking_advice, sort_by_cause,
+    untrusted_codes,
+};
 use gsens_core::LoopModel;
 use gsens_core::units::Decimal;
 use gsens_session::{ChannelRanking, ChannelSummary, SelectionConfig, SignalSummary};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// The loop a calibration modelled and what it implies for the shaking.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct LoopSummary {
     /// The loop in words.
@@ -44,15 +48,6 @@ impl LoopSummary {
             half_power_band_hz: model.half_power_band_hz().ok(),
         }
     }
-}
-
-/// A condition the user should know about before trusting the estimate.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Warning {
-    /// Stable identifier, e.g. `discriminator_range`.
-    pub code: &'static str,
-    /// What was found, why it matters and what to do.
-    pub message: String,
 }
 
 /// The largest step of the joint fit's nuisance parameters, at one σ, that its
@@ -115,99 +110,11 @@ pub fn two_rate_advice(loop_used: &LoopModel) -> String {
     }
 }
 
-/// Warning codes of the logs' units and time base: a wrong unit or time
-/// stamp explains most other findings (a phase in degrees drives the
-/// predicted error past the discriminator's range, an IMU in g or stamped
-/// in milliseconds leaves the axes unobservable), so they come first and
-/// the shaking advice that would follow from them is not given.
-pub const UNIT_WARNINGS: &[&str] = &["time_units", "imu_units", "phase_units"];
-
-/// The advice of `discriminator_range` (its message ends with it).
-const DISCRIMINATOR_ADVICE: &str = "shake more gently or the phase error wraps and biases Γ̂ low (or state the \
-                                    receiver's discriminator, --discriminator)";
-
-/// Where a warning comes in the document, by cause: the logs' units and time
-/// base (and what a wrong phase or IMU unit causes in the discriminator
-/// check), then how the logs were sampled and aligned, then the loop, then
-/// the shaking and the estimate, and last what was only reported.
-fn cause_rank(code: &str, units_flagged: bool) -> u8 {
-    match code {
-        "time_units" | "imu_units" | "phase_units" | "phase_sign" | "carrier_gain" => 0,
-        "discriminator_range" if units_flagged => 1,
-        "log_rate" | "imu_rate" | "highpass" | "time_offset_at_limit" => 2,
-        "response_unchecked" => 3,
-        c if c.starts_with("loop_") => 3,
-        c if INFORMATIONAL_WARNINGS.contains(&c) => 5,
-        _ => 4,
-    }
-}
-
-/// Sorts `warnings` by cause ([`cause_rank`]), keeping the order in which
-/// they were raised within a cause.
-pub fn sort_by_cause(warnings: &mut [Warning]) {
-    let units_flagged = warnings.iter().any(|w| UNIT_WARNINGS.contains(&w.code));
-    warnings.sort_by_key(|w| cause_rank(w.code, units_flagged));
-}
-
-/// The start of the advice that ends `loop_offset_unresolved`'s message.
-const LOOP_OFFSET_ADVICE: &str = " State the IMU's latency (--time-offset)";
-
-/// Replaces the shaking advice of `w` (`discriminator_range`,
-/// `nothing_observable`, `loop_offset_unresolved`), which would follow from
-/// the wrong unit or time stamp of the warnings `unit_codes`, by a pointer
-/// to them.
-fn defer_shaking_advice(w: &mut Warning, unit_codes: &str) {
-    match w.code {
-        "discriminator_range" => {
-            if let Some(finding) = w.message.strip_suffix(DISCRIMINATOR_ADVICE) {
-                w.message = format!(
-                    "{finding}the unit found above ({unit_codes}) explains it: fix the unit and estimate again before \
-                     changing the shaking"
-                );
-            }
-        }
-        "nothing_observable" => {
-            w.message = format!(
-                "no axis is observable, as the unit or time stamp found above ({unit_codes}) would make it: fix \
-                 that and estimate again before changing the shaking"
-            );
-        }
-        "loop_offset_unresolved" => {
-            if let Some((finding, _)) = w.message.split_once(LOOP_OFFSET_ADVICE) {
-                w.message = format!(
-                    "{finding} The unit found above ({unit_codes}) may explain it: fix the unit and estimate again \
-                     before changing the shaking"
-                );
-            }
-        }
-        _ => {}
-    }
-}
-
-/// Warning codes that report something gsens already corrected for (the
-/// estimate stays trustworthy); every other code means the estimate may be
-/// wrong beyond its σ.
-pub const INFORMATIONAL_WARNINGS: &[&str] = &["imu_spikes", "imu_stuck", "imu_clipped", "response_unchecked"];
-
-impl Warning {
-    /// Whether this warning makes the estimate untrustworthy (every code but
-    /// the [`INFORMATIONAL_WARNINGS`]).
-    pub fn affects_trust(&self) -> bool {
-        !INFORMATIONAL_WARNINGS.contains(&self.code)
-    }
-}
-
-/// The codes of the `warnings` that make an estimate untrustworthy (those
-/// that [`Warning::affects_trust`]), in their order.
-pub fn untrusted_codes(warnings: &[Warning]) -> Vec<&'static str> {
-    warnings.iter().filter(|w| w.affects_trust()).map(|w| w.code).collect()
-}
-
 /// What a receiver's adapter did to turn its files into the logs: which
 /// receiver, the conversion's settings and every track's fate, each as the
 /// adapter serializes them (the calibration does not read them; they are kept
 /// for the reader of the document).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SourceConversion {
     /// The receiver whose files were converted (`gnss-sdr`, `pocketsdr`).
     pub receiver: String,
@@ -218,7 +125,7 @@ pub struct SourceConversion {
 }
 
 /// How the session-level settings were applied.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PipelineSummary {
     /// The IMU time offset setting.
     pub time_offset: TimeOffset,
@@ -227,7 +134,7 @@ pub struct PipelineSummary {
 }
 
 /// Who wrote a report, when and with which figures (`report.json` only).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ReportInfo {
     /// When the report was generated, UTC.
     pub generated_utc: String,
@@ -240,7 +147,7 @@ pub struct ReportInfo {
 }
 
 /// One figure of a report.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FigureInfo {
     /// Identifier and file stem.
     pub id: String,
@@ -251,7 +158,7 @@ pub struct FigureInfo {
 /// The result of a calibration, as every output serializes it: the estimate
 /// ([`Calibration`], its keys at the top level), the loop, the channels and
 /// their screening, the warnings, the inputs and the tool.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct ResultDocument {
     /// The producing library and version, e.g. `gsens 0.1.0`.
@@ -260,7 +167,7 @@ pub struct ResultDocument {
     #[serde(flatten)]
     pub calibration: Calibration,
     /// Whether the estimate can be trusted within its σ: no warning but the
-    /// [`INFORMATIONAL_WARNINGS`], and at least one axis observable with a
+    /// codes that do not [`WarningCode::affects_trust`], and at least one axis observable with a
     /// finite Γ̂ and σ. `gsens` exits with status 3 when it is false.
     pub trustworthy: bool,
     /// The loop modelled, its peak and band.
@@ -288,14 +195,14 @@ pub struct ResultDocument {
     /// The inputs as role → path.
     pub inputs: BTreeMap<String, String>,
     /// The true Γ \[Hz/(m/s²)\] when known (simulated sessions).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub truth_gamma_hz_per_mps2: Option<[f64; 3]>,
     /// What a receiver's adapter converted, for sessions from a receiver's
     /// own files (GNSS-SDR dumps, a PocketSDR log).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<SourceConversion>,
     /// Report metadata (`report.json`).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub report: Option<ReportInfo>,
 }
 
@@ -326,7 +233,7 @@ impl ResultDocument {
         doc.warnings.extend(inputs);
         if let Some(first) = outcome.imu_spikes_t_s.first() {
             doc.warnings.push(Warning {
-                code: "imu_spikes",
+                code: WarningCode::ImuSpikes,
                 message: format!(
                     "{} isolated IMU sample(s) no hand motion can produce (the first at {first} s) were replaced by \
                      the mean of their neighbours; check the IMU and its logger",
@@ -338,7 +245,7 @@ impl ResultDocument {
             Ok(check) => {
                 if !check.consistent {
                     doc.warnings.push(Warning {
-                        code: "loop_response",
+                        code: WarningCode::LoopResponse,
                         message: format!(
                             "the loop's response measured from the session does not match the model: {}; check the \
                              receiver loop's order, bandwidth, update interval and what its log holds",
@@ -349,7 +256,7 @@ impl ResultDocument {
                 doc.loop_response = Some(check.clone());
             }
             Err(e) => doc.warnings.push(Warning {
-                code: "response_unchecked",
+                code: WarningCode::ResponseUnchecked,
                 message: format!("the loop's response could not be measured from the session: {e}"),
             }),
         }
@@ -367,7 +274,7 @@ impl ResultDocument {
             }
             flags += &format!(" --logged-phase {logged}");
             doc.warnings.push(Warning {
-                code: "loop_not_stated",
+                code: WarningCode::LoopNotStated,
                 message: format!(
                     "no receiver loop was stated: of {} typical receiver loops the data fit best {} with the log \
                      holding the {} discriminator output (the runner-up, {}, fits with {:.2} times the residual). \
@@ -402,9 +309,9 @@ impl ResultDocument {
     pub fn judge(&mut self) {
         let c = &self.calibration;
         let any_axis = (0..3).any(|i| c.gamma_hz_per_mps2[i].is_some() && c.sigma_hz_per_mps2[i].is_some());
-        if !any_axis && !self.warnings.iter().any(|w| w.code == "nothing_observable") {
+        if !any_axis && !self.warnings.iter().any(|w| w.code == WarningCode::NothingObservable) {
             self.warnings.push(Warning {
-                code: "nothing_observable",
+                code: WarningCode::NothingObservable,
                 message: "no axis is observable: the data hold too little g-induced phase error to estimate Γ; \
                           shake the board harder, along each axis in turn, near the loop's peak response"
                     .into(),
@@ -416,14 +323,14 @@ impl ResultDocument {
 
     /// Orders the warnings by cause (the logs' units and time base first,
     /// then sampling and alignment, the loop, the shaking; stable within
-    /// each), and, when a `UNIT_WARNINGS` code is raised, replaces the
+    /// each), and, when a unit code ([`WarningCode::is_unit`]) is raised, replaces the
     /// shaking advice of the warnings (`discriminator_range`, `nothing_observable`,
     /// `loop_offset_unresolved`) and of the
     /// axes' verdicts, which would follow from the wrong unit, by a pointer
     /// to it.
     pub fn order_by_cause(&mut self) {
         let units: Vec<&'static str> =
-            self.warnings.iter().map(|w| w.code).filter(|c| UNIT_WARNINGS.contains(c)).collect();
+            self.warnings.iter().map(|w| w.code).filter(|c| c.is_unit()).map(WarningCode::as_str).collect();
         sort_by_cause(&mut self.warnings);
         if units.is_empty() {
             return;
@@ -486,6 +393,52 @@ impl ResultDocument {
     pub fn to_json_string(&self) -> Result<String, serde_json::Error> {
         Ok(serde_json::to_string_pretty(self)? + "\n")
     }
+
+    /// A document read back from its JSON ([`ResultDocument::to_json_string`]:
+    /// `gsens estimate --json`, `report.json`); numbers written as `null`
+    /// because they were not finite read back as NaN, so that the document
+    /// writes the same JSON again.
+    pub fn from_json_str(json: &str) -> Result<Self, serde_json::Error> {
+        serde_json::from_str(json)
+    }
+
+    /// [`ResultDocument::from_json_str`] of the file at `path`.
+    pub fn read_json_file(path: &std::path::Path) -> Result<Self, DocumentError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|error| DocumentError::Io { file: file.clone(), error })?;
+        Self::from_json_str(&text).map_err(|e| DocumentError::Json {
+            file,
+            line: e.line(),
+            column: e.column(),
+            message: e.to_string(),
+        })
+    }
+}
+
+/// Why a result document could not be read back.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DocumentError {
+    /// The file could not be read.
+    #[error("{file}: cannot read: {error}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The underlying error, quoted in the message.
+        error: std::io::Error,
+    },
+    /// The file is not a result document's JSON.
+    #[error("{file}:{line}:{column}: not a gsens result document (write one with gsens estimate --json): {message}")]
+    Json {
+        /// The file.
+        file: String,
+        /// Line of the error (1-based).
+        line: usize,
+        /// Column of the error (1-based).
+        column: usize,
+        /// What serde_json found.
+        message: String,
+    },
 }
 
 /// The warnings a calibration's own numbers raise.
@@ -493,7 +446,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
     let mut w = Vec::new();
     if c.gamma_raw_hz_per_mps2.iter().any(|g| !g.is_finite()) {
         w.push(Warning {
-            code: "not_finite",
+            code: WarningCode::NotFinite,
             message: format!(
                 "the estimator did not give a finite Γ̂ ({}): with the gradient observer, lower its gain (the \
                  paper's k = 0.5) or use the batch estimator",
@@ -506,7 +459,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
     if peak > lin {
         let d = c.settings.discriminator;
         w.push(Warning {
-            code: "discriminator_range",
+            code: WarningCode::DiscriminatorRange,
             message: format!(
                 "the predicted g-induced phase error reaches {peak:.2} rad, beyond the discriminator's linear range \
                  ({lin:.2} rad: {d}'s ±{:.2} rad less {:.2} σ of thermal noise at the weakest channel's C/N0, on \
@@ -519,7 +472,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
     if let Some(j) = c.joint_fit.as_ref().filter(|j| j.stated_loop_rejected) {
         let (f, f0) = (j.natural_frequency_hz.unwrap_or(f64::NAN), j.stated_natural_frequency_hz.unwrap_or(f64::NAN));
         w.push(Warning {
-            code: "loop_rejected",
+            code: WarningCode::LoopRejected,
             message: format!(
                 "the data reject the stated loop ({}): its natural frequency fits at {f:.4} ± {:.4} Hz instead of \
                  {f0:.4} Hz (z = {:+.1}, beyond ±{:.2}, a {} % false-alarm test). Γ̂ is given under the fitted loop \
@@ -546,7 +499,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
     if let Some((x, offset, scale)) = joint_nonlinearity(c).filter(|(x, ..)| *x > JOINT_LINEAR_LIMIT_RAD) {
         let part = |v: Option<f64>| v.map_or("not fitted".to_string(), |v| format!("{v:.2}"));
         w.push(Warning {
-            code: "loop_offset_unresolved",
+            code: WarningCode::LoopOffsetUnresolved,
             message: format!(
                 "the data do not resolve the IMU time offset and the loop well enough for σ to hold: one σ of them \
                  moves the shaking's phase by {x:.2} rad (offset {}, loop scale {}), beyond the {JOINT_LINEAR_LIMIT_RAD} \
@@ -562,7 +515,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
         let found = j.imu_time_offset_s.unwrap_or(f64::NAN);
         let max = j.offset_max_abs_s.unwrap_or(f64::NAN);
         w.push(Warning {
-            code: "time_offset_at_limit",
+            code: WarningCode::TimeOffsetAtLimit,
             message: format!(
                 "the IMU time offset search ended at its limit ({found:+.3} s, the search spans ±{max} s): the IMU and tracking clocks \
                  may differ by more; widen the search (--time-offset-max-s) or state the offset (--time-offset)"
@@ -570,51 +523,4 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
         });
     }
     w
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn codes(raised: &[&'static str]) -> Vec<&'static str> {
-        let mut w: Vec<Warning> = raised.iter().map(|&code| Warning { code, message: String::new() }).collect();
-        sort_by_cause(&mut w);
-        w.iter().map(|w| w.code).collect()
-    }
-
-    /// The orders the checks raise them in for an IMU stamped in
-    /// milliseconds and for both logs so, and a phase in degrees: the unit
-    /// first, then the time base and the loop, then the shaking.
-    #[test]
-    fn warnings_come_by_cause() {
-        assert_eq!(
-            codes(&["loop_offset_unresolved", "time_units", "nothing_observable"]),
-            ["time_units", "loop_offset_unresolved", "nothing_observable"]
-        );
-        assert_eq!(
-            codes(&["time_offset_at_limit", "loop_rejected", "time_units", "imu_spikes", "time_units"]),
-            ["time_units", "time_units", "time_offset_at_limit", "loop_rejected", "imu_spikes"]
-        );
-        // The discriminator's range follows from a wrong phase unit, and is a shaking matter without one.
-        assert_eq!(
-            codes(&["discriminator_range", "loop_rejected", "phase_units"]),
-            ["phase_units", "discriminator_range", "loop_rejected"]
-        );
-        assert_eq!(codes(&["discriminator_range", "loop_rejected"]), ["loop_rejected", "discriminator_range"]);
-    }
-
-    /// Under a unit warning, `loop_offset_unresolved` keeps its finding and
-    /// points at the unit instead of advising more shaking.
-    #[test]
-    fn a_unit_warning_defers_the_offset_warnings_shaking_advice() {
-        let finding = "the data do not resolve the IMU time offset and the loop, and Γ̂ moves with them.";
-        let mut w = Warning {
-            code: "loop_offset_unresolved",
-            message: format!("{finding}{LOOP_OFFSET_ADVICE} if you know it, or shake harder and longer"),
-        };
-        defer_shaking_advice(&mut w, "time_units");
-        assert!(w.message.starts_with(finding), "{}", w.message);
-        assert!(w.message.contains("(time_units) may explain it"), "{}", w.message);
-        assert!(!w.message.contains("shake"), "{}", w.message);
-    }
 }

@@ -69,10 +69,11 @@ mod robust;
 mod search;
 mod settings;
 mod verdict;
+mod warning;
 
 pub use document::{
-    FigureInfo, INFORMATIONAL_WARNINGS, LoopSummary, PipelineSummary, ReportInfo, ResultDocument, SourceConversion,
-    Warning, tool_version, two_rate_advice, untrusted_codes,
+    DocumentError, FigureInfo, LoopSummary, PipelineSummary, ReportInfo, ResultDocument, SourceConversion,
+    tool_version, two_rate_advice,
 };
 pub use error::CalibError;
 pub use estimate::{
@@ -97,3 +98,4 @@ pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};
 pub use settings::{EstimateSettings, Method, Robust};
 pub use verdict::{AxisVerdict, session_linear_range_rad};
+pub use warning::{Warning, WarningCode, untrusted_codes};

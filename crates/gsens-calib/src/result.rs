@@ -104,6 +104,22 @@ pub struct HistoryPoint {
 }
 
 impl Calibration {
+    /// Γ̂ \[Hz/(m/s²)\] and its covariance \[(Hz/(m/s²))²\] as plain numbers,
+    /// for a compensator; `Err` names the first entry without a number
+    /// (`gamma_hz_per_mps2[2]`: that axis was not observable).
+    pub fn gamma_with_covariance(&self) -> Result<([f64; 3], [[f64; 3]; 3]), String> {
+        let mut gamma = [0.0; 3];
+        let mut cov = [[0.0; 3]; 3];
+        for i in 0..3 {
+            gamma[i] = self.gamma_hz_per_mps2[i].ok_or_else(|| format!("gamma_hz_per_mps2[{i}]"))?;
+            for j in 0..3 {
+                cov[i][j] = self.covariance_hz_per_mps2_sq[i][j]
+                    .ok_or_else(|| format!("covariance_hz_per_mps2_sq[{i}][{j}]"))?;
+            }
+        }
+        Ok((gamma, cov))
+    }
+
     /// Makes axis `i` unobservable: Γ̂, σ, the CRLB and its covariance row and
     /// column `null`, its verdict saying `why`. A σ of exactly 0 (or not a
     /// number) is no uncertainty but the absence of information on the axis.

@@ -36,7 +36,7 @@ fn estimate(dir: &Path, imu: &Path, ps: &PipelineSettings) -> ResultDocument {
 }
 
 fn codes(doc: &ResultDocument) -> Vec<&'static str> {
-    doc.warnings.iter().map(|w| w.code).collect()
+    doc.warnings.iter().map(|w| w.code.as_str()).collect()
 }
 
 /// A clean atan Costas session near `peak_rad` is trusted and Γ̂ lies within 3σ of the truth.

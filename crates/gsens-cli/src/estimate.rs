@@ -97,29 +97,10 @@ pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
 /// Γ̂ and its covariance from a result document (`gsens estimate --json`,
 /// `report.json`); an axis without an estimate is an error naming it.
 pub fn gamma_of_document(path: &Path) -> Result<([f64; 3], [[f64; 3]; 3])> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a JSON result document", path.display()))?;
-    let number = |v: &serde_json::Value, what: &str| {
-        v.as_f64().with_context(|| format!("{}: {what} is {v}: the axis was not observable", path.display()))
-    };
-    let g = doc["gamma_hz_per_mps2"]
-        .as_array()
-        .filter(|g| g.len() == 3)
-        .with_context(|| format!("{}: no gamma_hz_per_mps2 (write one with gsens estimate --json)", path.display()))?;
-    let c = doc["covariance_hz_per_mps2_sq"]
-        .as_array()
-        .filter(|c| c.len() == 3)
-        .with_context(|| format!("{}: no covariance_hz_per_mps2_sq", path.display()))?;
-    let mut gamma = [0.0; 3];
-    let mut cov = [[0.0; 3]; 3];
-    for i in 0..3 {
-        gamma[i] = number(&g[i], &format!("gamma_hz_per_mps2[{i}]"))?;
-        for j in 0..3 {
-            cov[i][j] = number(&c[i][j], &format!("covariance_hz_per_mps2_sq[{i}][{j}]"))?;
-        }
-    }
-    Ok((gamma, cov))
+    let doc = gsens_calib::ResultDocument::read_json_file(path)?;
+    doc.calibration
+        .gamma_with_covariance()
+        .map_err(|what| anyhow::anyhow!("{}: {what} is null: the axis was not observable", path.display()))
 }
 
 #[cfg(test)]

@@ -263,7 +263,7 @@ impl Kept {
 struct Plain {
     last: Option<(std::mem::Discriminant<Instruction>, Option<usize>)>,
     /// The warning codes already printed with their message.
-    warned: Vec<&'static str>,
+    warned: Vec<gsens_live::WarningCode>,
 }
 
 impl Plain {

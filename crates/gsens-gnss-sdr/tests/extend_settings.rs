@@ -79,7 +79,7 @@ fn the_default_setting_and_2_ms_integrations_estimate_within_3_sigma_with_the_de
                 .outcome;
         let doc = o.document(None);
         let c = &o.calibration;
-        let codes: Vec<&str> = doc.warnings.iter().map(|w| w.code).collect();
+        let codes: Vec<&str> = doc.warnings.iter().map(|w| w.code.as_str()).collect();
         eprintln!("{name}: trustworthy {}, warnings {codes:?}, {} epochs", doc.trustworthy, c.epochs_used);
         for i in 0..3 {
             let (g, sd) = (c.gamma_hz_per_mps2[i].unwrap(), c.sigma_hz_per_mps2[i].unwrap());

@@ -32,7 +32,7 @@ pub mod session;
 pub mod stream;
 
 pub use follow::Follower;
-pub use gsens_calib::Warning;
+pub use gsens_calib::{Warning, WarningCode};
 pub use guidance::{Instruction, LoopBand, Protocol};
 pub use input::{Input, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line};
 pub use motion::{MotionWindow, Shaking};

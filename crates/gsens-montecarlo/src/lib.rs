@@ -53,7 +53,7 @@ pub struct MethodRun {
     /// Whether the result document called the estimate trustworthy.
     pub trustworthy: bool,
     /// The codes of the warnings it raised.
-    pub warnings: Vec<&'static str>,
+    pub warnings: Vec<gsens_calib::WarningCode>,
 }
 
 /// One run: its seed, truth and each method's result (or why it failed).
@@ -177,7 +177,7 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
     let mut warning_counts = std::collections::BTreeMap::new();
     for m in &produced {
         for w in &m.warnings {
-            *warning_counts.entry(*w).or_insert(0) += 1;
+            *warning_counts.entry(w.as_str()).or_insert(0) += 1;
         }
     }
     let untrustworthy = produced.iter().filter(|m| !m.trustworthy).count() as f64 / produced.len() as f64;

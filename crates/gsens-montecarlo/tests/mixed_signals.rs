@@ -52,7 +52,7 @@ fn mixed_signal_sessions_estimate_gamma_within_sigma_and_a_dropped_carrier_colum
         let used: Vec<(&str, usize)> = doc.signals.iter().map(|s| (s.signal.as_str(), s.tracks_used)).collect();
         println!(
             "seed {seed}: signals used {used:?}; warnings {:?}",
-            doc.warnings.iter().map(|w| w.code).collect::<Vec<_>>()
+            doc.warnings.iter().map(|w| w.code.as_str()).collect::<Vec<_>>()
         );
         for s in SIGNALS {
             assert!(
@@ -111,7 +111,10 @@ fn mixed_signal_sessions_estimate_gamma_within_sigma_and_a_dropped_carrier_colum
             })
             .collect();
         println!("  dropped column: mean ratio {ratio:.4} over {} used; excluded {excluded:?}", used_ratios.len());
-        println!("  dropped column warnings: {:?}", doc_l1.warnings.iter().map(|w| w.code).collect::<Vec<_>>());
+        println!(
+            "  dropped column warnings: {:?}",
+            doc_l1.warnings.iter().map(|w| w.code.as_str()).collect::<Vec<_>>()
+        );
         // Caught: the G1 channels read as L1 follow the common signal by f_G1/f_L1 > 1.
         let w = doc_l1.warnings.iter().find(|w| w.code == "carrier_gain");
         assert!(

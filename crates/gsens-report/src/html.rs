@@ -137,7 +137,7 @@ fn verdict_banner(h: &mut String, d: &ReportData) {
     if !doc.warnings.is_empty() {
         let _ = writeln!(h, "<ul id=\"warnings\">");
         for w in &doc.warnings {
-            let _ = writeln!(h, "<li><code>{}</code>: {}</li>", escape(w.code), escape(&w.message));
+            let _ = writeln!(h, "<li><code>{}</code>: {}</li>", escape(w.code.as_str()), escape(&w.message));
         }
         let _ = writeln!(h, "</ul>");
     }

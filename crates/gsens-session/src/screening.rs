@@ -151,7 +151,7 @@ impl ScreeningConfig {
 }
 
 /// A stretch of a track excluded by the screening.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct ExcludedSpan {
     /// Time of the first excluded row \[s\].
@@ -169,7 +169,7 @@ pub struct ExcludedSpan {
 pub const MAX_SPANS: usize = 100;
 
 /// What the screening did to one track.
-#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct TrackScreening {
     /// Rows (passing the masks) excluded.
@@ -178,10 +178,10 @@ pub struct TrackScreening {
     /// (test 3, its tested windows pooled; 1 for a track on the carrier the log
     /// gives it, f_true/f_given for one whose carrier is wrong); `None` where
     /// fewer than two windows were tested.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_gain: Option<f64>,
     /// The standard error of [`relative_gain`](Self::relative_gain).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_gain_se: Option<f64>,
     /// Slip / excursion events detected.
     pub slips: usize,
@@ -212,12 +212,12 @@ pub struct TrackScreening {
     pub spans: Vec<ExcludedSpan>,
     /// The constant offset of each segment \[rad\], when the track was split
     /// (steps > 0) and is averaged with offsets removed; else empty.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub segment_offsets_rad: Vec<f64>,
     /// The tests that could not be applied to the track, each with why (e.g.
     /// `low gain: no 10 s window with enough rows …`): the track passed them
     /// untested. Empty when every test ran.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub not_checked: Vec<String>,
 }
 

@@ -102,7 +102,7 @@ impl Default for SelectionConfig {
 ///
 /// Exhaustive (no `#[non_exhaustive]`): callers outside the crate build it
 /// with struct literals (e.g. the report's test fixtures).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChannelSummary {
     /// Receiver channel number.
     pub channel: u32,
@@ -135,7 +135,7 @@ pub struct ChannelSummary {
 }
 
 /// The tracks of one signal (one carrier) in a session.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SignalSummary {
     /// The signal, as in [`ChannelSummary::signal`].
     pub signal: String,

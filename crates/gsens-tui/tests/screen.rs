@@ -151,7 +151,7 @@ fn gentler() -> LiveView {
             45.0,
             false,
             vec![gsens_live::Warning {
-                code: "discriminator_range",
+                code: gsens_live::WarningCode::DiscriminatorRange,
                 message: "the predicted g-induced phase error peaks at 0.62 rad, beyond the discriminator's \
                           linear range: shake more gently"
                     .into(),
@@ -369,7 +369,11 @@ fn odd_values_do_not_panic() {
             shaking: Shaking { frequency_hz: Some(f64::NAN), rms_mps2: [f64::INFINITY; 3], ..mid_session().shaking },
             peak_phase_rad: f64::NAN,
             channels: many.clone(),
-            batch: Some((f64::NAN, false, vec![gsens_live::Warning { code: "x", message: long.clone() }; 6])),
+            batch: Some((
+                f64::NAN,
+                false,
+                vec![gsens_live::Warning { code: gsens_live::WarningCode::NotFinite, message: long.clone() }; 6],
+            )),
             notices: (vec![long.clone(); 5], u64::MAX),
             received: (u64::MAX, u64::MAX),
             ..mid_session()
