@@ -41,6 +41,7 @@ pub mod runtime;
 pub mod session;
 pub mod sources;
 pub mod stream;
+pub mod truth;
 
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
@@ -54,3 +55,4 @@ pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, Runtim
 pub use session::{AxisProgress, BatchJob, BatchResult, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed};
 pub use sources::{LineFormat, Source, SourceEvent};
 pub use stream::{Epoch, EpochAverager, StreamEstimate};
+pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop};

@@ -31,12 +31,7 @@ fn config(inputs: Inputs, out_dir: &std::path::Path, settings: PipelineSettings,
 fn a_replayed_session_reaches_the_target() {
     let scratch = tempfile::Builder::new().prefix("gsens-runtime-replay-").tempdir().unwrap();
     let (sim, out) = (scratch.path().join("sim"), scratch.path().join("live"));
-    gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, &sim, |_| {}).unwrap();
-    let truth_loop = gsens_sim::read_truth_loop(&sim.join("truth.json")).unwrap().unwrap();
-    let mut settings = PipelineSettings::default();
-    settings.estimate.receiver_loop = truth_loop.receiver_loop;
-    settings.estimate.logged_phase = truth_loop.logged_phase;
-    settings.loop_stated = true;
+    let settings = simulated_session(&sim);
     let (tx, rx) = mpsc::channel();
     for (k, x) in read_session_dir(&sim).unwrap().iter().enumerate() {
         tx.send(SourceEvent::Line { source: 0, line: k as u64 + 1, text: merged_line(x) }).unwrap();
@@ -69,6 +64,45 @@ fn a_replayed_session_reaches_the_target() {
         assert!(all.starts_with(&kept) && kept.len() < all.len(), "{name}");
     }
     assert!(out.join("received/stdin.txt").exists());
+}
+
+/// The default session (seed 1) simulated into `dir`; the settings with its loop.
+fn simulated_session(dir: &std::path::Path) -> PipelineSettings {
+    gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, dir, |_| {}).unwrap();
+    gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap()
+}
+
+/// The session's plain lines (instructions, batch estimates) and its end,
+/// the target σ unreachable (1e-6): it runs to the end of its input.
+fn whole_session(inputs: Inputs, out: &std::path::Path, settings: PipelineSettings) -> (Vec<String>, bool, bool) {
+    let mut config = config(inputs, out, settings, 2.0);
+    config.target_sigma_hz_per_mps2 = 1e-6;
+    let mut runtime = Runtime::start(config, Arc::new(ManualClock::new())).unwrap();
+    let mut lines = Vec::new();
+    assert_eq!(runtime.run(Display::Plain(&mut lines)).unwrap(), Ending::InputEnded);
+    let said = String::from_utf8(lines).unwrap().lines().filter(|l| l.starts_with('[')).map(String::from).collect();
+    let finished = runtime.finish().unwrap();
+    (said, finished.target_met, finished.outcome.document(None).trustworthy)
+}
+
+/// Files followed from their start give the session the records in time
+/// order, as the merged stream does: the same guidance (the rest first) and
+/// the same estimates on the same data. Ended before the target σ, the
+/// estimate is trustworthy and the target missed (`gsens live` exits 4).
+#[test]
+fn followed_files_guide_as_the_merged_stream() {
+    let scratch = tempfile::Builder::new().prefix("gsens-runtime-files-").tempdir().unwrap();
+    let sim = scratch.path().join("sim");
+    let settings = simulated_session(&sim);
+    let merged: String = read_session_dir(&sim).unwrap().iter().map(|x| merged_line(x) + "\n").collect();
+    let reader = Box::new(std::io::Cursor::new(merged.into_bytes()));
+    let stdin = Inputs::Merged { name: "stdin".into(), reader };
+    let (a, a_met, a_trusted) = whole_session(stdin, &scratch.path().join("a"), settings.clone());
+    let files = Inputs::Files { imu: sim.join("imu.csv"), tracking: sim.join("tracking.csv") };
+    let (b, b_met, b_trusted) = whole_session(files, &scratch.path().join("b"), settings);
+    assert!(a.iter().take(2).any(|l| l.contains("rest: measuring")), "{}", a.join("\n"));
+    assert_eq!(a, b, "the merged stream and the followed files differ");
+    assert!(a_trusted && b_trusted && !a_met && !b_met);
 }
 
 /// Two followed files that stop growing: each ends after the stated idle
