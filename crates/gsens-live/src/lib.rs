@@ -47,7 +47,9 @@ pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
 pub use gsens_calib::Warning;
 pub use guidance::{Instruction, LoopBand, Protocol};
-pub use input::{Input, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line};
+pub use input::{
+    Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,
+};
 pub use monitor::{Datagrams, MonitorInput, receive_monitor};
 pub use motion::{MotionWindow, Shaking};
 pub use replay::read_session_dir;

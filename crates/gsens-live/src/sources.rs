@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use crate::clock::Clock;
 use crate::follow::Follower;
-use crate::input::{Input, LineKind, parse_imu_line, parse_merged_line, parse_tracking_line};
+use crate::input::{Input, LineError, LineKind, parse_imu_line, parse_merged_line, parse_tracking_line};
 
 /// What a reader thread sends; `source` indexes the session's [`Source`]s.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,7 +66,7 @@ pub enum LineFormat {
 
 impl LineFormat {
     /// Parses one line of this format.
-    pub fn parse(self, line: &str) -> Result<LineKind, String> {
+    pub fn parse(self, line: &str) -> Result<LineKind, LineError> {
         match self {
             LineFormat::Imu => parse_imu_line(line),
             LineFormat::Tracking => parse_tracking_line(line),
