@@ -3,9 +3,9 @@
 //! plus garbage; it stops on its idle timeout and writes `tracking.csv` on
 //! the 20 ms grid and the datagrams as received. A smoke test: a busy
 //! machine may drop datagrams on the loopback, so what was received is
-//! checked against what was sent, not counted exactly (the decoding of
-//! every datagram is gsens-gnss-sdr's tests; the live receiving loop is
-//! gsens-live's, on datagrams given without a socket).
+//! checked against what was sent, not counted exactly (the recording loop,
+//! every datagram counted and kept, is gsens-live's tests/monitor.rs, on
+//! datagrams given without a socket).
 
 mod common;
 

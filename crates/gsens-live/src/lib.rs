@@ -50,7 +50,7 @@ pub use guidance::{Instruction, LoopBand, Protocol};
 pub use input::{
     Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,
 };
-pub use monitor::{Datagrams, MonitorInput, receive_monitor};
+pub use monitor::{Datagrams, MonitorInput, receive_monitor, record_monitor};
 pub use motion::{MotionWindow, Shaking};
 pub use replay::read_session_dir;
 pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};

@@ -1,12 +1,16 @@
-//! GNSS-SDR's tracking monitor as a source of a live session: every
-//! datagram that brings something new kept in gsens's capture format, its
-//! rows put on the 20 ms grid as they arrive.
+//! GNSS-SDR's tracking monitor received live: as a source of a live
+//! session (every datagram that brings something new kept in gsens's
+//! capture format, its rows put on the 20 ms grid as they arrive), or
+//! recorded whole until it falls silent.
 
 use std::io::Write;
 use std::sync::mpsc::Sender;
+use std::time::Duration;
 
 use gsens_gnss_sdr::ImportSettings;
-use gsens_gnss_sdr::monitor::{LiveGrid, MonitorEvent, MonitorReceiver, Received, write_capture_record};
+use gsens_gnss_sdr::monitor::{
+    LiveGrid, MonitorEvent, MonitorReceiver, Notice, Received, Recorder, write_capture_record,
+};
 
 use crate::clock::Clock;
 use crate::input::Input;
@@ -103,4 +107,45 @@ pub fn receive_monitor(
     let _ = raw.flush();
     let why = format!("no datagram for {idle_timeout_s} s; {} rows came too late for the grid", grid.late());
     let _ = tx.send(SourceEvent::Ended { source, why: Some(why) });
+}
+
+/// Records the monitor (`gsens import gnss-sdr-monitor`): every datagram
+/// appended to `raw` as received (when given), its events taken by
+/// `recorder`, its notices given to `notice`; until no datagram came for
+/// `idle_timeout_s`, counted from the start too.
+pub fn record_monitor(
+    rx: &mut dyn Datagrams,
+    recorder: &mut Recorder,
+    mut raw: Option<&mut dyn Write>,
+    idle_timeout_s: f64,
+    clock: &dyn Clock,
+    notice: &mut dyn FnMut(&Notice),
+) -> std::io::Result<()> {
+    let idle = Duration::from_secs_f64(idle_timeout_s);
+    let mut last = clock.now();
+    loop {
+        match rx.recv()? {
+            Received::Timeout => {
+                if clock.now().saturating_sub(last) >= idle {
+                    break;
+                }
+            }
+            Received::Datagram(events) => {
+                last = clock.now();
+                if let Some(w) = raw.as_mut() {
+                    write_capture_record(w, rx.last_datagram())?;
+                }
+                for e in &events {
+                    if let MonitorEvent::Notice(n) = e {
+                        notice(n);
+                    }
+                }
+                recorder.take(&events);
+            }
+        }
+    }
+    match raw {
+        Some(w) => w.flush(),
+        None => Ok(()),
+    }
 }

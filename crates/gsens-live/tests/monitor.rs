@@ -1,17 +1,21 @@
-//! The monitor's receiving loop (`gsens_live::receive_monitor`) on the
-//! datagrams of a real GNSS-SDR 0.0.17 monitor capture (gsens-gnss-sdr's
-//! fixture) and a garbage datagram, given in order without a socket, on an
-//! injected clock: its idle timeout, its notices, its rows on the 20 ms grid
-//! and the datagrams it keeps do not depend on the machine's speed.
+//! The monitor's receiving loops (`gsens_live::receive_monitor` of a live
+//! session, `gsens_live::record_monitor` of `gsens import
+//! gnss-sdr-monitor`) on the datagrams of a real GNSS-SDR 0.0.17 monitor
+//! capture (gsens-gnss-sdr's fixture) and a garbage datagram, given in order
+//! without a socket, on an injected clock: their idle timeouts, notices,
+//! rows on the 20 ms grid and the datagrams they keep do not depend on the
+//! machine's speed.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc;
 use std::time::Duration;
 
-use gsens_gnss_sdr::monitor::{LiveGrid, MonitorStream, Received, split_capture, write_capture_record};
+use gsens_gnss_sdr::monitor::{
+    LiveGrid, MonitorStream, Notice, Received, Recorder, split_capture, write_capture_record,
+};
 use gsens_gnss_sdr::{GnssSdrConf, ImportSettings};
-use gsens_live::{Clock, Datagrams, Input, ManualClock, SourceEvent, receive_monitor};
+use gsens_live::{Clock, Datagrams, Input, ManualClock, SourceEvent, receive_monitor, record_monitor};
 
 fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../gsens-gnss-sdr/tests/fixtures/monitor")
@@ -45,16 +49,23 @@ impl Datagrams for Replayed {
     }
 }
 
-#[test]
-fn the_monitor_loop_grids_rows_keeps_new_datagrams_and_ends_when_idle() {
+/// The fixture's run: its import settings and decimation, and its first
+/// 1 200 datagrams with a garbage one before the 101st.
+fn fixture_run() -> (ImportSettings, u32, Vec<Vec<u8>>) {
     let conf = GnssSdrConf::read(fixture().join("gnss-sdr.conf")).unwrap();
     let tracking = conf.tracking().unwrap();
     let decimation = conf.get_count("TrackingMonitor.decimation_factor").unwrap().unwrap_or(1);
-    let fs_hz = tracking.fs_hz;
-    let import = ImportSettings::new(fs_hz.unwrap_or(1.0), tracking);
+    let import = ImportSettings::new(tracking.fs_hz.unwrap_or(1.0), tracking);
     let bytes = std::fs::read(fixture().join("monitor.bin")).unwrap();
     let mut datagrams: Vec<Vec<u8>> = split_capture(&bytes).unwrap().iter().take(1200).map(|d| d.to_vec()).collect();
     datagrams.insert(100, b"not protobuf \xff\xff".to_vec());
+    (import, decimation, datagrams)
+}
+
+#[test]
+fn the_monitor_loop_grids_rows_keeps_new_datagrams_and_ends_when_idle() {
+    let (import, decimation, datagrams) = fixture_run();
+    let fs_hz = import.tracking.fs_hz;
     let clock = Arc::new(ManualClock::new());
     let mut rx = Replayed {
         datagrams: datagrams.clone(),
@@ -109,4 +120,32 @@ fn the_monitor_loop_grids_rows_keeps_new_datagrams_and_ends_when_idle() {
     assert_eq!(raw, expected);
     let kept = split_capture(&raw).unwrap().len();
     assert!(kept > 100 && kept < datagrams.len(), "{kept} of {} datagrams kept", datagrams.len());
+}
+
+/// Recording the monitor (`gsens import gnss-sdr-monitor`): every datagram
+/// kept as received, each counted, the garbage one said, the rows on the
+/// 20 ms grid; it stops after the idle time on the injected clock.
+#[test]
+fn recording_keeps_and_counts_every_datagram_until_idle() {
+    let (import, decimation, datagrams) = fixture_run();
+    let fs_hz = import.tracking.fs_hz;
+    let clock = Arc::new(ManualClock::new());
+    let stream = MonitorStream::new(fs_hz, decimation);
+    let mut rx = Replayed { datagrams: datagrams.clone(), next: 0, stream, clock: clock.clone() };
+    let mut recorder = Recorder::new(decimation);
+    let (mut raw, mut notices) = (Vec::new(), Vec::new());
+    let mut say = |n: &Notice| notices.push(n.to_string());
+    record_monitor(&mut rx, &mut recorder, Some(&mut raw), 1.5, &*clock, &mut say).unwrap();
+    let idle_s = clock.now().as_secs_f64();
+    assert!((1.5..1.7).contains(&idle_s), "{idle_s} s");
+    assert!(rx.stream.counts.summary().starts_with("1201 datagrams (1 garbage)"), "{}", rx.stream.counts.summary());
+    assert!(notices.iter().any(|n| n.starts_with("datagram 100: ") && n.contains("not a GNSS-SDR Observables")));
+    let mut sent = Vec::new();
+    for d in &datagrams {
+        write_capture_record(&mut sent, d).unwrap();
+    }
+    assert_eq!(raw, sent, "the raw capture holds every datagram as received");
+    let rows = recorder.finish(import.settle_time_s());
+    assert!(rows.len() > 800, "{} rows", rows.len());
+    assert!(rows.iter().all(|r| (r.t_s / 0.02 - (r.t_s / 0.02).round()).abs() < 1e-6));
 }
