@@ -94,9 +94,14 @@ impl Status {
 /// Writes `text` to standard output; a closed pipe (`gsens response | head`)
 /// ends the output quietly.
 pub fn out(text: &str) -> anyhow::Result<()> {
-    match std::io::stdout().lock().write_all(text.as_bytes()) {
+    Ok(out_bytes(text.as_bytes())?)
+}
+
+/// [`out`] of bytes.
+pub fn out_bytes(bytes: &[u8]) -> std::io::Result<()> {
+    match std::io::stdout().lock().write_all(bytes) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
-        r => Ok(r?),
+        r => r,
     }
 }
 

@@ -6,12 +6,11 @@ use clap::Args;
 use gsens_core::units::Decimal;
 use gsens_gnss_sdr::conf::{GnssSdrConf, TrackingConf};
 use gsens_gnss_sdr::import::ImportSettings;
-use gsens_gnss_sdr::monitor::{
-    MonitorEvent, MonitorReceiver, MonitorStream, Notice, Received, Recorder, write_capture_record,
-};
+use gsens_gnss_sdr::monitor::{MonitorReceiver, MonitorStream, Notice, Recorder};
+use gsens_live::SystemClock;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// `gsens import gnss-sdr-monitor`.
 #[derive(Args, Debug)]
@@ -70,42 +69,22 @@ pub fn run(a: &ImportMonitorArgs) -> Result<()> {
     crate::err(&format!("listening on {} (stops after {} s without a datagram)\n", rx.local_addr()?, a.idle_timeout_s));
     let mut recorder = Recorder::new(decimation);
     let mut shown = [0usize; 4];
-    let mut last = Instant::now();
-    loop {
-        match rx.recv()? {
-            Received::Timeout => {
-                if last.elapsed() >= idle {
-                    break;
-                }
-            }
-            Received::Datagram(events) => {
-                last = Instant::now();
-                if let Some(w) = raw.as_mut() {
-                    write_capture_record(w, rx.last_datagram())?;
-                }
-                for e in &events {
-                    if let MonitorEvent::Notice(n) = e {
-                        let kind = match n {
-                            Notice::Garbage { .. } => 0,
-                            Notice::Gap { .. } => 1,
-                            Notice::Restart { .. } => 2,
-                            Notice::LossOfLock { .. } => 3,
-                        };
-                        shown[kind] += 1;
-                        if shown[kind] <= NOTICES_SHOWN {
-                            crate::err(&format!("{n}\n"));
-                        } else if shown[kind] == NOTICES_SHOWN + 1 {
-                            crate::err("(further notices of this kind are only counted)\n");
-                        }
-                    }
-                }
-                recorder.take(&events);
-            }
+    let mut say = |n: &Notice| {
+        let kind = match n {
+            Notice::Garbage { .. } => 0,
+            Notice::Gap { .. } => 1,
+            Notice::Restart { .. } => 2,
+            Notice::LossOfLock { .. } => 3,
+        };
+        shown[kind] += 1;
+        if shown[kind] <= NOTICES_SHOWN {
+            crate::err(&format!("{n}\n"));
+        } else if shown[kind] == NOTICES_SHOWN + 1 {
+            crate::err("(further notices of this kind are only counted)\n");
         }
-    }
-    if let Some(mut w) = raw {
-        w.flush()?;
-    }
+    };
+    let raw_out = raw.as_mut().map(|w| w as &mut dyn Write);
+    gsens_live::record_monitor(&mut rx, &mut recorder, raw_out, a.idle_timeout_s, &SystemClock::new(), &mut say)?;
     let counts = &rx.stream.counts;
     crate::out(&format!("received {}\n", counts.summary()))?;
     if counts.rows == 0 {

@@ -8,6 +8,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::Outcome;
 use gsens_io::TrackingLog;
+use gsens_live::TruthLoopUse;
 use gsens_report::{FigureInputs, write_report_dir};
 use std::path::{Path, PathBuf};
 
@@ -50,29 +51,26 @@ pub fn settings_and_loop_note(
 ) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
     let mut settings = calibration.settings()?;
     let Some(path) = truth else { return Ok((settings, None)) };
-    let Some(truth) = gsens_sim::read_truth_loop(path)? else {
-        let note = format!("receiver loop: from the options ({} states none)", path.display());
-        return Ok((settings, Some(note)));
-    };
     let logged = |l: gsens_core::LoggedPhase| match l {
         gsens_core::LoggedPhase::Last => "the last discriminator output",
         gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
     };
-    let stated = format!("{}, logged: {}", truth.receiver_loop, logged(truth.logged_phase));
-    let note = if calibration.loop_args.stated() {
-        let same = settings.estimate.receiver_loop == truth.receiver_loop
-            && settings.estimate.logged_phase == truth.logged_phase;
-        let relation = if same { "the same as" } else { "not" };
-        format!("receiver loop: from the options, {relation} the one {} states ({stated})", path.display())
-    } else {
-        settings.estimate.receiver_loop = truth.receiver_loop;
-        settings.estimate.logged_phase = truth.logged_phase;
-        settings.loop_stated = true;
-        format!(
-            "receiver loop: {stated} (from {}, the loop that made the log; loop options such as --bn-hz \
-             override it)",
+    let stated = |t: &gsens_sim::TruthLoop| format!("{}, logged: {}", t.receiver_loop, logged(t.logged_phase));
+    let note = match gsens_live::take_truth_loop(&mut settings, path)? {
+        TruthLoopUse::NotStated => format!("receiver loop: from the options ({} states none)", path.display()),
+        TruthLoopUse::SettingsOwn { truth, same } => {
+            let relation = if same { "the same as" } else { "not" };
+            format!(
+                "receiver loop: from the options, {relation} the one {} states ({})",
+                path.display(),
+                stated(&truth)
+            )
+        }
+        TruthLoopUse::Taken { truth } => format!(
+            "receiver loop: {} (from {}, the loop that made the log; loop options such as --bn-hz override it)",
+            stated(&truth),
             path.display()
-        )
+        ),
     };
     Ok((settings, Some(note)))
 }

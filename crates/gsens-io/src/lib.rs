@@ -33,6 +33,7 @@ pub mod error;
 pub mod imu;
 mod parse;
 mod plain;
+pub mod row;
 pub mod signal;
 #[cfg(test)]
 mod test_files;
@@ -43,6 +44,7 @@ pub mod writers;
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
+pub use row::{RowError, parse_imu_row, parse_tracking_row};
 pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
 pub use vibration::{VIBRATION_COLUMNS, read_vibration_psd, read_vibration_psd_file};

@@ -306,7 +306,8 @@ pub(crate) fn cell_u32(raw: &[u8]) -> Result<u32, BadCell> {
     std::str::from_utf8(raw).ok().and_then(|s| s.parse::<u32>().ok()).ok_or(BadCell::NotANumber)
 }
 
-fn cell_text(raw: &[u8]) -> String {
+/// A cell's text for a message: lossily decoded, trimmed, cut at 40 characters.
+pub(crate) fn cell_text(raw: &[u8]) -> String {
     let s = String::from_utf8_lossy(raw.trim_ascii());
     if s.chars().count() > 40 { format!("{}…", s.chars().take(40).collect::<String>()) } else { s.into_owned() }
 }

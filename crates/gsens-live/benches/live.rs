@@ -4,18 +4,13 @@
 //! one batch estimate of those 60 s.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use gsens_calib::PipelineSettings;
 use gsens_live::{Input, LiveConfig, LiveSession, read_session_dir};
 
 fn session_at_60_s() -> (LiveSession, Vec<Input>) {
     let dir = std::env::temp_dir().join(format!("gsens-live-bench-{}", std::process::id()));
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, &dir, |_| {}).unwrap();
     let inputs = read_session_dir(&dir).unwrap();
-    let truth = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
-    let mut settings = PipelineSettings::default();
-    settings.estimate.receiver_loop = truth.receiver_loop;
-    settings.estimate.logged_phase = truth.logged_phase;
-    settings.loop_stated = true;
+    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     let mut live = LiveSession::new(LiveConfig::new(settings, 8e-4)).unwrap();
     let mut rest = Vec::new();
     for (k, x) in inputs.into_iter().enumerate() {

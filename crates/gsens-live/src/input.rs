@@ -73,15 +73,27 @@ impl core::fmt::Display for Notice {
     }
 }
 
-fn number(field: Option<&str>, name: &str, column: usize) -> Result<f64, String> {
-    let s = field.ok_or_else(|| format!("column {column} ({name}) missing"))?.trim();
-    let v: f64 = s.parse().map_err(|_| format!("column {column} ({name}): {s:?} is not a number"))?;
-    if v.is_finite() { Ok(v) } else { Err(format!("column {column} ({name}): {s} is not finite")) }
-}
-
-fn integer(field: Option<&str>, name: &str, column: usize) -> Result<u32, String> {
-    let s = field.ok_or_else(|| format!("column {column} ({name}) missing"))?.trim();
-    s.parse().map_err(|_| format!("column {column} ({name}): {s:?} is not a non-negative integer"))
+/// Why a received line is not a record.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum LineError {
+    /// A cell of the row (gsens-io's row parser: the column is named).
+    #[error(transparent)]
+    Row(gsens_io::RowError),
+    /// A tracking row with cells after `phase_err_rad`: carrier columns.
+    #[error("more than {columns} columns (carrier columns are not read live yet: log GPS L1 only)")]
+    TrackingColumns {
+        /// The line's columns up to `phase_err_rad`.
+        columns: usize,
+    },
+    /// The header of a `tracking.csv` with carrier columns.
+    #[error("carrier columns (signal, carrier_hz) are not read live yet: log GPS L1 only")]
+    CarrierHeader,
+    /// A merged-stream line whose first column is no tag.
+    #[error("column 1: {tag:?} is neither `imu` nor `trk`")]
+    UnknownTag {
+        /// The first column.
+        tag: String,
+    },
 }
 
 fn skippable(line: &str) -> bool {
@@ -89,83 +101,56 @@ fn skippable(line: &str) -> bool {
     t.is_empty() || t.starts_with('#')
 }
 
-fn no_more(mut fields: core::str::Split<'_, char>, expected: usize) -> Result<(), String> {
-    match fields.next() {
-        None => Ok(()),
-        Some(_) => Err(format!("more than {expected} columns")),
-    }
-}
-
 /// One line of `imu.csv` (`t_s,fx_mps2,fy_mps2,fz_mps2`); the header is skipped.
 /// Errors say which column is wrong (columns counted from 1).
-pub fn parse_imu_line(line: &str) -> Result<LineKind, String> {
-    parse_imu_fields(line, 0)
-}
-
-fn parse_imu_fields(line: &str, offset: usize) -> Result<LineKind, String> {
+pub fn parse_imu_line(line: &str) -> Result<LineKind, LineError> {
     if skippable(line) || line.trim() == IMU_COLUMNS.join(",") {
         return Ok(LineKind::Skip);
     }
-    let mut f = line.trim_end().split(',');
-    for _ in 0..offset {
-        f.next();
-    }
-    let t_s = number(f.next(), IMU_COLUMNS[0], offset + 1)?;
-    let mut accel_mps2 = [0.0; 3];
-    for (i, a) in accel_mps2.iter_mut().enumerate() {
-        *a = number(f.next(), IMU_COLUMNS[i + 1], offset + i + 2)?;
-    }
-    no_more(f, offset + 4)?;
+    imu_cells(line, 1)
+}
+
+/// The IMU record of `cells`, the line's columns from `first_column` on.
+fn imu_cells(cells: &str, first_column: usize) -> Result<LineKind, LineError> {
+    let (t_s, accel_mps2) = gsens_io::parse_imu_row(cells, first_column).map_err(LineError::Row)?;
     Ok(LineKind::Data(Input::Imu { t_s, accel_mps2 }))
 }
 
 /// One line of `tracking.csv` (`t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`,
 /// `elev_deg` possibly empty); the header is skipped. Logs with carrier
 /// columns are not read live yet: their rows are errors saying so.
-pub fn parse_tracking_line(line: &str) -> Result<LineKind, String> {
-    parse_tracking_fields(line, 0)
-}
-
-fn parse_tracking_fields(line: &str, offset: usize) -> Result<LineKind, String> {
+pub fn parse_tracking_line(line: &str) -> Result<LineKind, LineError> {
     let header = TRACKING_COLUMNS.join(",");
     if skippable(line) || line.trim() == header {
         return Ok(LineKind::Skip);
     }
     if line.trim().starts_with(&header) {
-        return Err("carrier columns (signal, carrier_hz) are not read live yet: log GPS L1 only".into());
+        return Err(LineError::CarrierHeader);
     }
-    let mut f = line.trim_end().split(',');
-    for _ in 0..offset {
-        f.next();
+    tracking_cells(line, 1)
+}
+
+/// The tracking record of `cells`, the line's columns from `first_column` on.
+fn tracking_cells(cells: &str, first_column: usize) -> Result<LineKind, LineError> {
+    match gsens_io::parse_tracking_row(cells, first_column) {
+        Ok(row) => Ok(LineKind::Data(Input::Tracking(row))),
+        Err(gsens_io::RowError::TooManyColumns { columns }) => Err(LineError::TrackingColumns { columns }),
+        Err(e) => Err(LineError::Row(e)),
     }
-    let t_s = number(f.next(), "t_s", offset + 1)?;
-    let channel = integer(f.next(), "channel", offset + 2)?;
-    let prn = integer(f.next(), "prn", offset + 3)?;
-    let cn0_dbhz = number(f.next(), "cn0_dbhz", offset + 4)?;
-    let elev = f.next().ok_or_else(|| format!("column {} (elev_deg) missing", offset + 5))?;
-    let elev_deg = if elev.trim().is_empty() { None } else { Some(number(Some(elev), "elev_deg", offset + 5)?) };
-    let phase_err_rad = number(f.next(), "phase_err_rad", offset + 6)?;
-    if f.next().is_some() {
-        return Err(format!(
-            "more than {} columns (carrier columns are not read live yet: log GPS L1 only)",
-            offset + 6
-        ));
-    }
-    Ok(LineKind::Data(Input::Tracking(TrackingRow { t_s, channel, prn, cn0_dbhz, elev_deg, phase_err_rad })))
 }
 
 /// One line of the merged stream (module docs): `imu,…` or `trk,…`; the
 /// header lines of `imu.csv` and `tracking.csv` are skipped too.
-pub fn parse_merged_line(line: &str) -> Result<LineKind, String> {
+pub fn parse_merged_line(line: &str) -> Result<LineKind, LineError> {
     if skippable(line) {
         return Ok(LineKind::Skip);
     }
-    let tag = line.split(',').next().unwrap_or("").trim();
-    match tag {
-        "imu" => parse_imu_fields(line, 1),
-        "trk" => parse_tracking_fields(line, 1),
+    let (tag, rest) = line.split_once(',').unwrap_or((line, ""));
+    match tag.trim() {
+        "imu" => imu_cells(rest, 2),
+        "trk" => tracking_cells(rest, 2),
         "t_s" => Ok(LineKind::Skip),
-        _ => Err(format!("column 1: {tag:?} is neither `imu` nor `trk`")),
+        tag => Err(LineError::UnknownTag { tag: tag.to_string() }),
     }
 }
 
@@ -200,12 +185,13 @@ mod tests {
         }
         assert_eq!(parse_merged_line("# comment").unwrap(), LineKind::Skip);
         assert_eq!(parse_merged_line("t_s,fx_mps2,fy_mps2,fz_mps2").unwrap(), LineKind::Skip);
-        assert!(parse_merged_line("gps,1,2").unwrap_err().contains("column 1"));
-        assert!(parse_merged_line("imu,1.0,0,x,9.8").unwrap_err().contains("column 4 (fy_mps2)"));
-        assert!(parse_merged_line("imu,1.0,0,0").unwrap_err().contains("column 5 (fz_mps2) missing"));
-        assert!(parse_merged_line("trk,1.0,1,2,45,,0.1,9").unwrap_err().contains("more than 7 columns"));
-        assert!(parse_merged_line("trk,1.0,-1,2,45,,0.1").unwrap_err().contains("column 3 (channel)"));
-        assert!(parse_imu_line("1.0,0,NaN,9.8").unwrap_err().contains("not finite"));
+        let e = |line: &str| parse_merged_line(line).unwrap_err().to_string();
+        assert_eq!(e("gps,1,2"), "column 1: \"gps\" is neither `imu` nor `trk`");
+        assert_eq!(e("imu,1.0,0,x,9.8"), "column 4 (`fy_mps2`): `x` is not a number");
+        assert_eq!(e("imu,1.0,0,0"), "column 5 (`fz_mps2`) missing");
+        assert!(e("trk,1.0,1,2,45,,0.1,9").starts_with("more than 7 columns (carrier columns"));
+        assert_eq!(e("trk,1.0,-1,2,45,,0.1"), "column 3 (`channel`): `-1` is not a non-negative integer");
+        assert!(parse_imu_line("1.0,0,NaN,9.8").unwrap_err().to_string().contains("not a finite number"));
         assert_eq!(parse_tracking_line("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad").unwrap(), LineKind::Skip);
         assert!(parse_tracking_line("t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,signal,carrier_hz").is_err());
     }

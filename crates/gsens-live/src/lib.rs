@@ -15,7 +15,11 @@
 //! - [`session`]: [`LiveSession`] accumulates the received data, schedules the
 //!   batch estimate ([`BatchJob`], the same `gsens_calib::calibrate_logs` as
 //!   `gsens estimate`, runnable in another thread) and answers a
-//!   [`LiveView`] for the screen at any moment.
+//!   [`LiveView`] for the screen at any moment;
+//! - [`runtime`]: a whole session, from its inputs (read by one thread each,
+//!   [`sources`], [`monitor`]) to the final estimate on the logs it keeps,
+//!   shown as plain lines or on a [`LiveScreen`]; wall time is read through
+//!   a [`Clock`], so tests run it without waiting.
 //!
 //! The screen shows two estimates: the streamed one, new at every epoch, and
 //! the batch pipeline's on the data received so far, with its checks, which
@@ -23,19 +27,34 @@
 //! batch estimate of the logs that `gsens live` keeps.
 #![warn(missing_docs)]
 
+pub mod clock;
 pub mod follow;
 pub mod guidance;
 pub mod input;
+mod kept;
+mod merge;
+pub mod monitor;
 pub mod motion;
+mod plain;
 pub mod replay;
+pub mod runtime;
 pub mod session;
+pub mod sources;
 pub mod stream;
+pub mod truth;
 
+pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
 pub use gsens_calib::{Warning, WarningCode};
 pub use guidance::{Instruction, LoopBand, Protocol};
-pub use input::{Input, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line};
+pub use input::{
+    Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,
+};
+pub use monitor::{Datagrams, MonitorInput, receive_monitor, record_monitor};
 pub use motion::{MotionWindow, Shaking};
 pub use replay::read_session_dir;
+pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
 pub use session::{AxisProgress, BatchJob, BatchResult, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed};
+pub use sources::{LineFormat, Source, SourceEvent};
 pub use stream::{Epoch, EpochAverager, StreamEstimate};
+pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop};

@@ -3,26 +3,27 @@
 
 use std::path::Path;
 
-use crate::input::{Input, LineKind, parse_imu_line, parse_tracking_line};
+use crate::input::{Input, LineKind};
+use crate::sources::LineFormat;
 
 /// The records of `dir/imu.csv` and `dir/tracking.csv` in time order (at
 /// equal time stamps the IMU first: a receiver's row at t uses the IMU up to
 /// t). Errors name the file and line.
 pub fn read_session_dir(dir: &Path) -> Result<Vec<Input>, String> {
-    let read = |name: &str, parse: fn(&str) -> Result<LineKind, String>| -> Result<Vec<Input>, String> {
+    let read = |name: &str, format: LineFormat| -> Result<Vec<Input>, String> {
         let path = dir.join(name);
         let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut out = Vec::new();
         for (i, line) in text.lines().enumerate() {
-            match parse(line).map_err(|e| format!("{}:{}: {e}", path.display(), i + 1))? {
+            match format.parse(line).map_err(|e| format!("{}:{}: {e}", path.display(), i + 1))? {
                 LineKind::Data(x) => out.push(x),
                 LineKind::Skip => {}
             }
         }
         Ok(out)
     };
-    let imu = read("imu.csv", parse_imu_line)?;
-    let trk = read("tracking.csv", parse_tracking_line)?;
+    let imu = read("imu.csv", LineFormat::Imu)?;
+    let trk = read("tracking.csv", LineFormat::Tracking)?;
     let mut merged = Vec::with_capacity(imu.len() + trk.len());
     let (mut i, mut j) = (0, 0);
     while i < imu.len() || j < trk.len() {

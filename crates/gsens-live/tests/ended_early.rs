@@ -4,7 +4,6 @@
 //! the truth seen through the IMU, and the RMS of those errors in σ stays
 //! within its 0.1 % bound for 8 standard normals, √(χ²₈(0.999)/8) = 1.81.
 
-use gsens_calib::PipelineSettings;
 use gsens_live::{LiveConfig, LiveSession, read_session_dir};
 
 #[test]
@@ -21,11 +20,7 @@ fn ended_at_30_s_the_estimate_holds_its_sigma() {
             serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
         let gamma_imu: Vec<f64> =
             truth["gamma_imu_axes_hz_per_mps2"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-        let truth_loop = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
-        let mut settings = PipelineSettings::default();
-        settings.estimate.receiver_loop = truth_loop.receiver_loop;
-        settings.estimate.logged_phase = truth_loop.logged_phase;
-        settings.loop_stated = true;
+        let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
         let mut live = LiveSession::new(LiveConfig::new(settings, 1e-5)).unwrap();
         for (k, x) in read_session_dir(&dir).unwrap().iter().enumerate() {
             if x.t_s() > 30.0 {

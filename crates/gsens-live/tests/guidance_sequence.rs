@@ -3,7 +3,6 @@
 //! guidance asks for x, then y, then z, and ends when every axis meets the
 //! target σ, before the data end.
 
-use gsens_calib::PipelineSettings;
 use gsens_live::{Instruction, LiveConfig, LiveSession, read_session_dir};
 
 #[test]
@@ -13,11 +12,7 @@ fn asks_for_x_then_y_then_z_and_stops_at_the_target() {
     let scenario = gsens_sim::scenario::Scenario::default();
     gsens_sim::simulate_to_dir(&scenario, 1, &dir, |_| {}).unwrap();
     let inputs = read_session_dir(&dir).unwrap();
-    let truth_loop = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
-    let mut settings = PipelineSettings::default();
-    settings.estimate.receiver_loop = truth_loop.receiver_loop;
-    settings.estimate.logged_phase = truth_loop.logged_phase;
-    settings.loop_stated = true;
+    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     let mut live = LiveSession::new(LiveConfig::new(settings, 8e-4)).unwrap();
     let mut said: Vec<(f64, Instruction)> = Vec::new();
     let mut stopped_at = None;

@@ -44,12 +44,12 @@ fn time_going_back_is_one_notice_per_burst_and_the_session_goes_on() {
 #[test]
 fn garbage_lines_are_errors_naming_the_column() {
     for (line, what) in [
-        ("imu,1.0,0.0,0.0", "column 5 (fz_mps2) missing"),
+        ("imu,1.0,0.0,0.0", "column 5 (`fz_mps2`) missing"),
         ("\u{0}\u{1}binary", "neither `imu` nor `trk`"),
-        ("trk,1.0,0,5,45.0,,nan", "not finite"),
+        ("trk,1.0,0,5,45.0,,nan", "column 7 (`phase_err_rad`): `nan` is not a finite number"),
         ("imu,1.0,0.0,0.0,9.8,7", "more than 5 columns"),
     ] {
-        let e = parse_merged_line(line).unwrap_err();
+        let e = parse_merged_line(line).unwrap_err().to_string();
         assert!(e.contains(what), "{line:?}: {e}");
     }
     assert_eq!(parse_merged_line("").unwrap(), LineKind::Skip);

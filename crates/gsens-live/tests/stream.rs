@@ -19,11 +19,7 @@ fn session(dir_name: &str) -> (tempfile::TempDir, PipelineSettings) {
     let scratch = tempfile::Builder::new().prefix(&format!("gsens-live-{dir_name}-")).tempdir().unwrap();
     let dir = scratch.path();
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, dir, |_| {}).unwrap();
-    let truth_loop = gsens_sim::read_truth_loop(&dir.join("truth.json")).unwrap().unwrap();
-    let mut settings = PipelineSettings::default();
-    settings.estimate.receiver_loop = truth_loop.receiver_loop;
-    settings.estimate.logged_phase = truth_loop.logged_phase;
-    settings.loop_stated = true;
+    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     (scratch, settings)
 }
 
