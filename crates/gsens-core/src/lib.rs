@@ -27,6 +27,7 @@ mod observability;
 mod pll;
 mod regressor;
 mod robust;
+pub mod stats;
 pub mod units;
 
 pub use pll::gnss_sdr;

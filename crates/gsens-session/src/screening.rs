@@ -1,6 +1,7 @@
 //! Per-track screening of the tracking rows before averaging (documented at
 //! the crate root, section "Screening").
 
+use gsens_core::stats::median_in_place;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ScreeningConfigError;
@@ -380,18 +381,6 @@ pub(crate) fn per_track<'a, T>(v: &'a mut [T], track_start: &[usize]) -> Vec<&'a
     out
 }
 
-/// Median of a slice (reordered); NaN when empty.
-fn median_of(v: &mut [f64]) -> f64 {
-    let n = v.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    let m = n / 2;
-    let (lower, mid, _) = v.select_nth_unstable_by(m, f64::total_cmp);
-    let mid = *mid;
-    if n % 2 == 1 { mid } else { 0.5 * (mid + lower.iter().copied().fold(f64::NEG_INFINITY, f64::max)) }
-}
-
 /// An integer key with the order of the (finite) float, at single precision:
 /// the sign-magnitude bits of `v as f32` turned into two's complement.
 #[inline]
@@ -586,10 +575,10 @@ fn local_sigma(epoch: &[u32], d: &[f64], window: u32, scratch: &mut Vec<f64>) ->
         if block.len() < 3 {
             continue;
         }
-        let m = median_of(&mut block);
+        let m = median_in_place(&mut block);
         scratch.extend(d[first..j].iter().filter(|v| v.is_finite()).map(|v| (v - m).abs()));
     }
-    1.4826 * median_of(scratch)
+    1.4826 * median_in_place(scratch)
 }
 
 /// The median over a regular subsample of the epochs (at most
@@ -643,7 +632,7 @@ fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
     (0..n_tracks)
         .map(|i| {
             let mut v: Vec<f64> = parts.iter().flat_map(|p| p[i].iter().copied()).collect();
-            if v.is_empty() { 0.0 } else { median_of(&mut v) }
+            if v.is_empty() { 0.0 } else { median_in_place(&mut v) }
         })
         .collect()
 }
@@ -658,7 +647,7 @@ fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64
     let stride = values.len().div_ceil(MEDIAN_SAMPLE).max(1);
     scratch.clear();
     scratch.extend(values.iter().step_by(stride).copied().filter(|v| v.is_finite()).map(f));
-    median_of(scratch)
+    median_in_place(scratch)
 }
 
 /// Screens the rows (see the crate documentation, section "Screening"). `n_epochs`: the epoch
@@ -1112,7 +1101,7 @@ fn slip_events(
         }
         window.clear();
         window.extend(ev[first..].iter().map(|&k| d[k]));
-        let m = median_of(&mut window);
+        let m = median_in_place(&mut window);
         if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
             continue;
         }
@@ -1350,7 +1339,7 @@ fn low_gain_windows(
         }
         slopes.clear();
         slopes.extend(group.iter().map(|&f| fits[f].slope));
-        let typical = median_of(&mut slopes);
+        let typical = median_in_place(&mut slopes);
         if typical.is_nan() || typical < 0.8 {
             continue;
         }

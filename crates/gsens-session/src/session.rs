@@ -241,14 +241,7 @@ impl Grid {
             return Err(SessionError::TooFewEpochs { file: file.to_owned(), epochs: n });
         }
         let mut d: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
-        let m = d.len() / 2;
-        d.select_nth_unstable_by(m, f64::total_cmp);
-        let median_s = if d.len() % 2 == 1 {
-            d[m]
-        } else {
-            let lower = d[..m].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            0.5 * (lower + d[m])
-        };
+        let median_s = gsens_core::stats::median_in_place(&mut d);
         drop(d);
 
         let mut k_of_stamp = Vec::with_capacity(n);
