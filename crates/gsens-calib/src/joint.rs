@@ -664,7 +664,7 @@ pub fn choose_loop(
     offset_max_abs_s: Option<f64>,
 ) -> Result<ChosenLoop, CalibError> {
     let t = series.log_interval_s;
-    let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(3.0);
+    let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(crate::defaults::DEFAULT_BN_HZ);
     let mut intervals: Vec<f64> = TYPICAL_LOOP_INTERVALS_S
         .iter()
         .copied()

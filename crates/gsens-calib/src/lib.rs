@@ -49,6 +49,7 @@
 #![deny(missing_docs)]
 
 mod checks;
+pub mod defaults;
 mod document;
 mod error;
 mod estimate;

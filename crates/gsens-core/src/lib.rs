@@ -18,6 +18,7 @@
 
 mod calibrator;
 mod compensate;
+pub mod defaults;
 mod discriminator;
 mod estimator;
 mod filter;

@@ -98,7 +98,8 @@ pub fn third_order_bn_over_wn(a3: f64, b3: f64) -> f64 {
 
 impl LoopSpec {
     /// The paper's loop: 2nd order, Bn = 3 Hz, ζ = 1/√2.
-    pub const PAPER: LoopSpec = LoopSpec::SecondOrder { bn_hz: 3.0, zeta: core::f64::consts::FRAC_1_SQRT_2 };
+    pub const PAPER: LoopSpec =
+        LoopSpec::SecondOrder { bn_hz: crate::defaults::DEFAULT_BN_HZ, zeta: core::f64::consts::FRAC_1_SQRT_2 };
 
     /// Kaplan's 3rd-order loop with bandwidth `bn_hz`.
     pub fn third_order_kaplan(bn_hz: f64) -> LoopSpec {

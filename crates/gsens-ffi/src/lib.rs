@@ -35,7 +35,7 @@ use core::mem::{align_of, size_of};
 
 use gsens_core::{
     BatchLeastSquares, Calibrator, Compensator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopError, LoopFilterCoeffs,
-    LoopModel, LoopSpec, ModelLoop, ObservabilityCriteria, PrefilteredCalibrator, RegressorModel,
+    LoopModel, LoopSpec, ModelLoop, ObservabilityCriteria, PrefilteredCalibrator, RegressorModel, defaults,
     solve_in_observable_axes,
 };
 
@@ -261,12 +261,12 @@ pub extern "C" fn gsens_calibrator_config_default(config: *mut GsensCalibratorCo
         }
         let (bn_hz, zeta) = match LoopSpec::PAPER {
             LoopSpec::SecondOrder { bn_hz, zeta } => (bn_hz, zeta),
-            _ => (3.0, core::f64::consts::FRAC_1_SQRT_2),
+            _ => (defaults::DEFAULT_BN_HZ, core::f64::consts::FRAC_1_SQRT_2),
         };
         let criteria = ObservabilityCriteria::default();
         let c = GsensCalibratorConfig {
             struct_size: size_u32::<GsensCalibratorConfig>(),
-            order: 2,
+            order: u32::from(defaults::DEFAULT_ORDER),
             bn_hz,
             zeta,
             a3: KAPLAN_A3,
@@ -277,8 +277,8 @@ pub extern "C" fn gsens_calibrator_config_default(config: *mut GsensCalibratorCo
             loop_interval_s: 0.001,
             log_interval_s: 0.025,
             logged_phase: GsensLoggedPhase::Last as u32,
-            warmup_s: 2.0,
-            highpass_hz: 0.05,
+            warmup_s: defaults::DEFAULT_WARMUP_S,
+            highpass_hz: defaults::DEFAULT_HIGHPASS_HZ,
             min_excitation_rms: criteria.min_excitation_rms,
             max_sigma_hz_per_mps2: criteria.max_sigma_hz_per_mps2,
             sigma_colour_factor: 1.0,

@@ -60,7 +60,7 @@ pub struct ScreeningConfig {
     /// noise that crosses the limit.
     pub max_abs_phase_rad: Option<f64>,
     /// Rows whose C/N0 is more than this below the track's median are excluded
-    /// \[dB\]; `None`: no test. Default 6 dB.
+    /// \[dB\]; `None`: no test. Default [`DEFAULT_CN0_DROP_DB`].
     pub cn0_drop_db: Option<f64>,
     /// A track of which the cross-channel tests (slips, noisy stretches, low
     /// gain) flag more than this fraction of the rows is excluded entirely. Default 0.5.
@@ -81,6 +81,10 @@ pub struct ScreeningConfig {
     pub startup_s: f64,
 }
 
+/// The C/N0 drop below a track's median that excludes a row by default
+/// \[dB\]: 6 dB, a quarter of the track's typical signal power.
+pub const DEFAULT_CN0_DROP_DB: f64 = 6.0;
+
 impl Default for ScreeningConfig {
     fn default() -> Self {
         ScreeningConfig {
@@ -96,7 +100,7 @@ impl Default for ScreeningConfig {
             min_gain: 0.8,
             min_track_gain: 0.9,
             max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_4),
-            cn0_drop_db: Some(6.0),
+            cn0_drop_db: Some(DEFAULT_CN0_DROP_DB),
             max_excluded_fraction: 0.5,
             min_sigma_rad: 0.005,
             startup_s: 2.0,

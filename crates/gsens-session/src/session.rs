@@ -66,7 +66,7 @@ pub struct SelectionConfig {
     /// Use at most this many tracks, those with the highest mean C/N0 (after
     /// the masks), or the least noisy where C/N0 does not vary
     /// ([`ChannelRanking`]); `None`: all that pass the masks. Default
-    /// `Some(4)` (the paper).
+    /// `Some(DEFAULT_CHANNELS)`.
     pub max_channels: Option<usize>,
     /// Drop the rows whose C/N0 is below this [dB-Hz]. Default `None`.
     pub min_cn0_dbhz: Option<f64>,
@@ -85,10 +85,13 @@ pub struct SelectionConfig {
     pub screening: ScreeningConfig,
 }
 
+/// How many channels enter the average by default: 4, the paper's.
+pub const DEFAULT_CHANNELS: usize = 4;
+
 impl Default for SelectionConfig {
     fn default() -> Self {
         SelectionConfig {
-            max_channels: Some(4),
+            max_channels: Some(DEFAULT_CHANNELS),
             min_cn0_dbhz: None,
             elevation_mask_deg: None,
             weighting: Weighting::Equal,
