@@ -5,7 +5,7 @@ use crate::pipeline::Outcome;
 use crate::{Calibration, LoopSummary, Warning};
 use gsens_core::LoggedPhase;
 use gsens_core::stats::{median_high_in_place, median_in_place};
-use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2};
+use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2, cn0_dbhz_to_ratio_hz};
 use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::f64::consts::{PI, TAU};
@@ -330,7 +330,7 @@ fn scatter_ratio(
     let cn0_dbhz = ch.screening.median_cn0_dbhz.unwrap_or(ch.mean_cn0_dbhz);
     // The measured σ is on L1's scale (the phases times f_L1/f_c): so is the prediction.
     let to_l1 = gsens_core::units::GPS_L1_HZ / ch.carrier_hz;
-    let predicted = logged_phase_variance_rad2(10f64.powf(cn0_dbhz / 10.0), t_s, n, logged).sqrt() * to_l1;
+    let predicted = logged_phase_variance_rad2(cn0_dbhz_to_ratio_hz(cn0_dbhz), t_s, n, logged).sqrt() * to_l1;
     (predicted.is_finite() && predicted > 0.0).then(|| (measured / predicted, measured <= min_sigma_rad * (1.0 + 1e-9)))
 }
 

@@ -4,7 +4,9 @@
 //! g-sensitivity estimators and the compensator. No I/O, no allocation in the
 //! per-epoch path, `no_std` when built without the default `std` feature
 //! (all transcendental functions come from `libm`, so results are the same
-//! bit for bit with and without `std`).
+//! bit for bit with and without `std`; the one exception,
+//! [`units::cn0_dbhz_to_ratio_hz`], is a conversion for callers that the
+//! crate's algorithms do not use).
 //!
 //! The method (see `docs/conventions.md`): the oscillator adds a frequency
 //! bias Δf = aᵀΓ \[Hz\] to every carrier NCO, `a` the specific force \[m/s²\] in

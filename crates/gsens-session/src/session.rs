@@ -618,7 +618,7 @@ pub fn prepare_session_from(
     // Inverse of the scaled variance: s = f_L1/f_c scales the noise by s.
     let weight = |cn0_dbhz: f64, to_l1: f64| match selection.weighting {
         Weighting::Equal => 1.0 / (to_l1 * to_l1),
-        Weighting::Cn0 => 10f64.powf(cn0_dbhz / 10.0) / (to_l1 * to_l1),
+        Weighting::Cn0 => gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz) / (to_l1 * to_l1),
     };
     let selected_candidates: Vec<usize> =
         selected.iter().map(|&i| candidate_of[i].expect("a ranked track is a candidate")).collect();
