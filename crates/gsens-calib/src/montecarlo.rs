@@ -19,7 +19,6 @@
 use crate::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
 use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
-use gsens_core::LoopSpec;
 use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
 use gsens_sim::{LogsError, simulate_logs};
 use rayon::prelude::*;
@@ -305,10 +304,7 @@ pub enum MonteCarloError {
 /// as a user who knows the receiver would state them.
 pub fn scenario_settings(scenario: &Scenario, base: &EstimateSettings) -> Result<EstimateSettings, MonteCarloError> {
     let l = &scenario.tracking_loop;
-    let spec = match l.order {
-        3 => LoopSpec::ThirdOrder { bn_hz: l.bn_hz, a3: l.a3, b3: l.b3 },
-        _ => LoopSpec::SecondOrder { bn_hz: l.bn_hz, zeta: l.zeta },
-    };
+    let spec = l.spec();
     let mut s = *base;
     s.receiver_loop = LoopModel::kaplan(spec, Some(l.interval_s));
     s.logged_phase = match scenario.log.phase {

@@ -4,7 +4,7 @@
 //! [`PipelineSettings`].
 
 use crate::defaults::{
-    DEFAULT_BN_HZ, DEFAULT_CHANNELS, DEFAULT_CN0_DROP_DB, DEFAULT_GAIN_K, DEFAULT_HIGHPASS_HZ,
+    DEFAULT_BN_HZ, DEFAULT_CHANNELS, DEFAULT_CN0_DROP_DB, DEFAULT_GAIN_K, DEFAULT_HIGHPASS_HZ, DEFAULT_ORDER,
     DEFAULT_TIME_OFFSET_MAX_S, DEFAULT_WARMUP_S,
 };
 use crate::settings::check_range;
@@ -167,10 +167,9 @@ impl CalibrationOptions {
     /// 3) and [`bn_hz`](Self::bn_hz) (3 Hz unless given).
     pub fn loop_model(&self) -> LoopModel {
         let bn_hz = self.bn_hz.unwrap_or(DEFAULT_BN_HZ);
-        let spec = match self.order {
-            Some(3) => LoopSpec::ThirdOrder { bn_hz, a3: self.a3, b3: self.b3 },
-            _ => LoopSpec::SecondOrder { bn_hz, zeta: self.zeta },
-        };
+        // pipeline_settings refuses other orders; unchecked options keep the 2nd order's shape.
+        let spec = LoopSpec::of_order(self.order.unwrap_or(DEFAULT_ORDER), bn_hz, self.zeta, self.a3, self.b3)
+            .unwrap_or(LoopSpec::SecondOrder { bn_hz, zeta: self.zeta });
         LoopModel::kaplan(spec, self.loop_interval_s)
     }
 

@@ -48,7 +48,7 @@ pub use loop_model::{LoopModel, LoopPeak, TWO_RATE_FACTORS};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
 pub use pll::{
     CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopError, LoopFilter, LoopFilterCoeffs,
-    LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,
+    LoopOrderError, LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,
 };
 pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation};
 pub use robust::{HuberWeights, sandwich_covariance};

@@ -74,6 +74,22 @@ impl core::fmt::Display for LoopError {
 
 impl core::error::Error for LoopError {}
 
+/// A loop order [`LoopSpec::of_order`] has no Kaplan & Hegarty loop for
+/// (it has 2 and 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LoopOrderError {
+    /// The order asked for.
+    pub order: u8,
+}
+
+impl core::fmt::Display for LoopOrderError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "order must be 2 or 3, got {}", self.order)
+    }
+}
+
+impl core::error::Error for LoopOrderError {}
+
 fn positive(x: f64, name: &'static str) -> Result<f64, LoopError> {
     if x.is_finite() && x > 0.0 { Ok(x) } else { Err(LoopError::NonPositiveParameter(name)) }
 }
@@ -100,6 +116,21 @@ impl LoopSpec {
     /// The paper's loop: 2nd order, Bn = 3 Hz, ζ = 1/√2.
     pub const PAPER: LoopSpec =
         LoopSpec::SecondOrder { bn_hz: crate::defaults::DEFAULT_BN_HZ, zeta: core::f64::consts::FRAC_1_SQRT_2 };
+
+    /// Kaplan & Hegarty's loop (Table 5.6) of `order` as a user states it:
+    /// 2 → [`LoopSpec::SecondOrder`] of Bn = `bn_hz` \[Hz\] and damping
+    /// `zeta`, F(s) = 2ζωn + ωn²/s; 3 → [`LoopSpec::ThirdOrder`] of Bn and
+    /// `a3`, `b3`, F(s) = b3·ωn + a3·ωn²/s + ωn³/s². The shape parameters
+    /// of the other order are not used. Any other order is a
+    /// [`LoopOrderError`]; the values themselves are checked where the loop
+    /// is built ([`LoopSpec::coeffs`], [`LoopError`]).
+    pub fn of_order(order: u8, bn_hz: f64, zeta: f64, a3: f64, b3: f64) -> Result<LoopSpec, LoopOrderError> {
+        match order {
+            2 => Ok(LoopSpec::SecondOrder { bn_hz, zeta }),
+            3 => Ok(LoopSpec::ThirdOrder { bn_hz, a3, b3 }),
+            _ => Err(LoopOrderError { order }),
+        }
+    }
 
     /// Kaplan's 3rd-order loop with bandwidth `bn_hz`.
     pub fn third_order_kaplan(bn_hz: f64) -> LoopSpec {

@@ -260,3 +260,15 @@ fn pocket_sdr_loop_model_answers_every_question_like_kaplans_continuous_loop() {
     assert!(LoopModel::PocketSdr(PocketSdrStage::l1ca(500.0)).check().is_err());
     assert!(m.to_string().contains("PocketSDR") && m.to_string().contains("b_pll 5 Hz"), "{m}");
 }
+
+#[test]
+fn a_loop_of_order_two_or_three_takes_that_orders_shape_and_no_other_order_is_a_loop() {
+    use gsens_core::{LoopOrderError, LoopSpec};
+    assert_eq!(LoopSpec::of_order(2, 3.0, 0.7, 1.1, 2.4), Ok(LoopSpec::SecondOrder { bn_hz: 3.0, zeta: 0.7 }));
+    assert_eq!(LoopSpec::of_order(3, 5.0, 0.7, 1.1, 2.4), Ok(LoopSpec::ThirdOrder { bn_hz: 5.0, a3: 1.1, b3: 2.4 }));
+    for order in [0, 1, 4, 255] {
+        let e = LoopSpec::of_order(order, 3.0, 0.7, 1.1, 2.4).unwrap_err();
+        assert_eq!(e, LoopOrderError { order });
+        assert_eq!(e.to_string(), format!("order must be 2 or 3, got {order}"));
+    }
+}

@@ -295,14 +295,15 @@ fn build(config: &GsensCalibratorConfig) -> Result<GsensCalibrator, GsensStatus>
         return Err(GsensStatus::WrongSize);
     }
     let spec = match config.order {
-        2 => LoopSpec::SecondOrder { bn_hz: config.bn_hz, zeta: config.zeta },
-        3 => LoopSpec::ThirdOrder { bn_hz: config.bn_hz, a3: config.a3, b3: config.b3 },
         0 => LoopSpec::Coefficients(LoopFilterCoeffs {
             c0_per_s: config.c0_per_s,
             c1_per_s2: config.c1_per_s2,
             c2_per_s3: config.c2_per_s3,
         }),
-        _ => return Err(GsensStatus::InvalidConfig),
+        order => u8::try_from(order)
+            .ok()
+            .and_then(|order| LoopSpec::of_order(order, config.bn_hz, config.zeta, config.a3, config.b3).ok())
+            .ok_or(GsensStatus::InvalidConfig)?,
     };
     let finite = [
         config.bn_hz,

@@ -125,10 +125,7 @@ pub fn read_truth_loop(path: &Path) -> Result<Option<TruthLoop>, LoadError> {
     let spec = s
         .scenario
         .and_then(|sc| sc.tracking_loop)
-        .map(|l| match l.order {
-            3 => LoopSpec::ThirdOrder { bn_hz: l.bn_hz, a3: l.a3, b3: l.b3 },
-            _ => LoopSpec::SecondOrder { bn_hz: l.bn_hz, zeta: l.zeta },
-        })
+        .and_then(|l| LoopSpec::of_order(l.order, l.bn_hz, l.zeta, l.a3, l.b3).ok())
         .filter(|spec| spec.coeffs().is_ok_and(|k| k == c))
         .unwrap_or(LoopSpec::Coefficients(c));
     Ok(Some(TruthLoop {

@@ -306,13 +306,12 @@ impl Default for LoopSection {
 }
 
 impl LoopSection {
-    /// The loop specification for the core.
+    /// The loop specification for the core ([`LoopSpec::of_order`]); validation
+    /// refuses orders other than 2 and 3, an unvalidated one keeps the 2nd
+    /// order's shape.
     pub fn spec(&self) -> LoopSpec {
-        if self.order == 3 {
-            LoopSpec::ThirdOrder { bn_hz: self.bn_hz, a3: self.a3, b3: self.b3 }
-        } else {
-            LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta }
-        }
+        LoopSpec::of_order(self.order, self.bn_hz, self.zeta, self.a3, self.b3)
+            .unwrap_or(LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta })
     }
 
     /// The loop-filter coefficients (after validation they exist).
