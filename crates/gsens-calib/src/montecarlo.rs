@@ -17,9 +17,8 @@
 //! over that σ.
 
 use crate::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
-use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
-use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
+use gsens_sim::scenario::Scenario;
 use gsens_sim::{LogsError, simulate_logs};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -307,10 +306,7 @@ pub fn scenario_settings(scenario: &Scenario, base: &EstimateSettings) -> Result
     let spec = l.spec();
     let mut s = *base;
     s.receiver_loop = LoopModel::kaplan(spec, Some(l.interval_s));
-    s.logged_phase = match scenario.log.phase {
-        LoggedPhaseMode::Last => LoggedPhase::Last,
-        LoggedPhaseMode::Mean => LoggedPhase::Mean,
-    };
+    s.logged_phase = scenario.log.phase;
     s.carrier_hz = scenario.oscillator.carrier_hz;
     let imu = scenario.imu.config();
     if s.imu_scale_sigma == 0.0 {

@@ -81,7 +81,7 @@ pub struct LoopArgs {
     pub loop_interval_s: Option<f64>,
     /// What a log row holds when the loop runs faster than the log (default: last).
     #[arg(long, value_enum)]
-    pub logged_phase: Option<LoggedArg>,
+    pub logged_phase: Option<gsens_core::LoggedPhase>,
     /// The receiver's carrier-phase discriminator, whose linear range bounds the g-induced phase error (GNSS-SDR and PocketSDR sessions: theirs, atan-costas for GPS L1 C/A).
     #[arg(long, value_enum, default_value_t = DiscriminatorArg::AtanCostas)]
     pub discriminator: DiscriminatorArg,
@@ -94,15 +94,6 @@ pub enum DiscriminatorArg {
     AtanCostas,
     /// atan2(Q, I), a four-quadrant PLL discriminator (pilot signals): linear within ±π.
     Atan2,
-}
-
-/// What a log row holds when the loop runs faster than the log.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum LoggedArg {
-    /// The latest discriminator output.
-    Last,
-    /// The mean of the discriminator outputs since the previous row.
-    Mean,
 }
 
 impl LoopArgs {
@@ -128,10 +119,7 @@ impl LoopArgs {
         o.a3 = self.a3.unwrap_or(o.a3);
         o.b3 = self.b3.unwrap_or(o.b3);
         o.loop_interval_s = self.loop_interval_s;
-        o.logged_phase = self.logged_phase.map(|l| match l {
-            LoggedArg::Last => gsens_core::LoggedPhase::Last,
-            LoggedArg::Mean => gsens_core::LoggedPhase::Mean,
-        });
+        o.logged_phase = self.logged_phase;
         o.discriminator = match self.discriminator {
             DiscriminatorArg::AtanCostas => gsens_core::Discriminator::AtanCostas,
             DiscriminatorArg::Atan2 => gsens_core::Discriminator::Atan2,

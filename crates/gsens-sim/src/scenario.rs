@@ -17,7 +17,8 @@
 
 use core::f64::consts::FRAC_1_SQRT_2;
 
-use gsens_core::LoggedPhase;
+/// What a log row holds, re-exported for scenarios' `log.phase`.
+pub use gsens_core::LoggedPhase;
 use gsens_core::units::{GPS_L1_HZ, L1CA_CODE_PERIOD_S};
 use gsens_core::{LoopFilterCoeffs, LoopSpec};
 use serde::{Deserialize, Serialize};
@@ -320,25 +321,6 @@ impl LoopSection {
     }
 }
 
-/// What a tracking-log row's phase is, when the loop runs faster than the log.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LoggedPhaseMode {
-    /// The latest discriminator output ([`LoggedPhase::Last`]).
-    Last,
-    /// The mean of the discriminator outputs since the previous row ([`LoggedPhase::Mean`]).
-    Mean,
-}
-
-impl From<LoggedPhaseMode> for LoggedPhase {
-    fn from(m: LoggedPhaseMode) -> Self {
-        match m {
-            LoggedPhaseMode::Last => LoggedPhase::Last,
-            LoggedPhaseMode::Mean => LoggedPhase::Mean,
-        }
-    }
-}
-
 /// Which C/N0 the tracking log reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -357,7 +339,7 @@ pub struct LogSection {
     pub interval_s: f64,
     /// `"last"` or `"mean"` discriminator output (see `gsens_core::LoggedPhase`);
     /// rows are time-stamped at the centre of the latest integration.
-    pub phase: LoggedPhaseMode,
+    pub phase: LoggedPhase,
     /// `"estimated"` or `"true"` C/N0 in the rows.
     pub cn0: Cn0Logged,
     /// Leave out rows of channels whose lock indicator reads unlocked (as
@@ -367,7 +349,7 @@ pub struct LogSection {
 
 impl Default for LogSection {
     fn default() -> Self {
-        LogSection { interval_s: 0.025, phase: LoggedPhaseMode::Mean, cn0: Cn0Logged::Estimated, drop_unlocked: true }
+        LogSection { interval_s: 0.025, phase: LoggedPhase::Mean, cn0: Cn0Logged::Estimated, drop_unlocked: true }
     }
 }
 
