@@ -570,28 +570,7 @@ impl LinearLoop for ModelLoop {
     }
 }
 
-/// Test helper: the response φ/Δf of `l` at `f_hz` measured by simulation —
-/// driven by Δf_k = cos(2πf·kT) for `settle_s` seconds, then correlated with
-/// the input's cosine and sine over `span_s` seconds.
+/// The sinusoid-response harness of the loop models' tests (the integration
+/// tests include the same file).
 #[cfg(test)]
-pub(crate) fn simulated_response(
-    mut l: impl LinearLoop,
-    f_hz: f64,
-    t_s: f64,
-    settle_s: f64,
-    span_s: f64,
-) -> Complex<f64> {
-    let (mut si, mut sq) = (0.0, 0.0);
-    let k0 = (settle_s / t_s) as usize;
-    let k1 = k0 + (span_s / t_s) as usize;
-    for k in 0..k1 {
-        let x = TAU * f_hz * k as f64 * t_s;
-        let phi = l.step(cos(x));
-        if k >= k0 {
-            si += phi * cos(x);
-            sq -= phi * sin(x);
-        }
-    }
-    let m = (k1 - k0) as f64 / 2.0;
-    Complex::new(si / m, sq / m)
-}
+pub(crate) mod sinusoid_response;
