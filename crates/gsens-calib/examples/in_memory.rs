@@ -33,8 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         wall_s.push(start.elapsed().as_secs_f64());
         gamma = doc.calibration.gamma_hz_per_mps2;
     }
-    wall_s.sort_by(f64::total_cmp);
-    let median_s = wall_s[wall_s.len() / 2];
+    let median_s = gsens_core::stats::median_in_place(&mut wall_s);
     println!(
         "calibrate_logs + document: median {:.1} ms over {} runs (min {:.1}, max {:.1}); Γ̂ = {:?}",
         median_s * 1e3,

@@ -4,7 +4,8 @@
 use crate::pipeline::Outcome;
 use crate::{Calibration, LoopSummary, Warning, WarningCode};
 use gsens_core::LoggedPhase;
-use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2};
+use gsens_core::stats::{median_high_in_place, median_in_place};
+use gsens_core::units::{Decimal, STANDARD_GRAVITY_MPS2, cn0_dbhz_to_ratio_hz};
 use gsens_session::{ChannelSummary, FlatRunKind, FlatRuns};
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::f64::consts::{PI, TAU};
@@ -54,8 +55,7 @@ fn magnitude_at_rest(accel: &[[f64; 3]], interval_s: f64) -> Option<(f64, String
         let m = norm(mean(accel));
         return Some((m, "the magnitude of its mean vector over the session (no stretch at rest)".into()));
     }
-    let mid = rest.len() / 2;
-    let median = *rest.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let median = median_high_in_place(&mut rest);
     Some((median, format!("its median magnitude over the {} stretches of {REST_WINDOW_S} s at rest", rest.len())))
 }
 
@@ -330,7 +330,7 @@ fn scatter_ratio(
     let cn0_dbhz = ch.screening.median_cn0_dbhz.unwrap_or(ch.mean_cn0_dbhz);
     // The measured σ is on L1's scale (the phases times f_L1/f_c): so is the prediction.
     let to_l1 = gsens_core::units::GPS_L1_HZ / ch.carrier_hz;
-    let predicted = logged_phase_variance_rad2(10f64.powf(cn0_dbhz / 10.0), t_s, n, logged).sqrt() * to_l1;
+    let predicted = logged_phase_variance_rad2(cn0_dbhz_to_ratio_hz(cn0_dbhz), t_s, n, logged).sqrt() * to_l1;
     (predicted.is_finite() && predicted > 0.0).then(|| (measured / predicted, measured <= min_sigma_rad * (1.0 + 1e-9)))
 }
 
@@ -358,14 +358,7 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
     let floor = outcome.session.selection.screening.min_sigma_rad;
     let ratios: Vec<(f64, bool)> =
         outcome.session.channels.iter().filter_map(|ch| scatter_ratio(ch, t_s, n, logged, floor)).collect();
-    let median = |mut v: Vec<f64>| -> Option<f64> {
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        let m = v.len() / 2;
-        Some(if v.len() % 2 == 1 { v[m] } else { 0.5 * (v[m - 1] + v[m]) })
-    };
+    let median = |mut v: Vec<f64>| (!v.is_empty()).then(|| median_in_place(&mut v));
     let all = median(ratios.iter().map(|r| r.0).collect());
     let exact = median(ratios.iter().filter(|r| !r.1).map(|r| r.0).collect());
     let phases: Vec<f64> = outcome.session.phase_err_rad.iter().flatten().copied().collect();
@@ -597,8 +590,7 @@ mod tests {
         assert!((m - STANDARD_GRAVITY_MPS2).abs() < 1e-9, "{m}");
         assert!(how.contains("6 stretches"), "{how}");
         let mut norms: Vec<f64> = accel.iter().map(|a| (a[0] * a[0] + a[2] * a[2]).sqrt()).collect();
-        norms.sort_by(f64::total_cmp);
-        assert!(norms[norms.len() / 2] > 1.1 * STANDARD_GRAVITY_MPS2);
+        assert!(median_high_in_place(&mut norms) > 1.1 * STANDARD_GRAVITY_MPS2);
     }
 
     #[test]

@@ -261,10 +261,7 @@ impl ResultDocument {
             }),
         }
         if let Some(ch) = &outcome.chosen_loop {
-            let logged = match ch.logged_phase {
-                gsens_core::LoggedPhase::Last => "last",
-                gsens_core::LoggedPhase::Mean => "mean",
-            };
+            let logged = ch.logged_phase.name();
             let mut flags = format!("--order {}", ch.model.order());
             if let Some(bn) = ch.model.bn_hz() {
                 flags += &format!(" --bn-hz {}", Decimal((bn * 100.0).round() / 100.0));

@@ -664,7 +664,7 @@ pub fn choose_loop(
     offset_max_abs_s: Option<f64>,
 ) -> Result<ChosenLoop, CalibError> {
     let t = series.log_interval_s;
-    let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(3.0);
+    let bn_hz = settings.receiver_loop.bn_hz().unwrap_or(crate::defaults::DEFAULT_BN_HZ);
     let mut intervals: Vec<f64> = TYPICAL_LOOP_INTERVALS_S
         .iter()
         .copied()
@@ -674,9 +674,14 @@ pub fn choose_loop(
     let spec = JointSpec { natural_frequency: true, damping: false, offset_max_abs_s, loop_tolerance: None };
     let mut candidates: Vec<EstimateSettings> = Vec::new();
     for order in [2u8, 3] {
-        let loop_spec = match order {
-            2 => LoopSpec::SecondOrder { bn_hz, zeta: core::f64::consts::FRAC_1_SQRT_2 },
-            _ => LoopSpec::ThirdOrder { bn_hz, a3: gsens_core::KAPLAN_A3, b3: gsens_core::KAPLAN_B3 },
+        let Ok(loop_spec) = LoopSpec::of_order(
+            order,
+            bn_hz,
+            core::f64::consts::FRAC_1_SQRT_2,
+            gsens_core::KAPLAN_A3,
+            gsens_core::KAPLAN_B3,
+        ) else {
+            continue;
         };
         for &interval in &intervals {
             let logged: &[gsens_core::LoggedPhase] = if interval < t {

@@ -53,6 +53,7 @@
 #![deny(missing_docs)]
 
 mod checks;
+pub mod defaults;
 mod document;
 mod error;
 mod estimate;

@@ -3,6 +3,10 @@
 //! arguments, and the one place where those names become
 //! [`PipelineSettings`].
 
+use crate::defaults::{
+    DEFAULT_BN_HZ, DEFAULT_CHANNELS, DEFAULT_CN0_DROP_DB, DEFAULT_GAIN_K, DEFAULT_HIGHPASS_HZ, DEFAULT_ORDER,
+    DEFAULT_TIME_OFFSET_MAX_S, DEFAULT_WARMUP_S,
+};
 use crate::settings::check_range;
 use crate::{CalibError, EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
 use gsens_core::{Discriminator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopModel, LoopSpec};
@@ -133,23 +137,23 @@ impl Default for CalibrationOptions {
             loop_interval_s: None,
             logged_phase: None,
             method: MethodName::Batch,
-            gain_k: 0.5,
+            gain_k: DEFAULT_GAIN_K,
             lambda: 1.0,
-            warmup_s: 2.0,
+            warmup_s: DEFAULT_WARMUP_S,
             imu_scale_sigma_ppm: 0.0,
             imu_misalignment_sigma_mrad: 0.0,
-            highpass_hz: 0.05,
+            highpass_hz: DEFAULT_HIGHPASS_HZ,
             robust: Robust::None,
-            channels: 4,
+            channels: DEFAULT_CHANNELS,
             min_cn0_dbhz: None,
             elevation_mask_deg: None,
             weights: Weighting::Equal,
             screening: true,
-            cn0_drop_db: 6.0,
+            cn0_drop_db: DEFAULT_CN0_DROP_DB,
             max_abs_phase_rad: None,
             discriminator: Discriminator::AtanCostas,
             time_offset: TimeOffsetOption::default(),
-            time_offset_max_s: 0.25,
+            time_offset_max_s: DEFAULT_TIME_OFFSET_MAX_S,
             loop_check: true,
             identify_damping: false,
             loop_tolerance: None,
@@ -162,11 +166,10 @@ impl CalibrationOptions {
     /// The receiver loop: Kaplan's loop of [`order`](Self::order) (2 unless
     /// 3) and [`bn_hz`](Self::bn_hz) (3 Hz unless given).
     pub fn loop_model(&self) -> LoopModel {
-        let bn_hz = self.bn_hz.unwrap_or(3.0);
-        let spec = match self.order {
-            Some(3) => LoopSpec::ThirdOrder { bn_hz, a3: self.a3, b3: self.b3 },
-            _ => LoopSpec::SecondOrder { bn_hz, zeta: self.zeta },
-        };
+        let bn_hz = self.bn_hz.unwrap_or(DEFAULT_BN_HZ);
+        // pipeline_settings refuses other orders; unchecked options keep the 2nd order's shape.
+        let spec = LoopSpec::of_order(self.order.unwrap_or(DEFAULT_ORDER), bn_hz, self.zeta, self.a3, self.b3)
+            .unwrap_or(LoopSpec::SecondOrder { bn_hz, zeta: self.zeta });
         LoopModel::kaplan(spec, self.loop_interval_s)
     }
 

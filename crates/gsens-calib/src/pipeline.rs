@@ -55,7 +55,7 @@ pub struct ParseTimeOffsetError(pub String);
 
 impl Default for TimeOffset {
     fn default() -> Self {
-        TimeOffset::Auto { max_abs_s: 0.25 }
+        TimeOffset::Auto { max_abs_s: crate::defaults::DEFAULT_TIME_OFFSET_MAX_S }
     }
 }
 

@@ -185,7 +185,7 @@ pub fn jitter(receiver_loop: &LoopModel, bn_hz: f64, interval_s: f64, input: &Pr
         integrate(&grid, |f| l2(f) * fc2 * (o.h2 * f * f + o.h0 + o.h_neg1 / f + o.h_neg2 / (f * f)))
     });
     let thermal_sq = input.cn0_dbhz.map_or(0.0, |cn0| {
-        let c_n0 = 10f64.powf(cn0 / 10.0);
+        let c_n0 = gsens_core::units::cn0_dbhz_to_ratio_hz(cn0);
         bn_hz / c_n0 * (1.0 + 1.0 / (2.0 * interval_s * c_n0))
     });
     let vibration_rad = [vibration_sq[0].sqrt(), (vibration_sq[1] + imu_sq).sqrt()];

@@ -54,16 +54,14 @@ pub struct HuberFit {
     pub converged: bool,
 }
 
-/// Median of |x| (reorders a copy); 0 for an empty slice.
+/// Median of |x| (of a copy); 0 for an empty slice, so that a fit without
+/// residuals has no scale.
 fn median_abs(x: &[f64]) -> f64 {
-    let mut a: Vec<f64> = x.iter().map(|v| v.abs()).collect();
-    let n = a.len();
-    if n == 0 {
+    if x.is_empty() {
         return 0.0;
     }
-    let (lower, mid, _) = a.select_nth_unstable_by(n / 2, f64::total_cmp);
-    let mid = *mid;
-    if n % 2 == 1 { mid } else { 0.5 * (mid + lower.iter().copied().fold(f64::NEG_INFINITY, f64::max)) }
+    let mut a: Vec<f64> = x.iter().map(|v| v.abs()).collect();
+    gsens_core::stats::median_in_place(&mut a)
 }
 
 fn residuals(phase: &[f64], phi_a: &[[f64; 3]], g: &[f64; 3], out: &mut Vec<f64>) {

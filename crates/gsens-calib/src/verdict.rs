@@ -29,7 +29,7 @@ pub fn session_linear_range_rad(channels: &[ChannelSummary], discriminator: Disc
         .map(|c| {
             let cn0_dbhz = c.screening.median_cn0_dbhz.unwrap_or(c.mean_cn0_dbhz);
             let to_l1 = gsens_core::units::GPS_L1_HZ / c.carrier_hz;
-            discriminator.linear_range_rad(10f64.powf(cn0_dbhz / 10.0), interval_s) * to_l1
+            discriminator.linear_range_rad(gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz), interval_s) * to_l1
         })
         .filter(|r| r.is_finite())
         .reduce(f64::min)

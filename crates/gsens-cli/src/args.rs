@@ -7,7 +7,7 @@
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
-use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffsetOption};
+use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffsetOption, defaults};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
 use gsens_inputs::{Inputs, Log};
@@ -81,7 +81,7 @@ pub struct LoopArgs {
     pub loop_interval_s: Option<f64>,
     /// What a log row holds when the loop runs faster than the log (default: last).
     #[arg(long, value_enum)]
-    pub logged_phase: Option<LoggedArg>,
+    pub logged_phase: Option<gsens_core::LoggedPhase>,
     /// The receiver's carrier-phase discriminator, whose linear range bounds the g-induced phase error (GNSS-SDR and PocketSDR sessions: theirs, atan-costas for GPS L1 C/A).
     #[arg(long, value_enum, default_value_t = DiscriminatorArg::AtanCostas)]
     pub discriminator: DiscriminatorArg,
@@ -94,15 +94,6 @@ pub enum DiscriminatorArg {
     AtanCostas,
     /// atan2(Q, I), a four-quadrant PLL discriminator (pilot signals): linear within ±π.
     Atan2,
-}
-
-/// What a log row holds when the loop runs faster than the log.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum LoggedArg {
-    /// The latest discriminator output.
-    Last,
-    /// The mean of the discriminator outputs since the previous row.
-    Mean,
 }
 
 impl LoopArgs {
@@ -128,10 +119,7 @@ impl LoopArgs {
         o.a3 = self.a3.unwrap_or(o.a3);
         o.b3 = self.b3.unwrap_or(o.b3);
         o.loop_interval_s = self.loop_interval_s;
-        o.logged_phase = self.logged_phase.map(|l| match l {
-            LoggedArg::Last => gsens_core::LoggedPhase::Last,
-            LoggedArg::Mean => gsens_core::LoggedPhase::Mean,
-        });
+        o.logged_phase = self.logged_phase;
         o.discriminator = match self.discriminator {
             DiscriminatorArg::AtanCostas => gsens_core::Discriminator::AtanCostas,
             DiscriminatorArg::Atan2 => gsens_core::Discriminator::Atan2,
@@ -176,7 +164,7 @@ pub struct EstimatorArgs {
     #[arg(long, allow_negative_numbers = true, value_parser = forgetting_factor)]
     pub lambda: Option<f64>,
     /// Seconds at the start that only drive the loop models (their start-up transient).
-    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = defaults::DEFAULT_WARMUP_S, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub warmup_s: f64,
     /// 1σ scale-factor error of the IMU [ppm] (from its datasheet), added to Γ̂'s uncertainty.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
@@ -185,7 +173,7 @@ pub struct EstimatorArgs {
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub imu_misalignment_sigma_mrad: f64,
     /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off).
-    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = defaults::DEFAULT_HIGHPASS_HZ, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub highpass_hz: f64,
     /// Robust estimation against outlying epochs: `huber` (IRLS; batch method only) or `none`.
     #[arg(long, value_enum, default_value_t = RobustArg::None)]
@@ -242,7 +230,7 @@ impl EstimatorArgs {
 #[command(next_help_heading = "Channels")]
 pub struct SelectionArgs {
     /// Average the N channels with the highest mean C/N0, or the least noisy when C/N0 does not vary between them (0 = all that pass the masks).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = defaults::DEFAULT_CHANNELS)]
     pub channels: usize,
     /// Drop rows below this C/N0 [dB-Hz].
     #[arg(long, allow_negative_numbers = true, value_parser = finite)]
@@ -257,7 +245,7 @@ pub struct SelectionArgs {
     #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
     pub screening: bool,
     /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
-    #[arg(long, default_value_t = 6.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = defaults::DEFAULT_CN0_DROP_DB, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub cn0_drop_db: f64,
     /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default: half the discriminator's unambiguous range, π/4 for atan-costas, π/2 for atan2).
     #[arg(long, allow_negative_numbers = true, value_parser = finite_non_negative)]
@@ -297,7 +285,7 @@ pub struct SystematicArgs {
     #[arg(long, default_value = "auto", allow_hyphen_values = true, value_parser = time_offset)]
     pub time_offset: TimeOffset,
     /// Search range ± of `--time-offset auto` [s].
-    #[arg(long, default_value_t = 0.25, allow_negative_numbers = true, value_parser = finite_non_negative)]
+    #[arg(long, default_value_t = defaults::DEFAULT_TIME_OFFSET_MAX_S, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub time_offset_max_s: f64,
     /// Test the stated loop against the data: its natural frequency is estimated jointly with Γ and the time offset, a
     /// stated loop the data reject is flagged, and Γ̂ is given under the fitted loop with the loop's uncertainty in its

@@ -9,7 +9,7 @@ use clap::Args;
 use gsens_calib::{Outcome, calibrate_files};
 use gsens_montecarlo::scenario_settings;
 use gsens_report::{Figure, FigureInputs, write_figures};
-use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
+use gsens_sim::scenario::Scenario;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -64,10 +64,7 @@ pub fn run(args: &DemoArgs) -> Result<crate::Status> {
     let l = &scenario.tracking_loop;
     let (imu, tracking) = (dir.join("imu.csv"), dir.join("tracking.csv"));
     let outcome = crate::observed(|| calibrate_files(&tracking, &imu, &settings))?;
-    let logged = match scenario.log.phase {
-        LoggedPhaseMode::Last => "last",
-        LoggedPhaseMode::Mean => "mean",
-    };
+    let logged = scenario.log.phase.name();
     let (i, t) = (imu.display(), tracking.display());
     let mut flags =
         format!("--order {} --bn-hz {} --loop-interval-s {} --logged-phase {logged}", l.order, l.bn_hz, l.interval_s);

@@ -4,7 +4,9 @@
 //! g-sensitivity estimators and the compensator. No I/O, no allocation in the
 //! per-epoch path, `no_std` when built without the default `std` feature
 //! (all transcendental functions come from `libm`, so results are the same
-//! bit for bit with and without `std`).
+//! bit for bit with and without `std`; the one exception,
+//! [`units::cn0_dbhz_to_ratio_hz`], is a conversion for callers that the
+//! crate's algorithms do not use).
 //!
 //! The method (see `docs/conventions.md`): the oscillator adds a frequency
 //! bias Δf = aᵀΓ \[Hz\] to every carrier NCO, `a` the specific force \[m/s²\] in
@@ -18,6 +20,7 @@
 
 mod calibrator;
 mod compensate;
+pub mod defaults;
 mod discriminator;
 mod estimator;
 mod filter;
@@ -27,6 +30,7 @@ mod observability;
 mod pll;
 mod regressor;
 mod robust;
+pub mod stats;
 pub mod units;
 
 pub use pll::gnss_sdr;
@@ -44,7 +48,7 @@ pub use loop_model::{LoopModel, LoopPeak, TWO_RATE_FACTORS};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
 pub use pll::{
     CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopError, LoopFilter, LoopFilterCoeffs,
-    LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,
+    LoopOrderError, LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,
 };
 pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation};
 pub use robust::{HuberWeights, sandwich_covariance};

@@ -30,7 +30,8 @@ pub(crate) fn exp(x: f64) -> f64 {
 pub(crate) fn ln(x: f64) -> f64 {
     libm::log(x)
 }
-/// 10ˣ.
+/// 10ˣ (with `std`, `units::cn0_dbhz_to_ratio_hz` uses the platform's pow instead).
+#[cfg(not(feature = "std"))]
 #[inline]
 pub(crate) fn pow10(x: f64) -> f64 {
     libm::pow(10.0, x)

@@ -74,6 +74,22 @@ impl core::fmt::Display for LoopError {
 
 impl core::error::Error for LoopError {}
 
+/// A loop order [`LoopSpec::of_order`] has no Kaplan & Hegarty loop for
+/// (it has 2 and 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LoopOrderError {
+    /// The order asked for.
+    pub order: u8,
+}
+
+impl core::fmt::Display for LoopOrderError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "order must be 2 or 3, got {}", self.order)
+    }
+}
+
+impl core::error::Error for LoopOrderError {}
+
 fn positive(x: f64, name: &'static str) -> Result<f64, LoopError> {
     if x.is_finite() && x > 0.0 { Ok(x) } else { Err(LoopError::NonPositiveParameter(name)) }
 }
@@ -98,7 +114,23 @@ pub fn third_order_bn_over_wn(a3: f64, b3: f64) -> f64 {
 
 impl LoopSpec {
     /// The paper's loop: 2nd order, Bn = 3 Hz, ζ = 1/√2.
-    pub const PAPER: LoopSpec = LoopSpec::SecondOrder { bn_hz: 3.0, zeta: core::f64::consts::FRAC_1_SQRT_2 };
+    pub const PAPER: LoopSpec =
+        LoopSpec::SecondOrder { bn_hz: crate::defaults::DEFAULT_BN_HZ, zeta: core::f64::consts::FRAC_1_SQRT_2 };
+
+    /// Kaplan & Hegarty's loop (Table 5.6) of `order` as a user states it:
+    /// 2 → [`LoopSpec::SecondOrder`] of Bn = `bn_hz` \[Hz\] and damping
+    /// `zeta`, F(s) = 2ζωn + ωn²/s; 3 → [`LoopSpec::ThirdOrder`] of Bn and
+    /// `a3`, `b3`, F(s) = b3·ωn + a3·ωn²/s + ωn³/s². The shape parameters
+    /// of the other order are not used. Any other order is a
+    /// [`LoopOrderError`]; the values themselves are checked where the loop
+    /// is built ([`LoopSpec::coeffs`], [`LoopError`]).
+    pub fn of_order(order: u8, bn_hz: f64, zeta: f64, a3: f64, b3: f64) -> Result<LoopSpec, LoopOrderError> {
+        match order {
+            2 => Ok(LoopSpec::SecondOrder { bn_hz, zeta }),
+            3 => Ok(LoopSpec::ThirdOrder { bn_hz, a3, b3 }),
+            _ => Err(LoopOrderError { order }),
+        }
+    }
 
     /// Kaplan's 3rd-order loop with bandwidth `bn_hz`.
     pub fn third_order_kaplan(bn_hz: f64) -> LoopSpec {
@@ -538,28 +570,7 @@ impl LinearLoop for ModelLoop {
     }
 }
 
-/// Test helper: the response φ/Δf of `l` at `f_hz` measured by simulation —
-/// driven by Δf_k = cos(2πf·kT) for `settle_s` seconds, then correlated with
-/// the input's cosine and sine over `span_s` seconds.
+/// The sinusoid-response harness of the loop models' tests (the integration
+/// tests include the same file).
 #[cfg(test)]
-pub(crate) fn simulated_response(
-    mut l: impl LinearLoop,
-    f_hz: f64,
-    t_s: f64,
-    settle_s: f64,
-    span_s: f64,
-) -> Complex<f64> {
-    let (mut si, mut sq) = (0.0, 0.0);
-    let k0 = (settle_s / t_s) as usize;
-    let k1 = k0 + (span_s / t_s) as usize;
-    for k in 0..k1 {
-        let x = TAU * f_hz * k as f64 * t_s;
-        let phi = l.step(cos(x));
-        if k >= k0 {
-            si += phi * cos(x);
-            sq -= phi * sin(x);
-        }
-    }
-    let m = (k1 - k0) as f64 / 2.0;
-    Complex::new(si / m, sq / m)
-}
+pub(crate) mod sinusoid_response;

@@ -4,11 +4,23 @@ use crate::pll::{DiscretePll, LinearLoop, LoopFilterCoeffs, ModelLoop};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum LoggedPhase {
     /// The latest discriminator output.
     Last,
     /// The mean of the discriminator outputs since the previous row.
     Mean,
+}
+
+impl LoggedPhase {
+    /// Its name in scenarios, result documents and on the command line
+    /// (`--logged-phase`): `last` or `mean`, as serde and clap spell it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            LoggedPhase::Last => "last",
+            LoggedPhase::Mean => "mean",
+        }
+    }
 }
 
 /// Errors building a [`RegressorModel`].

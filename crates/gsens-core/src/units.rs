@@ -26,9 +26,24 @@ pub fn ppb_per_g_to_hz_per_mps2(ppb_per_g: f64, carrier_hz: f64) -> f64 {
     ppb_per_g * carrier_hz / STANDARD_GRAVITY_MPS2 / 1e9
 }
 
-/// C/N0 in dB-Hz → ratio \[Hz\].
+/// C/N0 in dB-Hz → ratio \[Hz\]: C/N0 = 10^(C/N0\[dB-Hz\] / 10).
+///
+/// With the `std` feature this is `f64::powf` (the platform's `pow`), the
+/// function the simulator's sessions and the checks' thresholds are computed
+/// with, so their numbers keep every bit; without `std` it is libm's `pow`,
+/// which differs from the platform's in the last bit for about one argument
+/// in ten (far below any C/N0 estimate's precision). The crate's own
+/// algorithms do not call it, so they stay bit-identical with and without
+/// `std`.
 pub fn cn0_dbhz_to_ratio_hz(cn0_dbhz: f64) -> f64 {
-    crate::math::pow10(cn0_dbhz / 10.0)
+    #[cfg(feature = "std")]
+    {
+        10f64.powf(cn0_dbhz / 10.0)
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        crate::math::pow10(cn0_dbhz / 10.0)
+    }
 }
 
 /// Significant digits a computed number keeps in a message: f64 arithmetic

@@ -2,6 +2,10 @@
 
 use gsens_core::LoopModel;
 use gsens_core::*;
+
+#[path = "../src/pll/sinusoid_response.rs"]
+mod sinusoid_response;
+use sinusoid_response::assert_sinusoid_response;
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
 fn paper() -> LoopFilterCoeffs {
@@ -105,20 +109,10 @@ fn discrete_response_matches_time_domain_loop() {
     for (c, t_s) in [(paper(), 0.025), (paper(), 0.001), (LoopSpec::third_order_kaplan(5.0).coeffs().unwrap(), 0.02)] {
         for f_hz in [0.3, 0.9, 3.0] {
             let mut pll = DiscretePll::new(c, t_s);
-            let n_settle = (30.0 / t_s) as usize;
-            let n_cycles = 20.0;
-            let n = (n_cycles / (f_hz * t_s)).round() as usize;
-            let mut acc = nalgebra::Complex::new(0.0, 0.0);
-            for k in 0..n_settle + n {
-                let t = k as f64 * t_s;
-                let y = pll.step((TAU * f_hz * t).cos());
-                if k >= n_settle {
-                    acc += nalgebra::Complex::new(0.0, -TAU * f_hz * t).exp() * y;
-                }
-            }
-            let measured = acc * (2.0 / n as f64);
+            // 30 s to settle, then 20 cycles.
+            let span_s = 20.0 / f_hz;
             let model = c.response_discrete(f_hz, t_s);
-            assert!((measured - model).norm() < 2e-3 * model.norm(), "f={f_hz} T={t_s}: {measured} vs {model}");
+            assert_sinusoid_response(|x| pll.step(x), f_hz, t_s, (30.0, span_s), model, 2e-3, "DiscretePll");
         }
     }
 }
@@ -244,19 +238,20 @@ fn pocket_sdr_loop_model_answers_every_question_like_kaplans_continuous_loop() {
     assert!((p2.f_hz / pm.f_hz - 2.0).abs() < 0.02, "{p2:?} {pm:?}");
     // The runnable model is the exact one: its steady sinusoid response is `response`.
     let mut l = m.runnable().unwrap();
-    let f_hz = pm.f_hz;
-    let (mut si, mut sq, n0, n1) = (0.0, 0.0, 30_000usize, 130_000usize);
-    for k in 0..n1 {
-        let x = std::f64::consts::TAU * f_hz * k as f64 * 1e-3;
-        let phi = l.step(x.cos());
-        if k >= n0 {
-            si += phi * x.cos();
-            sq -= phi * x.sin();
-        }
-    }
-    let half = (n1 - n0) as f64 / 2.0;
-    let r = m.response(f_hz);
-    assert!(((si / half - r.re).powi(2) + (sq / half - r.im).powi(2)).sqrt() < 2e-3 * r.norm());
+    let (f_hz, r) = (pm.f_hz, m.response(pm.f_hz));
+    assert_sinusoid_response(|x| l.step(x), f_hz, 1e-3, (30.0, 100.0), r, 2e-3, "PocketSDR runnable");
     assert!(LoopModel::PocketSdr(PocketSdrStage::l1ca(500.0)).check().is_err());
     assert!(m.to_string().contains("PocketSDR") && m.to_string().contains("b_pll 5 Hz"), "{m}");
+}
+
+#[test]
+fn a_loop_of_order_two_or_three_takes_that_orders_shape_and_no_other_order_is_a_loop() {
+    use gsens_core::{LoopOrderError, LoopSpec};
+    assert_eq!(LoopSpec::of_order(2, 3.0, 0.7, 1.1, 2.4), Ok(LoopSpec::SecondOrder { bn_hz: 3.0, zeta: 0.7 }));
+    assert_eq!(LoopSpec::of_order(3, 5.0, 0.7, 1.1, 2.4), Ok(LoopSpec::ThirdOrder { bn_hz: 5.0, a3: 1.1, b3: 2.4 }));
+    for order in [0, 1, 4, 255] {
+        let e = LoopSpec::of_order(order, 3.0, 0.7, 1.1, 2.4).unwrap_err();
+        assert_eq!(e, LoopOrderError { order });
+        assert_eq!(e.to_string(), format!("order must be 2 or 3, got {order}"));
+    }
 }

@@ -35,7 +35,7 @@ use core::mem::{align_of, size_of};
 
 use gsens_core::{
     BatchLeastSquares, Calibrator, Compensator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopError, LoopFilterCoeffs,
-    LoopModel, LoopSpec, ModelLoop, ObservabilityCriteria, PrefilteredCalibrator, RegressorModel,
+    LoopModel, LoopSpec, ModelLoop, ObservabilityCriteria, PrefilteredCalibrator, RegressorModel, defaults,
     solve_in_observable_axes,
 };
 
@@ -261,12 +261,12 @@ pub extern "C" fn gsens_calibrator_config_default(config: *mut GsensCalibratorCo
         }
         let (bn_hz, zeta) = match LoopSpec::PAPER {
             LoopSpec::SecondOrder { bn_hz, zeta } => (bn_hz, zeta),
-            _ => (3.0, core::f64::consts::FRAC_1_SQRT_2),
+            _ => (defaults::DEFAULT_BN_HZ, core::f64::consts::FRAC_1_SQRT_2),
         };
         let criteria = ObservabilityCriteria::default();
         let c = GsensCalibratorConfig {
             struct_size: size_u32::<GsensCalibratorConfig>(),
-            order: 2,
+            order: u32::from(defaults::DEFAULT_ORDER),
             bn_hz,
             zeta,
             a3: KAPLAN_A3,
@@ -277,8 +277,8 @@ pub extern "C" fn gsens_calibrator_config_default(config: *mut GsensCalibratorCo
             loop_interval_s: 0.001,
             log_interval_s: 0.025,
             logged_phase: GsensLoggedPhase::Last as u32,
-            warmup_s: 2.0,
-            highpass_hz: 0.05,
+            warmup_s: defaults::DEFAULT_WARMUP_S,
+            highpass_hz: defaults::DEFAULT_HIGHPASS_HZ,
             min_excitation_rms: criteria.min_excitation_rms,
             max_sigma_hz_per_mps2: criteria.max_sigma_hz_per_mps2,
             sigma_colour_factor: 1.0,
@@ -295,14 +295,15 @@ fn build(config: &GsensCalibratorConfig) -> Result<GsensCalibrator, GsensStatus>
         return Err(GsensStatus::WrongSize);
     }
     let spec = match config.order {
-        2 => LoopSpec::SecondOrder { bn_hz: config.bn_hz, zeta: config.zeta },
-        3 => LoopSpec::ThirdOrder { bn_hz: config.bn_hz, a3: config.a3, b3: config.b3 },
         0 => LoopSpec::Coefficients(LoopFilterCoeffs {
             c0_per_s: config.c0_per_s,
             c1_per_s2: config.c1_per_s2,
             c2_per_s3: config.c2_per_s3,
         }),
-        _ => return Err(GsensStatus::InvalidConfig),
+        order => u8::try_from(order)
+            .ok()
+            .and_then(|order| LoopSpec::of_order(order, config.bn_hz, config.zeta, config.a3, config.b3).ok())
+            .ok_or(GsensStatus::InvalidConfig)?,
     };
     let finite = [
         config.bn_hz,

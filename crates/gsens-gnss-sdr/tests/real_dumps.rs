@@ -242,7 +242,7 @@ fn phase_recursion_reproduces_gnss_sdr_discriminator_outputs() {
     let gnss_sdr = replay(true);
     let continuous = replay(false);
     // Thermal noise of a 20 ms atan discriminator at the dump's C/N0.
-    let cn0 = recs.iter().map(|x| 10f64.powf(x.cn0_dbhz / 10.0)).sum::<f64>() / recs.len() as f64;
+    let cn0 = recs.iter().map(|x| gsens_core::units::cn0_dbhz_to_ratio_hz(x.cn0_dbhz)).sum::<f64>() / recs.len() as f64;
     let noise = (1.0 / (2.0 * cn0 * 0.02)).sqrt();
     eprintln!(
         "phase replay RMS: GNSS-SDR's booking {gnss_sdr:.4} rad, continuous NCO {continuous:.4} rad, thermal {noise:.4} rad"

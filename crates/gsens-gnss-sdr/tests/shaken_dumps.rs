@@ -127,7 +127,7 @@ fn the_switch_transient_lasts_five_time_constants_of_the_narrow_loop() {
             .collect();
         (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
     };
-    let cn0 = 10f64.powf(imported.tracks[0].mean_cn0_dbhz / 10.0);
+    let cn0 = gsens_core::units::cn0_dbhz_to_ratio_hz(imported.tracks[0].mean_cn0_dbhz);
     let thermal = (1.0 / (2.0 * cn0 * 0.02)).sqrt();
     let settle = settings(3).settle_time_s();
     let (early, late) = (rms(0.0, 2.0), rms(settle, settle + 10.0));

@@ -247,8 +247,7 @@ impl StreamEstimate {
                 return;
             }
             let mut d: Vec<f64> = epochs[..INTERVAL_EPOCHS].windows(2).map(|w| w[1].0 - w[0].0).collect();
-            d.sort_by(f64::total_cmp);
-            let h = d[d.len() / 2];
+            let h = gsens_core::stats::median_high_in_place(&mut d);
             match streaming_calibrator(&self.settings, h) {
                 Ok(c) => {
                     self.calibrator = Some(c);

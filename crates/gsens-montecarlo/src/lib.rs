@@ -21,10 +21,8 @@
 //! over that σ.
 
 use gsens_calib::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
-use gsens_core::LoggedPhase;
 use gsens_core::LoopModel;
-use gsens_core::LoopSpec;
-use gsens_sim::scenario::{LoggedPhaseMode, Scenario};
+use gsens_sim::scenario::Scenario;
 use gsens_sim::{LogsError, simulate_logs};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -309,16 +307,10 @@ pub enum MonteCarloError {
 /// as a user who knows the receiver would state them.
 pub fn scenario_settings(scenario: &Scenario, base: &EstimateSettings) -> Result<EstimateSettings, MonteCarloError> {
     let l = &scenario.tracking_loop;
-    let spec = match l.order {
-        3 => LoopSpec::ThirdOrder { bn_hz: l.bn_hz, a3: l.a3, b3: l.b3 },
-        _ => LoopSpec::SecondOrder { bn_hz: l.bn_hz, zeta: l.zeta },
-    };
+    let spec = l.spec();
     let mut s = *base;
     s.receiver_loop = LoopModel::kaplan(spec, Some(l.interval_s));
-    s.logged_phase = match scenario.log.phase {
-        LoggedPhaseMode::Last => LoggedPhase::Last,
-        LoggedPhaseMode::Mean => LoggedPhase::Mean,
-    };
+    s.logged_phase = scenario.log.phase;
     s.carrier_hz = scenario.oscillator.carrier_hz;
     let imu = scenario.imu.config();
     if s.imu_scale_sigma == 0.0 {

@@ -93,7 +93,7 @@ fn the_model_driven_by_the_true_carrier_reproduces_err_phas() {
             && i >= skip
         {
             pairs.push((phi, measured));
-            let c = 10f64.powf(cn0 / 10.0) * 1e-3;
+            let c = gsens_core::units::cn0_dbhz_to_ratio_hz(cn0) * 1e-3;
             var_th += (1.0 + 1.0 / (2.0 * c)) / (2.0 * c);
         }
     }

@@ -1,6 +1,7 @@
 //! `gsens.Loop`: the one loop abstraction (`gsens_core::LoopModel`) from Python.
 
 use crate::{GsensError, error};
+use gsens_core::defaults::{DEFAULT_BN_HZ, DEFAULT_ORDER};
 use gsens_core::{KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopModel, LoopSpec};
 use numpy::{Complex64, PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
@@ -19,13 +20,9 @@ pub(crate) struct Loop {
 #[pymethods]
 impl Loop {
     #[new]
-    #[pyo3(signature = (order=2, bn_hz=3.0, zeta=std::f64::consts::FRAC_1_SQRT_2, a3=KAPLAN_A3, b3=KAPLAN_B3, interval_s=None))]
+    #[pyo3(signature = (order=DEFAULT_ORDER, bn_hz=DEFAULT_BN_HZ, zeta=std::f64::consts::FRAC_1_SQRT_2, a3=KAPLAN_A3, b3=KAPLAN_B3, interval_s=None))]
     fn new(order: u8, bn_hz: f64, zeta: f64, a3: f64, b3: f64, interval_s: Option<f64>) -> PyResult<Self> {
-        let spec = match order {
-            2 => LoopSpec::SecondOrder { bn_hz, zeta },
-            3 => LoopSpec::ThirdOrder { bn_hz, a3, b3 },
-            _ => return Err(GsensError::new_err(format!("order must be 2 or 3, got {order}"))),
-        };
+        let spec = LoopSpec::of_order(order, bn_hz, zeta, a3, b3).map_err(|e| GsensError::new_err(e.to_string()))?;
         if let Some(t) = interval_s.filter(|t| !(t.is_finite() && *t > 0.0)) {
             return Err(GsensError::new_err(format!("interval_s must be finite and > 0, got {t}")));
         }

@@ -388,8 +388,7 @@ fn typical_step(t: &[f64]) -> f64 {
     if d.is_empty() {
         return 1.0;
     }
-    d.sort_by(f64::total_cmp);
-    d[d.len() / 2]
+    gsens_core::stats::median_high_in_place(&mut d)
 }
 
 /// Polylines of (t, y) with gaps broken, each decimated to at most `2·buckets`

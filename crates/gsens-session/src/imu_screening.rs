@@ -12,6 +12,7 @@
 //! neighbours and counted: the loop models would otherwise turn one wild
 //! sample into a transient that the fit mistakes for Γ's signature.
 
+use gsens_core::stats::{median_high_in_place, median_low_in_place, quantile_in_place};
 use gsens_io::ImuSeries;
 
 /// Robust standard deviations of the second difference above which an
@@ -43,15 +44,14 @@ pub fn despike_imu(imu: &ImuSeries) -> (ImuSeries, ImuSpikes) {
     }
     let a = &imu.accel_mps2;
     let mut dt: Vec<f64> = imu.t_s.windows(2).map(|w| w[1] - w[0]).collect();
-    let h = *dt.select_nth_unstable_by(n / 2 - 1, f64::total_cmp).1;
+    let h = median_low_in_place(&mut dt);
     let w = std::f64::consts::TAU * HAND_MAX_FREQ_HZ;
     let hand_limit = 0.5 * h * h * w * w * HAND_MAX_ACCEL_MPS2;
     let mut spiked = vec![false; n];
     for axis in 0..3 {
         let d: Vec<f64> = (1..n - 1).map(|k| a[k][axis] - 0.5 * (a[k - 1][axis] + a[k + 1][axis])).collect();
         let mut abs: Vec<f64> = d.iter().map(|v| v.abs()).collect();
-        let mid = abs.len() / 2;
-        let mad = *abs.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let mad = median_high_in_place(&mut abs);
         // A motionless axis of a quantized IMU can have MAD 0: fall back to the mean |d|.
         let scale = if mad > 0.0 { 1.4826 * mad } else { d.iter().map(|v| v.abs()).sum::<f64>() / d.len() as f64 };
         if scale <= 0.0 {
@@ -174,8 +174,7 @@ pub fn find_flat_runs(imu: &ImuSeries) -> FlatRuns {
     }
     let a = &imu.accel_mps2;
     let mut dt: Vec<f64> = imu.t_s.windows(2).map(|w| w[1] - w[0]).collect();
-    let mid = dt.len() / 2;
-    let h = *dt.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let h = median_high_in_place(&mut dt);
     out.sample_interval_s = h;
     let window = if h > 0.0 { ((1.0 / h).round() as usize).clamp(8, n) } else { n };
     for axis in 0..3 {
@@ -191,16 +190,10 @@ pub fn find_flat_runs(imu: &ImuSeries) -> FlatRuns {
             .filter(|c| c.len() >= 8)
             .map(|c| {
                 let mut abs: Vec<f64> = c.iter().map(|v| v.abs()).collect();
-                let m = abs.len() / 2;
-                1.4826 * *abs.select_nth_unstable_by(m, f64::total_cmp).1 / 1.5f64.sqrt()
+                1.4826 * median_high_in_place(&mut abs) / 1.5f64.sqrt()
             })
             .collect();
-        let sigma = if sigmas.is_empty() {
-            0.0
-        } else {
-            let i = sigmas.len() / 10;
-            *sigmas.select_nth_unstable_by(i, f64::total_cmp).1
-        };
+        let sigma = if sigmas.is_empty() { 0.0 } else { quantile_in_place(&mut sigmas, 0.1) };
         out.noise_sigma_mps2[axis] = sigma;
         let p = if sigma > 0.0 { q / (2.0 * sigma * std::f64::consts::PI.sqrt()) } else { 1.0 };
         let limit = (p < 1.0).then(|| {

@@ -240,9 +240,9 @@ pub use imu_screening::{
     FLAT_RUN_FALSE_ALARM, FlatRun, FlatRunKind, FlatRuns, ImuSpikes, MIN_FLAT_RUN, SPIKE_SIGMAS, despike_imu,
     find_flat_runs, mask_flat_runs,
 };
-pub use screening::{ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
+pub use screening::{DEFAULT_CN0_DROP_DB, ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{
-    CN0_RANKING_RESOLUTION_DB, ChannelRanking, ChannelSummary, GRID_TOLERANCE, MAX_EPOCHS, PreparedSession,
-    SelectionConfig, SignalSummary, Weighting, overlap_hint, prepare_session, prepare_session_files,
+    CN0_RANKING_RESOLUTION_DB, ChannelRanking, ChannelSummary, DEFAULT_CHANNELS, GRID_TOLERANCE, MAX_EPOCHS,
+    PreparedSession, SelectionConfig, SignalSummary, Weighting, overlap_hint, prepare_session, prepare_session_files,
     prepare_session_from, reinterpolate_imu,
 };

@@ -1,6 +1,7 @@
 //! Per-track screening of the tracking rows before averaging (documented at
 //! the crate root, section "Screening").
 
+use gsens_core::stats::median_in_place;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ScreeningConfigError;
@@ -59,7 +60,7 @@ pub struct ScreeningConfig {
     /// noise that crosses the limit.
     pub max_abs_phase_rad: Option<f64>,
     /// Rows whose C/N0 is more than this below the track's median are excluded
-    /// \[dB\]; `None`: no test. Default 6 dB.
+    /// \[dB\]; `None`: no test. Default [`DEFAULT_CN0_DROP_DB`].
     pub cn0_drop_db: Option<f64>,
     /// A track of which the cross-channel tests (slips, noisy stretches, low
     /// gain) flag more than this fraction of the rows is excluded entirely. Default 0.5.
@@ -80,6 +81,10 @@ pub struct ScreeningConfig {
     pub startup_s: f64,
 }
 
+/// The C/N0 drop below a track's median that excludes a row by default
+/// \[dB\]: 6 dB, a quarter of the track's typical signal power.
+pub const DEFAULT_CN0_DROP_DB: f64 = 6.0;
+
 impl Default for ScreeningConfig {
     fn default() -> Self {
         ScreeningConfig {
@@ -95,7 +100,7 @@ impl Default for ScreeningConfig {
             min_gain: 0.8,
             min_track_gain: 0.9,
             max_abs_phase_rad: Some(core::f64::consts::FRAC_PI_4),
-            cn0_drop_db: Some(6.0),
+            cn0_drop_db: Some(DEFAULT_CN0_DROP_DB),
             max_excluded_fraction: 0.5,
             min_sigma_rad: 0.005,
             startup_s: 2.0,
@@ -380,18 +385,6 @@ pub(crate) fn per_track<'a, T>(v: &'a mut [T], track_start: &[usize]) -> Vec<&'a
     out
 }
 
-/// Median of a slice (reordered); NaN when empty.
-fn median_of(v: &mut [f64]) -> f64 {
-    let n = v.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    let m = n / 2;
-    let (lower, mid, _) = v.select_nth_unstable_by(m, f64::total_cmp);
-    let mid = *mid;
-    if n % 2 == 1 { mid } else { 0.5 * (mid + lower.iter().copied().fold(f64::NEG_INFINITY, f64::max)) }
-}
-
 /// An integer key with the order of the (finite) float, at single precision:
 /// the sign-magnitude bits of `v as f32` turned into two's complement.
 #[inline]
@@ -586,10 +579,10 @@ fn local_sigma(epoch: &[u32], d: &[f64], window: u32, scratch: &mut Vec<f64>) ->
         if block.len() < 3 {
             continue;
         }
-        let m = median_of(&mut block);
+        let m = median_in_place(&mut block);
         scratch.extend(d[first..j].iter().filter(|v| v.is_finite()).map(|v| (v - m).abs()));
     }
-    1.4826 * median_of(scratch)
+    1.4826 * median_in_place(scratch)
 }
 
 /// The median over a regular subsample of the epochs (at most
@@ -643,7 +636,7 @@ fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
     (0..n_tracks)
         .map(|i| {
             let mut v: Vec<f64> = parts.iter().flat_map(|p| p[i].iter().copied()).collect();
-            if v.is_empty() { 0.0 } else { median_of(&mut v) }
+            if v.is_empty() { 0.0 } else { median_in_place(&mut v) }
         })
         .collect()
 }
@@ -658,7 +651,7 @@ fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64
     let stride = values.len().div_ceil(MEDIAN_SAMPLE).max(1);
     scratch.clear();
     scratch.extend(values.iter().step_by(stride).copied().filter(|v| v.is_finite()).map(f));
-    median_of(scratch)
+    median_in_place(scratch)
 }
 
 /// Screens the rows (see the crate documentation, section "Screening"). `n_epochs`: the epoch
@@ -1112,7 +1105,7 @@ fn slip_events(
         }
         window.clear();
         window.extend(ev[first..].iter().map(|&k| d[k]));
-        let m = median_of(&mut window);
+        let m = median_in_place(&mut window);
         if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
             continue;
         }
@@ -1350,7 +1343,7 @@ fn low_gain_windows(
         }
         slopes.clear();
         slopes.extend(group.iter().map(|&f| fits[f].slope));
-        let typical = median_of(&mut slopes);
+        let typical = median_in_place(&mut slopes);
         if typical.is_nan() || typical < 0.8 {
             continue;
         }

@@ -66,7 +66,7 @@ pub struct SelectionConfig {
     /// Use at most this many tracks, those with the highest mean C/N0 (after
     /// the masks), or the least noisy where C/N0 does not vary
     /// ([`ChannelRanking`]); `None`: all that pass the masks. Default
-    /// `Some(4)` (the paper).
+    /// `Some(DEFAULT_CHANNELS)`.
     pub max_channels: Option<usize>,
     /// Drop the rows whose C/N0 is below this [dB-Hz]. Default `None`.
     pub min_cn0_dbhz: Option<f64>,
@@ -85,10 +85,13 @@ pub struct SelectionConfig {
     pub screening: ScreeningConfig,
 }
 
+/// How many channels enter the average by default: 4, the paper's.
+pub const DEFAULT_CHANNELS: usize = 4;
+
 impl Default for SelectionConfig {
     fn default() -> Self {
         SelectionConfig {
-            max_channels: Some(4),
+            max_channels: Some(DEFAULT_CHANNELS),
             min_cn0_dbhz: None,
             elevation_mask_deg: None,
             weighting: Weighting::Equal,
@@ -241,14 +244,7 @@ impl Grid {
             return Err(SessionError::TooFewEpochs { file: file.to_owned(), epochs: n });
         }
         let mut d: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
-        let m = d.len() / 2;
-        d.select_nth_unstable_by(m, f64::total_cmp);
-        let median_s = if d.len() % 2 == 1 {
-            d[m]
-        } else {
-            let lower = d[..m].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            0.5 * (lower + d[m])
-        };
+        let median_s = gsens_core::stats::median_in_place(&mut d);
         drop(d);
 
         let mut k_of_stamp = Vec::with_capacity(n);
@@ -622,7 +618,7 @@ pub fn prepare_session_from(
     // Inverse of the scaled variance: s = f_L1/f_c scales the noise by s.
     let weight = |cn0_dbhz: f64, to_l1: f64| match selection.weighting {
         Weighting::Equal => 1.0 / (to_l1 * to_l1),
-        Weighting::Cn0 => 10f64.powf(cn0_dbhz / 10.0) / (to_l1 * to_l1),
+        Weighting::Cn0 => gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz) / (to_l1 * to_l1),
     };
     let selected_candidates: Vec<usize> =
         selected.iter().map(|&i| candidate_of[i].expect("a ranked track is a candidate")).collect();

@@ -268,7 +268,7 @@ pub fn noise_sigma(cn0_dbhz: f64, interval_s: f64) -> f64 {
     if cn0_dbhz.is_infinite() && cn0_dbhz > 0.0 {
         0.0
     } else {
-        (0.5 / (10f64.powf(cn0_dbhz / 10.0) * interval_s)).sqrt()
+        (0.5 / (gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz) * interval_s)).sqrt()
     }
 }
 

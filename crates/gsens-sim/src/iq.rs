@@ -485,7 +485,7 @@ fn set_segment(sat: &mut Sat, now: &LineOfSight, next: &LineOfSight, t: f64, car
 }
 
 fn amplitude(noise_sigma: f64, cn0_dbhz: f64, fs_hz: f64) -> f32 {
-    (noise_sigma * (2.0 * 10f64.powf(cn0_dbhz / 10.0) / fs_hz).sqrt()) as f32
+    (noise_sigma * (2.0 * gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz) / fs_hz).sqrt()) as f32
 }
 
 /// First sample index of block `b`: ⌈b·fs·1ms⌉ (samples at or after the block start).

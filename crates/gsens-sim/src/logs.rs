@@ -2,7 +2,7 @@
 //! `tracking.csv` and `truth.json` into a folder, or kept in memory as the
 //! log types of `gsens-io`, exactly as its readers would return the files.
 
-use crate::scenario::{LoggedPhaseMode, Scenario};
+use crate::scenario::Scenario;
 use crate::session::{MemorySink, SessionSink, SimError, SimulatedRow, SinkError, Truth, simulate};
 use gsens_core::{LoggedPhase, LoopFilterCoeffs, LoopModel, LoopSpec};
 use gsens_io::{FormatError, ImuSeries, ImuWriter, TrackingLog, TrackingWriter};
@@ -102,7 +102,7 @@ pub fn read_truth_loop(path: &Path) -> Result<Option<TruthLoop>, LoadError> {
         loop_coeffs: Coeffs,
         loop_interval_s: f64,
         log_interval_s: f64,
-        logged_phase: LoggedPhaseMode,
+        logged_phase: LoggedPhase,
         scenario: Option<ScenarioLoop>,
     }
     let text =
@@ -125,15 +125,12 @@ pub fn read_truth_loop(path: &Path) -> Result<Option<TruthLoop>, LoadError> {
     let spec = s
         .scenario
         .and_then(|sc| sc.tracking_loop)
-        .map(|l| match l.order {
-            3 => LoopSpec::ThirdOrder { bn_hz: l.bn_hz, a3: l.a3, b3: l.b3 },
-            _ => LoopSpec::SecondOrder { bn_hz: l.bn_hz, zeta: l.zeta },
-        })
+        .and_then(|l| LoopSpec::of_order(l.order, l.bn_hz, l.zeta, l.a3, l.b3).ok())
         .filter(|spec| spec.coeffs().is_ok_and(|k| k == c))
         .unwrap_or(LoopSpec::Coefficients(c));
     Ok(Some(TruthLoop {
         receiver_loop: LoopModel::kaplan(spec, Some(s.loop_interval_s)),
-        logged_phase: s.logged_phase.into(),
+        logged_phase: s.logged_phase,
         log_interval_s: s.log_interval_s,
     }))
 }

@@ -17,7 +17,8 @@
 
 use core::f64::consts::FRAC_1_SQRT_2;
 
-use gsens_core::LoggedPhase;
+/// What a log row holds, re-exported for scenarios' `log.phase`.
+pub use gsens_core::LoggedPhase;
 use gsens_core::units::{GPS_L1_HZ, L1CA_CODE_PERIOD_S};
 use gsens_core::{LoopFilterCoeffs, LoopSpec};
 use serde::{Deserialize, Serialize};
@@ -306,37 +307,17 @@ impl Default for LoopSection {
 }
 
 impl LoopSection {
-    /// The loop specification for the core.
+    /// The loop specification for the core ([`LoopSpec::of_order`]); validation
+    /// refuses orders other than 2 and 3, an unvalidated one keeps the 2nd
+    /// order's shape.
     pub fn spec(&self) -> LoopSpec {
-        if self.order == 3 {
-            LoopSpec::ThirdOrder { bn_hz: self.bn_hz, a3: self.a3, b3: self.b3 }
-        } else {
-            LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta }
-        }
+        LoopSpec::of_order(self.order, self.bn_hz, self.zeta, self.a3, self.b3)
+            .unwrap_or(LoopSpec::SecondOrder { bn_hz: self.bn_hz, zeta: self.zeta })
     }
 
     /// The loop-filter coefficients (after validation they exist).
     pub fn coeffs(&self) -> Result<LoopFilterCoeffs, ScenarioError> {
         Ok(self.spec().coeffs().map_err(ConfigError::Loop)?)
-    }
-}
-
-/// What a tracking-log row's phase is, when the loop runs faster than the log.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LoggedPhaseMode {
-    /// The latest discriminator output ([`LoggedPhase::Last`]).
-    Last,
-    /// The mean of the discriminator outputs since the previous row ([`LoggedPhase::Mean`]).
-    Mean,
-}
-
-impl From<LoggedPhaseMode> for LoggedPhase {
-    fn from(m: LoggedPhaseMode) -> Self {
-        match m {
-            LoggedPhaseMode::Last => LoggedPhase::Last,
-            LoggedPhaseMode::Mean => LoggedPhase::Mean,
-        }
     }
 }
 
@@ -358,7 +339,7 @@ pub struct LogSection {
     pub interval_s: f64,
     /// `"last"` or `"mean"` discriminator output (see `gsens_core::LoggedPhase`);
     /// rows are time-stamped at the centre of the latest integration.
-    pub phase: LoggedPhaseMode,
+    pub phase: LoggedPhase,
     /// `"estimated"` or `"true"` C/N0 in the rows.
     pub cn0: Cn0Logged,
     /// Leave out rows of channels whose lock indicator reads unlocked (as
@@ -368,7 +349,7 @@ pub struct LogSection {
 
 impl Default for LogSection {
     fn default() -> Self {
-        LogSection { interval_s: 0.025, phase: LoggedPhaseMode::Mean, cn0: Cn0Logged::Estimated, drop_unlocked: true }
+        LogSection { interval_s: 0.025, phase: LoggedPhase::Mean, cn0: Cn0Logged::Estimated, drop_unlocked: true }
     }
 }
 

@@ -63,7 +63,8 @@ use crate::motion::Motion;
 use crate::oscillator::Oscillator;
 use crate::rng::{Xoshiro256PlusPlus, normal, substream};
 use crate::satellites::{Cn0Offsets, Constellation, LineOfSight};
-use crate::scenario::{Cn0Logged, LoggedPhaseMode, Scenario, ScenarioError};
+use crate::scenario::{Cn0Logged, Scenario, ScenarioError};
+use gsens_core::LoggedPhase;
 
 /// Stream ids of [`crate::rng::substream`] for the session's components
 /// (shared with [`crate::iq`], so both draw the same oscillator, motion and IMU).
@@ -273,10 +274,7 @@ impl core::fmt::Display for Truth {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let slips: u64 = self.channels.iter().map(|c| c.stats.cycle_slips).sum();
         let g = self.sensitivity.gamma_hz_per_mps2;
-        let logged = match self.logged_phase {
-            crate::scenario::LoggedPhaseMode::Last => "last",
-            crate::scenario::LoggedPhaseMode::Mean => "mean",
-        };
+        let logged = self.logged_phase.name();
         writeln!(
             f,
             "simulated {:.1} s, {} channel passes ({slips} cycle slips), seed {}",
@@ -312,7 +310,7 @@ pub struct Truth {
     /// Tracking log interval \[s\].
     pub log_interval_s: f64,
     /// What `phase_err_rad` is: `last` or `mean`.
-    pub logged_phase: LoggedPhaseMode,
+    pub logged_phase: LoggedPhase,
     /// The rows' time-stamp convention.
     pub row_time_stamp: String,
     /// The loop filter used by every channel.
@@ -519,8 +517,8 @@ pub fn simulate<S: SessionSink + ?Sized>(
                     continue;
                 }
                 let (phase, truth) = match sc.log.phase {
-                    LoggedPhaseMode::Last => (snap.last_rad, snap.true_last_rad),
-                    LoggedPhaseMode::Mean => (snap.mean_rad, snap.true_mean_rad),
+                    LoggedPhase::Last => (snap.last_rad, snap.true_last_rad),
+                    LoggedPhase::Mean => (snap.mean_rad, snap.true_mean_rad),
                 };
                 let row = SimulatedRow {
                     t_s: t,

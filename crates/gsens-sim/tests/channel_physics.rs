@@ -19,7 +19,7 @@ fn start(cn0_dbhz: f64, freq_hz: f64) -> ChannelStart {
 
 /// Costas tracking jitter σ² = Bn/(C/N0)·(1 + 1/(2T·C/N0)) (docs/conventions.md).
 fn costas_sigma_rad(bn_hz: f64, cn0_dbhz: f64, t_s: f64) -> f64 {
-    let c = 10f64.powf(cn0_dbhz / 10.0);
+    let c = gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz);
     (bn_hz / c * (1.0 + 1.0 / (2.0 * t_s * c))).sqrt()
 }
 

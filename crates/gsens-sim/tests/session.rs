@@ -7,7 +7,7 @@ use gsens_core::RegressorModel;
 use gsens_sim::imu::ImuPreset;
 use gsens_sim::motion::{Axis, Segment};
 use gsens_sim::satellites::Constellation;
-use gsens_sim::scenario::{Cn0Logged, LoggedPhaseMode, Scenario};
+use gsens_sim::scenario::{Cn0Logged, LoggedPhase, Scenario};
 use gsens_sim::session::{MemorySink, simulate};
 
 fn bits(s: &MemorySink) -> Vec<u64> {
@@ -124,7 +124,7 @@ fn loop_intervals_of_5_and_20_ms_work_with_costas_and_pilot() {
 /// specific force (an ideal IMU sampled at the row times) times Γ.
 #[test]
 fn g_induced_phase_matches_the_core_regressor_model() {
-    for phase in [LoggedPhaseMode::Mean, LoggedPhaseMode::Last] {
+    for phase in [LoggedPhase::Mean, LoggedPhase::Last] {
         let mut sc = Scenario::default();
         sc.motion.segments = vec![
             Segment::rest(2.0),
@@ -145,7 +145,7 @@ fn g_induced_phase_matches_the_core_regressor_model() {
         // The channels started at t = 0 with the NCO preloaded for the
         // apparent frequency there, so the model is fed a − a(0).
         let coeffs = sc.tracking_loop.coeffs().unwrap();
-        let mut model = RegressorModel::new(coeffs, 0.001, 0.025, phase.into()).unwrap();
+        let mut model = RegressorModel::new(coeffs, 0.001, 0.025, phase).unwrap();
         let a0 = with.imu[0].1;
         let model_at: HashMap<u64, f64> = with
             .imu

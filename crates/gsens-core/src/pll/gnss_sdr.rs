@@ -389,6 +389,7 @@ impl LinearLoop for GnssSdrPll {
 
 #[cfg(test)]
 mod tests {
+    use super::super::sinusoid_response::assert_sinusoid_response;
     use super::*;
 
     fn pll(order: u8, bw_hz: f64, symbols: u32) -> GnssSdrPll {
@@ -442,12 +443,11 @@ mod tests {
     #[test]
     fn response_matches_a_simulated_sinusoid() {
         for (order, bw, n) in [(2u8, 3.0, 20u32), (3, 3.0, 20), (3, 35.0, 1), (2, 15.0, 1)] {
-            let l0 = pll(order, bw, n);
+            let mut l0 = pll(order, bw, n);
             assert!(l0.is_stable());
-            let f_hz = 0.9;
-            let sim = super::super::simulated_response(l0, f_hz, l0.interval_s(), 60.0, 100.0);
-            let model = l0.response(f_hz);
-            assert!((sim - model).norm() < 2e-3 * model.norm(), "{order} {bw} {n}: {sim} vs {model}");
+            let (f_hz, t_s, model) = (0.9, l0.interval_s(), l0.response(0.9));
+            let what = format!("order {order}, {bw} Hz, {n} symbols");
+            assert_sinusoid_response(|x| l0.step(x), f_hz, t_s, (60.0, 100.0), model, 2e-3, &what);
         }
     }
 

@@ -267,6 +267,7 @@ impl LinearLoop for PocketSdrPll {
 
 #[cfg(test)]
 mod tests {
+    use super::super::sinusoid_response::assert_sinusoid_response;
     use super::*;
 
     fn pll(bw_hz: f64) -> PocketSdrPll {
@@ -317,11 +318,10 @@ mod tests {
     #[test]
     fn response_matches_a_simulated_sinusoid() {
         for (bw, f_hz) in [(5.0, 0.9), (10.0, 0.9), (5.0, 7.0), (20.0, 30.0)] {
-            let l0 = pll(bw);
+            let mut l0 = pll(bw);
             assert!(l0.stage.is_stable());
-            let sim = super::super::simulated_response(l0, f_hz, l0.stage.interval_s, 20.0, 50.0);
-            let model = l0.stage.response(f_hz);
-            assert!((sim - model).norm() < 2e-3 * model.norm(), "{bw} {f_hz}: {sim} vs {model}");
+            let (t_s, model) = (l0.stage.interval_s, l0.stage.response(f_hz));
+            assert_sinusoid_response(|x| l0.step(x), f_hz, t_s, (20.0, 50.0), model, 2e-3, &format!("{bw} Hz"));
         }
     }
 

@@ -361,7 +361,7 @@ fn screening_config_serde_and_brief() {
 fn noise_crossing_the_linear_range_is_not_an_excursion() {
     let mut w = TrackingWriter::new(Vec::new()).unwrap();
     let mut noise = Noise(29);
-    let sigma = 1.0 / (2.0 * 10f64.powf(3.9) * 1e-3).sqrt();
+    let sigma = 1.0 / (2.0 * gsens_core::units::cn0_dbhz_to_ratio_hz(39.0) * 1e-3).sqrt();
     let signal = |t: f64| 0.5 * (TAU * 0.9 * t).sin();
     let epochs = EPOCHS;
     for k in 0..epochs {

@@ -347,7 +347,7 @@ fn cn0_weights_are_the_cn0_ratio() {
     let log = log_from(&rows);
     let cfg = SelectionConfig { weighting: Weighting::Cn0, remove_channel_offsets: false, ..base() };
     let s = prep(&log, &wide_imu(), &cfg).unwrap();
-    let (w1, w2) = (10f64.powf(4.0), 10f64.powf(4.3));
+    let (w1, w2) = (gsens_core::units::cn0_dbhz_to_ratio_hz(40.0), gsens_core::units::cn0_dbhz_to_ratio_hz(43.0));
     let want = w1 / (w1 + w2);
     assert!((want - 0.3339).abs() < 1e-3); // 3 dB ≈ twice the weight
     for p in &s.phase_err_rad {
@@ -565,7 +565,11 @@ fn phases_are_scaled_to_l1_and_weighted_by_the_inverse_scaled_variance() {
         let (mut sw, mut swx) = (0.0, 0.0);
         for (c, label) in labels.iter().enumerate() {
             let r = on(label).carrier_hz / l1;
-            let base = if weighting == Weighting::Cn0 { 10f64.powf((40.0 + c as f64) / 10.0) } else { 1.0 };
+            let base = if weighting == Weighting::Cn0 {
+                gsens_core::units::cn0_dbhz_to_ratio_hz(40.0 + c as f64)
+            } else {
+                1.0
+            };
             sw += base * r * r;
             swx += base * r * r * own[c] / r;
         }
