@@ -34,7 +34,10 @@
 //! follow at all — a broadband environment needs a fast IMU.
 
 use gsens_core::{LoopModel, LoopSpec};
+
+mod sweep;
 use statrs::distribution::{ContinuousCDF, Normal};
+pub use sweep::{BN_GRID_HZ, Sweep, SweepError, SweepRow, SweepSettings};
 
 /// Kaplan & Hegarty's rule of thumb for keeping a Costas loop in lock,
 /// 3σ + θₑ ≤ 45° \[rad\]: a lock criterion for the loop's whole jitter over a

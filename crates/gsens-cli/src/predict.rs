@@ -6,7 +6,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use gsens_calib::predict::{FrequencyNoise, PredictionInput, Vibration, jitter, narrowest_bn_hz, second_order_loop};
+use gsens_calib::predict::{BN_GRID_HZ, FrequencyNoise, SweepError, SweepSettings, Vibration};
 use gsens_report::figures::{DEFAULT_SIZE, Format, LockMarginData, fig_lock_margin};
 use gsens_sim::oscillator::OscillatorConfig;
 use std::path::PathBuf;
@@ -143,10 +143,25 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
         h_neg2: o.h_neg2,
         carrier_hz: args.carrier_hz,
     });
-    let receiver_loop = second_order_loop(args.bn_hz, args.zeta, args.loop_interval_s);
-    receiver_loop.check().with_context(|| format!("the loop (Bn {} Hz, T {} s)", args.bn_hz, args.loop_interval_s))?;
     let delay_s = args.latency_s + 0.5 / args.imu_rate_hz;
-    let bn_grid: Vec<f64> = (1..=200).map(|k| 0.1 * k as f64).collect();
+    let settings = SweepSettings {
+        gamma_hz_per_mps2: gamma,
+        covariance_hz_per_mps2_sq: covariance,
+        vibration: base,
+        levels: args.levels.clone(),
+        oscillator,
+        cn0_dbhz: args.cn0_dbhz,
+        delay_s,
+        imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
+        doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
+        bn_hz: args.bn_hz,
+        zeta: args.zeta,
+        loop_interval_s: args.loop_interval_s,
+    };
+    let sweep = settings.sweep().map_err(|e| match e {
+        SweepError::Level(level) => anyhow::anyhow!("--levels {level}: must be finite and ≥ 0"),
+        e => e.into(),
+    })?;
     crate::out(&format!(
         "loop: 2nd order, Bn {} Hz, ζ {:.3}, T {} s; oscillator {}; C/N0 {} dB-Hz; feed-forward delay {:.4} s \
          (latency {} s + half the IMU's {} Hz sample); lock while 3σ + θe ≤ 45°, θe the dynamic stress of a {} Hz/s \
@@ -165,84 +180,38 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
         "  level  vibration RMS [m/s²]     1σ [rad]: thermal  oscillator  vibration without → with   total without → with   \
          lock without/with   narrowest Bn without/with [Hz]\n",
     )?;
-    let mut rows = Vec::new();
-    let mut last_input = None;
-    for &level in &args.levels {
-        if !(level.is_finite() && level >= 0.0) {
-            anyhow::bail!("--levels {level}: must be finite and ≥ 0");
-        }
-        let vibration = match &base {
-            Vibration::Spectrum(p) => {
-                Vibration::Spectrum(p.iter().map(|(f, s)| (*f, s.map(|v| v * level * level))).collect())
-            }
-            Vibration::Tones(t) => Vibration::Tones(t.iter().map(|(f, a)| (*f, a.map(|v| v * level))).collect()),
-        };
-        let input = PredictionInput {
-            gamma_hz_per_mps2: gamma,
-            covariance,
-            vibration: vibration.clone(),
-            oscillator,
-            cn0_dbhz: Some(args.cn0_dbhz),
-            delay_s,
-            imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
-            doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
-        };
-        let narrowest = narrowest_bn_hz(args.zeta, args.loop_interval_s, &input, &bn_grid);
-        let j = jitter(&receiver_loop, args.bn_hz, args.loop_interval_s, &input);
-        last_input = Some((level, input));
-        let rms = vibration.rms_mps2();
-        let yes = |b: bool| if b { "yes" } else { "NO" };
-        let bn = |b: Option<f64>| match b {
-            None => "none ≤ 20".to_string(),
-            Some(b) if b <= bn_grid[0] => format!("≤ {b:.1}"),
-            Some(b) => format!("{b:.1}"),
-        };
+    let yes = |b: bool| if b { "yes" } else { "NO" };
+    let bn = |b: Option<f64>| match b {
+        None => format!("none ≤ {}", BN_GRID_HZ[BN_GRID_HZ.len() - 1]),
+        Some(b) if b <= BN_GRID_HZ[0] => format!("≤ {b:.1}"),
+        Some(b) => format!("{b:.1}"),
+    };
+    for r in &sweep.predictions {
         crate::out(&format!(
-            "  {level:5.2}  {:5.2} {:5.2} {:5.2}        {:7.4}     {:7.4}     {:7.4} → {:7.4}       {:6.4} → {:6.4}       \
+            "  {:5.2}  {:5.2} {:5.2} {:5.2}        {:7.4}     {:7.4}     {:7.4} → {:7.4}       {:6.4} → {:6.4}       \
              {:>3} / {:<3}          {} / {}\n",
-            rms[0],
-            rms[1],
-            rms[2],
-            j.thermal_rad,
-            j.oscillator_rad,
-            j.vibration_rad[0],
-            j.vibration_rad[1],
-            j.total_rad[0],
-            j.total_rad[1],
-            yes(j.keeps_lock[0]),
-            yes(j.keeps_lock[1]),
-            bn(narrowest[0]),
-            bn(narrowest[1]),
+            r.level,
+            r.vibration_rms_mps2[0],
+            r.vibration_rms_mps2[1],
+            r.vibration_rms_mps2[2],
+            r.thermal_rad,
+            r.oscillator_rad,
+            r.vibration_rad[0],
+            r.vibration_rad[1],
+            r.total_rad[0],
+            r.total_rad[1],
+            yes(r.keeps_lock[0]),
+            yes(r.keeps_lock[1]),
+            bn(r.narrowest_bn_hz[0]),
+            bn(r.narrowest_bn_hz[1]),
         ))?;
-        rows.push(serde_json::json!({
-            "level": level,
-            "vibration_rms_mps2": rms,
-            "thermal_rad": j.thermal_rad,
-            "oscillator_rad": j.oscillator_rad,
-            "vibration_rad": j.vibration_rad,
-            "total_rad": j.total_rad,
-            "dynamic_stress_rad": j.dynamic_stress_rad,
-            "keeps_lock": j.keeps_lock,
-            "p_beyond_linear_range": j.p_beyond_range,
-            "narrowest_bn_hz": narrowest,
-        }));
     }
     crate::out(
         "\nwithout: Δf = aᵀΓ̂ reaches the loop; with: what Γ̂'s covariance and the feed-forward's delay leave of it \
          (docs: gsens_calib::predict)\n",
     )?;
-    if let (Some(path), Some((level, input))) = (&args.figure, &last_input) {
-        let (mut bns, mut without, mut with) = (Vec::new(), Vec::new(), Vec::new());
-        for &bn in &bn_grid {
-            let l = second_order_loop(bn, args.zeta, args.loop_interval_s);
-            if l.check().is_err() {
-                continue;
-            }
-            let j = jitter(&l, bn, args.loop_interval_s, input);
-            bns.push(bn);
-            without.push(3.0 * j.total_rad[0] + j.dynamic_stress_rad);
-            with.push(3.0 * j.total_rad[1] + j.dynamic_stress_rad);
-        }
+    if let (Some(path), Some(&level)) = (&args.figure, args.levels.last()) {
+        let (bns, without, with) = settings.lock_margin(level);
         let label = format!("vibration level {level}, {} oscillator, C/N0 {} dB-Hz", args.oscillator, args.cn0_dbhz);
         let data = LockMarginData {
             bn_hz: &bns,
@@ -256,13 +225,7 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     if let Some(path) = &args.json {
-        let doc = serde_json::json!({
-            "gamma_hz_per_mps2": gamma,
-            "covariance_hz_per_mps2_sq": covariance,
-            "bn_hz": args.bn_hz,
-            "predictions": rows,
-        });
-        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+        std::fs::write(path, serde_json::to_string_pretty(&sweep)?)
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(crate::Status::Done)
