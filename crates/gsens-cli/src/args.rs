@@ -292,9 +292,6 @@ pub struct SystematicArgs {
     /// σ. `off` takes the stated loop as exact.
     #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
     pub loop_check: bool,
-    /// Kept for old scripts: the loop check is on by default (see --loop-check).
-    #[arg(long, hide = true)]
-    pub identify_loop: bool,
     /// With the loop check: fit a 2nd-order loop's damping ζ too (weakly determined by near-sinusoidal shaking).
     #[arg(long)]
     pub identify_damping: bool,
@@ -333,7 +330,7 @@ impl SystematicArgs {
             TimeOffset::Fixed { imu_time_offset_s } => TimeOffsetOption::Seconds(imu_time_offset_s),
         };
         o.time_offset_max_s = self.time_offset_max_s;
-        o.loop_check = self.loop_check || self.identify_loop;
+        o.loop_check = self.loop_check;
         o.identify_damping = self.identify_damping;
         o.loop_tolerance = self.loop_tolerance;
         o.imu_despike = self.imu_despike;

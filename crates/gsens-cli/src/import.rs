@@ -76,12 +76,10 @@ pub struct ImportGnssSdrArgs {
     /// Output tracking.csv (`gsens estimate --tracking` reads it as written).
     #[arg(long, default_value = "tracking.csv")]
     pub out: PathBuf,
-    /// Put all channels on the common grid t = j·T (T the narrow integration) by cubic
-    /// interpolation, as `gsens estimate --tracking` needs. The default; kept for scripts.
-    #[arg(long, conflicts_with = "record_times")]
-    pub common_grid: bool,
-    /// Write each record at the middle of its own integration instead, with its carrier
-    /// lock test (channels are not on one grid: `gsens estimate --tracking` refuses it).
+    /// Write each record at the middle of its own integration, with its carrier lock test,
+    /// instead of all channels on the common grid t = j·T (T the narrow integration, by cubic
+    /// interpolation) that `gsens estimate --tracking` needs (channels not on one grid: it
+    /// refuses them).
     #[arg(long)]
     pub record_times: bool,
     /// Also write what became of each track (JSON).
@@ -106,7 +104,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     let imported = crate::with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
     crate::out(&gsens_gnss_sdr::render_tracks(&imported.tracks, imported.interval_s))?;
     let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
-    let common_grid = a.common_grid || !a.record_times;
+    let common_grid = !a.record_times;
     let rows = if common_grid {
         let grid = gsens_gnss_sdr::resample(&imported, imported.interval_s);
         gsens_io::write_tracking_csv(file, &grid)?;

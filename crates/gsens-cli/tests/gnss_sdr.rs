@@ -46,7 +46,7 @@ fn import_writes_tracking_csv() {
     let t: Vec<f64> = rows.iter().map(|r| r[0].parse().unwrap()).collect();
     assert!(t.iter().any(|v| ((v / 0.02).round() * 0.02 - v).abs() > 1e-4));
     let grid = d.join("grid.csv");
-    import(&grid, &["--common-grid"]);
+    import(&grid, &[]);
     let g = std::fs::read_to_string(&grid).unwrap();
     for line in g.lines().skip(1) {
         let v: f64 = line.split(',').next().unwrap().parse().unwrap();
@@ -280,7 +280,7 @@ fn tracking_rows_with_the_gnss_sdr_loop_of_a_conf() {
     for order in ["order2", "order3"] {
         let conf = f.join(order).join("gnss-sdr.conf");
         let csv = d.join(format!("{order}.csv"));
-        gsens(&["import", "gnss-sdr", &s(&f.join(order)), "--conf", &s(&conf), "--out", &s(&csv), "--common-grid"]);
+        gsens(&["import", "gnss-sdr", &s(&f.join(order)), "--conf", &s(&conf), "--out", &s(&csv)]);
         let out = d.join(format!("{order}.json"));
         let imu = f.join("imu.csv");
         let (text, _) = gsens_any(&[

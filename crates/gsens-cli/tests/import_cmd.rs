@@ -1,6 +1,6 @@
 //! `gsens import gnss-sdr` as a new user meets it: a wrong dump directory is
 //! named before anything about the configuration, and what it writes by
-//! default (no `--out`, no `--common-grid`) is a `tracking.csv` that
+//! default (no `--out`) is a `tracking.csv` that
 //! `gsens estimate --tracking` reads. On the real GNSS-SDR 0.0.17 dumps of
 //! `gsens-gnss-sdr`'s fixtures.
 

@@ -56,7 +56,7 @@ fn report_from_gnss_sdr_rows_is_the_estimate() {
     let d = temp_dir("report-route-rows-csv");
     let conf = s(&f.join("order2/gnss-sdr.conf"));
     let csv = s(&d.join("rows.csv"));
-    gsens(&["import", "gnss-sdr", &s(&f.join("order2")), "--conf", &conf, "--out", &csv, "--common-grid"]);
+    gsens(&["import", "gnss-sdr", &s(&f.join("order2")), "--conf", &conf, "--out", &csv]);
     same_document("rows", &["--imu", &s(&f.join("imu.csv")), "--tracking", &csv, "--gnss-sdr-conf", &conf]);
 }
 
