@@ -5,12 +5,10 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::{EstimateSettings, calibrate_logs};
-use gsens_montecarlo::scenario_settings;
+use gsens_montecarlo::{ValidateError, calibrate_scenario, default_bandwidths_hz, validate};
 use gsens_report::figures::{CompensationData, CompensationKind, Format, fig_compensation};
 use gsens_sim::compensation::CompensationSection;
-use gsens_sim::compensation_trial::{RUNS, Trial, run_trial};
-use gsens_sim::simulate_logs;
+use gsens_sim::compensation_trial::RUNS;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -51,33 +49,19 @@ pub fn run(args: &ValidateArgs) -> Result<crate::Status> {
         (None, Some(path)) => crate::estimate::gamma_of_document(path)?.0,
         (None, None) => {
             crate::out(&format!("calibrating on the scenario's session (seed {seed}) …\n"))?;
-            let logs = simulate_logs(&scenario, seed)?;
-            let mut settings = gsens_calib::PipelineSettings::default();
-            settings.estimate = scenario_settings(&scenario, &EstimateSettings::default())?;
-            let outcome = calibrate_logs(&logs.tracking, &logs.imu, "simulated imu", &settings)?;
-            let doc = outcome.document(Some(logs.truth.sensitivity.gamma_hz_per_mps2));
-            if !doc.trustworthy {
-                anyhow::bail!(
+            let g = match calibrate_scenario(&scenario, seed) {
+                Err(ValidateError::Untrustworthy(doc)) => anyhow::bail!(
                     "the calibration is not trustworthy, so there is no Γ̂ to validate:\n{}",
                     gsens_report::render_text(&doc)
-                );
-            }
-            let g = outcome.calibration.gamma_hz_per_mps2;
-            let Some(g) = g[0].zip(g[1]).zip(g[2]).map(|((x, y), z)| [x, y, z]) else {
-                anyhow::bail!("an axis is unobservable in the calibration: nothing to feed forward on it");
+                ),
+                g => g?,
             };
             crate::out(&format!("Γ̂ [Hz/(m/s²)] = [{:+.5}, {:+.5}, {:+.5}]\n", g[0], g[1], g[2]))?;
             g
         }
     };
-    if gamma_hat.iter().any(|g| !g.is_finite()) {
-        anyhow::bail!("Γ̂ {gamma_hat:?}: every component must be finite");
-    }
     let compensation = CompensationSection { gamma_hz_per_mps2: gamma_hat, latency_s: args.latency_s };
-    let bn_list = args.bn_hz.clone().unwrap_or_else(|| {
-        let bn = scenario.tracking_loop.bn_hz;
-        vec![bn, bn * 2.0 / 3.0, bn / 2.0, bn / 3.0]
-    });
+    let bn_list = args.bn_hz.clone().unwrap_or_else(|| default_bandwidths_hz(&scenario));
     let g = scenario.oscillator.gamma_hz_per_mps2;
     crate::out(&format!(
         "Γ [Hz/(m/s²)] of the oscillator: [{:+.5}, {:+.5}, {:+.5}]; Γ̂ fed forward: [{:+.5}, {:+.5}, {:+.5}]; {} \
@@ -97,24 +81,21 @@ pub fn run(args: &ValidateArgs) -> Result<crate::Status> {
         "  Bn [Hz]   g-induced φ RMS under shaking [rad]      logged φ RMS [rad]       cycle slips          losses of lock\n\
          \x20          without    with      reduced by        ref    without with     ref  without with   ref  without with\n",
     )?;
-    let mut trials: Vec<Trial> = Vec::new();
-    for &bn in &bn_list {
-        if !(bn.is_finite() && bn > 0.0) {
-            anyhow::bail!("--bn-hz {bn}: must be positive");
-        }
-        let mut s = scenario.clone();
-        s.tracking_loop.bn_hz = bn;
-        // A session other than the calibration's: the same Γ̂ on fresh noise.
-        let trial = run_trial(&s, seed + 1, &compensation).with_context(|| format!("the trial at Bn {bn} Hz"))?;
+    // A session other than the calibration's: the same Γ̂ on fresh noise.
+    let trials = validate(&scenario, seed + 1, &compensation, &bn_list, |bn, trial| -> Result<()> {
         let [lr, lu, lc] = trial.logged_rms_rad;
         let [sr, su, sc] = trial.cycle_slips;
         let [or, ou, oc] = trial.losses_of_lock;
         crate::out(&format!(
             "  {bn:6.2}    {:8.4}  {:8.4}    ×{:<8.1}      {lr:6.3} {lu:6.3} {lc:6.3}    {sr:5} {su:6} {sc:5}   {or:4} {ou:6} {oc:5}\n",
             trial.g_rms_rad[0], trial.g_rms_rad[1], trial.suppression
-        ))?;
-        trials.push(trial);
-    }
+        ))
+    })
+    .map_err(|e| match e.downcast::<ValidateError>() {
+        Ok(ValidateError::Bandwidth(bn)) => anyhow::anyhow!("--bn-hz {bn}: must be positive"),
+        Ok(e) => e.into(),
+        Err(e) => e,
+    })?;
     crate::out(&format!(
         "\nruns: {}; g-induced = the run's true phase error less the reference's, same noise; slips and losses: \
          the simulator's truth over all channels\n",

@@ -14,7 +14,7 @@
 //! A cycle slip of one run shows as a 2π step in its difference, and in
 //! the channels' slip counters, which are the simulator's truth.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use serde::Serialize;
 
@@ -142,7 +142,9 @@ fn compare(scenario: &Scenario, compensation: &CompensationSection, runs: [&(Mem
     let compensated: HashMap<Key, &SimulatedRow> = runs[2].0.tracking.iter().map(|row| (key(row), row)).collect();
     // Per channel: sums of squares (uncompensated, compensated) and the count.
     let mut per_channel: Vec<(u32, u32, [f64; 2], usize)> = Vec::new();
-    let mut traces: HashMap<u32, PhaseTrace> = HashMap::new();
+    // Ordered by channel, so that the trace drawn (the longest; of equals,
+    // the highest channel) is the same on every run.
+    let mut traces: BTreeMap<u32, PhaseTrace> = BTreeMap::new();
     let mut logged_ss = [0.0; 3];
     let mut logged_n = [0usize; 3];
     for (k, run) in runs.iter().enumerate() {
