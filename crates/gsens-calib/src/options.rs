@@ -28,21 +28,60 @@ pub enum MethodName {
     Gls,
 }
 
-/// The IMU time offset by name: `"auto"` (searched within
+/// The IMU time offset as the options name it: `"auto"` (searched within
 /// ±[`CalibrationOptions::time_offset_max_s`]), `"none"` (0) or a number of
-/// seconds (IMU time stamp minus true time).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+/// seconds (IMU time stamp minus true time). Serialized as that word or
+/// number; any other word is an error naming `time_offset` and the choices.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[non_exhaustive]
 pub enum TimeOffsetOption {
+    /// Searched from the data.
+    #[default]
+    Auto,
+    /// None: 0 s.
+    None,
     /// A fixed offset \[s\].
     Seconds(f64),
-    /// `auto` or `none`.
-    Word(String),
 }
 
-impl Default for TimeOffsetOption {
-    fn default() -> Self {
-        TimeOffsetOption::Word("auto".into())
+impl Serialize for TimeOffsetOption {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            TimeOffsetOption::Auto => s.serialize_str("auto"),
+            TimeOffsetOption::None => s.serialize_str("none"),
+            TimeOffsetOption::Seconds(v) => s.serialize_f64(*v),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for TimeOffsetOption {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = TimeOffsetOption;
+            fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str("auto, none or a number of seconds")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(TimeOffsetOption::Seconds(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(TimeOffsetOption::Seconds(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(TimeOffsetOption::Seconds(v as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+                match v {
+                    "auto" => Ok(TimeOffsetOption::Auto),
+                    "none" => Ok(TimeOffsetOption::None),
+                    _ => v.parse().map(TimeOffsetOption::Seconds).map_err(|_| {
+                        E::custom(format!("time_offset: expected auto, none or a number of seconds, got `{v}`"))
+                    }),
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
     }
 }
 
@@ -152,7 +191,7 @@ impl Default for CalibrationOptions {
             cn0_drop_db: DEFAULT_CN0_DROP_DB,
             max_abs_phase_rad: None,
             discriminator: Discriminator::AtanCostas,
-            time_offset: TimeOffsetOption::default(),
+            time_offset: TimeOffsetOption::Auto,
             time_offset_max_s: DEFAULT_TIME_OFFSET_MAX_S,
             loop_check: true,
             identify_damping: false,
@@ -252,14 +291,8 @@ impl CalibrationOptions {
             TimeOffsetOption::Seconds(s) => {
                 return Err(CalibError::Setting { name: "time_offset", value: *s, expected: "finite" });
             }
-            TimeOffsetOption::Word(w) => match w.parse::<TimeOffset>() {
-                Ok(TimeOffset::Auto { .. }) => TimeOffset::Auto { max_abs_s: self.time_offset_max_s },
-                Ok(fixed) => fixed,
-                Err(_) => {
-                    let (name, expected) = ("time_offset", "auto, none or a number of seconds");
-                    return Err(CalibError::Word { name, value: w.clone(), expected });
-                }
-            },
+            TimeOffsetOption::Auto => TimeOffset::Auto { max_abs_s: self.time_offset_max_s },
+            TimeOffsetOption::None => TimeOffset::Fixed { imu_time_offset_s: 0.0 },
         };
         let loop_identification = match (self.loop_check, self.identify_damping) {
             (false, _) => LoopIdentificationMode::Off,
@@ -285,5 +318,28 @@ impl CalibrationOptions {
         let mut p = self.pipeline_settings_around(estimate)?;
         p.loop_stated = self.loop_stated();
         Ok(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The time offset reads as a word or a number (also a number in a
+    /// string), writes back as it was given, and any other word names the
+    /// option and its choices.
+    #[test]
+    fn time_offset_reads_words_and_numbers_and_names_itself_when_wrong() {
+        let read = |json: &str| serde_json::from_str::<TimeOffsetOption>(json);
+        assert_eq!(read("\"auto\"").unwrap(), TimeOffsetOption::Auto);
+        assert_eq!(read("\"none\"").unwrap(), TimeOffsetOption::None);
+        assert_eq!(read("-0.01").unwrap(), TimeOffsetOption::Seconds(-0.01));
+        assert_eq!(read("2").unwrap(), TimeOffsetOption::Seconds(2.0));
+        assert_eq!(read("\"0.5\"").unwrap(), TimeOffsetOption::Seconds(0.5));
+        for o in [TimeOffsetOption::Auto, TimeOffsetOption::None, TimeOffsetOption::Seconds(-0.01)] {
+            assert_eq!(read(&serde_json::to_string(&o).unwrap()).unwrap(), o);
+        }
+        let e = read("\"later\"").unwrap_err().to_string();
+        assert!(e.contains("time_offset") && e.contains("auto, none or a number of seconds"), "{e}");
     }
 }

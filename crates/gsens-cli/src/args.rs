@@ -326,7 +326,7 @@ impl SystematicArgs {
     /// Sets the options of the systematic errors.
     pub fn apply(&self, o: &mut CalibrationOptions) {
         o.time_offset = match self.time_offset {
-            TimeOffset::Auto { .. } => TimeOffsetOption::Word("auto".into()),
+            TimeOffset::Auto { .. } => TimeOffsetOption::Auto,
             TimeOffset::Fixed { imu_time_offset_s } => TimeOffsetOption::Seconds(imu_time_offset_s),
         };
         o.time_offset_max_s = self.time_offset_max_s;
