@@ -195,7 +195,7 @@ pub struct Outcome {
     /// The loop's response measured from the session against the model
     /// ([`crate::measure_response_with`], at [`RESPONSE_CHECK_FALSE_ALARM`]),
     /// or why it could not be measured.
-    pub loop_response: Result<crate::ResponseCheck, String>,
+    pub loop_response: Result<crate::ResponseCheck, crate::ResponseCheckError>,
     /// Time stamps of the IMU samples replaced as isolated spikes \[s\].
     pub imu_spikes_t_s: Vec<f64>,
     /// Runs of identical IMU samples no noise or motion makes (stuck,
@@ -390,7 +390,7 @@ fn calibrate_prepared(
     // loop, not the estimator: it is measured against the least-squares Γ̂
     // (a gradient observer's noisier Γ̂ would show as a loop mismatch).
     let series = series_of(&session);
-    let response_check = || -> Result<Result<crate::ResponseCheck, String>, CalibError> {
+    let response_check = || -> Result<Result<crate::ResponseCheck, crate::ResponseCheckError>, CalibError> {
         let gamma_ls = match &joint {
             Some(fit) => fit.gamma_hz_per_mps2,
             None => crate::search::batch_pass(&series, &estimate)?.1.solve().gamma_hz_per_mps2,
@@ -398,14 +398,7 @@ fn calibrate_prepared(
         let response_settings =
             crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
         Ok(crate::measure_response_with(&series, &estimate, &gamma_ls, &response_settings)
-            .map_err(|e| e.to_string())
-            .and_then(|c| {
-                if c.bins_tested == 0 {
-                    Err("no frequency bin of the shaken band has a significant coherence".to_string())
-                } else {
-                    Ok(c)
-                }
-            }))
+            .and_then(|c| if c.bins_tested == 0 { Err(crate::ResponseCheckError::NothingCoherent) } else { Ok(c) }))
     };
     crate::progress::stage("estimating Γ and checking the loop's response", None);
     let (calibration, loop_response) = rayon::join(|| calibrate(&series, &estimate), response_check);

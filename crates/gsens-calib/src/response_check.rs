@@ -266,7 +266,8 @@ impl ResponseCheck {
 }
 
 /// Why the response could not be measured.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ResponseCheckError {
     /// The estimator's model could not be built.
     #[error(transparent)]
@@ -290,6 +291,9 @@ pub enum ResponseCheckError {
         /// Effective segments needed.
         needed: f64,
     },
+    /// No bin of the shaken band is coherent enough to test.
+    #[error("no frequency bin of the shaken band has a significant coherence")]
+    NothingCoherent,
 }
 
 /// The analytic epoch-level response of a loop from the g-induced frequency
