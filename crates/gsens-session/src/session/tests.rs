@@ -610,7 +610,7 @@ fn linear_range_test_uses_each_channels_own_carrier() {
 }
 
 /// A log given to the session (freed track by track as its rows are taken,
-/// the tracks on both cores) gives the session a lent one gives: tracks
+/// the tracks in parallel) gives the session a lent one gives: tracks
 /// joining, leaving, below the masks and re-assigned, with the screening on.
 #[test]
 fn given_and_lent_logs_give_the_same_session() {
