@@ -736,6 +736,11 @@ const JOIN_PARALLEL_ROWS: usize = 1 << 16;
 /// and its join cost little beside its parsing.
 const CHUNK_BYTES: u64 = 8 << 20;
 
+/// Chunks parsed at once before they are joined: enough to keep a few
+/// threads busy, few enough that their columns beside the joined log's stay
+/// small (a fixed number, so the memory does not grow with the threads).
+const WAVE_CHUNKS: usize = 4;
+
 /// Opens and reads a `tracking.csv` file; errors name the file by its path.
 ///
 /// A file without quotes or carrier columns is parsed on the fast path
@@ -790,28 +795,33 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<T
     }
     let fields = src.header.len();
     let bounds = crate::plain::chunk_bounds(&mut file, start, total, chunk_bytes)?;
-    let chunks: Vec<(u64, u64)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
-    let parsed: Vec<Option<(Builder, u64)>> = chunks
-        .par_iter()
-        .enumerate()
-        .map(|(k, &(from, to))| {
-            let mut b = builder_for(&src, &cols).ok()?;
-            // The first chunk's columns are sized for the whole file: the others' rows join them.
-            let (first_line, reserve) = if k == 0 { (2, total - start) } else { (1, to - from) };
-            let newlines =
-                plain_rows(crate::plain::byte_range(path, from, to)?, first_line, &cols, fields, &mut b, reserve)?;
-            Some((b, newlines))
-        })
-        .collect();
-    let mut parsed = parsed.into_iter();
-    let (mut log, mut lines_before) = parsed.next()??;
-    // Each later chunk's lines count from 1 at its first byte: the header's and the earlier chunks' lines precede it.
-    lines_before += 1;
-    for chunk in parsed {
-        let (b, newlines) = chunk?;
-        log = log.join(b, lines_before)?;
-        lines_before += newlines;
+    let chunks: Vec<(usize, (u64, u64))> = bounds.windows(2).map(|w| (w[0], w[1])).enumerate().collect();
+    let mut joined: Option<(Builder, u64)> = None;
+    // A wave of chunks at a time, joined before the next is parsed: the
+    // chunks' own columns held at once stay a few chunks' worth.
+    for wave in chunks.chunks(WAVE_CHUNKS) {
+        let parsed: Vec<Option<(Builder, u64)>> = wave
+            .par_iter()
+            .map(|&(k, (from, to))| {
+                let mut b = builder_for(&src, &cols).ok()?;
+                // The first chunk's columns are sized for the whole file: the others' rows join them.
+                let (first_line, reserve) = if k == 0 { (2, total - start) } else { (1, to - from) };
+                let input = crate::plain::byte_range(path, from, to)?;
+                let newlines = plain_rows(input, first_line, &cols, fields, &mut b, reserve)?;
+                Some((b, newlines))
+            })
+            .collect();
+        for chunk in parsed {
+            let (b, newlines) = chunk?;
+            joined = Some(match joined {
+                // The header's line and the first chunk's precede the next chunk's first byte.
+                None => (b, 1 + newlines),
+                // A later chunk's lines count from 1 at its first byte.
+                Some((log, lines_before)) => (log.join(b, lines_before)?, lines_before + newlines),
+            });
+        }
     }
+    let (log, _) = joined?;
     log.finish().ok()
 }
 
