@@ -205,7 +205,7 @@ fn calibrate_all_axes(
     // The noise model, the Cramér–Rao bound and the GLS estimate (all methods
     // get the bound), while the estimate's history and the regressors'
     // transforms for the robust covariance (neither needs the model) are
-    // computed on the other core.
+    // computed as separate tasks alongside it.
     let segments = gls::segments_of(fed.iter().map(|e| e.used));
     let columns: Vec<Vec<f64>> = (0..3).map(|i| fed.iter().map(|e| e.phi_a[i]).collect()).collect();
     let (noise_fit, (history, spectra)) = rayon::join(
@@ -403,7 +403,7 @@ fn gls_pass(
 }
 
 /// The estimate's history, to be computed: every [`HISTORY_INTERVAL_S`] the
-/// estimator as it stood then, each solved when asked for (on all cores).
+/// estimator as it stood then, each solved when asked for (in parallel).
 type History<'a> = Box<dyn FnOnce() -> Vec<HistoryPoint> + Send + 'a>;
 
 /// Runs an estimator and, alongside, a batch accumulator (for the

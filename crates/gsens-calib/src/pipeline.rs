@@ -270,6 +270,7 @@ struct PreparedImu {
 
 impl PreparedImu {
     fn new(imu: &ImuSeries, settings: &PipelineSettings) -> Self {
+        // Two independent tasks over the same series, run at once.
         let ((despiked, spikes), flat_runs) = rayon::join(
             || if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) },
             || find_flat_runs(imu),
@@ -401,6 +402,7 @@ fn calibrate_prepared(
             .and_then(|c| if c.bins_tested == 0 { Err(crate::ResponseCheckError::NothingCoherent) } else { Ok(c) }))
     };
     crate::progress::stage("estimating Γ and checking the loop's response", None);
+    // The estimate and the loop's response check need nothing of each other: two tasks at once.
     let (calibration, loop_response) = rayon::join(|| calibrate(&series, &estimate), response_check);
     let (mut calibration, loop_response) = (calibration?, loop_response?);
     if let Some(fit) = joint {

@@ -169,8 +169,8 @@ pub fn with_spinner<R>(what: &str, f: impl FnOnce() -> R) -> R {
 
 /// glibc's malloc gives each thread that allocates an arena of its own and
 /// keeps what is freed in it for that thread: the estimate's stages allocate
-/// large buffers on both cores in turn, so with an arena per thread the freed
-/// buffers of one core's stage are not reused by the other's and the peak RSS
+/// large buffers on several threads in turn, so with an arena per thread the
+/// freed buffers of one thread's stage are not reused by another's and the peak RSS
 /// of a 1-hour log grows by some 25 MB over its largest live heap (and every
 /// fresh page is a page fault). One arena for the process: its few large
 /// allocations do not contend for the lock (BENCHMARKS.md).

@@ -268,6 +268,7 @@ fn calibrate_logs(
         // Both files read at once, the IMU log prepared while the tracking log is read.
         return Ok((gsens_calib::calibrate_files(tracking, imu, settings)?, None));
     }
+    // The two logs are independent: each read as its own task, at once.
     let (imu, tracking) = rayon::join(|| imu.read(), || tracking.read());
     let ((imu_name, imu), tracking) = (imu?, tracking?);
     let (mut outcome, tracking) = if keep_tracking {

@@ -65,7 +65,7 @@ fn time_tracking(label: &str, text: &[u8]) -> gsens_io::TrackingLog {
         text.len() as f64 / 1e6 / read_s,
     );
 
-    // The same bytes as a file: read_tracking_file's quote-free fast path, in two halves at once
+    // The same bytes as a file: read_tracking_file's quote-free fast path, its chunks parsed at once
     // (median of 5 reads; the file is in the page cache after the first).
     let path = std::env::temp_dir().join(format!("gsens-bench-readers-{}.csv", std::process::id()));
     std::fs::write(&path, text).unwrap();

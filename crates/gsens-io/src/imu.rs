@@ -129,7 +129,7 @@ pub fn read_imu_file(path: impl AsRef<Path>) -> Result<ImuSeries, FormatError> {
     let path = path.as_ref();
     let name = path_name(path);
     let file = std::fs::File::open(path).map_err(|e| FormatError::io(&name, e))?;
-    if let Some(imu) = file.metadata().ok().and_then(|m| read_plain(path, &name, m.len())) {
+    if let Some(imu) = file.metadata().ok().and_then(|m| read_plain(path, &name, m.len(), CHUNK_BYTES)) {
         return Ok(imu);
     }
     read_imu(file, &name)
@@ -138,15 +138,21 @@ pub fn read_imu_file(path: impl AsRef<Path>) -> Result<ImuSeries, FormatError> {
 /// Rows read before the columns are reserved for the rest of the file.
 const ROWS_BEFORE_RESERVE: usize = 1024;
 
-/// The file read on the quote-free fast path ([`crate::plain`]), `None`
+/// The bytes of rows in one chunk of a file read on the fast path: the
+/// chunks are parsed at once and joined in file order (see
+/// [`crate::read_tracking_file`]).
+const CHUNK_BYTES: u64 = 8 << 20;
+
+/// The file read on the quote-free fast path ([`crate::plain`]), in chunks
+/// of about `chunk_bytes` split at line ends and parsed at once; `None`
 /// where [`read_imu_file`] reads it with `csv` (which then reports the first
 /// error in the file).
-fn read_plain(path: &Path, name: &str, total: u64) -> Option<ImuSeries> {
+fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<ImuSeries> {
     use crate::parse::cell_f64;
     use crate::plain::{Cells, PlainFile, Record, for_each_plain_line, open_plain, split};
-    let PlainFile { file, header, cols, data_start } = open_plain(path, name, &IMU_COLUMNS, total)?;
+    use rayon::prelude::*;
+    let PlainFile { mut file, header, cols, data_start } = open_plain(path, name, &IMU_COLUMNS, total)?;
     let (fields, ct, cx, cy, cz) = (header.header.len(), cols[0], cols[1], cols[2], cols[3]);
-    let mut out = ImuSeries::default();
     // Which value each cell is (0: time, 1–3: the axes), for the reading in place.
     let mut layout = vec![None; fields];
     for (slot, at) in [ct, cx, cy, cz].into_iter().enumerate() {
@@ -170,21 +176,40 @@ fn read_plain(path: &Path, name: &str, total: u64) -> Option<ImuSeries> {
         }
         Some((number(f[ct])?, [number(f[cx])?, number(f[cy])?, number(f[cz])?]))
     };
-    for_each_plain_line(file, 2, |_, bytes_before, text| {
-        let Some((t, a)) = row(text) else { return Record::Decline };
-        if out.t_s.last().is_some_and(|&prev| t <= prev) {
-            return Record::Decline;
+    let read_chunk = |from: u64, to: u64| -> Option<ImuSeries> {
+        let mut out = ImuSeries::default();
+        for_each_plain_line(crate::plain::byte_range(path, from, to)?, 1, |_, bytes_before, text| {
+            let Some((t, a)) = row(text) else { return Record::Decline };
+            if out.t_s.last().is_some_and(|&prev| t <= prev) {
+                return Record::Decline;
+            }
+            out.t_s.push(t);
+            out.accel_mps2.push(a);
+            if out.t_s.len() == ROWS_BEFORE_RESERVE && bytes_before > 0 {
+                // The rows of the whole chunk (2 % spare).
+                let rows = (1.02 * crate::plain::rows_in(to - from, ROWS_BEFORE_RESERVE, bytes_before)) as usize;
+                out.t_s.reserve_exact(rows.saturating_sub(out.t_s.len()));
+                out.accel_mps2.reserve_exact(rows.saturating_sub(out.accel_mps2.len()));
+            }
+            Record::Next
+        })?;
+        Some(out)
+    };
+    let bounds = crate::plain::chunk_bounds(&mut file, data_start, total, chunk_bytes)?;
+    let chunks: Vec<Option<ImuSeries>> = bounds.par_windows(2).map(|w| read_chunk(w[0], w[1])).collect();
+    let rows = chunks.iter().map(|c| c.as_ref().map_or(0, |c| c.t_s.len())).sum();
+    let mut out = ImuSeries { t_s: Vec::with_capacity(rows), accel_mps2: Vec::with_capacity(rows) };
+    for chunk in chunks {
+        let chunk = chunk?;
+        // Time stamps strictly increasing across the chunks too.
+        if let (Some(&last), Some(&first)) = (out.t_s.last(), chunk.t_s.first())
+            && first <= last
+        {
+            return None;
         }
-        out.t_s.push(t);
-        out.accel_mps2.push(a);
-        if out.t_s.len() == ROWS_BEFORE_RESERVE && bytes_before > 0 {
-            // The rows of the whole file (2 % spare).
-            let rows = (1.02 * crate::plain::rows_in(total - data_start, ROWS_BEFORE_RESERVE, bytes_before)) as usize;
-            out.t_s.reserve_exact(rows.saturating_sub(out.t_s.len()));
-            out.accel_mps2.reserve_exact(rows.saturating_sub(out.accel_mps2.len()));
-        }
-        Record::Next
-    })?;
+        out.t_s.extend_from_slice(&chunk.t_s);
+        out.accel_mps2.extend_from_slice(&chunk.accel_mps2);
+    }
     (!out.t_s.is_empty()).then_some(out)
 }
 
@@ -222,9 +247,12 @@ mod tests {
         ];
         for (i, text) in clean.iter().enumerate() {
             let f = TempFile::new(&format!("imu-plain-{i}.csv"), text);
-            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64);
-            let plain = plain.unwrap_or_else(|| panic!("case {i}: a clean file takes the fast path"));
-            assert_eq!(plain, read_imu(text.as_bytes(), "x").unwrap(), "case {i}");
+            // In one chunk and in many (of any size: the bounds fall at line ends).
+            for chunk in [CHUNK_BYTES, 1000, 37, 1] {
+                let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64, chunk);
+                let plain = plain.unwrap_or_else(|| panic!("case {i}: a clean file takes the fast path"));
+                assert_eq!(plain, read_imu(text.as_bytes(), "x").unwrap(), "case {i}, chunks of {chunk} bytes");
+            }
         }
         for bad in [
             "0.04,1,2,3",
@@ -239,7 +267,9 @@ mod tests {
         ] {
             let text = format!("{h}0,1,2,3\n0.01,1,2,3\n0.02,1,2,3\n0.03,1,2,3\n0.04,1,2,3\n{bad}\n0.07,1,2,3\n");
             let f = TempFile::new("imu-plain-left.csv", &text);
-            assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64).is_none(), "{bad:?}");
+            for chunk in [CHUNK_BYTES, 20, 1] {
+                assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64, chunk).is_none(), "{bad:?}");
+            }
             match (read_imu_file(&f.0), read_imu(text.as_bytes(), &path_name(&f.0))) {
                 (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
                 (Ok(a), Ok(b)) => assert_eq!(a, b),

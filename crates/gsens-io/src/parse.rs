@@ -123,18 +123,6 @@ impl<R: Read> CsvSource<R> {
         Ok((src, indices))
     }
 
-    /// A source of records that continue a file whose header was `header`
-    /// (read by [`CsvSource::open`] from its start): the second half of a
-    /// file read in two halves. Its lines count from 1 at its first byte.
-    pub fn with_header(input: R, file: &str, header: Vec<String>) -> Self {
-        CsvSource { reader: csv_reader(input), record: csv::ByteRecord::new(), line: 0, file: file.to_owned(), header }
-    }
-
-    /// The input, once read.
-    pub fn into_inner(self) -> R {
-        self.reader.into_inner().inner
-    }
-
     /// The 0-based position of the optional column `name`, `None` when the
     /// header lacks it; a column named twice is an error.
     pub fn optional_column(&self, name: &str) -> Result<Option<usize>, FormatError> {

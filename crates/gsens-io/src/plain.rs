@@ -11,7 +11,7 @@
 //! quote, a `\r` that does not end a line) makes [`for_each_plain_line`]
 //! decline, and the caller reads the text with `csv` instead; the readers
 //! also leave every error to their `csv` path, so the messages are that
-//! path's. Tests compare the two on the same bytes (the `tracking_halves`
+//! path's. Tests compare the two on the same bytes (the `tracking_chunks`
 //! fuzz target too).
 
 use std::io::{Cursor, Read, Seek, SeekFrom};
@@ -63,6 +63,45 @@ pub(crate) fn open_plain(path: &Path, name: &str, required: &[&str], total: u64)
 /// columns for (so that they are neither grown by doubling nor copied).
 pub(crate) fn rows_in(rest_bytes: u64, rows: usize, bytes_read: u64) -> f64 {
     rest_bytes as f64 * rows as f64 / bytes_read as f64
+}
+
+/// The bounds of the chunks the bytes `from..to` of `file` are read in:
+/// `from`, then just after the first line end at or past each
+/// `chunk_bytes` (at least 1) from the previous bound, then `to`. The
+/// chunks hold whole lines and depend only on the bytes, so a log read in
+/// them is the same however many threads read it.
+pub(crate) fn chunk_bounds(file: &mut std::fs::File, from: u64, to: u64, chunk_bytes: u64) -> Option<Vec<u64>> {
+    let mut bounds = vec![from];
+    let mut window = vec![0u8; 1 << 16];
+    let mut at = from;
+    while to - at > chunk_bytes {
+        let mut look = at + chunk_bytes;
+        file.seek(SeekFrom::Start(look)).ok()?;
+        // The first line end from `look` on, read a window at a time.
+        at = loop {
+            let got = file.read(&mut window).ok()?;
+            if got == 0 {
+                break to;
+            }
+            if let Some(i) = memchr::memchr(b'\n', &window[..got]) {
+                break (look + i as u64 + 1).min(to);
+            }
+            look += got as u64;
+        };
+        if at >= to {
+            break;
+        }
+        bounds.push(at);
+    }
+    bounds.push(to);
+    Some(bounds)
+}
+
+/// The bytes `from..to` of the file at `path`, opened on their own.
+pub(crate) fn byte_range(path: &Path, from: u64, to: u64) -> Option<std::io::Take<std::fs::File>> {
+    let mut f = std::fs::File::open(path).ok()?;
+    f.seek(SeekFrom::Start(from)).ok()?;
+    Some(f.take(to - from))
 }
 
 /// What the caller makes of one record.

@@ -197,6 +197,12 @@ impl ChannelTable {
             self.sparse.insert(channel, state);
         }
     }
+
+    /// Every channel seen, with its state.
+    fn entries(&self) -> impl Iterator<Item = (u32, &ChannelState)> {
+        let dense = self.dense.iter().enumerate().filter_map(|(c, s)| Some((c as u32, s.as_ref()?)));
+        dense.chain(self.sparse.iter().map(|(&c, s)| (c, s)))
+    }
 }
 
 /// One row's values, as parsed.
@@ -354,10 +360,11 @@ impl Builder {
     /// Appends the rows of `next`, the builder of the rows that follow this
     /// one's in the same file (its lines counted from 1 at its first byte,
     /// `line_offset` lines into the file), with the checks that span the
-    /// two: `None` when one fails (the one-thread reader then finds it).
-    /// The joined builder is only to be finished (its per-channel state is
-    /// this one's).
+    /// two: `None` when one fails (the `csv` reader then finds it). The
+    /// joined builder takes `next`'s per-channel state, so that the rows of
+    /// a further chunk can join it in turn.
     fn join(mut self, next: Builder, line_offset: u64) -> Option<Builder> {
+        use rayon::prelude::*;
         let (Some((last_t, _)), Some(&next_t)) = (self.prev, next.epoch_t_s.first()) else {
             return if next.rows == 0 { Some(self) } else { None };
         };
@@ -381,51 +388,50 @@ impl Builder {
         self.epoch_t_s.extend_from_slice(&next.epoch_t_s[skip..]);
         self.epoch_line.extend(next.epoch_line[skip..].iter().map(|l| l + line_offset));
         self.rows += next.rows;
-        // Each continued track's columns are appended on the thread that is
-        // free, track by track (tens of MB for a long log).
+        self.prev = next.prev.map(|(t, line)| (t, line + line_offset));
+        // Where each of `next`'s tracks is here, its columns to append when it continues one.
+        let mut index = Vec::with_capacity(next.tracks.len());
         let mut appended: Vec<Option<ChannelTrack>> = Vec::with_capacity(self.tracks.len());
         appended.resize_with(self.tracks.len(), || None);
-        for tr in next.tracks {
-            match self.track_of.get(&(tr.channel, tr.prn)) {
-                Some(&k) => appended[k] = Some(tr),
+        for (tr, line) in next.tracks.into_iter().zip(next.track_line) {
+            let k = match self.track_of.get(&(tr.channel, tr.prn)) {
+                Some(&k) => {
+                    appended[k] = Some(tr);
+                    k
+                }
                 None => {
-                    self.track_of.insert((tr.channel, tr.prn), self.tracks.len());
+                    let k = self.tracks.len();
+                    self.track_of.insert((tr.channel, tr.prn), k);
                     self.tracks.push(tr);
+                    self.track_line.push(0);
                     appended.push(None);
-                }
-            }
-        }
-        std::thread::scope(|scope| {
-            let mut pairs: Vec<(&mut ChannelTrack, ChannelTrack)> =
-                self.tracks.iter_mut().zip(appended).filter_map(|(to, tr)| Some((to, tr?))).collect();
-            // Two lists of about equal rows, one per thread.
-            pairs.sort_by_key(|(_, tr)| std::cmp::Reverse(tr.len()));
-            let (mut a, mut b, mut rows_a, mut rows_b) = (Vec::new(), Vec::new(), 0, 0);
-            for p in pairs {
-                if rows_a <= rows_b {
-                    rows_a += p.1.len();
-                    a.push(p);
-                } else {
-                    rows_b += p.1.len();
-                    b.push(p);
-                }
-            }
-            let append = |list: Vec<(&mut ChannelTrack, ChannelTrack)>| {
-                for (to, tr) in list {
-                    to.t_s.extend_from_slice(&tr.t_s);
-                    to.phase_err_rad.extend_from_slice(&tr.phase_err_rad);
-                    to.cn0_dbhz.extend_from_slice(&tr.cn0_dbhz);
-                    to.elev_deg.extend_from_slice(&tr.elev_deg);
+                    k
                 }
             };
-            // A thread only for a long log: a short one is copied sooner than a thread starts.
-            if rows_a + rows_b >= JOIN_THREAD_ROWS {
-                scope.spawn(move || append(b));
-            } else {
-                append(b);
-            }
-            append(a);
-        });
+            self.track_line[k] = line + line_offset;
+            index.push(k);
+        }
+        for (channel, state) in next.channels.entries() {
+            let state = ChannelState {
+                last_t_s: state.last_t_s,
+                last_line: state.last_line + line_offset,
+                track: index[state.track],
+            };
+            self.channels.set(channel, state);
+        }
+        // Each continued track's columns appended on their own (tens of MB for a long log).
+        let append = |(to, tr): (&mut ChannelTrack, ChannelTrack)| {
+            to.t_s.extend_from_slice(&tr.t_s);
+            to.phase_err_rad.extend_from_slice(&tr.phase_err_rad);
+            to.cn0_dbhz.extend_from_slice(&tr.cn0_dbhz);
+            to.elev_deg.extend_from_slice(&tr.elev_deg);
+        };
+        let pairs = self.tracks.iter_mut().zip(appended).filter_map(|(to, tr)| Some((to, tr?)));
+        if next.rows >= JOIN_PARALLEL_ROWS {
+            pairs.collect::<Vec<_>>().into_par_iter().for_each(append);
+        } else {
+            pairs.for_each(append);
+        }
         Some(self)
     }
 
@@ -719,34 +725,38 @@ fn read_rows<R: Read>(
     Ok(())
 }
 
-/// Rows appended at least this many when two halves are joined are copied
-/// on two threads.
-const JOIN_THREAD_ROWS: usize = 1 << 16;
+/// Tracks appended at least this many rows in all when two chunks are joined
+/// are copied in parallel, track by track; fewer are copied sooner than the
+/// work is handed out.
+const JOIN_PARALLEL_ROWS: usize = 1 << 16;
 
-/// Files at least this long are parsed in two halves at once (one per core);
-/// below it a second thread costs more than it saves.
-const TWO_HALVES_BYTES: u64 = 4 << 20;
+/// The bytes of rows in one chunk of a file read on the fast path: chunks
+/// are parsed at once and joined in file order, so the log does not depend
+/// on how many threads parse them. Large enough that a chunk's own columns
+/// and its join cost little beside its parsing.
+const CHUNK_BYTES: u64 = 8 << 20;
+
+/// Chunks parsed at once before they are joined: enough to keep a few
+/// threads busy, few enough that their columns beside the joined log's stay
+/// small (a fixed number, so the memory does not grow with the threads).
+const WAVE_CHUNKS: usize = 4;
 
 /// Opens and reads a `tracking.csv` file; errors name the file by its path.
 ///
-/// A long file is parsed in two halves at once, split at the first line end
-/// after its middle, and the halves joined with the checks that span them
-/// (time stamps non-decreasing, one row per channel per epoch, one carrier
-/// per track). The result is the log the reader gives on one thread; when
-/// anything stops the halves (an error in either, a quote character that
-/// could hide a line end, a check across the halves failing) the file is
-/// read again on one thread, so the error reported is the first in the file.
+/// A file without quotes or carrier columns is parsed on the fast path
+/// ([`crate::plain`]) in chunks of about [`CHUNK_BYTES`], split at line
+/// ends, all at once, and the chunks joined with the checks that span them
+/// (time stamps non-decreasing, one row per channel per epoch). The result
+/// is the log the `csv` reader gives; when anything stops a chunk (an error,
+/// a quote character that could hide a line end, a check across chunks
+/// failing) the file is read again by the `csv` reader, so the error
+/// reported is the first in the file, with its line and column.
 pub fn read_tracking_file(path: impl AsRef<Path>) -> Result<TrackingLog, FormatError> {
     let path = path.as_ref();
     let name = path_name(path);
     let file = std::fs::File::open(path).map_err(|e| FormatError::io(&name, e))?;
     let total_bytes = file.metadata().ok().map(|m| m.len());
-    if let Some(log) = total_bytes.and_then(|total| read_plain(path, &name, total)) {
-        return Ok(log);
-    }
-    if let Some(total) = total_bytes.filter(|&t| t >= TWO_HALVES_BYTES)
-        && let Some(log) = read_in_halves(path, &name, total)
-    {
+    if let Some(log) = total_bytes.and_then(|total| read_plain(path, &name, total, CHUNK_BYTES)) {
         return Ok(log);
     }
     read_tracking_sized(file, &name, total_bytes)
@@ -758,38 +768,61 @@ pub fn read_tracking_file(path: impl AsRef<Path>) -> Result<TrackingLog, FormatE
 #[doc(hidden)]
 pub fn read_tracking_file_plain(path: &Path) -> Option<TrackingLog> {
     let total = std::fs::metadata(path).ok()?.len();
-    read_plain(path, &path_name(path), total)
+    read_plain(path, &path_name(path), total, CHUNK_BYTES)
+}
+
+/// [`read_tracking_file_plain`] with chunks of about `chunk_bytes` (at least
+/// 1): for the differential fuzz target, so that short inputs are read in
+/// many chunks (the joined chunks must give the `csv` reader's log).
+#[doc(hidden)]
+pub fn read_tracking_file_in_chunks(path: &Path, chunk_bytes: u64) -> Option<TrackingLog> {
+    let total = std::fs::metadata(path).ok()?.len();
+    read_plain(path, &path_name(path), total, chunk_bytes.max(1))
 }
 
 /// A file without quotes and carrier columns read on the fast path
-/// ([`crate::plain`]), in two halves at once when long. `None` (the `csv`
-/// path then reads it, and reports the first error in the file) for anything
-/// else: a quote, a lone `\r`, blank lines before the header, carrier
-/// columns, a row the `csv` path would refuse.
-fn read_plain(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
+/// ([`crate::plain`]), in chunks of about `chunk_bytes` parsed at once.
+/// `None` (the `csv` path then reads it, and reports the first error in the
+/// file) for anything else: a quote, a lone `\r`, blank lines before the
+/// header, carrier columns, a row the `csv` path would refuse, chunks that
+/// do not join.
+fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<TrackingLog> {
+    use rayon::prelude::*;
     let crate::plain::PlainFile { mut file, header: src, cols, data_start: start } =
         crate::plain::open_plain(path, name, &TRACKING_COLUMNS, total)?;
     if CarrierCells::find(&src).ok()?.any() {
         return None;
     }
     let fields = src.header.len();
-    let (mut b1, mut b2) = (builder_for(&src, &cols).ok()?, builder_for(&src, &cols).ok()?);
-    if total - start < TWO_HALVES_BYTES {
-        plain_rows(file.take(total - start), 2, &cols, fields, &mut b1, total - start)?;
-        return b1.finish().ok();
+    let bounds = crate::plain::chunk_bounds(&mut file, start, total, chunk_bytes)?;
+    let chunks: Vec<(usize, (u64, u64))> = bounds.windows(2).map(|w| (w[0], w[1])).enumerate().collect();
+    let mut joined: Option<(Builder, u64)> = None;
+    // A wave of chunks at a time, joined before the next is parsed: the
+    // chunks' own columns held at once stay a few chunks' worth.
+    for wave in chunks.chunks(WAVE_CHUNKS) {
+        let parsed: Vec<Option<(Builder, u64)>> = wave
+            .par_iter()
+            .map(|&(k, (from, to))| {
+                let mut b = builder_for(&src, &cols).ok()?;
+                // The first chunk's columns are sized for the whole file: the others' rows join them.
+                let (first_line, reserve) = if k == 0 { (2, total - start) } else { (1, to - from) };
+                let input = crate::plain::byte_range(path, from, to)?;
+                let newlines = plain_rows(input, first_line, &cols, fields, &mut b, reserve)?;
+                Some((b, newlines))
+            })
+            .collect();
+        for chunk in parsed {
+            let (b, newlines) = chunk?;
+            joined = Some(match joined {
+                // The header's line and the first chunk's precede the next chunk's first byte.
+                None => (b, 1 + newlines),
+                // A later chunk's lines count from 1 at its first byte.
+                Some((log, lines_before)) => (log.join(b, lines_before)?, lines_before + newlines),
+            });
+        }
     }
-    let split = split_after_middle(&mut file, start, total)?;
-    let (first, second) = (byte_range(path, start, split)?, byte_range(path, split, total)?);
-    let (r1, r2) = std::thread::scope(|scope| {
-        let second = scope.spawn(|| plain_rows(second, 1, &cols, fields, &mut b2, total - split));
-        // The first half's columns are sized for the whole file: the second's rows join them.
-        let r1 = plain_rows(first, 2, &cols, fields, &mut b1, total - start);
-        (r1, second.join())
-    });
-    let newlines = r1?;
-    r2.ok()??;
-    // The second half's lines count from 1 at its first byte: the header's and the first half's lines precede it.
-    b1.join(b2, 1 + newlines)?.finish().ok()
+    let (log, _) = joined?;
+    log.finish().ok()
 }
 
 /// The rows of `input` (lines from `first_line` on, `fields` cells each,
@@ -886,90 +919,6 @@ fn plain_rows(
     })
 }
 
-/// Where a file's bytes `from..to` are split into two halves read at once:
-/// just after the first line end past their middle (`None` when there is
-/// none within 64 KiB of it).
-fn split_after_middle(file: &mut std::fs::File, from: u64, to: u64) -> Option<u64> {
-    use std::io::{Seek, SeekFrom};
-    let middle = from + (to - from) / 2;
-    file.seek(SeekFrom::Start(middle)).ok()?;
-    let mut window = vec![0u8; 1 << 16];
-    let got = file.read(&mut window).ok()?;
-    Some(middle + memchr::memchr(b'\n', &window[..got])? as u64 + 1)
-}
-
-/// The bytes `from..to` of the file at `path`, opened on their own.
-fn byte_range(path: &Path, from: u64, to: u64) -> Option<std::io::Take<std::fs::File>> {
-    use std::io::{Seek, SeekFrom};
-    let mut f = std::fs::File::open(path).ok()?;
-    f.seek(SeekFrom::Start(from)).ok()?;
-    Some(f.take(to - from))
-}
-
-/// The file read in two halves whatever its size, `None` where
-/// [`read_tracking_file`] would read it on one thread: for the differential
-/// fuzz target (the halves must give the one-thread log), not for use.
-#[doc(hidden)]
-pub fn read_tracking_file_in_halves(path: &Path) -> Option<TrackingLog> {
-    let total = std::fs::metadata(path).ok()?.len();
-    read_in_halves(path, &path_name(path), total)
-}
-
-/// The bytes of a source as they are read: how many line ends, and whether
-/// any quote character, went by.
-struct Scanned<R> {
-    inner: R,
-    newlines: u64,
-    quoted: bool,
-}
-
-impl<R: Read> Read for Scanned<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.inner.read(buf)?;
-        let bytes = &buf[..n];
-        self.newlines += memchr::memchr_iter(b'\n', bytes).count() as u64;
-        self.quoted |= memchr::memchr(b'"', bytes).is_some();
-        Ok(n)
-    }
-}
-
-/// The file read as two halves on two threads, `None` when it must be read
-/// on one (see [`read_tracking_file`]).
-fn read_in_halves(path: &Path, name: &str, total: u64) -> Option<TrackingLog> {
-    use std::io::{Seek, SeekFrom};
-    let mut probe = std::fs::File::open(path).ok()?;
-    let split = split_after_middle(&mut probe, 0, total)?;
-    if split >= total {
-        return None;
-    }
-    // The csv reader drops a byte-order mark at the start of its input: one
-    // that starts the second half is a cell's bytes to the one-thread reader.
-    let mut head = [0u8; 3];
-    probe.seek(SeekFrom::Start(split)).ok()?;
-    if probe.read(&mut head).ok()? == 3 && head == *b"\xEF\xBB\xBF" {
-        return None;
-    }
-    let first = Scanned { inner: byte_range(path, 0, split)?, newlines: 0, quoted: false };
-    let second = Scanned { inner: byte_range(path, split, total)?, newlines: 0, quoted: false };
-
-    let (mut src1, cols) = CsvSource::open(first, name, &TRACKING_COLUMNS).ok()?;
-    let mut src2 = CsvSource::with_header(second, name, src1.header.clone());
-    let (mut b1, mut b2) = (builder_for(&src1, &cols).ok()?, builder_for(&src2, &cols).ok()?);
-    let (r1, r2) = std::thread::scope(|scope| {
-        let second = scope.spawn(|| read_rows(&mut src2, &cols, &mut b2, Some(total - split)));
-        // The first half's columns are sized for the whole file: the second's rows join them.
-        let r1 = read_rows(&mut src1, &cols, &mut b1, Some(total));
-        (r1, second.join())
-    });
-    r1.ok()?;
-    r2.ok()?.ok()?;
-    let (s1, s2) = (src1.into_inner(), src2.into_inner());
-    if s1.quoted || s2.quoted {
-        return None;
-    }
-    b1.join(b2, s1.newlines)?.finish().ok()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -992,8 +941,8 @@ mod tests {
 
     /// Errors and epochs name the line a row is on, after blank lines and
     /// with CRLF line ends too (the `csv` crate's own count names the blank
-    /// line above; found by the tracking_halves fuzz target, whose halves
-    /// counted right and disagreed).
+    /// line above; found by the differential fuzz target, whose faster
+    /// reading counted right and disagreed).
     #[test]
     fn lines_count_blank_lines_and_crlf() {
         let row1 = "0.15,1,28,47.1,63.1,-0.09";
@@ -1309,41 +1258,45 @@ mod tests {
         text
     }
 
-    /// Read in two halves (wherever the split falls in an epoch), a file
-    /// gives the log the one-thread reader gives: tracks, rows, epochs and
-    /// their lines, a channel re-assigned and a channel joining in the
-    /// second half.
+    /// Read in chunks of any size (wherever the bounds fall in an epoch,
+    /// an epoch over several chunks), a file gives the log the `csv` reader
+    /// gives: tracks, rows, epochs and their lines, a channel re-assigned
+    /// and a channel joining in a later chunk.
     #[test]
-    fn two_halves_give_the_one_thread_log() {
+    fn chunks_give_the_csv_readers_log() {
         for epochs in 40..52 {
             let text = log_text(HEADER, epochs, 3, epochs * 2 / 3, epochs * 3 / 4);
-            let f = TempFile::new(&format!("halves-{epochs}.csv"), &text);
+            let f = TempFile::new(&format!("chunks-{epochs}.csv"), &text);
             let serial = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
             let total = text.len() as u64;
-            let halves = read_in_halves(&f.0, &path_name(&f.0), total).expect("a clean file is read in halves");
-            assert_eq!(halves, serial, "{epochs} epochs");
-        }
-        // Blank lines and CRLF line ends on either side of the split: the
-        // epochs' lines agree (the fuzz target's finding).
-        let text = log_text(HEADER, 44, 3, 30, 33);
-        for edit in [text.replace("\n0.5", "\n\n\n0.5"), text.replace('\n', "\r\n"), text.replace("\n", "\n\n")] {
-            let f = TempFile::new("halves-blank.csv", &edit);
-            let serial = read_tracking(edit.as_bytes(), &path_name(&f.0)).unwrap();
-            if let Some(halves) = read_in_halves(&f.0, &path_name(&f.0), edit.len() as u64) {
-                assert_eq!(halves, serial);
+            for chunk in [1, 7, 40, 100, 333, total / 2, total] {
+                let chunks = read_plain(&f.0, &path_name(&f.0), total, chunk).expect("a clean file is read in chunks");
+                assert_eq!(format!("{chunks:?}"), format!("{serial:?}"), "{epochs} epochs, chunks of {chunk} bytes");
             }
         }
-        // Large enough for read_tracking_file to take the two halves itself.
-        let text = log_text(HEADER, 120_000, 3, 100_000, 110_000);
-        assert!(text.len() as u64 >= TWO_HALVES_BYTES);
-        let f = TempFile::new("halves-large.csv", &text);
+        // Blank lines and CRLF line ends around the bounds: the epochs' lines
+        // agree (the fuzz target's finding).
+        let text = log_text(HEADER, 44, 3, 30, 33);
+        for edit in [text.replace("\n0.5", "\n\n\n0.5"), text.replace('\n', "\r\n"), text.replace("\n", "\n\n")] {
+            let f = TempFile::new("chunks-blank.csv", &edit);
+            let serial = read_tracking(edit.as_bytes(), &path_name(&f.0)).unwrap();
+            for chunk in [1, 5, 64, 500] {
+                if let Some(chunks) = read_plain(&f.0, &path_name(&f.0), edit.len() as u64, chunk) {
+                    assert_eq!(format!("{chunks:?}"), format!("{serial:?}"), "chunks of {chunk} bytes");
+                }
+            }
+        }
+        // Large enough for read_tracking_file to read it in several chunks itself.
+        let text = log_text(HEADER, 240_000, 3, 200_000, 220_000);
+        assert!(text.len() as u64 >= 2 * CHUNK_BYTES);
+        let f = TempFile::new("chunks-large.csv", &text);
         assert_eq!(read_tracking_file(&f.0).unwrap(), read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
     }
 
-    /// What the halves cannot decide alone is read again on one thread: the
-    /// error is the first in the file, with its line.
+    /// What the chunks cannot decide alone is read again by the `csv`
+    /// reader: the error is the first in the file, with its line.
     #[test]
-    fn two_halves_leave_errors_to_the_one_thread_reader() {
+    fn chunks_leave_errors_to_the_csv_reader() {
         let base = log_text(HEADER, 40, 3, 1000, 1000);
         let lines: Vec<&str> = base.lines().collect();
         let mid = lines.len() / 2;
@@ -1358,14 +1311,14 @@ mod tests {
             (mid + 3, "\"0.500\",7,8,40.0,30.0,0.01"),
         ];
         // A byte-order mark starting the second half (the csv reader would
-        // drop it there; the one-thread reader sees a cell's bytes). Found by
-        // the tracking_halves fuzz target.
+        // drop it at the start of its input; in the file it is a cell's
+        // bytes). Found by the fuzz target when the csv reader read halves.
         let split_of = |text: &str| text.len() / 2 + text[text.len() / 2..].find('\n').unwrap() + 1;
         let at = split_of(&base);
         let text = format!("{}\u{feff}{}", &base[..at], &base[at..]);
         assert_eq!(split_of(&text), at, "the test's mark must start the second half");
-        let f = TempFile::new("halves-bom.csv", &text);
-        assert!(read_in_halves(&f.0, &path_name(&f.0), text.len() as u64).is_none());
+        let f = TempFile::new("chunks-bom.csv", &text);
+        assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64, (at / 2) as u64).is_none());
         let one = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap_err().to_string();
         assert_eq!(read_tracking_file(&f.0).unwrap_err().to_string(), one);
         assert!(one.contains("is not a number"), "{one}");
@@ -1373,8 +1326,10 @@ mod tests {
             let mut edited: Vec<&str> = lines.clone();
             edited.insert(at, line);
             let text = edited.join("\n") + "\n";
-            let f = TempFile::new("halves-bad.csv", &text);
-            assert!(read_in_halves(&f.0, &path_name(&f.0), text.len() as u64).is_none(), "{line}");
+            let f = TempFile::new("chunks-bad.csv", &text);
+            for chunk in [64, text.len() as u64 / 2, CHUNK_BYTES] {
+                assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64, chunk).is_none(), "{line}");
+            }
             let serial = read_tracking(text.as_bytes(), &path_name(&f.0));
             match (read_tracking_file(&f.0), serial) {
                 (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
@@ -1390,8 +1345,8 @@ mod tests {
                 let sig = if k < change { "L1CA" } else { "L5I" };
                 text.push_str(&format!("{:.3},1,5,45,30,0.01,{sig}\n", k as f64 * 0.025));
             }
-            let f = TempFile::new("halves-carrier.csv", &text);
-            assert!(read_in_halves(&f.0, &path_name(&f.0), text.len() as u64).is_none());
+            let f = TempFile::new("chunks-carrier.csv", &text);
+            assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64, 64).is_none());
             let m = read_tracking_file(&f.0).unwrap_err().to_string();
             let (line, previous) = (change + 2, change + 1);
             assert!(
@@ -1402,7 +1357,7 @@ mod tests {
     }
 
     /// The quote-free fast path of [`read_tracking_file`] gives the log the
-    /// `csv` reader gives on the same bytes, in one piece or in two halves,
+    /// `csv` reader gives on the same bytes, in one chunk or in several,
     /// and leaves to it whatever it does not take (the reader's result is
     /// then the `csv` reader's, error message included).
     #[test]
@@ -1420,7 +1375,7 @@ mod tests {
         ];
         for (i, text) in clean.iter().enumerate() {
             let f = TempFile::new(&format!("plain-clean-{i}.csv"), text);
-            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64);
+            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64, CHUNK_BYTES);
             let plain = plain.unwrap_or_else(|| panic!("case {i}: a clean file takes the fast path"));
             let csv = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
             // Not PartialEq: NaN elevations differ; their bits do not.
@@ -1447,7 +1402,7 @@ mod tests {
             edited.insert(at, line);
             let text = edited.join("\n") + "\n";
             let f = TempFile::new("plain-left.csv", &text);
-            assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64).is_none(), "{line:?}");
+            assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64, CHUNK_BYTES).is_none(), "{line:?}");
             match (read_tracking_file(&f.0), read_tracking(text.as_bytes(), &path_name(&f.0))) {
                 (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
                 (Ok(a), Ok(b)) => assert_eq!(format!("{a:?}"), format!("{b:?}")),
@@ -1457,10 +1412,10 @@ mod tests {
         // Carrier columns are read by the csv path (the fast path reads L1 logs).
         let text = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,signal\n0,1,5,45,30,0.01,L1CA\n";
         let f = TempFile::new("plain-carrier.csv", text);
-        assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64).is_none());
+        assert!(read_plain(&f.0, &path_name(&f.0), text.len() as u64, CHUNK_BYTES).is_none());
         assert_eq!(read_tracking_file(&f.0).unwrap().tracks()[0].carrier.label(), "L1CA");
-        // Long enough for two halves, wherever the split falls in an epoch,
-        // with CRLF line ends and blank lines around the split too.
+        // Long enough for several chunks, wherever the bounds fall in an
+        // epoch, with CRLF line ends and blank lines around a bound too.
         let long = |extra: usize| log_text(HEADER, 120_000 + extra, 3, 100_000, 110_000);
         let blank_lines = {
             let text = long(0);
@@ -1468,11 +1423,11 @@ mod tests {
             format!("{}\n\n{}", &text[..at], &text[at..]).replace("\n0.5", "\n\n0.5")
         };
         for text in [long(0), long(1), long(2), long(1).replace('\n', "\r\n"), blank_lines] {
-            assert!(text.len() as u64 >= 2 * TWO_HALVES_BYTES);
-            let f = TempFile::new("plain-halves.csv", &text);
-            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64).expect("a clean file");
+            assert!(text.len() as u64 >= 4 << 20);
+            let f = TempFile::new("plain-chunks.csv", &text);
+            let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64, 1 << 20).expect("a clean file");
             let csv = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
-            assert!(plain == csv, "the fast path's halves differ from the csv reader's log");
+            assert!(plain == csv, "the fast path's chunks differ from the csv reader's log");
         }
     }
 }

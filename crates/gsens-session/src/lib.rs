@@ -227,7 +227,7 @@
 //! each epoch a rank sort of the dozen tracks present (once, twice when the
 //! first round found slips); the medians that set offsets and scales run over
 //! regular subsamples. About 70–90 ms for 12 tracks over an hour at 40 Hz
-//! (1.7 M rows) on a 2-core machine (BENCHMARKS.md).
+//! (1.7 M rows; BENCHMARKS.md gives the machine and the runs).
 #![deny(missing_docs)]
 
 mod error;

@@ -396,6 +396,10 @@ fn order_key(v: f64) -> i32 {
 /// The most tracks at one epoch the median computation handles on the stack.
 const MAX_AT_EPOCH: usize = 64;
 
+/// Spans of [`deviations`] computed at once: enough to keep a few threads
+/// busy, few enough that their outputs held at once stay small.
+const WAVE_SPANS: usize = 8;
+
 /// The deviations of every row from the median of the other tracks at its
 /// epoch (NaN where fewer than two others), with the tracks' offsets `c`
 /// removed; rows with `flags & mask != 0` do not enter the medians, and the
@@ -403,8 +407,9 @@ const MAX_AT_EPOCH: usize = 64;
 /// included), if given.
 ///
 /// Each epoch's medians need only that epoch's rows: spans of epochs are
-/// computed on all cores, a wave of one span per core at a time (so that the
-/// spans' outputs held at once stay small), and copied into `d`.
+/// computed in parallel, a wave of [`WAVE_SPANS`] spans at a time (so that
+/// the spans' outputs held at once stay small whatever the thread count),
+/// and copied into `d`.
 fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], shift: Option<&[f64]>, d: &mut [f64]) {
     use rayon::prelude::*;
     const SPAN_EPOCHS: usize = 1 << 14;
@@ -420,8 +425,7 @@ fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], s
     };
     let spans: Vec<(usize, usize)> =
         (0..n_epochs).step_by(SPAN_EPOCHS).map(|e0| (e0, (e0 + SPAN_EPOCHS).min(n_epochs))).collect();
-    let threads = rayon::current_num_threads().max(1);
-    for wave in spans.chunks(threads) {
+    for wave in spans.chunks(WAVE_SPANS) {
         let parts: Vec<(Vec<usize>, Vec<usize>, Vec<f64>)> = wave
             .par_iter()
             .map(|&(e0, e1)| {
@@ -630,9 +634,10 @@ fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
         }
         dep
     };
-    // The runs on all cores, their departures joined in epoch order.
-    let run = sampled.len().div_ceil(rayon::current_num_threads().max(1)).max(1);
-    let parts: Vec<Vec<Vec<f64>>> = sampled.par_chunks(run).map(departures).collect();
+    // Runs of sampled epochs in parallel, their departures joined in epoch
+    // order (the medians are of the same values however the runs fall).
+    const RUN_EPOCHS: usize = 1024;
+    let parts: Vec<Vec<Vec<f64>>> = sampled.par_chunks(RUN_EPOCHS).map(departures).collect();
     (0..n_tracks)
         .map(|i| {
             let mut v: Vec<f64> = parts.iter().flat_map(|p| p[i].iter().copied()).collect();
@@ -668,7 +673,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     let guard = epochs_of(cfg.guard_s);
     let flags = &mut out.flags;
 
-    // Test 5: C/N0 drops (each track on its own: the tracks on both cores).
+    // Test 5: C/N0 drops (each track on its own, the tracks in parallel).
     let cn0_medians: Vec<f64> = per_track(flags, &rows.track_start)
         .into_par_iter()
         .enumerate()
@@ -734,7 +739,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
         deviations(rows, n_epochs, flags, mask, &c, shift, &mut d);
         // Each track's own offset refined by the median of its deviations (the
         // others' medians are robust to their small errors); σ from the local
-        // MAD. Each track on its own: the tracks on both cores.
+        // MAD. Each track on its own, the tracks in parallel.
         let refined: Vec<Option<(f64, f64)>> = per_track(&mut d, &rows.track_start)
             .into_par_iter()
             .enumerate()
@@ -754,7 +759,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
                 sigma[i] = s;
             }
         }
-        // Test 1 (slips, steps, levels), track by track on both cores.
+        // Test 1 (slips, steps, levels), track by track in parallel.
         let per_row = per_track(&mut level, &rows.track_start)
             .into_iter()
             .zip(per_track(flags, &rows.track_start))
@@ -799,7 +804,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     // than the track's noise explains, while the common level (the others'
     // median plus the track's offset, φ − d) is well within it; a log of a
     // single track has no common level (and no σ) to compare with.
-    // Tests 4 and 2 look at one track at a time: the tracks on both cores.
+    // Tests 4 and 2 look at one track at a time: the tracks in parallel.
     if let Some(limit) = cfg.max_abs_phase_rad {
         per_track(flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
             let range = rows.range(i);
@@ -886,7 +891,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     }
 
     // Whole tracks (the fraction flagged by the cross-channel tests), counts,
-    // spans: the tracks on both cores.
+    // spans: the tracks in parallel.
     let per_row = per_track(flags, &rows.track_start);
     let each = per_row.into_par_iter().zip(out.summaries.par_iter_mut()).zip(out.spans.par_iter_mut());
     each.enumerate().for_each(|(i, ((fl, sum), spans))| {

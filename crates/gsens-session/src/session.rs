@@ -410,8 +410,8 @@ pub fn prepare_session_from(
     let above_mask = |elev: f64| selection.elevation_mask_deg.is_none_or(|m| elev.is_nan() || elev >= m);
     let above_cn0 = |cn0: f64| selection.min_cn0_dbhz.is_none_or(|m| cn0 >= m);
 
-    // Each track on its own: the tracks on both cores, each thread with its
-    // own buffer of grid indices.
+    // Each track on its own, in parallel, each worker with its own buffer of
+    // grid indices.
     let stats: Vec<TrackStats> = tracking
         .tracks()
         .par_iter()
@@ -628,10 +628,12 @@ pub fn prepare_session_from(
         slot_base.push(slot_base.last().copied().unwrap_or(0) + screened.segments[c]);
     }
     let n_slots = *slot_base.last().expect("non-empty");
-    // The epochs in two halves, each on its own core: a track's rows in a
-    // run of epochs are a run of its rows (in epoch order), and every epoch's
-    // entries come out in the order of one pass over the tracks.
-    let mid = n_epochs / 2;
+    // The epochs in blocks of EPOCH_BLOCK, the blocks at once: a track's rows
+    // in a run of epochs are a run of its rows (in epoch order), and every
+    // epoch's entries come out in the order of one pass over the tracks, so
+    // the result does not depend on how the blocks are shared out.
+    let blocks: Vec<std::ops::Range<usize>> =
+        (0..n_epochs).step_by(EPOCH_BLOCK).map(|e0| e0..(e0 + EPOCH_BLOCK).min(n_epochs)).collect();
     let for_each_used_row = |epochs: std::ops::Range<usize>, f: &mut dyn FnMut(usize, usize, f64)| {
         for (sel, &c) in selected_candidates.iter().enumerate() {
             let range = rows.range(c);
@@ -646,31 +648,34 @@ pub fn prepare_session_from(
         }
     };
     let mut start = vec![0usize; n_epochs + 1];
-    {
-        let (lo, hi) = start[1..].split_at_mut(mid);
-        rayon::join(
-            || for_each_used_row(0..mid, &mut |_, r, _| lo[rows.epoch[r] as usize] += 1),
-            || for_each_used_row(mid..n_epochs, &mut |_, r, _| hi[rows.epoch[r] as usize - mid] += 1),
-        );
-    }
+    start[1..].par_chunks_mut(EPOCH_BLOCK).zip(&blocks).for_each(|(counts, epochs)| {
+        let e0 = epochs.start;
+        for_each_used_row(epochs.clone(), &mut |_, r, _| counts[rows.epoch[r] as usize - e0] += 1);
+    });
     for e in 0..n_epochs {
         start[e + 1] += start[e];
     }
     let mut entries = vec![(0usize, 0f64, 0f64); start[n_epochs]];
     {
-        let (lo, hi) = entries.split_at_mut(start[mid]);
-        let fill_half = |epochs: std::ops::Range<usize>, out: &mut [(usize, f64, f64)]| {
+        // Each block's entries, a slice of their own.
+        let mut outs = Vec::with_capacity(blocks.len());
+        let mut rest = entries.as_mut_slice();
+        for epochs in &blocks {
+            let (out, tail) = rest.split_at_mut(start[epochs.end] - start[epochs.start]);
+            outs.push(out);
+            rest = tail;
+        }
+        outs.into_par_iter().zip(&blocks).for_each(|(out, epochs)| {
             // Where each epoch's next entry goes, in `out`.
             let base = start[epochs.start];
             let mut fill: Vec<usize> = start[epochs.clone()].iter().map(|s| s - base).collect();
             let e0 = epochs.start;
-            for_each_used_row(epochs, &mut |slot, r, to_l1| {
+            for_each_used_row(epochs.clone(), &mut |slot, r, to_l1| {
                 let e = rows.epoch[r] as usize - e0;
                 out[fill[e]] = (slot, weight(rows.cn0[r], to_l1), rows.phase[r]);
                 fill[e] += 1;
             });
-        };
-        rayon::join(|| fill_half(0..mid, lo), || fill_half(mid..n_epochs, hi));
+        });
     }
 
     let offsets_rad = if selection.remove_channel_offsets && n_slots > 1 {
@@ -680,7 +685,7 @@ pub fn prepare_session_from(
         vec![0.0; n_slots]
     };
 
-    // Average, interpolate: each epoch on its own, the two halves at once.
+    // Average, interpolate: each epoch on its own, the blocks at once.
     let average = |epochs: std::ops::Range<usize>| {
         let n = epochs.len();
         let (mut t_s, mut phase_err_rad, mut accel_mps2) =
@@ -712,11 +717,14 @@ pub fn prepare_session_from(
         }
         (t_s, phase_err_rad, accel_mps2)
     };
-    let ((mut t_s, mut phase_err_rad, mut accel_mps2), (t_hi, phase_hi, accel_hi)) =
-        rayon::join(|| average(0..mid), || average(mid..n_epochs));
-    t_s.extend(t_hi);
-    phase_err_rad.extend(phase_hi);
-    accel_mps2.extend(accel_hi);
+    let averaged: Vec<_> = blocks.par_iter().map(|epochs| average(epochs.clone())).collect();
+    let (mut t_s, mut phase_err_rad, mut accel_mps2) =
+        (Vec::with_capacity(n_epochs), Vec::with_capacity(n_epochs), Vec::with_capacity(n_epochs));
+    for (t, phase, accel) in averaged {
+        t_s.extend(t);
+        phase_err_rad.extend(phase);
+        accel_mps2.extend(accel);
+    }
 
     let mut summaries = screened.summaries;
     let mut channels: Vec<ChannelSummary> = (0..tracks.len())
@@ -851,6 +859,11 @@ fn check_settings(file: &str, selection: &SelectionConfig, imu_time_offset_s: f6
 /// Unix time minus GPS time at the GPS epoch \[s\]: 1980-01-06 is 3 657 days
 /// after 1970-01-01 (GPS time has no leap seconds, UTC has had 18 more since).
 const UNIX_MINUS_GPS_S: f64 = 315_964_800.0;
+
+/// Epochs gathered and averaged as one block: the blocks run in parallel,
+/// each long enough (minutes of a 40 Hz log) that its per-track searches
+/// and hand-out cost little beside its rows.
+const EPOCH_BLOCK: usize = 1 << 13;
 
 /// Seconds in a GPS week.
 const WEEK_S: f64 = 604_800.0;

@@ -610,7 +610,7 @@ fn linear_range_test_uses_each_channels_own_carrier() {
 }
 
 /// A log given to the session (freed track by track as its rows are taken,
-/// the tracks on both cores) gives the session a lent one gives: tracks
+/// the tracks in parallel) gives the session a lent one gives: tracks
 /// joining, leaving, below the masks and re-assigned, with the screening on.
 #[test]
 fn given_and_lent_logs_give_the_same_session() {
@@ -634,6 +634,31 @@ fn given_and_lent_logs_give_the_same_session() {
     let given = prepare_session_from(Cow::Owned(log.clone()), &imu, "imu.csv", &cfg, 0.0).unwrap();
     assert_eq!(format!("{given:?}"), format!("{lent:?}"));
     assert_eq!(lent.channels.iter().filter(|c| c.epochs > 0).count(), 6);
+}
+
+/// The session is the same on one thread and on several: the epochs go in
+/// fixed blocks (several here, one starting mid-gap), whatever the pool.
+#[test]
+fn the_session_is_the_same_on_any_number_of_threads() {
+    let mut rows = Vec::new();
+    for k in 0..20_000 {
+        for ch in 0..5u32 {
+            if (ch == 1 && (8000..8500).contains(&k)) || (ch == 4 && k < 9000) {
+                continue;
+            }
+            let phase = 0.05 * (k as f64 * 0.21).sin() + 0.003 * ((k * 7 + ch as usize * 13) % 11) as f64;
+            rows.push(row(tk(k), ch, 40.0 + ch as f64, Some(30.0), phase));
+        }
+    }
+    let log = log_from(&rows);
+    let (imu, cfg) = (wide_imu(), SelectionConfig::default());
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        format!("{:?}", pool.install(|| prep(&log, &imu, &cfg).unwrap()))
+    };
+    let one = on(1);
+    assert_eq!(on(2), one);
+    assert_eq!(on(5), one);
 }
 
 /// Standard normal deviates from a splitmix64 stream (Box–Muller).
