@@ -4,19 +4,21 @@
 //! with the level and compensation never makes it worse; bad levels and an
 //! unstable loop are errors, not rows.
 
-use gsens_calib::predict::{SweepError, SweepSettings, Vibration};
+use gsens_calib::predict::{PredictionInput, SweepError, SweepSettings, Vibration};
 
 fn settings(levels: Vec<f64>) -> SweepSettings {
     SweepSettings {
-        gamma_hz_per_mps2: [0.09, 0.08, -0.08],
-        covariance_hz_per_mps2_sq: [[1e-6, 0.0, 0.0], [0.0, 1e-6, 0.0], [0.0, 0.0, 4e-6]],
-        vibration: Vibration::Tones(vec![(0.91, [3.0, 0.0, 0.0])]),
+        base: PredictionInput {
+            gamma_hz_per_mps2: [0.09, 0.08, -0.08],
+            covariance: [[1e-6, 0.0, 0.0], [0.0, 1e-6, 0.0], [0.0, 0.0, 4e-6]],
+            vibration: Vibration::Tones(vec![(0.91, [3.0, 0.0, 0.0])]),
+            oscillator: None,
+            cn0_dbhz: Some(45.0),
+            delay_s: 0.005,
+            imu_noise_mps2_per_rthz: 0.0,
+            doppler_rate_hz_per_s: 0.0,
+        },
         levels,
-        oscillator: None,
-        cn0_dbhz: 45.0,
-        delay_s: 0.005,
-        imu_noise_mps2_per_rthz: 0.0,
-        doppler_rate_hz_per_s: 0.0,
         bn_hz: 3.0,
         zeta: std::f64::consts::FRAC_1_SQRT_2,
         loop_interval_s: 0.001,

@@ -6,7 +6,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use gsens_calib::predict::{BN_GRID_HZ, FrequencyNoise, SweepError, SweepSettings, Vibration};
+use gsens_calib::predict::{BN_GRID_HZ, FrequencyNoise, PredictionInput, SweepError, SweepSettings, Vibration};
 use gsens_report::figures::{DEFAULT_SIZE, Format, LockMarginData, fig_lock_margin};
 use gsens_sim::oscillator::OscillatorConfig;
 use std::path::PathBuf;
@@ -145,15 +145,17 @@ pub fn run(args: &PredictArgs) -> Result<crate::Status> {
     });
     let delay_s = args.latency_s + 0.5 / args.imu_rate_hz;
     let settings = SweepSettings {
-        gamma_hz_per_mps2: gamma,
-        covariance_hz_per_mps2_sq: covariance,
-        vibration: base,
+        base: PredictionInput {
+            gamma_hz_per_mps2: gamma,
+            covariance,
+            vibration: base,
+            oscillator,
+            cn0_dbhz: Some(args.cn0_dbhz),
+            delay_s,
+            imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
+            doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
+        },
         levels: args.levels.clone(),
-        oscillator,
-        cn0_dbhz: args.cn0_dbhz,
-        delay_s,
-        imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
-        doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
         bn_hz: args.bn_hz,
         zeta: args.zeta,
         loop_interval_s: args.loop_interval_s,

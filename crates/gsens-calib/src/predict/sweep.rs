@@ -5,7 +5,7 @@
 //! [`BN_GRID_HZ`] that keeps lock ([`narrowest_bn_hz`]); and the lock margin
 //! against the bandwidth at one level, for a figure.
 
-use super::{FrequencyNoise, PredictionInput, Vibration, jitter, narrowest_bn_hz, second_order_loop};
+use super::{PredictionInput, Vibration, jitter, narrowest_bn_hz, second_order_loop};
 use gsens_core::LoopError;
 use serde::Serialize;
 
@@ -21,28 +21,15 @@ pub const BN_GRID_HZ: [f64; 200] = {
     grid
 };
 
-/// The inputs of a sweep: the estimate and its covariance, the vibration at
-/// level 1, the levels, the oscillator, the signal and the 2nd-order loop.
+/// The inputs of a sweep: the prediction's input at level 1, the levels
+/// and the 2nd-order loop.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SweepSettings {
-    /// Γ̂ \[Hz/(m/s²)\].
-    pub gamma_hz_per_mps2: [f64; 3],
-    /// Its covariance \[(Hz/(m/s²))²\].
-    pub covariance_hz_per_mps2_sq: [[f64; 3]; 3],
-    /// The vibration at level 1.
-    pub vibration: Vibration,
+    /// Γ̂, its covariance, the vibration at level 1, the oscillator, the
+    /// signal and the feed-forward's delay.
+    pub base: PredictionInput,
     /// The levels (finite, ≥ 0).
     pub levels: Vec<f64>,
-    /// The oscillator's own frequency noise (`None`: left out).
-    pub oscillator: Option<FrequencyNoise>,
-    /// C/N0 \[dB-Hz\].
-    pub cn0_dbhz: f64,
-    /// The feed-forward's delay (latency plus half an IMU sample) \[s\].
-    pub delay_s: f64,
-    /// The IMU's white noise \[(m/s²)/√Hz\].
-    pub imu_noise_mps2_per_rthz: f64,
-    /// The Doppler rate the loop must follow \[Hz/s\].
-    pub doppler_rate_hz_per_s: f64,
     /// The loop's noise bandwidth \[Hz\].
     pub bn_hz: f64,
     /// Its damping.
@@ -114,22 +101,13 @@ pub enum SweepError {
 impl SweepSettings {
     /// The prediction's input at `level`.
     pub fn input_at(&self, level: f64) -> PredictionInput {
-        let vibration = match &self.vibration {
+        let vibration = match &self.base.vibration {
             Vibration::Spectrum(p) => {
                 Vibration::Spectrum(p.iter().map(|(f, s)| (*f, s.map(|v| v * level * level))).collect())
             }
             Vibration::Tones(t) => Vibration::Tones(t.iter().map(|(f, a)| (*f, a.map(|v| v * level))).collect()),
         };
-        PredictionInput {
-            gamma_hz_per_mps2: self.gamma_hz_per_mps2,
-            covariance: self.covariance_hz_per_mps2_sq,
-            vibration,
-            oscillator: self.oscillator,
-            cn0_dbhz: Some(self.cn0_dbhz),
-            delay_s: self.delay_s,
-            imu_noise_mps2_per_rthz: self.imu_noise_mps2_per_rthz,
-            doppler_rate_hz_per_s: self.doppler_rate_hz_per_s,
-        }
+        PredictionInput { vibration, ..self.base.clone() }
     }
 
     /// The sweep over [`SweepSettings::levels`].
@@ -162,8 +140,8 @@ impl SweepSettings {
         }
         Ok(Sweep {
             bn_hz: self.bn_hz,
-            covariance_hz_per_mps2_sq: self.covariance_hz_per_mps2_sq,
-            gamma_hz_per_mps2: self.gamma_hz_per_mps2,
+            covariance_hz_per_mps2_sq: self.base.covariance,
+            gamma_hz_per_mps2: self.base.gamma_hz_per_mps2,
             predictions,
         })
     }
