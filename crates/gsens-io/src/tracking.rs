@@ -743,9 +743,9 @@ const WAVE_CHUNKS: usize = 4;
 
 /// Opens and reads a `tracking.csv` file; errors name the file by its path.
 ///
-/// A file without quotes or carrier columns is parsed on the fast path
-/// ([`crate::plain`]) in chunks of about [`CHUNK_BYTES`], split at line
-/// ends, all at once, and the chunks joined with the checks that span them
+/// A file without quotes or carrier columns is parsed on the fast path (the
+/// cells parsed in place) in chunks of a fixed size in bytes, split at line
+/// ends, several at once, and the chunks joined with the checks that span them
 /// (time stamps non-decreasing, one row per channel per epoch). The result
 /// is the log the `csv` reader gives; when anything stops a chunk (an error,
 /// a quote character that could hide a line end, a check across chunks
