@@ -113,7 +113,7 @@ impl Options {
             loop_tolerance: self.loop_tolerance.opt(d.loop_tolerance),
             time_offset: match self.time_offset {
                 None => d.time_offset,
-                Some(Value::Default) => TimeOffsetOption::Word("none".into()),
+                Some(Value::Default) => TimeOffsetOption::None,
                 Some(v) => TimeOffsetOption::Seconds(v.or(0.0)),
             },
             time_offset_max_s: self.time_offset_max_s.or(d.time_offset_max_s),
