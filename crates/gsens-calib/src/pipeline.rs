@@ -6,7 +6,7 @@ use crate::document::{ResultDocument, SourceConversion};
 use crate::{
     CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit, session_linear_range_rad,
 };
-use gsens_core::Discriminator;
+use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
     FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session_from,
@@ -138,6 +138,21 @@ impl Default for PipelineSettings {
 }
 
 impl PipelineSettings {
+    /// These settings with a receiver's own loop modelled exactly, as an
+    /// adapter that reads the loop from the receiver's configuration states
+    /// it: `receiver_loop`, each row the loop's last discriminator output
+    /// ([`gsens_core::LoggedPhase::Last`]), `discriminator`, the loop stated,
+    /// and exact (a tolerance of 0 unless one was given: tested, not fitted).
+    pub fn with_exact_loop(&self, receiver_loop: LoopModel, discriminator: Discriminator) -> PipelineSettings {
+        let mut settings = self.clone();
+        settings.estimate.receiver_loop = receiver_loop;
+        settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
+        settings.set_discriminator(discriminator);
+        settings.loop_stated = true;
+        settings.loop_tolerance.get_or_insert(0.0);
+        settings
+    }
+
     /// States the receiver's discriminator: the estimate's range check uses
     /// it, and the screening's linear-range limit moves with it where it was
     /// half the previous discriminator's unambiguous range, the default (a

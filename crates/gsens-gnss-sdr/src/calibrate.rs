@@ -53,15 +53,9 @@ pub fn gnss_sdr_tracking_log(dir: &Path, imported: &Imported) -> Result<Tracking
 /// path than its dumps (its tracking monitor): a Kaplan model of the same
 /// order and bandwidth at its 20 ms integration is not its loop.
 pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) -> PipelineSettings {
-    let mut settings = settings.clone();
-    settings.estimate.receiver_loop = LoopModel::GnssSdr(import.stage());
-    settings.estimate.logged_phase = gsens_core::LoggedPhase::Last;
     // dll_pll_veml_tracking's PLL on GPS L1 C/A: pll_cloop_two_quadrant_atan
     // (its four-quadrant pll_four_quadrant_atan only with track_pilot, and L1 C/A has no pilot).
-    settings.set_discriminator(Discriminator::AtanCostas);
-    settings.loop_stated = true;
-    settings.loop_tolerance.get_or_insert(0.0);
-    settings
+    settings.with_exact_loop(LoopModel::GnssSdr(import.stage()), Discriminator::AtanCostas)
 }
 
 /// A calibration from GNSS-SDR dumps: the pipeline's outcome, what the

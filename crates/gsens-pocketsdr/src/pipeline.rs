@@ -4,7 +4,7 @@ use gsens_core::units::Decimal;
 use std::path::Path;
 
 use gsens_calib::{Outcome, PipelineSettings, SourceConversion, calibrate_logs};
-use gsens_core::{LoggedPhase, LoopModel};
+use gsens_core::LoopModel;
 use gsens_io::{FormatError, TrackingLog};
 
 use crate::error::PocketSdrError;
@@ -45,7 +45,7 @@ impl Imported {
 /// carrier loop modelled exactly ([`gsens_core::pocket_sdr`]): the loop of
 /// `settings` is replaced by PocketSDR's at the options' `b_pll`, each row
 /// is the single 1 ms discriminator output at its epoch
-/// ([`LoggedPhase::Last`]), the loop is exact (a tolerance of 0 unless
+/// ([`gsens_core::LoggedPhase::Last`]), the loop is exact (a tolerance of 0 unless
 /// `settings` give one: tested, not fitted), and
 /// the warm-up is at least [`ImportSettings::models_warmup_s`].
 pub fn calibrate_pocketsdr(
@@ -57,14 +57,10 @@ pub fn calibrate_pocketsdr(
     let imported = import_file(log, import)?;
     let tracking = pocketsdr_tracking_log(&imported)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
-    let mut settings = settings.clone();
-    settings.estimate.receiver_loop = LoopModel::PocketSdr(imported.stage);
-    settings.estimate.logged_phase = LoggedPhase::Last;
-    // pocket_trk's err_phas on L1CA: atan(Q/I), the two-quadrant Costas discriminator.
-    settings.set_discriminator(gsens_core::Discriminator::AtanCostas);
-    settings.loop_stated = true;
     // PocketSDR's loop is known exactly from its options: tested, not fitted.
-    settings.loop_tolerance.get_or_insert(0.0);
+    // pocket_trk's err_phas on L1CA: atan(Q/I), the two-quadrant Costas discriminator.
+    let mut settings =
+        settings.with_exact_loop(LoopModel::PocketSdr(imported.stage), gsens_core::Discriminator::AtanCostas);
     // The regressor models start at the first kept line, possibly while the
     // board is shaken: their start-up error, computed from the IMU, is left to
     // the warm-up (ImportSettings::models_warmup_s).
