@@ -27,16 +27,6 @@ pub enum CalibError {
         /// The range it must be in.
         expected: &'static str,
     },
-    /// A setting that is not one of the words it takes.
-    #[error("setting {name} = `{value}` is not allowed: expected {expected}")]
-    Word {
-        /// The setting's name.
-        name: &'static str,
-        /// Its value.
-        value: String,
-        /// What it may be.
-        expected: &'static str,
-    },
     /// A combination of settings gsens does not support.
     #[error("{0}")]
     Unsupported(&'static str),
