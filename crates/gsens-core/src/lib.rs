@@ -47,8 +47,9 @@ pub use filter::HighPass;
 pub use loop_model::{LoopModel, LoopPeak, TWO_RATE_FACTORS};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
 pub use pll::{
-    CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LinearLoop, LoopError, LoopFilter, LoopFilterCoeffs,
-    LoopOrderError, LoopSpec, ModelLoop, second_order_bn_from_wn, second_order_wn_from_bn, third_order_bn_over_wn,
+    CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LOOP_STATE_LEN, LinearLoop, LoopError, LoopFilter,
+    LoopFilterCoeffs, LoopOrderError, LoopSpec, LoopState, ModelLoop, loop_state_space, second_order_bn_from_wn,
+    second_order_wn_from_bn, third_order_bn_over_wn,
 };
 pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation};
 pub use robust::{HuberWeights, sandwich_covariance};

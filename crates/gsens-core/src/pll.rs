@@ -1,4 +1,5 @@
 use crate::math::{PI, TAU, cos, sin, sqrt};
+use nalgebra::{Matrix4, Vector4};
 
 pub mod gnss_sdr;
 pub mod pocket_sdr;
@@ -500,6 +501,49 @@ pub trait LinearLoop {
     fn settle(&mut self, delta_f_hz: f64);
     /// Back to rest.
     fn reset(&mut self);
+    /// The loop's state between two updates: with it and the next Δf the
+    /// next update is determined. At most [`LOOP_STATE_LEN`] numbers in an
+    /// order of the implementation's own; entries it does not use are 0.
+    /// [`loop_state_space`] and the regressor's lifted recursion probe the loop
+    /// through it.
+    fn state(&self) -> LoopState;
+    /// Sets the state [`LinearLoop::state`] returns (unused entries ignored).
+    fn set_state(&mut self, state: &LoopState);
+}
+
+/// How many numbers a [`LinearLoop`]'s state holds at most.
+pub const LOOP_STATE_LEN: usize = 4;
+
+/// A [`LinearLoop`]'s state ([`LinearLoop::state`]).
+pub type LoopState = [f64; LOOP_STATE_LEN];
+
+/// The state-space form of one update of a linear loop, found by probing it
+/// (it is linear, so one update from each unit state with Δf = 0 and one from
+/// rest with Δf = 1 give every column):
+///
+/// ```text
+/// s' = A·s + b·Δf,    φ = c·s + d·Δf      (s = LinearLoop::state)
+/// ```
+///
+/// Returns (A, b, c, d).
+pub fn loop_state_space<L: LinearLoop + Clone>(model_loop: &L) -> (Matrix4<f64>, Vector4<f64>, Vector4<f64>, f64) {
+    let probe = |state: LoopState, delta_f_hz: f64| {
+        let mut l = model_loop.clone();
+        l.set_state(&state);
+        let phi = l.step(delta_f_hz);
+        (Vector4::from(l.state()), phi)
+    };
+    let mut a = Matrix4::zeros();
+    let mut c = Vector4::zeros();
+    for j in 0..LOOP_STATE_LEN {
+        let mut s = [0.0; LOOP_STATE_LEN];
+        s[j] = 1.0;
+        let (next, phi) = probe(s, 0.0);
+        a.set_column(j, &next);
+        c[j] = phi;
+    }
+    let (b, d) = probe([0.0; LOOP_STATE_LEN], 1.0);
+    (a, b, c, d)
 }
 
 impl LinearLoop for DiscretePll {
@@ -512,6 +556,18 @@ impl LinearLoop for DiscretePll {
     }
     fn reset(&mut self) {
         DiscretePll::reset(self)
+    }
+    /// (e, f, a1, a2): the phase error at the start of the next integration
+    /// \[rad\], the NCO command during it \[Hz\], the filter's integrators.
+    fn state(&self) -> LoopState {
+        let f = &self.carrier.filter;
+        [self.err_start_rad, self.carrier.nco_freq_hz, f.acc1_rad_per_s, f.acc2_rad_per_s2]
+    }
+    fn set_state(&mut self, state: &LoopState) {
+        self.err_start_rad = state[0];
+        self.carrier.nco_freq_hz = state[1];
+        self.carrier.filter.acc1_rad_per_s = state[2];
+        self.carrier.filter.acc2_rad_per_s2 = state[3];
     }
 }
 
@@ -566,6 +622,20 @@ impl LinearLoop for ModelLoop {
             ModelLoop::Kaplan(p) => p.reset(),
             ModelLoop::GnssSdr(p) => p.reset(),
             ModelLoop::PocketSdr(p) => p.reset(),
+        }
+    }
+    fn state(&self) -> LoopState {
+        match self {
+            ModelLoop::Kaplan(p) => p.state(),
+            ModelLoop::GnssSdr(p) => p.state(),
+            ModelLoop::PocketSdr(p) => p.state(),
+        }
+    }
+    fn set_state(&mut self, state: &LoopState) {
+        match self {
+            ModelLoop::Kaplan(p) => p.set_state(state),
+            ModelLoop::GnssSdr(p) => p.set_state(state),
+            ModelLoop::PocketSdr(p) => p.set_state(state),
         }
     }
 }

@@ -1,4 +1,4 @@
-use crate::pll::{DiscretePll, LinearLoop, LoopFilterCoeffs, ModelLoop};
+use crate::pll::{DiscretePll, LOOP_STATE_LEN, LinearLoop, LoopFilterCoeffs, LoopState, ModelLoop};
 
 /// What a tracking-log row reports when the loop runs faster than the log.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,6 +72,22 @@ impl core::error::Error for RegressorError {}
 ///
 /// With n = 1 the two are the same.
 ///
+/// # One log interval in one step
+///
+/// The loop is linear and the input between two epochs is a linear
+/// interpolation of a_{k−1} and a_k, so the n updates of one log interval are
+/// one affine map of the loop's state s ([`LinearLoop::state`]) and the two
+/// samples (a lifted, or block, recursion):
+///
+/// ```text
+/// s_k = Φ·s_{k−1} + b₀·a_{k−1} + b₁·a_k,    φ_k = c·s_{k−1} + d₀·a_{k−1} + d₁·a_k
+/// ```
+///
+/// `LiftedInterval` finds Φ, b₀, b₁, c, d₀, d₁ by running the n updates
+/// from each unit state and each unit sample once; each epoch then costs one
+/// 4×4 product per axis instead of n loop updates, whatever n is. The result
+/// equals the update-by-update recursion up to rounding.
+///
 /// # Interpolation and its compensation
 ///
 /// Linear interpolation of the samples a_k onto the n loop updates between two
@@ -90,6 +106,95 @@ pub struct RegressorModel<L = ModelLoop> {
     substeps: u32,
     logged: LoggedPhase,
     prev_accel_mps2: Option<[f64; 3]>,
+    /// The map of one log interval, when it holds more than one update.
+    lifted: Option<LiftedInterval>,
+    /// The triad's states between epochs on the lifted path.
+    states: [LoopState; 3],
+}
+
+/// One log interval of a linear loop, n updates on the linear interpolation
+/// of two samples, as one affine map (see [`RegressorModel`]):
+///
+/// ```text
+/// s' = Φ·s + b₀·a₀ + b₁·a₁,    φ = c·s + d₀·a₀ + d₁·a₁
+/// ```
+///
+/// φ is what the log row holds ([`LoggedPhase`]). By linearity each column
+/// is one run of the n updates: from the unit state e_j with a₀ = a₁ = 0
+/// (Φ's column j and c_j), and from rest with (a₀, a₁) = (1, 0) and (0, 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LiftedInterval {
+    phi: [[f64; LOOP_STATE_LEN]; LOOP_STATE_LEN],
+    b_prev: LoopState,
+    b_cur: LoopState,
+    c: LoopState,
+    d_prev: f64,
+    d_cur: f64,
+}
+
+impl LiftedInterval {
+    /// The map of `substeps` updates of `model_loop` (its own state is not
+    /// used) whose log row is `logged`.
+    pub(crate) fn of_loop<L: LinearLoop + Clone>(model_loop: &L, substeps: u32, logged: LoggedPhase) -> Self {
+        let run = |state: LoopState, a_prev: f64, a_cur: f64| {
+            let mut l = model_loop.clone();
+            l.set_state(&state);
+            let out = interval_updates(&mut l, a_prev, a_cur, substeps, logged);
+            (l.state(), out)
+        };
+        let mut phi = [[0.0; LOOP_STATE_LEN]; LOOP_STATE_LEN];
+        let mut c = [0.0; LOOP_STATE_LEN];
+        for j in 0..LOOP_STATE_LEN {
+            let mut unit = [0.0; LOOP_STATE_LEN];
+            unit[j] = 1.0;
+            let (next, out) = run(unit, 0.0, 0.0);
+            for i in 0..LOOP_STATE_LEN {
+                phi[i][j] = next[i];
+            }
+            c[j] = out;
+        }
+        let (b_prev, d_prev) = run([0.0; LOOP_STATE_LEN], 1.0, 0.0);
+        let (b_cur, d_cur) = run([0.0; LOOP_STATE_LEN], 0.0, 1.0);
+        LiftedInterval { phi, b_prev, b_cur, c, d_prev, d_cur }
+    }
+
+    /// Advances `state` over one interval from sample `a_prev` to `a_cur`;
+    /// returns the logged φ.
+    #[inline]
+    pub(crate) fn step(&self, state: &mut LoopState, a_prev: f64, a_cur: f64) -> f64 {
+        let s = *state;
+        let mut out = self.d_prev * a_prev + self.d_cur * a_cur;
+        for j in 0..LOOP_STATE_LEN {
+            out += self.c[j] * s[j];
+        }
+        for i in 0..LOOP_STATE_LEN {
+            let row = &self.phi[i];
+            let mut v = self.b_prev[i] * a_prev + self.b_cur[i] * a_cur;
+            for j in 0..LOOP_STATE_LEN {
+                v += row[j] * s[j];
+            }
+            state[i] = v;
+        }
+        out
+    }
+}
+
+/// The n loop updates of one log interval, one at a time, on the linear
+/// interpolation a_prev + (j/n)·(a_cur − a_prev), j = 1…n: the recursion
+/// `LiftedInterval` condenses (and its probe). Returns what the log row holds.
+fn interval_updates<L: LinearLoop>(l: &mut L, a_prev: f64, a_cur: f64, substeps: u32, logged: LoggedPhase) -> f64 {
+    let inv_n = 1.0 / f64::from(substeps);
+    let mut sum = 0.0;
+    let mut last = 0.0;
+    for j in 1..=substeps {
+        let w = f64::from(j) * inv_n;
+        last = l.step(a_prev + w * (a_cur - a_prev));
+        sum += last;
+    }
+    match logged {
+        LoggedPhase::Last => last,
+        LoggedPhase::Mean => sum * inv_n,
+    }
 }
 
 impl RegressorModel<ModelLoop> {
@@ -127,7 +232,16 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         }
         let mut l = model_loop;
         l.reset();
-        Ok(RegressorModel { triad: [l.clone(), l.clone(), l], substeps: n as u32, logged, prev_accel_mps2: None })
+        let substeps = n as u32;
+        let lifted = (substeps > 1).then(|| LiftedInterval::of_loop(&l, substeps, logged));
+        Ok(RegressorModel {
+            triad: [l.clone(), l.clone(), l],
+            substeps,
+            logged,
+            prev_accel_mps2: None,
+            lifted,
+            states: [[0.0; LOOP_STATE_LEN]; 3],
+        })
     }
 
     /// Loop updates per log epoch.
@@ -153,36 +267,22 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
             None => {
                 // The receiver was tracking before the log began: start each
                 // model loop in the steady state of the first sample.
-                for (pll, a) in self.triad.iter_mut().zip(accel_mps2) {
+                for ((pll, a), state) in self.triad.iter_mut().zip(accel_mps2).zip(&mut self.states) {
                     pll.settle(*a);
+                    *state = pll.state();
                 }
                 *accel_mps2
             }
         };
         self.prev_accel_mps2 = Some(*accel_mps2);
-        let n = self.substeps;
-        if n == 1 {
+        let Some(lifted) = &self.lifted else {
             return [
                 self.triad[0].step(accel_mps2[0]),
                 self.triad[1].step(accel_mps2[1]),
                 self.triad[2].step(accel_mps2[2]),
             ];
-        }
-        let inv_n = 1.0 / n as f64;
-        let mut sum = [0.0; 3];
-        let mut last = [0.0; 3];
-        for j in 1..=n {
-            let w = j as f64 * inv_n;
-            for axis in 0..3 {
-                let a = prev[axis] + w * (accel_mps2[axis] - prev[axis]);
-                last[axis] = self.triad[axis].step(a);
-                sum[axis] += last[axis];
-            }
-        }
-        match self.logged {
-            LoggedPhase::Last => last,
-            LoggedPhase::Mean => [sum[0] * inv_n, sum[1] * inv_n, sum[2] * inv_n],
-        }
+        };
+        [0, 1, 2].map(|axis| lifted.step(&mut self.states[axis], prev[axis], accel_mps2[axis]))
     }
 
     /// Back to rest.
@@ -190,6 +290,7 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         for p in &mut self.triad {
             p.reset();
         }
+        self.states = [[0.0; LOOP_STATE_LEN]; 3];
         self.prev_accel_mps2 = None;
     }
 }
@@ -212,3 +313,118 @@ pub fn compensate_interpolation(accel: &mut [[f64; 3]], c: f64) {
     }
 }
 use crate::units::Decimal;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pll::LoopSpec;
+    use crate::pll::gnss_sdr::{GnssSdrPll, GnssSdrStage};
+    use crate::pll::pocket_sdr::{PocketSdrPll, PocketSdrStage};
+
+    fn spec(order: u8, bn_hz: f64) -> LoopFilterCoeffs {
+        let zeta = core::f64::consts::FRAC_1_SQRT_2;
+        LoopSpec::of_order(order, bn_hz, zeta, crate::pll::KAPLAN_A3, crate::pll::KAPLAN_B3).unwrap().coeffs().unwrap()
+    }
+
+    /// A deterministic, broadband test input: a sum of incommensurate sines
+    /// and a slow ramp [m/s²].
+    fn accel(k: usize) -> [f64; 3] {
+        let t = k as f64 * 0.025;
+        [
+            2.0 * libm::sin(5.3 * t) + 0.7 * libm::sin(17.1 * t) + 0.01 * t,
+            -1.5 * libm::sin(3.1 * t + 0.4) + 0.9 * libm::cos(23.9 * t),
+            9.81 + 0.8 * libm::sin(11.7 * t + 1.0),
+        ]
+    }
+
+    /// The update-by-update reference: three loops settled on the first
+    /// sample, then [`interval_updates`] per epoch.
+    fn by_updates<L: LinearLoop + Clone>(l: &L, n: u32, logged: LoggedPhase, epochs: usize) -> [f64; 3] {
+        let mut triad = [l.clone(), l.clone(), l.clone()];
+        let first = accel(0);
+        for (pll, a) in triad.iter_mut().zip(first) {
+            pll.settle(a);
+        }
+        let mut prev = first;
+        let mut sum_sq = [0.0; 3];
+        let mut out = [0.0; 3];
+        for k in 0..epochs {
+            let a = accel(k);
+            for axis in 0..3 {
+                out[axis] = interval_updates(&mut triad[axis], prev[axis], a[axis], n, logged);
+                sum_sq[axis] += out[axis] * out[axis];
+            }
+            prev = a;
+        }
+        sum_sq
+    }
+
+    fn assert_lifted_equals_updates<L: LinearLoop + Clone>(l: L, loop_interval_s: f64, log_interval_s: f64) {
+        for logged in [LoggedPhase::Last, LoggedPhase::Mean] {
+            let n = libm::round(log_interval_s / loop_interval_s) as u32;
+            let mut model = RegressorModel::with_loop(l.clone(), loop_interval_s, log_interval_s, logged).unwrap();
+            assert_eq!(model.lifted.is_some(), n > 1);
+            let epochs = 4000;
+            let want_energy = by_updates(&l, n, logged, epochs);
+            let mut energy = [0.0; 3];
+            let mut max_rel_err: f64 = 0.0;
+            let mut triad = [l.clone(), l.clone(), l.clone()];
+            let mut prev = accel(0);
+            for (pll, a) in triad.iter_mut().zip(prev) {
+                pll.settle(a);
+            }
+            for k in 0..epochs {
+                let a = accel(k);
+                let got = model.epoch(&a);
+                let want = [0, 1, 2].map(|axis| interval_updates(&mut triad[axis], prev[axis], a[axis], n, logged));
+                prev = a;
+                for axis in 0..3 {
+                    energy[axis] += got[axis] * got[axis];
+                    let scale = libm::sqrt(want_energy[axis] / epochs as f64);
+                    max_rel_err = max_rel_err.max(libm::fabs(got[axis] - want[axis]) / scale);
+                }
+            }
+            // Rounding only: the lifted map and the n updates differ in the
+            // order of their sums, not in what they compute.
+            assert!(max_rel_err < 1e-11, "{logged:?} n = {n}: {max_rel_err:e} of the RMS");
+            for axis in 0..3 {
+                assert!(libm::fabs(energy[axis] / want_energy[axis] - 1.0) < 1e-11);
+            }
+            // After reset the model starts again from the first sample's steady state.
+            model.reset();
+            let mut fresh = RegressorModel::with_loop(l.clone(), loop_interval_s, log_interval_s, logged).unwrap();
+            for k in 0..3 {
+                assert_eq!(model.epoch(&accel(k)), fresh.epoch(&accel(k)));
+            }
+        }
+    }
+
+    #[test]
+    fn one_log_interval_in_one_step_equals_its_updates_for_every_loop_kind() {
+        let kaplan2 = spec(2, 3.0);
+        let kaplan3 = spec(3, 10.0);
+        assert_lifted_equals_updates(DiscretePll::new(kaplan2, 0.001), 0.001, 0.025);
+        assert_lifted_equals_updates(DiscretePll::new(kaplan3, 0.001), 0.001, 0.025);
+        assert_lifted_equals_updates(DiscretePll::new(kaplan2, 0.005), 0.005, 0.1);
+        assert_lifted_equals_updates(DiscretePll::new(kaplan2, 0.025), 0.025, 0.025);
+        let gnss_sdr = GnssSdrPll::new(GnssSdrStage { order: 3, bw_hz: 15.0, symbols: 1 }).unwrap();
+        assert_lifted_equals_updates(ModelLoop::from(gnss_sdr), 0.001, 0.02);
+        let pocket = PocketSdrPll::new(PocketSdrStage::l1ca(5.0)).unwrap();
+        assert_lifted_equals_updates(ModelLoop::from(pocket), pocket.stage().interval_s, 0.02);
+    }
+
+    #[test]
+    fn the_lifted_map_is_the_updates_state_space_raised_to_n() {
+        // Φ = Aⁿ: the state transition of n updates with no input.
+        let l = DiscretePll::new(spec(2, 3.0), 0.001);
+        let (a, _, _, _) = crate::pll::loop_state_space(&l);
+        let lifted = LiftedInterval::of_loop(&l, 25, LoggedPhase::Last);
+        let a_n = a.pow(25);
+        for i in 0..LOOP_STATE_LEN {
+            for j in 0..LOOP_STATE_LEN {
+                let scale = a_n.abs().max().max(1.0);
+                assert!(libm::fabs(lifted.phi[i][j] - a_n[(i, j)]) < 1e-12 * scale, "({i}, {j})");
+            }
+        }
+    }
+}

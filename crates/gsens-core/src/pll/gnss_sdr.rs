@@ -76,7 +76,7 @@
 
 use nalgebra::{Complex, Matrix4, Vector4};
 
-use super::{LinearLoop, LoopError};
+use super::{LinearLoop, LoopError, LoopState};
 use crate::math::{PI, TAU, cos, sin};
 
 /// Length of one C/A code period, the unit of GNSS-SDR's integrations \[s\].
@@ -297,30 +297,10 @@ impl GnssSdrPll {
         self.nco_hz = nco_next_hz;
     }
 
-    /// The state-space form of one record: s' = A·s + b·Δf, φ = c·s + d·Δf,
-    /// s = (e, f_prev, w, x) (x unused, all zero, for order 2).
+    /// The state-space form of one record ([`super::loop_state_space`]), s = (e,
+    /// f_prev, w, x) (x unused, all zero, for order 2).
     fn state_space(&self) -> (Matrix4<f64>, Vector4<f64>, Vector4<f64>, f64) {
-        let probe = |s: [f64; 4], df: f64| {
-            let mut l = *self;
-            l.err_start_rad = s[0];
-            l.nco_hz = s[1];
-            l.filter.w_hz = s[2];
-            l.filter.x_hz = if self.stage.order == 3 { s[3] } else { 0.0 };
-            let phi = l.step(df);
-            (Vector4::new(l.err_start_rad, l.nco_hz, l.filter.w_hz, l.filter.x_hz), phi)
-        };
-        let mut a = Matrix4::zeros();
-        let mut c = Vector4::zeros();
-        let dim = if self.stage.order == 3 { 4 } else { 3 };
-        for j in 0..dim {
-            let mut s = [0.0; 4];
-            s[j] = 1.0;
-            let (next, phi) = probe(s, 0.0);
-            a.set_column(j, &next);
-            c[j] = phi;
-        }
-        let (b, d) = probe([0.0; 4], 1.0);
-        (a, b, c, d)
+        super::loop_state_space(self)
     }
 
     /// Whether the loop of this stage is stable: every eigenvalue of its
@@ -384,6 +364,19 @@ impl LinearLoop for GnssSdrPll {
         self.filter = GnssSdrFilter::new(stage.order, stage.bw_hz, stage.interval_s());
         self.err_start_rad = 0.0;
         self.nco_hz = 0.0;
+    }
+
+    /// (e, f_prev, w, x): the phase error at the start of the next record
+    /// \[rad\], the NCO command during it \[Hz\], the filter's integrators.
+    fn state(&self) -> LoopState {
+        let (w_hz, x_hz) = self.filter.state();
+        [self.err_start_rad, self.nco_hz, w_hz, x_hz]
+    }
+
+    fn set_state(&mut self, state: &LoopState) {
+        self.err_start_rad = state[0];
+        self.nco_hz = state[1];
+        self.filter.set_state(state[2], state[3]);
     }
 }
 

@@ -60,7 +60,7 @@
 
 use nalgebra::{Complex, Matrix4};
 
-use super::{LinearLoop, LoopError, LoopFilterCoeffs};
+use super::{LinearLoop, LoopError, LoopFilterCoeffs, LoopState};
 use crate::math::{PI, TAU, cos, sin};
 
 /// `b_pll` when neither the options file nor the command line sets it
@@ -262,6 +262,15 @@ impl LinearLoop for PocketSdrPll {
         self.nco_hz = 0.0;
         self.acc_hz_per_s = 0.0;
         self.prev_cycles = 0.0;
+    }
+
+    /// (e, f, A, c_{k−1}) of the step's recursion.
+    fn state(&self) -> LoopState {
+        [self.err_start_rad, self.nco_hz, self.acc_hz_per_s, self.prev_cycles]
+    }
+
+    fn set_state(&mut self, state: &LoopState) {
+        [self.err_start_rad, self.nco_hz, self.acc_hz_per_s, self.prev_cycles] = *state;
     }
 }
 
