@@ -34,18 +34,22 @@ if [ ! -x "$venv/bin/python" ]; then
   fi
 fi
 "$venv/bin/python" -m pip install -q --upgrade pip
-"$venv/bin/python" -m pip install -q "maturin>=1.16,<2" "numpy>=1.21" scipy pandas pytest matplotlib
+"$venv/bin/python" -m pip install -q "maturin>=1.16,<2" "numpy>=1.21" scipy pandas pytest matplotlib "mypy>=1.20,<2"
 
 echo "== the wheel (maturin build, dev profile: optimized like the tests)"
 rm -rf "$target_dir/wheels"
 "$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out "$target_dir/wheels"
 "$venv/bin/python" -m pip install -q --force-reinstall --no-deps "$target_dir"/wheels/gsens-*.whl
 
-echo "== pytest python/tests"
 # pytest keeps the tmp_path folders of its last runs under the temporary
 # directory; here they go to a folder of this run's own, removed on exit.
 pytest_tmp=$(mktemp -d "${TMPDIR:-/tmp}/gsens-pytest-XXXXXX")
 trap 'rm -rf "$pytest_tmp"' EXIT
+
+echo "== the type stubs against the module (mypy's stubtest, no cache written)"
+(cd "$pytest_tmp" && MYPY_CACHE_DIR=/dev/null "$venv/bin/python" -m mypy.stubtest gsens._gsens)
+
+echo "== pytest python/tests"
 # Run from outside the source tree so that `import gsens` is the installed wheel.
 GSENS_BIN="$target_dir/debug/gsens" "$venv/bin/python" -m pytest -q "$PWD/python/tests" --rootdir "$PWD/python" \
   -p no:cacheprovider --basetemp "$pytest_tmp/basetemp"

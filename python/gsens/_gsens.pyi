@@ -3,10 +3,25 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, final, overload
+
+from typing_extensions import Self
 
 import numpy as np
 import numpy.typing as npt
+
+__all__ = [
+    "GsensError",
+    "__version__",
+    "estimate",
+    "options_defaults",
+    "Estimate",
+    "Loop",
+    "simulate",
+    "default_scenario",
+    "montecarlo",
+    "Calibrator",
+]
 
 __version__: str
 
@@ -16,6 +31,7 @@ _Columns = Mapping[str, npt.NDArray[np.float64]]
 class GsensError(ValueError):
     """A bad input, setting or log: the command line's message (file, line, column)."""
 
+@final
 class Estimate:
     """The result of :func:`estimate`: the result document of ``gsens estimate --json``."""
 
@@ -72,18 +88,19 @@ class Estimate:
     def report(self) -> str:
         """The text report of ``gsens estimate``."""
 
+@final
 class Loop:
     """A carrier PLL (Kaplan & Hegarty): continuous, or discrete with ``interval_s``."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         order: int = 2,
         bn_hz: float = 3.0,
         zeta: float = ...,
         a3: float = 1.1,
         b3: float = 2.4,
         interval_s: Optional[float] = None,
-    ) -> None: ...
+    ) -> Self: ...
     @property
     def order(self) -> int: ...
     @property
@@ -105,10 +122,11 @@ class Loop:
     def filter(self, delta_f_hz: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The discrete loop run over Δf [Hz] per update: φ [rad] per update."""
 
+@final
 class Calibrator:
     """The streaming calibrator: one epoch of specific force and phase error at a time."""
 
-    def __init__(self, log_interval_s: float, **settings: Any) -> None: ...
+    def __new__(cls, log_interval_s: float, **settings: Any) -> Self: ...
     def feed(self, accel_mps2: Sequence[float], phase_err_rad: Optional[float] = None) -> None: ...
     def feed_many(self, accel_mps2: npt.ArrayLike, phase_err_rad: npt.ArrayLike) -> None: ...
     def finish(self) -> None: ...

@@ -20,7 +20,12 @@ pub(crate) struct Loop {
 #[pymethods]
 impl Loop {
     #[new]
-    #[pyo3(signature = (order=DEFAULT_ORDER, bn_hz=DEFAULT_BN_HZ, zeta=std::f64::consts::FRAC_1_SQRT_2, a3=KAPLAN_A3, b3=KAPLAN_B3, interval_s=None))]
+    // Python's inspect cannot show constants' values: the text signature
+    // spells them out (stubtest holds the stub to it, the stub test the stub to the constants).
+    #[pyo3(
+        signature = (order=DEFAULT_ORDER, bn_hz=DEFAULT_BN_HZ, zeta=std::f64::consts::FRAC_1_SQRT_2, a3=KAPLAN_A3, b3=KAPLAN_B3, interval_s=None),
+        text_signature = "(order=2, bn_hz=3.0, zeta=..., a3=1.1, b3=2.4, interval_s=None)"
+    )]
     fn new(order: u8, bn_hz: f64, zeta: f64, a3: f64, b3: f64, interval_s: Option<f64>) -> PyResult<Self> {
         let spec = LoopSpec::of_order(order, bn_hz, zeta, a3, b3).map_err(|e| GsensError::new_err(e.to_string()))?;
         if let Some(t) = interval_s.filter(|t| !(t.is_finite() && *t > 0.0)) {
