@@ -52,6 +52,7 @@ pub enum LoopSpec {
 
 /// Errors in a loop specification.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum LoopError {
     /// Bn, ζ, a3, b3 or T not finite and positive.
     NonPositiveParameter(&'static str),

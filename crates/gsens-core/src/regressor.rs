@@ -25,6 +25,7 @@ impl LoggedPhase {
 
 /// Errors building a [`RegressorModel`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum RegressorError {
     /// The log interval is not an integer multiple of the loop interval.
     NotAMultiple {

@@ -336,7 +336,7 @@ fn build(config: &GsensCalibratorConfig) -> Result<GsensCalibrator, GsensStatus>
     let model_loop =
         LoopModel::Kaplan { spec, interval_s: Some(config.loop_interval_s) }.runnable().map_err(|e| match e {
             LoopError::Unstable | LoopError::UnstableAtInterval => GsensStatus::UnstableLoop,
-            LoopError::NonPositiveParameter(_) => GsensStatus::InvalidConfig,
+            _ => GsensStatus::InvalidConfig,
         })?;
     let logged = match config.logged_phase {
         x if x == GsensLoggedPhase::Last as u32 => LoggedPhase::Last,

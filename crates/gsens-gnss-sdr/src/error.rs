@@ -6,6 +6,7 @@ use crate::dump::REQUIRED_FIELDS;
 
 /// What can go wrong reading GNSS-SDR's files or converting them.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum GnssSdrError {
     /// A file or directory could not be read.
     #[error("{file}: cannot read: {error}")]

@@ -161,6 +161,7 @@ pub struct Observables {
 
 /// Why a datagram is not a monitor message.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DatagramError {
     /// Zero bytes.
     #[error("empty datagram")]

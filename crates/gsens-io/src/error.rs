@@ -30,6 +30,7 @@ impl fmt::Display for Column {
 /// imu.csv: line 17, column 3 (`fy_mps2`): `abc` is not a number
 /// ```
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FormatError {
     /// The file could not be opened or read.
     #[error("{file}: cannot read: {error}")]

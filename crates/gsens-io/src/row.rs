@@ -12,6 +12,7 @@ use crate::writers::TrackingRow;
 
 /// What is wrong with a row read on its own.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RowError {
     /// The row ends before this column.
     #[error("{column} missing")]

@@ -79,6 +79,7 @@ pub struct Signal {
 
 /// Why a signal name or carrier is refused (the readers add file, line and column).
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum SignalError {
     /// A name not in [`SIGNALS`].
     Unknown(String),

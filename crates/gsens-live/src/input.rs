@@ -75,6 +75,7 @@ impl core::fmt::Display for Notice {
 
 /// Why a received line is not a record.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum LineError {
     /// A cell of the row (gsens-io's row parser: the column is named).
     #[error(transparent)]

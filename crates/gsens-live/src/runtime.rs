@@ -138,6 +138,7 @@ impl core::fmt::Display for Ending {
 
 /// What can stop a live session.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RuntimeError {
     /// The receiver loop of the settings cannot be modelled.
     #[error("the receiver loop")]

@@ -15,6 +15,7 @@ use std::path::Path;
 
 /// Why figures could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum WriteError {
     /// A figure could not be drawn.
     #[error("drawing {id}: {error}")]

@@ -120,6 +120,7 @@ impl Image {
 
 /// Why a figure could not be drawn.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RenderError {
     /// The requested size is unusable.
     #[error("figure size {0}×{1} px is outside {MIN_SIZE:?} … {MAX_SIZE:?}")]

@@ -16,6 +16,7 @@ use gsens_io::{Column, FormatError};
 /// tracking.csv: line 17, column 1 (`t_s`): time stamp 0.4 s is 0.01 s off the epoch grid t0 + k*T (…)
 /// ```
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SessionError {
     /// A log could not be read or is malformed, or an in-memory IMU series is
     /// inconsistent (displayed as the [`FormatError`] itself).
@@ -152,6 +153,7 @@ pub enum SessionError {
 /// An invalid value in a [`ScreeningConfig`](crate::ScreeningConfig), naming
 /// its key (e.g. `screening.guard_s = -1 must be ≥ 0`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ScreeningConfigError {
     /// A value that must be positive and finite is not.
     #[error("screening.{key} = {value} must be positive")]
