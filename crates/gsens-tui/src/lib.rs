@@ -12,8 +12,11 @@
 //!   [`poll_quit`] waits for `q`, Esc or Ctrl-C.
 //! - [`render_text`]: the screen drawn into a text buffer of a given size
 //!   (ratatui's `TestBackend`), for snapshot tests and documentation.
+//! - [`progress`]: the bars and spinners of the other commands' long steps,
+//!   the calibration pipeline's stages among them ([`progress::observed`]).
 #![warn(missing_docs)]
 
+pub mod progress;
 mod screen;
 mod terminal;
 
