@@ -6,7 +6,7 @@
 use crate::estimate::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
-use gsens_live::{Display, Inputs, LiveScreen, LiveView, MonitorInput, Runtime, RuntimeConfig, SystemClock};
+use gsens_live::{Display, Inputs, LiveScreen, LiveView, Runtime, RuntimeConfig, SystemClock};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -92,12 +92,11 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
     let imu = args.follow_imu.clone().expect("checked: --follow-imu");
     if let (Some(addr), Some(conf)) = (&args.gnss_sdr_monitor, &args.gnss_sdr_conf) {
         if args.calibration.loop_args.stated() {
-            anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
+            anyhow::bail!(crate::estimate::LOOP_STATED_TWICE);
         }
-        let setup = crate::monitor::monitor_setup(Some(conf), None, None)?;
-        let monitor =
-            MonitorInput { addr: addr.clone(), import: setup.import, decimation: setup.decimation, fs_hz: setup.fs_hz };
-        return Ok(Inputs::Monitor { imu, monitor: Box::new(monitor) });
+        let setup = gsens_live::monitor_setup(Some(conf), None, None)?;
+        crate::err(setup.note.as_deref().unwrap_or_default());
+        return Ok(Inputs::Monitor { imu, monitor: Box::new(setup.input(addr)) });
     }
     let tracking = args.follow_tracking.clone().expect("checked: --follow-tracking");
     Ok(Inputs::Files { imu, tracking })
@@ -106,7 +105,7 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
 pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     check_inputs(args)?;
     let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
-    crate::outputs::dir("--out", &args.out)?;
+    crate::check_dir("--out", &args.out)?;
     let inputs = inputs(args)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let config = RuntimeConfig {

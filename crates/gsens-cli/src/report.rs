@@ -9,7 +9,8 @@ use clap::Args;
 use gsens_calib::Outcome;
 use gsens_io::TrackingLog;
 use gsens_live::TruthLoopUse;
-use gsens_report::{FigureInputs, write_report_dir};
+use gsens_report::write_calibration_report;
+use gsens_tui::progress::spinner;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -80,7 +81,7 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
     let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
     let (settings, loop_note) = settings_and_loop_note(&args.calibration, truth_loop)?;
-    crate::outputs::dir("--out", &args.out)?;
+    crate::check_dir("--out", &args.out)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
@@ -106,22 +107,18 @@ pub fn write_report(
     title: &str,
     header: HeaderArgs,
 ) -> Result<crate::Status> {
-    let bar = crate::spinner();
-    let doc = outcome.document(truth);
-    let figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
-    let files = write_report_dir(out, title, &doc, &figure_inputs.figures(), header.write_untrusted_header, |id| {
+    let bar = spinner();
+    let untrusted = header.write_untrusted_header;
+    let (doc, files) = write_calibration_report(outcome, tracking, truth, out, title, untrusted, |id| {
         bar.set_message(format!("drawing {id}"))
     })?;
     bar.finish_and_clear();
-    crate::out(&gsens_report::render_text(&doc))?;
-    let beside = if files.header.is_some() { "report.json, gsens_gamma.h" } else { "report.json" };
-    crate::out(&format!("\nreport: {} (with {beside} and figures/ beside it)\n", files.html.display()))?;
+    crate::out(&format!("{}\n{}\n", gsens_report::render_text(&doc), files.summary()))?;
     if files.header.is_none() {
-        let codes = doc.untrusted_codes();
         crate::err(&format!(
             "gsens_gamma.h not written: the estimate is not trustworthy ({}); --write-untrusted-header writes it \
              anyway, marked GSENS_GAMMA_TRUSTWORTHY 0\n",
-            codes.join(", ")
+            doc.untrusted_codes().join(", ")
         ));
     }
     Ok(crate::Status::of(&doc))
