@@ -4,6 +4,7 @@ use crate::args::{AnalysisArgs, InputArgs, LoopArgs};
 use anyhow::{Context, Result, anyhow};
 use clap::Args;
 use gsens_calib::PipelineSettings;
+use gsens_calib::option_values::positive;
 use gsens_inputs::{Calibrated, Inputs, InputsError};
 use gsens_tui::progress::observed;
 use std::path::PathBuf;
@@ -28,7 +29,7 @@ pub struct EstimateArgs {
 #[derive(Args, Debug, Clone)]
 pub struct CalibrationArgs {
     /// Carrier frequency [Hz] for ppb/g (default GPS L1).
-    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
     pub carrier_hz: f64,
     #[command(flatten)]
     pub loop_args: LoopArgs,

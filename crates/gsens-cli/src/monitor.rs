@@ -4,6 +4,7 @@
 use crate::import::create;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use gsens_calib::option_values::{finite_non_negative, positive};
 use gsens_core::units::Decimal;
 use gsens_gnss_sdr::monitor::{MonitorReceiver, MonitorStream, Notice, Recorder};
 use gsens_live::{NoticeLimit, SystemClock, monitor_setup, render_recorded_tracks};
@@ -18,7 +19,7 @@ pub struct ImportMonitorArgs {
     #[arg(long, default_value = "127.0.0.1:1234")]
     pub listen: String,
     /// Sampling rate [Hz] (default: the configuration's, else each message's own `fs`).
-    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub fs_hz: Option<f64>,
     /// The GNSS-SDR configuration of the run: its loop (for the settling time dropped after each
     /// track's start) and TrackingMonitor.decimation_factor.
@@ -31,10 +32,10 @@ pub struct ImportMonitorArgs {
     #[arg(long)]
     pub raw: Option<PathBuf>,
     /// Stop after this many seconds without a datagram (counted from the start too) [s].
-    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true, value_parser = positive)]
     pub idle_timeout_s: f64,
     /// Seconds dropped from each track's start (default: the narrow loop's settling time).
-    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub settle_s: Option<f64>,
 }
 

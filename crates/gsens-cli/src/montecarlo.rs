@@ -5,6 +5,7 @@
 use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs};
 use anyhow::Result;
 use clap::Args;
+use gsens_calib::option_values::positive;
 use gsens_montecarlo::{method_settings, monte_carlo};
 use gsens_tui::progress::count_bar;
 use std::path::PathBuf;
@@ -24,7 +25,7 @@ pub struct MonteCarloArgs {
     pub json: Option<PathBuf>,
     /// State the receiver loop's bandwidth this many times the true one (1: right), as a user who got it
     /// wrong would: how often the loop check catches the mistake.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = positive)]
     pub stated_bn_scale: f64,
     #[command(flatten)]
     pub estimator: EstimatorArgs,

@@ -7,6 +7,7 @@
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, ValueEnum};
 use gsens_calib::ResultDocument;
+use gsens_calib::option_values::{finite_non_negative, positive};
 use gsens_calib::predict::{
     FeedForward, PredictionInput, SweepContext, SweepError, SweepSettings, Vibration, diagonal_covariance, parse_tone,
     render_sweep_text,
@@ -64,32 +65,32 @@ pub struct PredictArgs {
     #[arg(long, value_enum, default_value = "ocxo")]
     pub oscillator: OscillatorArg,
     /// Carrier [Hz] (GPS L1 by default).
-    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
     pub carrier_hz: f64,
     /// C/N0 for the thermal noise [dB-Hz].
-    #[arg(long, default_value_t = 45.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, default_value_t = 45.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub cn0_dbhz: f64,
     /// The loop (2nd order): noise bandwidth [Hz].
-    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true, value_parser = positive)]
     pub bn_hz: f64,
     /// Damping ratio ζ.
-    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = positive)]
     pub zeta: f64,
     /// Loop update interval [s].
-    #[arg(long, default_value_t = 0.001, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 0.001, allow_negative_numbers = true, value_parser = positive)]
     pub loop_interval_s: f64,
     /// The feed-forward: IMU sample rate [Hz] (its hold delays by half a sample).
-    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true, value_parser = positive)]
     pub imu_rate_hz: f64,
     /// The feed-forward: latency on top of the hold [s].
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub latency_s: f64,
     /// The IMU's white noise density [m/s²/√Hz].
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub imu_noise_mps2_per_rthz: f64,
     /// The line-of-sight Doppler rate the loop must follow [Hz/s] (its dynamic stress
     /// error enters the lock rule; a static receiver sees up to about 0.9 Hz/s at L1).
-    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub doppler_rate_hz_per_s: f64,
     /// Write the predictions as JSON here.
     #[arg(long)]

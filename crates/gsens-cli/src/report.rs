@@ -8,7 +8,6 @@ use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::Outcome;
 use gsens_io::TrackingLog;
-use gsens_live::TruthLoopUse;
 use gsens_report::write_calibration_report;
 use gsens_tui::progress::spinner;
 use std::path::{Path, PathBuf};
@@ -52,27 +51,7 @@ pub fn settings_and_loop_note(
 ) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
     let mut settings = calibration.settings()?;
     let Some(path) = truth else { return Ok((settings, None)) };
-    let logged = |l: gsens_core::LoggedPhase| match l {
-        gsens_core::LoggedPhase::Last => "the last discriminator output",
-        gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
-    };
-    let stated = |t: &gsens_sim::TruthLoop| format!("{}, logged: {}", t.receiver_loop, logged(t.logged_phase));
-    let note = match gsens_live::take_truth_loop(&mut settings, path)? {
-        TruthLoopUse::NotStated => format!("receiver loop: from the options ({} states none)", path.display()),
-        TruthLoopUse::SettingsOwn { truth, same } => {
-            let relation = if same { "the same as" } else { "not" };
-            format!(
-                "receiver loop: from the options, {relation} the one {} states ({})",
-                path.display(),
-                stated(&truth)
-            )
-        }
-        TruthLoopUse::Taken { truth } => format!(
-            "receiver loop: {} (from {}, the loop that made the log; loop options such as --bn-hz override it)",
-            stated(&truth),
-            path.display()
-        ),
-    };
+    let note = gsens_live::take_truth_loop(&mut settings, path)?.note(path);
     Ok((settings, Some(note)))
 }
 

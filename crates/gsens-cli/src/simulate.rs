@@ -5,6 +5,7 @@
 
 use anyhow::Result;
 use clap::Args;
+use gsens_calib::option_values::positive;
 use gsens_gnss_sdr::conf::{IqConfOptions, write_iq_conf};
 use gsens_sim::iq::{IqConfig, IqFormat};
 use gsens_tui::progress::progress_bar;
@@ -27,7 +28,7 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = IqFormatArg::Ibyte, requires = "iq")]
     pub iq_format: IqFormatArg,
     /// Sampling rate of --iq [Hz].
-    #[arg(long, default_value_t = 4.0e6, requires = "iq", allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 4.0e6, requires = "iq", allow_negative_numbers = true, value_parser = positive)]
     pub fs_hz: f64,
     /// Also write carrier.csv: each satellite's baseband carrier frequency per 1 ms
     /// block (the truth a receiver's loop tracks; large).

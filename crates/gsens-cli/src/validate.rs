@@ -6,6 +6,7 @@
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use gsens_calib::ResultDocument;
+use gsens_calib::option_values::finite_non_negative;
 use gsens_montecarlo::{
     ValidateError, calibrate_scenario, default_bandwidths_hz, render_gamma_hat, render_trial_row,
     render_validate_footer, render_validate_header, validate,
@@ -31,7 +32,7 @@ pub struct ValidateArgs {
     pub bn_hz: Option<Vec<f64>>,
     /// Delay from an IMU sample to its use in the NCO command [s], on top of the IMU's own
     /// time offset and the hold until its next sample.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub latency_s: f64,
     /// Write every trial (per channel, and the phase trace) as JSON here.
     #[arg(long)]
