@@ -410,6 +410,16 @@ impl ResultDocument {
             message: e.to_string(),
         })
     }
+
+    /// Γ̂ and its covariance ([`Calibration::gamma_with_covariance`]) from
+    /// the result document at `path`; an axis without an estimate is an
+    /// error naming the file and the entry.
+    pub fn read_gamma_file(path: &std::path::Path) -> Result<([f64; 3], [[f64; 3]; 3]), DocumentError> {
+        let doc = Self::read_json_file(path)?;
+        doc.calibration
+            .gamma_with_covariance()
+            .map_err(|entry| DocumentError::Unobservable { file: path.display().to_string(), entry })
+    }
 }
 
 /// Why a result document could not be read back.
@@ -435,6 +445,14 @@ pub enum DocumentError {
         column: usize,
         /// What serde_json found.
         message: String,
+    },
+    /// An entry of Γ̂ or its covariance is null: its axis was not observable.
+    #[error("{file}: {entry} is null: the axis was not observable")]
+    Unobservable {
+        /// The file.
+        file: String,
+        /// The entry, e.g. `gamma_hz_per_mps2[2]`.
+        entry: String,
     },
 }
 

@@ -60,6 +60,7 @@ mod estimate;
 mod fft;
 pub mod gls;
 mod joint;
+pub mod option_values;
 mod options;
 mod pipeline;
 pub mod predict;

@@ -35,9 +35,13 @@
 
 use gsens_core::{LoopModel, LoopSpec};
 
+mod setup;
 mod sweep;
+mod table;
+pub use setup::{FeedForward, ToneError, diagonal_covariance, parse_tone};
 use statrs::distribution::{ContinuousCDF, Normal};
 pub use sweep::{BN_GRID_HZ, Sweep, SweepError, SweepRow, SweepSettings};
+pub use table::{SweepContext, render_sweep_text};
 
 /// Kaplan & Hegarty's rule of thumb for keeping a Costas loop in lock,
 /// 3σ + θₑ ≤ 45° \[rad\]: a lock criterion for the loop's whole jitter over a

@@ -77,3 +77,31 @@ fn a_file_that_is_not_a_document_is_named_with_line_and_column() {
     let e = ResultDocument::read_json_file(&path).unwrap_err().to_string();
     assert!(e.starts_with(&format!("{}:2:", path.display())) && e.contains("not a gsens result document"), "{e}");
 }
+
+/// Γ̂ and its covariance read back from a document file as written; an axis
+/// never shaken is an error naming the file and the first null entry.
+#[test]
+fn gamma_reads_back_from_a_file_and_an_unobservable_axis_is_named() {
+    let mut settings = PipelineSettings::default();
+    settings.estimate.receiver_loop = LoopModel::kaplan(LoopSpec::PAPER, Some(common::T));
+    settings.loop_stated = true;
+    settings.time_offset = TimeOffset::Fixed { imu_time_offset_s: 0.0 };
+    let dir = tempfile::tempdir().unwrap();
+    for shake_z in [true, false] {
+        let (tracking, imu) = logs(shake_z, false);
+        let doc = calibrate_logs(&tracking, &imu, "imu", &settings).unwrap().document(None);
+        let path = dir.path().join(format!("z{shake_z}.json"));
+        doc.write_json_file(&path).unwrap();
+        let read = ResultDocument::read_gamma_file(&path);
+        if shake_z {
+            let (gamma, cov) = read.unwrap();
+            assert_eq!(gamma.map(Some), doc.calibration.gamma_hz_per_mps2);
+            assert_eq!(cov.map(|r| r.map(Some)), doc.calibration.covariance_hz_per_mps2_sq);
+        } else {
+            // The first entry without a number: x's covariance with the unobservable z.
+            let e = read.unwrap_err().to_string();
+            let entry = "covariance_hz_per_mps2_sq[0][2]";
+            assert_eq!(e, format!("{}: {entry} is null: the axis was not observable", path.display()));
+        }
+    }
+}

@@ -7,6 +7,9 @@
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
+use gsens_calib::option_values::{
+    elevation_deg, finite, finite_non_negative, forgetting_factor, non_negative_or_inf, positive, stated_time_offset,
+};
 use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffsetOption, defaults};
 use gsens_core::LoopModel;
 use gsens_gnss_sdr::{DumpLayout, ImportSettings};
@@ -282,7 +285,7 @@ impl SelectionArgs {
 #[command(next_help_heading = "Systematic errors")]
 pub struct SystematicArgs {
     /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
-    #[arg(long, default_value = "auto", allow_hyphen_values = true, value_parser = time_offset)]
+    #[arg(long, default_value = "auto", allow_hyphen_values = true, value_parser = stated_time_offset)]
     pub time_offset: TimeOffset,
     /// Search range ± of `--time-offset auto` [s].
     #[arg(long, default_value_t = defaults::DEFAULT_TIME_OFFSET_MAX_S, allow_negative_numbers = true, value_parser = finite_non_negative)]
@@ -537,62 +540,5 @@ impl InputArgs {
             (None, Some(t), None) => Inputs::Csv { imu: Log::File(imu), tracking: Log::File(t.clone()) },
             (None, None, _) => bail!("--tracking is required (or --gnss-sdr, or --pocketsdr)"),
         })
-    }
-}
-
-// clap's parsers of number options: clap's error names the option and the
-// value, the parser's message the range. Options that take such numbers also
-// allow a leading minus, so that `-3` reaches the range check instead of
-// being read as an option.
-
-/// A number ≥ 0, or `inf`.
-pub fn non_negative_or_inf(text: &str) -> Result<f64, String> {
-    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number (or inf)"))?;
-    if x >= 0.0 { Ok(x) } else { Err(format!("{x} is not a number ≥ 0 (or inf)")) }
-}
-
-/// A finite number ≥ 0.
-pub fn finite_non_negative(text: &str) -> Result<f64, String> {
-    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
-    if x.is_finite() && x >= 0.0 { Ok(x) } else { Err(format!("{x} is not a finite number ≥ 0")) }
-}
-
-/// A finite number > 0.
-pub fn positive(text: &str) -> Result<f64, String> {
-    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
-    if x.is_finite() && x > 0.0 { Ok(x) } else { Err(format!("{x} is not a finite number > 0")) }
-}
-
-/// A finite number.
-pub fn finite(text: &str) -> Result<f64, String> {
-    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
-    if x.is_finite() { Ok(x) } else { Err(format!("{x} is not a finite number")) }
-}
-
-/// A forgetting factor, in (0, 1].
-fn forgetting_factor(text: &str) -> Result<f64, String> {
-    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
-    if x > 0.0 && x <= 1.0 { Ok(x) } else { Err(format!("{x} is not in (0, 1] (1: no forgetting)")) }
-}
-
-/// An elevation, in [−90, 90] degrees.
-fn elevation_deg(text: &str) -> Result<f64, String> {
-    let x: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
-    if (-90.0..=90.0).contains(&x) { Ok(x) } else { Err(format!("{x} is not an elevation in [-90, 90] degrees")) }
-}
-
-/// The largest IMU time offset that can be stated \[s\]: an IMU's latency
-/// is milliseconds to a few hundred; more is a clock on another time base.
-pub const MAX_STATED_TIME_OFFSET_S: f64 = 1.0;
-
-/// `auto`, `none` or seconds within ±[`MAX_STATED_TIME_OFFSET_S`].
-fn time_offset(text: &str) -> Result<TimeOffset, String> {
-    let t: TimeOffset = text.trim().parse().map_err(|e| format!("{e}"))?;
-    match t {
-        TimeOffset::Fixed { imu_time_offset_s: s } if s.abs() > MAX_STATED_TIME_OFFSET_S => Err(format!(
-            "{s} s is beyond ±{MAX_STATED_TIME_OFFSET_S} s: an IMU's latency is milliseconds to a few hundred, more \
-             is a clock on another time base; stamp both logs by one clock (shift the IMU's t_s) instead"
-        )),
-        t => Ok(t),
     }
 }

@@ -1,11 +1,13 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
 use crate::args::{AnalysisArgs, InputArgs, LoopArgs};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, anyhow};
 use clap::Args;
 use gsens_calib::PipelineSettings;
+use gsens_calib::option_values::positive;
 use gsens_inputs::{Calibrated, Inputs, InputsError};
-use std::path::{Path, PathBuf};
+use gsens_tui::progress::observed;
+use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct EstimateArgs {
@@ -27,7 +29,7 @@ pub struct EstimateArgs {
 #[derive(Args, Debug, Clone)]
 pub struct CalibrationArgs {
     /// Carrier frequency [Hz] for ppb/g (default GPS L1).
-    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
     pub carrier_hz: f64,
     #[command(flatten)]
     pub loop_args: LoopArgs,
@@ -57,28 +59,28 @@ impl CalibrationArgs {
 /// was made from when `keep_tracking`), printing what became of each track of
 /// a receiver's log and which receiver loop was modelled.
 pub fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
-    let calibrated = crate::observed(|| {
-        if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) }
-    })
-    .map_err(|e| match e {
-        InputsError::LoopStatedTwice { .. } => {
-            anyhow::anyhow!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like")
-        }
-        e => e.into(),
-    })?;
-    if let Some(summary) = calibrated.track_summary() {
-        crate::out(&summary)?;
-    }
-    if let Some(note) = calibrated.loop_note() {
-        crate::out(&format!("{note}\n"))?;
-    }
+    let calibrated =
+        observed(
+            || {
+                if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) }
+            },
+        )
+        .map_err(|e| match e {
+            InputsError::LoopStatedTwice { .. } => anyhow!(LOOP_STATED_TWICE),
+            e => e.into(),
+        })?;
+    let loop_note = calibrated.loop_note().map(|note| note + "\n");
+    crate::out(&(calibrated.track_summary().unwrap_or_default() + &loop_note.unwrap_or_default()))?;
     Ok(calibrated)
 }
 
+/// The error of a receiver's configuration given with loop options.
+pub const LOOP_STATED_TWICE: &str = "--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like";
+
 pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings()?;
-    crate::outputs::maybe_file("--json", args.json.as_deref())?;
-    crate::outputs::maybe_file("--epochs-out", args.epochs_out.as_deref())?;
+    crate::check_file("--json", args.json.as_deref(), None)?;
+    crate::check_file("--epochs-out", args.epochs_out.as_deref(), None)?;
     let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
@@ -92,15 +94,6 @@ pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(crate::Status::of(&doc))
-}
-
-/// Γ̂ and its covariance from a result document (`gsens estimate --json`,
-/// `report.json`); an axis without an estimate is an error naming it.
-pub fn gamma_of_document(path: &Path) -> Result<([f64; 3], [[f64; 3]; 3])> {
-    let doc = gsens_calib::ResultDocument::read_json_file(path)?;
-    doc.calibration
-        .gamma_with_covariance()
-        .map_err(|what| anyhow::anyhow!("{}: {what} is null: the axis was not observable", path.display()))
 }
 
 #[cfg(test)]

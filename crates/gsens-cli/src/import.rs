@@ -3,9 +3,9 @@
 use crate::args::{ConversionArgs, PocketSdrConversionArgs};
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use gsens_gnss_sdr::import::write_imported_csv;
 use gsens_gnss_sdr::import_dir;
-use std::path::PathBuf;
+use gsens_tui::progress::with_spinner;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct ImportArgs {
@@ -42,13 +42,11 @@ pub struct ImportPocketSdrArgs {
 
 fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
     let settings = a.conversion.import_settings()?;
-    crate::outputs::file("--out", &a.out)?;
-    crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
-    let imported =
-        crate::with_spinner("reading the PocketSDR log", || gsens_pocketsdr::import_file(&a.log, &settings))?;
+    crate::check_file("--out", Some(&a.out), None)?;
+    crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
+    let imported = with_spinner("reading the PocketSDR log", || gsens_pocketsdr::import_file(&a.log, &settings))?;
     crate::out(&gsens_pocketsdr::render_summary(&imported))?;
-    let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
-    gsens_io::write_tracking_csv(file, &imported.rows)?;
+    gsens_io::write_tracking_csv(create(&a.out)?, &imported.rows)?;
     crate::out(&format!(
         "wrote {} rows → {}; estimate with PocketSDR's loop model: gsens estimate --imu <imu.csv> --pocketsdr {}{} \
          (b_pll {} Hz, rows = the single 1 ms discriminator output at each epoch)\n",
@@ -58,11 +56,15 @@ fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
         a.conversion.pocketsdr_conf.as_ref().map_or(String::new(), |c| format!(" --pocketsdr-conf {}", c.display())),
         imported.stage.bw_hz
     ))?;
-    if let Some(p) = &a.tracks_json {
-        std::fs::write(p, serde_json::to_string_pretty(&imported)? + "\n")
-            .with_context(|| format!("{}: cannot write", p.display()))?;
+    match &a.tracks_json {
+        Some(p) => crate::write(p, serde_json::to_string_pretty(&imported)? + "\n"),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// A new file at `path`.
+pub fn create(path: &Path) -> Result<std::fs::File> {
+    std::fs::File::create(path).with_context(|| format!("{}: cannot create", path.display()))
 }
 
 /// `gsens import gnss-sdr`.
@@ -99,30 +101,21 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     // whatever the configuration says.
     gsens_gnss_sdr::find_dumps(&a.dump_dir, None)?;
     let settings = a.conversion.import_settings(a.conf.as_deref())?;
-    crate::outputs::file("--out", &a.out)?;
-    crate::outputs::maybe_file("--tracks-json", a.tracks_json.as_deref())?;
-    let imported = crate::with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
+    crate::check_file("--out", Some(&a.out), None)?;
+    crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
+    let imported = with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
     crate::out(&gsens_gnss_sdr::render_tracks(&imported.tracks, imported.interval_s))?;
-    let file = std::fs::File::create(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
-    let common_grid = !a.record_times;
-    let rows = if common_grid {
-        let grid = gsens_gnss_sdr::resample(&imported, imported.interval_s);
-        gsens_io::write_tracking_csv(file, &grid)?;
-        grid.len()
-    } else {
-        write_imported_csv(file, &imported.rows)?;
-        imported.rows.len()
-    };
+    let rows = imported.write_csv(create(&a.out)?, !a.record_times)?;
     let stage = settings.stage();
     crate::out(&format!(
         "wrote {} rows → {}{}; estimate with the GNSS-SDR loop model: gsens estimate --imu <imu.csv> --gnss-sdr {} \
          --gnss-sdr-conf {} (order {}, Bn {} Hz, {} ms)\n",
         rows,
         a.out.display(),
-        if common_grid {
-            " (common grid, for gsens estimate --tracking)"
-        } else {
+        if a.record_times {
             " (times at the middle of each integration; not for gsens estimate --tracking)"
+        } else {
+            " (common grid, for gsens estimate --tracking)"
         },
         a.dump_dir.display(),
         a.conf.as_ref().map_or("<conf>".to_string(), |c| c.display().to_string()),
@@ -130,10 +123,11 @@ pub fn run(args: &ImportArgs) -> Result<()> {
         stage.bw_hz,
         stage.symbols
     ))?;
-    if let Some(p) = &a.tracks_json {
-        let conversion = gsens_gnss_sdr::Conversion { conversion: settings, tracks: imported.tracks };
-        std::fs::write(p, serde_json::to_string_pretty(&conversion)? + "\n")
-            .with_context(|| format!("{}: cannot write", p.display()))?;
+    match &a.tracks_json {
+        Some(p) => {
+            let conversion = gsens_gnss_sdr::Conversion { conversion: settings, tracks: imported.tracks };
+            crate::write(p, serde_json::to_string_pretty(&conversion)? + "\n")
+        }
+        None => Ok(()),
     }
-    Ok(())
 }

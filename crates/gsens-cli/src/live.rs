@@ -6,11 +6,11 @@
 use crate::estimate::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
-use gsens_live::{Display, Inputs, LiveScreen, LiveView, MonitorInput, Runtime, RuntimeConfig, SystemClock};
+use gsens_calib::option_values::{finite_non_negative, positive};
+use gsens_live::{Display, Inputs, Runtime, RuntimeConfig, SystemClock};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Duration;
 
 #[derive(Args, Debug)]
 pub struct LiveArgs {
@@ -34,7 +34,7 @@ pub struct LiveArgs {
     pub follow_tracking: Option<PathBuf>,
     /// With --follow-* and --gnss-sdr-monitor: end when no input has grown for this long [s]
     /// (0: only on a key or the target).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::args::finite_non_negative)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
     /// received in received/), and at the end the report of `gsens report`
@@ -43,10 +43,10 @@ pub struct LiveArgs {
     pub out: PathBuf,
     /// End when every axis's σ is at most this [Hz/(m/s²)]; ending before (the input ended, a key,
     /// --idle-timeout-s) exits with status 4.
-    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true, value_parser = positive)]
     pub target_sigma: f64,
     /// Re-run the estimate every this many seconds of data [s].
-    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = positive)]
     pub batch_every_s: f64,
     /// Plain lines instead of the terminal screen (also when standard output is not a terminal).
     #[arg(long)]
@@ -92,12 +92,11 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
     let imu = args.follow_imu.clone().expect("checked: --follow-imu");
     if let (Some(addr), Some(conf)) = (&args.gnss_sdr_monitor, &args.gnss_sdr_conf) {
         if args.calibration.loop_args.stated() {
-            anyhow::bail!("--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like");
+            anyhow::bail!(crate::estimate::LOOP_STATED_TWICE);
         }
-        let setup = crate::monitor::monitor_setup(Some(conf), None, None)?;
-        let monitor =
-            MonitorInput { addr: addr.clone(), import: setup.import, decimation: setup.decimation, fs_hz: setup.fs_hz };
-        return Ok(Inputs::Monitor { imu, monitor: Box::new(monitor) });
+        let setup = gsens_live::monitor_setup(Some(conf), None, None)?;
+        crate::err(setup.note.as_deref().unwrap_or_default());
+        return Ok(Inputs::Monitor { imu, monitor: Box::new(setup.input(addr)) });
     }
     let tracking = args.follow_tracking.clone().expect("checked: --follow-tracking");
     Ok(Inputs::Files { imu, tracking })
@@ -106,7 +105,7 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
 pub fn run(args: &LiveArgs) -> Result<crate::Status> {
     check_inputs(args)?;
     let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
-    crate::outputs::dir("--out", &args.out)?;
+    crate::check_dir("--out", &args.out)?;
     let inputs = inputs(args)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let config = RuntimeConfig {
@@ -133,7 +132,7 @@ pub fn run(args: &LiveArgs) -> Result<crate::Status> {
         runtime.run(Display::Plain(&mut Stdout))?
     } else {
         // The terminal is restored when the screen is dropped, before the final report.
-        runtime.run(Display::Screen(&mut Tui(gsens_tui::Terminal::new()?)))?
+        runtime.run(Display::Screen(&mut gsens_tui::Terminal::new()?))?
     };
     crate::out(&format!("ended: {ending}; the final estimate on everything received:\n"))?;
     let mut finished = runtime.finish()?;
@@ -165,18 +164,5 @@ impl Write for Stdout {
 
     fn flush(&mut self) -> std::io::Result<()> {
         std::io::stdout().flush()
-    }
-}
-
-/// gsens-tui's terminal screen.
-struct Tui(gsens_tui::Terminal);
-
-impl LiveScreen for Tui {
-    fn draw(&mut self, view: &LiveView) -> std::io::Result<()> {
-        self.0.draw(view)
-    }
-
-    fn quit_asked(&mut self) -> std::io::Result<bool> {
-        gsens_tui::poll_quit(Duration::ZERO)
     }
 }

@@ -11,7 +11,6 @@ mod import;
 mod live;
 mod monitor;
 mod montecarlo;
-mod outputs;
 mod predict;
 mod replay;
 mod report;
@@ -19,11 +18,11 @@ mod response;
 mod simulate;
 mod validate;
 
+use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write;
+use std::path::Path;
 use std::process::ExitCode;
-use std::time::Duration;
 
 #[derive(Parser)]
 #[command(
@@ -93,7 +92,7 @@ impl Status {
 
 /// Writes `text` to standard output; a closed pipe (`gsens response | head`)
 /// ends the output quietly.
-pub fn out(text: &str) -> anyhow::Result<()> {
+pub fn out(text: &str) -> Result<()> {
     Ok(out_bytes(text.as_bytes())?)
 }
 
@@ -111,60 +110,20 @@ pub fn err(text: &str) {
     let _ = std::io::stderr().lock().write_all(text.as_bytes());
 }
 
-/// A bar on stderr (drawn only on a terminal) for work counted in thousandths.
-pub fn progress_bar(verb: &str) -> ProgressBar {
-    let bar = ProgressBar::new(1000);
-    let template = format!("{verb} {{bar:40}} {{percent:>3}}% {{elapsed_precise}} (eta {{eta}})");
-    bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
-    bar
+/// Checks before any work that the file of option `flag` can be written
+/// (in `made`, a directory the command creates first, when it lies there).
+pub fn check_file(flag: &str, path: Option<&Path>, made: Option<&Path>) -> Result<()> {
+    path.map_or(Ok(()), |p| gsens_io::check_output_file_in(p, made).map_err(|e| anyhow!("{flag} {e}")))
 }
 
-/// A spinner on stderr (drawn only on a terminal).
-pub fn spinner() -> ProgressBar {
-    let bar = ProgressBar::new_spinner();
-    bar.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"));
-    bar.enable_steady_tick(Duration::from_millis(120));
-    bar
+/// Checks before any work that the directory of option `flag` exists or can be made, and accepts files.
+pub fn check_dir(flag: &str, path: &Path) -> Result<()> {
+    gsens_io::check_output_dir(path).map_err(|e| anyhow!("{flag} {e}"))
 }
 
-/// The pipeline's progress ([`gsens_calib::Progress`]) on stderr, drawn
-/// only on a terminal: the stage in a spinner, a stage with counted steps
-/// (the receiver-loop search's candidates) with a bar.
-struct BarProgress(ProgressBar);
-
-impl gsens_calib::Progress for BarProgress {
-    fn stage(&self, name: &str, steps: Option<u64>) {
-        let template = match steps {
-            Some(_) => "{spinner} {elapsed} {msg} {bar:30} {pos}/{len}",
-            None => "{spinner} {elapsed} {msg}",
-        };
-        self.0.set_style(ProgressStyle::with_template(template).expect("valid template"));
-        self.0.set_position(0);
-        self.0.set_length(steps.unwrap_or(0));
-        self.0.set_message(name.to_string());
-    }
-
-    fn step(&self) {
-        self.0.inc(1);
-    }
-}
-
-/// Runs `f`, a call of the calibration pipeline, with its progress shown
-/// ([`BarProgress`]); the bar is cleared when it returns.
-pub fn observed<R>(f: impl FnOnce() -> R) -> R {
-    let bar = spinner();
-    let result = gsens_calib::observe(std::sync::Arc::new(BarProgress(bar.clone())), f);
-    bar.finish_and_clear();
-    result
-}
-
-/// Runs `f` with a spinner saying `what` (on a terminal), cleared when it returns.
-pub fn with_spinner<R>(what: &str, f: impl FnOnce() -> R) -> R {
-    let bar = spinner();
-    bar.set_message(what.to_string());
-    let result = f();
-    bar.finish_and_clear();
-    result
+/// Writes `bytes` to the file `path`.
+pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> Result<()> {
+    std::fs::write(path, bytes).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// glibc's malloc gives each thread that allocates an arena of its own and

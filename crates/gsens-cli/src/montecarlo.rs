@@ -3,10 +3,11 @@
 //! (`gsens_montecarlo`).
 
 use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gsens_montecarlo::{monte_carlo, scenario_settings};
-use indicatif::{ProgressBar, ProgressStyle};
+use gsens_calib::option_values::positive;
+use gsens_montecarlo::{method_settings, monte_carlo};
+use gsens_tui::progress::count_bar;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -24,7 +25,7 @@ pub struct MonteCarloArgs {
     pub json: Option<PathBuf>,
     /// State the receiver loop's bandwidth this many times the true one (1: right), as a user who got it
     /// wrong would: how often the loop check catches the mistake.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = positive)]
     pub stated_bn_scale: f64,
     #[command(flatten)]
     pub estimator: EstimatorArgs,
@@ -36,35 +37,21 @@ pub struct MonteCarloArgs {
 
 pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
     args.estimator.check_methods(&args.methods)?;
-    crate::outputs::maybe_file("--json", args.json.as_deref())?;
+    crate::check_file("--json", args.json.as_deref(), None)?;
     let scenario = args.scenario.load()?;
     let mut options = gsens_calib::CalibrationOptions::default();
     args.estimator.apply(&mut options);
     args.selection.apply(&mut options);
     args.systematic.apply(&mut options);
-    let methods = args
-        .methods
-        .iter()
-        .map(|&m| {
-            let o = gsens_calib::CalibrationOptions { method: m.name(), ..options.clone() };
-            let mut s = scenario_settings(&scenario, &o.estimate_settings())?;
-            s.receiver_loop = s.receiver_loop.with_bn_scaled(args.stated_bn_scale);
-            Ok(o.pipeline_settings_around(s)?)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let bar = ProgressBar::new(args.runs);
-    bar.set_style(
-        ProgressStyle::with_template("monte carlo {bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta})")
-            .expect("valid template"),
-    );
+    let names: Vec<_> = args.methods.iter().map(|m| m.name()).collect();
+    let methods = method_settings(&scenario, &options, &names, args.stated_bn_scale)?;
+    let bar = count_bar("monte carlo", args.runs, "runs");
     let name = args.scenario.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
-    let seed = args.scenario.seed;
-    let mc = monte_carlo(&scenario, &name, args.runs, seed, &methods, || bar.inc(1))?;
+    let mc = monte_carlo(&scenario, &name, args.runs, args.scenario.seed, &methods, || bar.inc(1))?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_montecarlo_text(&mc))?;
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&mc)? + "\n")
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        crate::write(path, serde_json::to_string_pretty(&mc)? + "\n")?;
     }
     Ok(crate::Status::Done)
 }

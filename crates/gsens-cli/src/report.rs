@@ -8,8 +8,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::Outcome;
 use gsens_io::TrackingLog;
-use gsens_live::TruthLoopUse;
-use gsens_report::{FigureInputs, write_report_dir};
+use gsens_report::write_calibration_report;
+use gsens_tui::progress::spinner;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -51,27 +51,7 @@ pub fn settings_and_loop_note(
 ) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
     let mut settings = calibration.settings()?;
     let Some(path) = truth else { return Ok((settings, None)) };
-    let logged = |l: gsens_core::LoggedPhase| match l {
-        gsens_core::LoggedPhase::Last => "the last discriminator output",
-        gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
-    };
-    let stated = |t: &gsens_sim::TruthLoop| format!("{}, logged: {}", t.receiver_loop, logged(t.logged_phase));
-    let note = match gsens_live::take_truth_loop(&mut settings, path)? {
-        TruthLoopUse::NotStated => format!("receiver loop: from the options ({} states none)", path.display()),
-        TruthLoopUse::SettingsOwn { truth, same } => {
-            let relation = if same { "the same as" } else { "not" };
-            format!(
-                "receiver loop: from the options, {relation} the one {} states ({})",
-                path.display(),
-                stated(&truth)
-            )
-        }
-        TruthLoopUse::Taken { truth } => format!(
-            "receiver loop: {} (from {}, the loop that made the log; loop options such as --bn-hz override it)",
-            stated(&truth),
-            path.display()
-        ),
-    };
+    let note = gsens_live::take_truth_loop(&mut settings, path)?.note(path);
     Ok((settings, Some(note)))
 }
 
@@ -80,7 +60,7 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
     // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
     let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
     let (settings, loop_note) = settings_and_loop_note(&args.calibration, truth_loop)?;
-    crate::outputs::dir("--out", &args.out)?;
+    crate::check_dir("--out", &args.out)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
@@ -106,22 +86,18 @@ pub fn write_report(
     title: &str,
     header: HeaderArgs,
 ) -> Result<crate::Status> {
-    let bar = crate::spinner();
-    let doc = outcome.document(truth);
-    let figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
-    let files = write_report_dir(out, title, &doc, &figure_inputs.figures(), header.write_untrusted_header, |id| {
+    let bar = spinner();
+    let untrusted = header.write_untrusted_header;
+    let (doc, files) = write_calibration_report(outcome, tracking, truth, out, title, untrusted, |id| {
         bar.set_message(format!("drawing {id}"))
     })?;
     bar.finish_and_clear();
-    crate::out(&gsens_report::render_text(&doc))?;
-    let beside = if files.header.is_some() { "report.json, gsens_gamma.h" } else { "report.json" };
-    crate::out(&format!("\nreport: {} (with {beside} and figures/ beside it)\n", files.html.display()))?;
+    crate::out(&format!("{}\n{}\n", gsens_report::render_text(&doc), files.summary()))?;
     if files.header.is_none() {
-        let codes = doc.untrusted_codes();
         crate::err(&format!(
             "gsens_gamma.h not written: the estimate is not trustworthy ({}); --write-untrusted-header writes it \
              anyway, marked GSENS_GAMMA_TRUSTWORTHY 0\n",
-            codes.join(", ")
+            doc.untrusted_codes().join(", ")
         ));
     }
     Ok(crate::Status::of(&doc))

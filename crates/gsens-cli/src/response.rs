@@ -4,10 +4,9 @@
 use crate::args::LoopArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::LoopSummary;
 use gsens_report::Format;
 use gsens_report::figures::{DEFAULT_SIZE, ResponseData, fig_response};
-use serde::Serialize;
+use gsens_report::studies::response_json;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -31,38 +30,20 @@ pub struct ResponseArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// `--json`: the table, its peak and band, and the loop.
-#[derive(Serialize)]
-struct ResponseJson<'a> {
-    loop_interval_s: Option<f64>,
-    recommended_period_s: f64,
-    #[serde(rename = "loop")]
-    summary: LoopSummary,
-    #[serde(flatten)]
-    table: &'a ResponseData,
-}
-
 pub fn run(args: &ResponseArgs) -> Result<()> {
     anyhow::ensure!(
         args.f_min_hz > 0.0 && args.f_max_hz > args.f_min_hz && args.points >= 2,
         "need 0 < --f-min-hz < --f-max-hz and --points ≥ 2"
     );
     args.loop_args.check()?;
-    crate::outputs::maybe_file("--json", args.json.as_deref())?;
-    crate::outputs::maybe_file("--plot", args.plot.as_deref())?;
+    crate::check_file("--json", args.json.as_deref(), None)?;
+    crate::check_file("--plot", args.plot.as_deref(), None)?;
     let model = args.loop_args.loop_model();
     let table = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, args.points, model.to_string())
         .with_context(|| format!("the loop ({model})"))?;
     crate::out(&gsens_report::render_response_text(&table))?;
     if let Some(path) = &args.json {
-        let json = ResponseJson {
-            loop_interval_s: model.interval_s(),
-            recommended_period_s: 1.0 / table.peak_hz,
-            summary: LoopSummary::of(&model),
-            table: &table,
-        };
-        std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        crate::write(path, response_json(&model, &table)?)?;
     }
     if let Some(path) = &args.plot {
         let Some(format) = Format::of_path(path) else {

@@ -5,11 +5,11 @@
 
 use anyhow::Result;
 use clap::Args;
+use gsens_calib::option_values::positive;
 use gsens_gnss_sdr::conf::{IqConfOptions, write_iq_conf};
 use gsens_sim::iq::{IqConfig, IqFormat};
-use gsens_sim::scenario::Scenario;
-use gsens_sim::session::Truth;
-use std::path::{Path, PathBuf};
+use gsens_tui::progress::progress_bar;
+use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -28,7 +28,7 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = IqFormatArg::Ibyte, requires = "iq")]
     pub iq_format: IqFormatArg,
     /// Sampling rate of --iq [Hz].
-    #[arg(long, default_value_t = 4.0e6, requires = "iq", allow_negative_numbers = true, value_parser = crate::args::positive)]
+    #[arg(long, default_value_t = 4.0e6, requires = "iq", allow_negative_numbers = true, value_parser = positive)]
     pub fs_hz: f64,
     /// Also write carrier.csv: each satellite's baseband carrier frequency per 1 ms
     /// block (the truth a receiver's loop tracks; large).
@@ -53,49 +53,30 @@ pub enum IqFormatArg {
     GrComplex,
 }
 
-/// Simulates `scenario` into `dir` (imu.csv, tracking.csv, truth.json) with a
-/// progress bar on a terminal.
-pub fn simulate_to_dir(scenario: &Scenario, seed: u64, dir: &Path) -> Result<Truth> {
-    let bar = crate::progress_bar("simulating");
-    let truth = gsens_sim::simulate_to_dir(scenario, seed, dir, |f| bar.set_position((f * 1000.0) as u64))?;
-    bar.finish_and_clear();
-    Ok(truth)
-}
-
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let scenario = args.scenario.load()?;
-    crate::outputs::dir("--out", &args.out)?;
-    crate::outputs::maybe_file_in("--iq", args.iq.as_deref(), Some(&args.out))?;
-    if let Some(iq) = &args.iq {
-        return run_iq(&scenario, args, iq);
-    }
-    let truth = simulate_to_dir(&scenario, args.scenario.seed, &args.out)?;
-    crate::out(&format!("{truth}\nlogs: imu.csv, tracking.csv, truth.json in {}\n", args.out.display()))
-}
-
-/// Writes `iq` and, in `--out`, the files of `gsens_sim::simulate_iq_to_dir`
-/// and gnss-sdr.conf.
-fn run_iq(scenario: &Scenario, args: &SimulateArgs, iq: &Path) -> Result<()> {
-    let (fs_hz, out) = (args.fs_hz, args.out.as_path());
+    crate::check_dir("--out", &args.out)?;
+    crate::check_file("--iq", args.iq.as_deref(), Some(&args.out))?;
+    let (seed, out) = (args.scenario.seed, args.out.as_path());
+    let bar = progress_bar(if args.iq.is_some() { "generating" } else { "simulating" });
+    let progress = |f: f64| bar.set_position((f * 1000.0) as u64);
+    let Some(iq) = &args.iq else {
+        let truth = gsens_sim::simulate_to_dir(&scenario, seed, out, progress)?;
+        bar.finish_and_clear();
+        return crate::out(&format!("{truth}\nlogs: imu.csv, tracking.csv, truth.json in {}\n", out.display()));
+    };
     let format = match args.iq_format {
         IqFormatArg::Ibyte => IqFormat::Ibyte,
         IqFormatArg::Ishort => IqFormat::Ishort,
         IqFormatArg::GrComplex => IqFormat::GrComplex,
     };
-    let bar = crate::progress_bar("generating");
-    let mut cfg = IqConfig::new(fs_hz, format, scenario);
+    let mut cfg = IqConfig::new(args.fs_hz, format, &scenario);
     cfg.navigation_data = !args.iq_no_data;
-    let session =
-        gsens_sim::simulate_iq_to_dir(scenario, args.scenario.seed, &cfg, iq, out, args.iq_carrier_truth, |f| {
-            bar.set_position((f * 1000.0) as u64)
-        })?;
+    let session = gsens_sim::simulate_iq_to_dir(&scenario, seed, &cfg, iq, out, args.iq_carrier_truth, progress)?;
     bar.finish_and_clear();
-    let truth = &session.truth;
-
-    let l = &scenario.tracking_loop;
-    let sats = truth.satellites.len() as u32;
+    let (l, sats) = (&scenario.tracking_loop, session.truth.satellites.len() as u32);
     let item = format.gnss_sdr_item_type();
-    let options = IqConfOptions::for_iq_file(&iq.display().to_string(), item, fs_hz, sats, l.order, l.bn_hz);
+    let options = IqConfOptions::for_iq_file(&iq.display().to_string(), item, args.fs_hz, sats, l.order, l.bn_hz);
     let conf_path = write_iq_conf(out, options)?;
     crate::out(&format!(
         "{session}\nfiles: {} and imu.csv, truth.json, delta_f.csv, gnss-sdr.conf in {}\nrun: gnss-sdr --config_file={}\n",

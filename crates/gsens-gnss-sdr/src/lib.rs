@@ -28,6 +28,7 @@ pub mod calibrate;
 pub mod conf;
 pub mod dump;
 pub mod error;
+mod export;
 pub mod import;
 pub mod mat;
 pub mod monitor;

@@ -31,6 +31,7 @@
 pub mod config;
 pub mod error;
 pub mod imu;
+pub mod output;
 mod parse;
 mod plain;
 pub mod row;
@@ -44,6 +45,7 @@ pub mod writers;
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
+pub use output::{OutputPathError, check_output_dir, check_output_file, check_output_file_in};
 pub use row::{RowError, parse_imu_row, parse_tracking_row};
 pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};

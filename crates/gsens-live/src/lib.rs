@@ -19,7 +19,9 @@
 //! - [`runtime`]: a whole session, from its inputs (read by one thread each,
 //!   [`sources`], [`monitor`]) to the final estimate on the logs it keeps,
 //!   shown as plain lines or on a [`LiveScreen`]; wall time is read through
-//!   a [`Clock`], so tests run it without waiting.
+//!   a [`Clock`], so tests run it without waiting;
+//! - [`pacing`]: a recorded session ([`read_session_dir`]) played back at
+//!   real time or a multiple of it, as a merged stream or growing files.
 //!
 //! The screen shows two estimates: the streamed one, new at every epoch, and
 //! the batch pipeline's on the data received so far, with its checks, which
@@ -34,7 +36,9 @@ pub mod input;
 mod kept;
 mod merge;
 pub mod monitor;
+pub mod monitor_setup;
 pub mod motion;
+pub mod pacing;
 mod plain;
 pub mod replay;
 pub mod runtime;
@@ -51,7 +55,9 @@ pub use input::{
     Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,
 };
 pub use monitor::{Datagrams, MonitorInput, receive_monitor, record_monitor};
+pub use monitor_setup::{MonitorSetup, NoticeLimit, monitor_setup, render_recorded_tracks};
 pub use motion::{MotionWindow, Shaking};
+pub use pacing::{CreateError, ReplaySink, replay};
 pub use replay::read_session_dir;
 pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
 pub use session::{AxisProgress, BatchJob, BatchResult, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed};

@@ -26,6 +26,32 @@ pub enum TruthLoopUse {
     },
 }
 
+impl TruthLoopUse {
+    /// Which loop is modelled and why, for the user: the options', the same
+    /// as the one `truth_json` states or not, or the one it states.
+    pub fn note(&self, truth_json: &Path) -> String {
+        let path = truth_json.display();
+        let stated = |t: &TruthLoop| {
+            let logged = match t.logged_phase {
+                gsens_core::LoggedPhase::Last => "the last discriminator output",
+                gsens_core::LoggedPhase::Mean => "the mean of the discriminator outputs",
+            };
+            format!("{}, logged: {logged}", t.receiver_loop)
+        };
+        match self {
+            TruthLoopUse::NotStated => format!("receiver loop: from the options ({path} states none)"),
+            TruthLoopUse::SettingsOwn { truth, same } => {
+                let relation = if *same { "the same as" } else { "not" };
+                format!("receiver loop: from the options, {relation} the one {path} states ({})", stated(truth))
+            }
+            TruthLoopUse::Taken { truth } => format!(
+                "receiver loop: {} (from {path}, the loop that made the log; loop options such as --bn-hz override it)",
+                stated(truth)
+            ),
+        }
+    }
+}
+
 /// Puts the loop of the simulated session's `truth_json` in `settings`
 /// when they state none ([`PipelineSettings::loop_stated`]).
 pub fn take_truth_loop(settings: &mut PipelineSettings, truth_json: &Path) -> Result<TruthLoopUse, LoadError> {
@@ -50,4 +76,39 @@ pub fn settings_of_simulated_session(truth_json: &Path) -> Result<PipelineSettin
         settings.loop_stated = true;
     }
     Ok(settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A short simulated session's truth.json: taken when the settings state
+    /// no loop, the settings' own otherwise, and the note says which.
+    #[test]
+    fn the_note_says_which_loop_is_modelled_and_why() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut scenario = gsens_sim::scenario::Scenario::default();
+        scenario.session.duration_s = Some(5.0);
+        gsens_sim::simulate_to_dir(&scenario, 1, dir.path(), |_| {}).unwrap();
+        let path = dir.path().join("truth.json");
+        let shown = path.display();
+        let mut settings = PipelineSettings::default();
+        settings.loop_stated = false;
+        let taken = take_truth_loop(&mut settings, &path).unwrap();
+        let TruthLoopUse::Taken { truth } = &taken else { panic!("{taken:?}") };
+        let stated = format!("{}, logged: the mean of the discriminator outputs", truth.receiver_loop);
+        let note = taken.note(&path);
+        assert!(
+            note.starts_with(&format!("receiver loop: {stated} (from {shown}, the loop that made the log")),
+            "{note}"
+        );
+        // Now stated, and by the same loop.
+        let own = take_truth_loop(&mut settings, &path).unwrap();
+        let expected = format!("receiver loop: from the options, the same as the one {shown} states ({stated})");
+        assert_eq!(own.note(&path), expected);
+        assert_eq!(
+            TruthLoopUse::NotStated.note(&path),
+            format!("receiver loop: from the options ({shown} states none)")
+        );
+    }
 }

@@ -22,8 +22,16 @@
 //! within 3σ (the statistical σ the method reported) and the RMS of the error
 //! over that σ.
 
+pub mod demo;
+mod methods;
+mod predict;
 mod validate;
+mod validate_text;
+pub use demo::{Demo, DemoError, simulate_demo};
+pub use methods::method_settings;
+pub use predict::frequency_noise;
 pub use validate::{ValidateError, calibrate_scenario, default_bandwidths_hz, validate};
+pub use validate_text::{render_gamma_hat, render_trial_row, render_validate_footer, render_validate_header};
 
 use gsens_calib::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
 use gsens_core::LoopModel;
@@ -304,6 +312,9 @@ pub enum MonteCarloError {
         /// Why.
         source: LogsError,
     },
+    /// The options are not valid settings.
+    #[error(transparent)]
+    Settings(#[from] gsens_calib::CalibError),
 }
 
 /// The estimation settings for a simulated scenario: the receiver loop the

@@ -76,7 +76,6 @@ fn predicted_and_simulated_jitter_agree_at_three_vibration_levels() {
 /// (OCXO, thermal noise dominates), ×1.04 to ×1.06 (TCXO, its phase noise).
 #[test]
 fn predicted_and_simulated_noise_jitter_agree() {
-    use gsens_calib::predict::FrequencyNoise;
     use gsens_sim::scenario::OscillatorKind;
     use gsens_sim::session::{MemorySink, simulate};
     for kind in [OscillatorKind::Ocxo, OscillatorKind::Tcxo] {
@@ -101,13 +100,7 @@ fn predicted_and_simulated_noise_jitter_agree() {
                 gamma_hz_per_mps2: [0.0; 3],
                 covariance: [[0.0; 3]; 3],
                 vibration: Vibration::Tones(vec![]),
-                oscillator: Some(FrequencyNoise {
-                    h2: o.h2,
-                    h0: o.h0,
-                    h_neg1: o.h_neg1,
-                    h_neg2: o.h_neg2,
-                    carrier_hz: s.oscillator.carrier_hz,
-                }),
+                oscillator: Some(gsens_montecarlo::frequency_noise(&o, s.oscillator.carrier_hz)),
                 cn0_dbhz: Some(cn0),
                 delay_s: 0.0,
                 imu_noise_mps2_per_rthz: 0.0,

@@ -18,6 +18,11 @@
 //! - [`cheader`]: Γ̂ as C preprocessor constants (Hz/(m/s²) and ppb/g), with
 //!   the verdict (`GSENS_GAMMA_TRUSTWORTHY`) and the warnings;
 //! - [`render_text`]: the text report the CLI prints;
+//! - [`write_calibration_report`]: a calibration's whole report from its
+//!   outcome, and [`write_demo_figures`]: a demo's figures with the
+//!   simulated oscillator's Allan deviation;
+//! - [`studies`]: the outputs of `response`, `predict` and `validate`
+//!   besides their text tables;
 //! - [`FigureInputs`]: the figure set of a calibration, drawn from its
 //!   [`gsens_calib::Outcome`], and [`write_figures`] to write it as PNG and SVG.
 //!
@@ -25,16 +30,21 @@
 //! crate reads no file.
 #![deny(missing_docs)]
 
+mod calibration_report;
 pub mod cheader;
+mod demo_figures;
 mod figure_set;
 pub mod figures;
 pub mod html;
 pub mod json;
 mod montecarlo_text;
 pub mod spectrum;
+pub mod studies;
 mod text;
 mod time;
 
+pub use calibration_report::{ReportError, write_calibration_report};
+pub use demo_figures::{DemoFiguresError, write_demo_figures};
 pub use figure_set::{Figure, FigureInputs, ReportFiles, WriteError, write_figures, write_report_dir};
 pub use figures::{Format, Image, RenderError};
 pub use montecarlo_text::render_montecarlo_text;

@@ -9,11 +9,16 @@
 //!   least needed first; nothing panics on any size.
 //! - [`Terminal`]: the real terminal (crossterm: raw mode, alternate
 //!   screen), restored when it is dropped and when the program panics;
-//!   [`poll_quit`] waits for `q`, Esc or Ctrl-C.
+//!   [`poll_quit`] waits for `q`, Esc or Ctrl-C; it is the
+//!   [`gsens_live::LiveScreen`] a live session runs on.
 //! - [`render_text`]: the screen drawn into a text buffer of a given size
 //!   (ratatui's `TestBackend`), for snapshot tests and documentation.
+//! - [`progress`]: the bars and spinners of the other commands' long steps,
+//!   the calibration pipeline's stages among them ([`progress::observed`]).
 #![warn(missing_docs)]
 
+mod live_screen;
+pub mod progress;
 mod screen;
 mod terminal;
 

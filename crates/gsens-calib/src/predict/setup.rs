@@ -1,0 +1,70 @@
+//! A prediction's inputs as a user states them: Γ̂'s 1σ per axis without
+//! correlations, a sine tone written `F_HZ:AX,AY,AZ`, and the feed-forward's
+//! timing (the IMU's sample rate and the latency on top of its hold), from
+//! which [`super::PredictionInput`]'s covariance, tones and delay follow.
+
+/// The feed-forward's timing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeedForward {
+    /// The IMU's sample rate \[Hz\]: its sample-and-hold delays by half a sample.
+    pub imu_rate_hz: f64,
+    /// The latency on top of the hold \[s\].
+    pub latency_s: f64,
+}
+
+impl FeedForward {
+    /// The delay τ = latency + 1/(2·f_IMU) \[s\] (a zero-order hold of
+    /// interval T delays by T/2 on average).
+    pub fn delay_s(&self) -> f64 {
+        self.latency_s + 0.5 / self.imu_rate_hz
+    }
+}
+
+/// The covariance of uncorrelated axes of 1σ `sigma`: diag(σ²).
+pub fn diagonal_covariance(sigma: [f64; 3]) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        c[i][i] = sigma[i] * sigma[i];
+    }
+    c
+}
+
+/// A tone that is not written `F_HZ:AX,AY,AZ` with F > 0 and finite amplitudes.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("expected F_HZ:AX,AY,AZ (e.g. 0.91:3,0,0)")]
+pub struct ToneError;
+
+/// A sine tone from `F_HZ:AX,AY,AZ`: its frequency \[Hz\] (finite, > 0) and
+/// its peak amplitude per axis \[m/s²\] (finite), as
+/// [`super::Vibration::Tones`] holds it.
+pub fn parse_tone(text: &str) -> Result<(f64, [f64; 3]), ToneError> {
+    let (f, a) = text.split_once(':').ok_or(ToneError)?;
+    let f: f64 = f.trim().parse().ok().filter(|f: &f64| f.is_finite() && *f > 0.0).ok_or(ToneError)?;
+    let a: Vec<f64> = a.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| ToneError)?;
+    match a[..] {
+        [x, y, z] if a.iter().all(|v| v.is_finite()) => Ok((f, [x, y, z])),
+        _ => Err(ToneError),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tones_read_as_written_and_anything_else_is_refused() {
+        assert_eq!(parse_tone("0.91:3,0,0"), Ok((0.91, [3.0, 0.0, 0.0])));
+        assert_eq!(parse_tone(" 20 : -1, 2.5 ,0"), Ok((20.0, [-1.0, 2.5, 0.0])));
+        for bad in ["0.9:3,0", "0.9:3,0,0,1", "0:1,1,1", "-1:1,1,1", "x:1,1,1", "0.9:1,inf,1", "0.9", "nan:1,1,1"] {
+            assert_eq!(parse_tone(bad), Err(ToneError), "{bad}");
+        }
+    }
+
+    #[test]
+    fn the_delay_is_the_latency_and_half_a_sample() {
+        let f = FeedForward { imu_rate_hz: 40.0, latency_s: 0.01 };
+        assert_eq!(f.delay_s(), 0.01 + 0.0125);
+        let c = diagonal_covariance([1.0, 2.0, 3.0]);
+        assert_eq!(c, [[1.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 9.0]]);
+    }
+}

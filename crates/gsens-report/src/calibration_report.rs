@@ -1,0 +1,64 @@
+//! A calibration's whole report from its outcome: the result document, the
+//! figure set and every file of [`write_report_dir`], and the line that
+//! says where they are.
+
+use crate::{FigureInputs, ReportFiles, WriteError, write_report_dir};
+use gsens_calib::{CalibError, Outcome, ResultDocument};
+use gsens_io::TrackingLog;
+use std::path::Path;
+
+/// Why a calibration's report could not be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReportError {
+    /// The figures' series could not be computed.
+    #[error(transparent)]
+    Series(#[from] CalibError),
+    /// A figure or file could not be drawn or written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+/// Writes the report of `outcome`, estimated from `tracking` (with the
+/// true Γ `truth` when known), into `dir` titled `title`: the files of
+/// [`write_report_dir`] with the figures of [`FigureInputs`]. Returns the
+/// result document and the files written.
+pub fn write_calibration_report(
+    outcome: &Outcome,
+    tracking: &TrackingLog,
+    truth: Option<[f64; 3]>,
+    dir: &Path,
+    title: &str,
+    write_untrusted_header: bool,
+    on_figure: impl FnMut(&str),
+) -> Result<(ResultDocument, ReportFiles), ReportError> {
+    let doc = outcome.document(truth);
+    let figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
+    let files = write_report_dir(dir, title, &doc, &figure_inputs.figures(), write_untrusted_header, on_figure)?;
+    Ok((doc, files))
+}
+
+impl ReportFiles {
+    /// Where the report is: `report: DIR/report.html (with report.json,
+    /// gsens_gamma.h and figures/ beside it)`, the header named only when
+    /// written.
+    pub fn summary(&self) -> String {
+        let beside = if self.header.is_some() { "report.json, gsens_gamma.h" } else { "report.json" };
+        format!("report: {} (with {beside} and figures/ beside it)", self.html.display())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    #[test]
+    fn the_summary_names_the_header_only_when_written() {
+        let mut files =
+            ReportFiles { html: PathBuf::from("out/report.html"), header: Some(PathBuf::from("out/gsens_gamma.h")) };
+        assert_eq!(files.summary(), "report: out/report.html (with report.json, gsens_gamma.h and figures/ beside it)");
+        files.header = None;
+        assert_eq!(files.summary(), "report: out/report.html (with report.json and figures/ beside it)");
+    }
+}
