@@ -1,8 +1,8 @@
-//! GNSS-SDR tracking dumps (gsens_gnss_sdr::dump::parse_dump): the first
+//! GNSS-SDR tracking dumps (gsens_gnss_sdr::parse_dump): the first
 //! byte picks the layout (any known one found by the reader, or one given),
 //! the rest is the file; a dump or an error, never a panic.
 #![no_main]
-use gsens_gnss_sdr::dump::{DumpLayout, parse_dump};
+use gsens_gnss_sdr::{DumpLayout, parse_dump};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -4,7 +4,7 @@
 //! layout, cyclically), the rest is the file; a dump or an error, never a
 //! panic, a hang or an allocation the file cannot back.
 #![no_main]
-use gsens_gnss_sdr::dump::DumpLayout;
+use gsens_gnss_sdr::DumpLayout;
 use gsens_gnss_sdr::mat::parse_mat_dump;
 use libfuzzer_sys::fuzz_target;
 

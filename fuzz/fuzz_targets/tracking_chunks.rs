@@ -15,9 +15,9 @@ fuzz_target!(|data: &[u8]| {
     // Chunk sizes from the data, so that short inputs are read in many chunks.
     let small = 1 + u64::from(data.first().copied().unwrap_or(0) % 64);
     let faster = [
-        gsens_io::tracking::read_tracking_file_in_chunks(&path, small),
-        gsens_io::tracking::read_tracking_file_in_chunks(&path, 1),
-        gsens_io::tracking::read_tracking_file_plain(&path),
+        gsens_io::read_tracking_file_in_chunks(&path, small),
+        gsens_io::read_tracking_file_in_chunks(&path, 1),
+        gsens_io::read_tracking_file_plain(&path),
     ];
     for log in faster.into_iter().flatten() {
         let one = gsens_io::read_tracking(data, &path.display().to_string())

@@ -446,7 +446,7 @@ pub(crate) fn carrier_gain(channels: &[ChannelSummary]) -> Option<Warning> {
             let mut candidates: Vec<String> = Vec::new();
             for spec in &gsens_io::SIGNALS {
                 let ks: Vec<Option<i64>> = match spec.fdma_step_hz {
-                    Some(_) => gsens_io::signal::GLONASS_K.map(|k| Some(i64::from(k))).collect(),
+                    Some(_) => gsens_io::GLONASS_K.map(|k| Some(i64::from(k))).collect(),
                     None => vec![None],
                 };
                 for k in ks {

@@ -58,7 +58,7 @@ impl LoopSummary {
 /// loop's scale likewise, x = σ_ln s, as a relative change of the response
 /// near its peak). At x = 0.2 that is 10 %; beyond it Γ̂ moves with the
 /// nuisance errors in ways σ does not describe.
-pub const JOINT_LINEAR_LIMIT_RAD: f64 = 0.2;
+pub(crate) const JOINT_LINEAR_LIMIT_RAD: f64 = 0.2;
 
 /// The linearity of the joint fit: x = max(2π·f·σ_τ, σ_ln s) (see
 /// [`JOINT_LINEAR_LIMIT_RAD`]), f the highest dominant shaking frequency of
@@ -68,7 +68,7 @@ pub const JOINT_LINEAR_LIMIT_RAD: f64 = 0.2;
 /// linearization must hold; a loop held exact rests on the held fit (σ_τ
 /// alone). `None` when the fit estimated neither or no observable axis has a
 /// frequency.
-pub fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f64>)> {
+pub(crate) fn joint_nonlinearity(c: &Calibration) -> Option<(f64, Option<f64>, Option<f64>)> {
     let j = c.joint_fit.as_ref()?;
     let f_hz = c
         .axes

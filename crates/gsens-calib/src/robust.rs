@@ -27,7 +27,7 @@ use gsens_core::{HuberWeights, sandwich_covariance};
 use serde::{Deserialize, Serialize};
 
 /// Most IRLS iterations.
-pub const MAX_ITERATIONS: u32 = 50;
+pub(crate) const MAX_ITERATIONS: u32 = 50;
 
 /// A Huber fit of Γ.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

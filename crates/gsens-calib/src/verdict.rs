@@ -82,7 +82,7 @@ fn dominant_frequency_hz(x: &[f64], interval_s: f64) -> Option<f64> {
 
 /// Below this fraction of the loop's peak sensitivity an observable axis's
 /// verdict advises shaking closer to the peak.
-pub const ADVISED_BELOW_FRACTION: f64 = 0.5;
+pub(crate) const ADVISED_BELOW_FRACTION: f64 = 0.5;
 
 impl AxisVerdict {
     /// Whether the verdict's text advises how to shake (an unobservable
@@ -93,7 +93,7 @@ impl AxisVerdict {
 }
 
 /// The verdict for every axis.
-pub fn axis_verdicts(
+pub(crate) fn axis_verdicts(
     accel_mps2: &[[f64; 3]],
     interval_s: f64,
     receiver_loop: &LoopModel,

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 /// Estimator choice.
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum MethodArg {
+pub(crate) enum MethodArg {
     /// The paper's gradient observer (constant gain).
     Gradient,
     /// Recursive least squares (Kalman-type gain).
@@ -32,7 +32,7 @@ pub enum MethodArg {
 
 impl MethodArg {
     /// The library's name of the method.
-    pub fn name(self) -> MethodName {
+    pub(crate) fn name(self) -> MethodName {
         match self {
             MethodArg::Gradient => MethodName::Gradient,
             MethodArg::Rls => MethodName::Rls,
@@ -44,7 +44,7 @@ impl MethodArg {
 
 /// The simulated scenario and its seed (`demo`, `simulate`, `montecarlo`).
 #[derive(Args, Debug, Clone)]
-pub struct ScenarioArgs {
+pub(crate) struct ScenarioArgs {
     /// Scenario TOML (default: the embedded paper experiment; see `gsens scenario`).
     #[arg(long)]
     pub scenario: Option<PathBuf>,
@@ -55,7 +55,7 @@ pub struct ScenarioArgs {
 
 impl ScenarioArgs {
     /// The scenario: the file's, or the embedded default.
-    pub fn load(&self) -> Result<gsens_sim::scenario::Scenario> {
+    pub(crate) fn load(&self) -> Result<gsens_sim::scenario::Scenario> {
         Ok(gsens_sim::load_scenario(self.scenario.as_deref())?)
     }
 }
@@ -63,7 +63,7 @@ impl ScenarioArgs {
 /// The receiver's carrier loop.
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Receiver loop")]
-pub struct LoopArgs {
+pub(crate) struct LoopArgs {
     /// Loop order of the receiver's carrier PLL.
     #[arg(long, value_parser = clap::value_parser!(u8).range(2..=3))]
     pub order: Option<u8>,
@@ -92,7 +92,7 @@ pub struct LoopArgs {
 
 /// The carrier-phase discriminator.
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum DiscriminatorArg {
+pub(crate) enum DiscriminatorArg {
     /// atan(Q/I), the two-quadrant Costas discriminator of GPS L1 C/A receivers: linear within ±π/2.
     AtanCostas,
     /// atan2(Q, I), a four-quadrant PLL discriminator (pilot signals): linear within ±π.
@@ -102,7 +102,7 @@ pub enum DiscriminatorArg {
 impl LoopArgs {
     /// Refuses a shape parameter of the other order's loop: ζ shapes a
     /// 2nd-order loop only, a3 and b3 a 3rd-order one.
-    pub fn check(&self) -> Result<()> {
+    pub(crate) fn check(&self) -> Result<()> {
         let third = self.order == Some(3);
         if third && self.zeta.is_some() {
             bail!("--zeta is the damping of a 2nd-order loop: a 3rd-order loop (--order 3) takes --a3 and --b3");
@@ -114,7 +114,7 @@ impl LoopArgs {
     }
 
     /// Sets the loop's options.
-    pub fn apply(&self, o: &mut CalibrationOptions) {
+    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
         o.order = self.order;
         o.bn_hz = self.bn_hz;
         // Unset shape parameters keep the options' defaults.
@@ -136,13 +136,13 @@ impl LoopArgs {
     }
 
     /// The loop as the library models it.
-    pub fn loop_model(&self) -> LoopModel {
+    pub(crate) fn loop_model(&self) -> LoopModel {
         self.options().loop_model()
     }
 
     /// Whether any of the loop's order, bandwidth, update interval or
     /// logged phase was given (otherwise the data choose the loop).
-    pub fn stated(&self) -> bool {
+    pub(crate) fn stated(&self) -> bool {
         self.options().loop_stated()
     }
 }
@@ -150,7 +150,7 @@ impl LoopArgs {
 /// The estimator of a single calibration (`estimate`, `report`, `demo`).
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Estimator")]
-pub struct MethodChoice {
+pub(crate) struct MethodChoice {
     /// Estimator.
     #[arg(long, value_enum, default_value_t = MethodArg::Batch)]
     pub method: MethodArg,
@@ -159,7 +159,7 @@ pub struct MethodChoice {
 /// The estimators' parameters and the error model.
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Estimator")]
-pub struct EstimatorArgs {
+pub(crate) struct EstimatorArgs {
     /// Gain k of the gradient observer (--method gradient only) [default: 0.5].
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub gain_k: Option<f64>,
@@ -185,7 +185,7 @@ pub struct EstimatorArgs {
 
 /// Robust estimation.
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum RobustArg {
+pub(crate) enum RobustArg {
     /// Plain least squares.
     None,
     /// Huber's M-estimate (iteratively reweighted least squares).
@@ -195,7 +195,7 @@ pub enum RobustArg {
 impl EstimatorArgs {
     /// Refuses a method's parameter given for methods that do not use it
     /// (`methods`: every method the options will run).
-    pub fn check_methods(&self, methods: &[MethodArg]) -> Result<()> {
+    pub(crate) fn check_methods(&self, methods: &[MethodArg]) -> Result<()> {
         let names = || methods.iter().map(|m| format!("{m:?}").to_lowercase()).collect::<Vec<_>>().join(", ");
         if self.lambda.is_some() && !methods.contains(&MethodArg::Rls) {
             bail!(
@@ -210,7 +210,7 @@ impl EstimatorArgs {
     }
 
     /// Sets the estimator's options (the method's parameters, the error model).
-    pub fn apply(&self, o: &mut CalibrationOptions) {
+    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
         if let Some(k) = self.gain_k {
             o.gain_k = k;
         }
@@ -231,7 +231,7 @@ impl EstimatorArgs {
 /// Which channels enter the average.
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Channels")]
-pub struct SelectionArgs {
+pub(crate) struct SelectionArgs {
     /// Average the N channels with the highest mean C/N0, or the least noisy when C/N0 does not vary between them (0 = all that pass the masks).
     #[arg(long, default_value_t = defaults::DEFAULT_CHANNELS)]
     pub channels: usize,
@@ -257,7 +257,7 @@ pub struct SelectionArgs {
 
 /// Channel weighting.
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub enum WeightsArg {
+pub(crate) enum WeightsArg {
     /// Equal weights (the paper).
     Equal,
     /// Weights proportional to C/N0 (inverse thermal phase variance).
@@ -266,7 +266,7 @@ pub enum WeightsArg {
 
 impl SelectionArgs {
     /// Sets the channel selection's options.
-    pub fn apply(&self, o: &mut CalibrationOptions) {
+    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
         o.channels = self.channels;
         o.min_cn0_dbhz = self.min_cn0_dbhz;
         o.elevation_mask_deg = self.elevation_mask_deg;
@@ -283,7 +283,7 @@ impl SelectionArgs {
 /// Systematic errors estimated jointly with Γ.
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Systematic errors")]
-pub struct SystematicArgs {
+pub(crate) struct SystematicArgs {
     /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
     #[arg(long, default_value = "auto", allow_hyphen_values = true, value_parser = stated_time_offset)]
     pub time_offset: TimeOffset,
@@ -314,7 +314,7 @@ pub struct SystematicArgs {
 /// The options of a single calibration besides its receiver loop (`estimate`,
 /// `report`, `demo`).
 #[derive(Args, Debug, Clone)]
-pub struct AnalysisArgs {
+pub(crate) struct AnalysisArgs {
     #[command(flatten)]
     pub method: MethodChoice,
     #[command(flatten)]
@@ -327,7 +327,7 @@ pub struct AnalysisArgs {
 
 impl SystematicArgs {
     /// Sets the options of the systematic errors.
-    pub fn apply(&self, o: &mut CalibrationOptions) {
+    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
         o.time_offset = match self.time_offset {
             TimeOffset::Auto { .. } => TimeOffsetOption::Auto,
             TimeOffset::Fixed { imu_time_offset_s } => TimeOffsetOption::Seconds(imu_time_offset_s),
@@ -342,12 +342,12 @@ impl SystematicArgs {
 
 impl AnalysisArgs {
     /// Refuses options the chosen method ignores.
-    pub fn check(&self) -> Result<()> {
+    pub(crate) fn check(&self) -> Result<()> {
         self.estimator.check_methods(&[self.method.method])
     }
 
     /// The options of a calibration with the loop at its default.
-    pub fn options(&self) -> CalibrationOptions {
+    pub(crate) fn options(&self) -> CalibrationOptions {
         let mut o = CalibrationOptions { method: self.method.method.name(), ..CalibrationOptions::default() };
         self.estimator.apply(&mut o);
         self.selection.apply(&mut o);
@@ -359,7 +359,7 @@ impl AnalysisArgs {
 /// How GNSS-SDR dump records are selected.
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "GNSS-SDR dumps")]
-pub struct ConversionArgs {
+pub(crate) struct ConversionArgs {
     /// Sampling rate of the tracking [Hz] when the configuration does not give it.
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub gnss_sdr_fs_hz: Option<f64>,
@@ -395,7 +395,7 @@ impl ConversionArgs {
     /// The conversion settings for dumps made with the configuration `conf`
     /// (GNSS-SDR's defaults when none is given), with the options that
     /// override the configuration's lock detector.
-    pub fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
+    pub(crate) fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
         let mut s = ImportSettings::from_conf(conf, self.gnss_sdr_fs_hz).map_err(|e| match e {
             gsens_gnss_sdr::GnssSdrError::UnknownSamplingRate => anyhow::anyhow!("{e}; give --gnss-sdr-fs-hz"),
             e => e.into(),
@@ -432,7 +432,7 @@ impl ConversionArgs {
 
 /// Options of `gsens estimate` and `gsens report` for GNSS-SDR tracking dumps.
 #[derive(Args, Debug, Clone)]
-pub struct GnssSdrArgs {
+pub(crate) struct GnssSdrArgs {
     /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead of --tracking.
     #[arg(long, requires = "gnss_sdr_conf")]
     pub gnss_sdr: Option<PathBuf>,
@@ -448,7 +448,7 @@ pub struct GnssSdrArgs {
 /// How a PocketSDR log is converted (`gsens import pocketsdr` and `gsens estimate --pocketsdr`).
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "PocketSDR logs")]
-pub struct PocketSdrConversionArgs {
+pub(crate) struct PocketSdrConversionArgs {
     /// The pocket_trk options file (-opt FILE) the log was made with: its b_pll (the PLL
     /// bandwidth) and epoch (the $CH interval) [default: PocketSDR's defaults, b_pll = 5 Hz, and
     /// the log's own interval].
@@ -465,7 +465,7 @@ pub struct PocketSdrConversionArgs {
 
 impl PocketSdrConversionArgs {
     /// The conversion settings.
-    pub fn import_settings(&self) -> Result<gsens_pocketsdr::ImportSettings> {
+    pub(crate) fn import_settings(&self) -> Result<gsens_pocketsdr::ImportSettings> {
         let mut s = gsens_pocketsdr::ImportSettings::from_options_file(self.pocketsdr_conf.as_deref())?;
         if let Some(v) = self.pocketsdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
             bail!("--pocketsdr-settle-s must be ≥ 0, got {v}");
@@ -479,14 +479,14 @@ impl PocketSdrConversionArgs {
     }
 
     /// Whether any option differs from its default (they need a log to act on).
-    pub fn given(&self) -> bool {
+    pub(crate) fn given(&self) -> bool {
         self.pocketsdr_conf.is_some() || self.pocketsdr_settle_s.is_some() || self.pocketsdr_toff_s != 0.0
     }
 }
 
 /// Options of `gsens estimate` and `gsens report` for PocketSDR logs.
 #[derive(Args, Debug, Clone)]
-pub struct PocketSdrArgs {
+pub(crate) struct PocketSdrArgs {
     /// A pocket_trk log (-log FILE, its $CH lines) to use instead of --tracking; PocketSDR's
     /// carrier loop is modelled exactly.
     #[arg(long, conflicts_with = "gnss_sdr")]
@@ -498,7 +498,7 @@ pub struct PocketSdrArgs {
 /// Where a calibration's logs come from (`estimate`, `report`): an IMU log
 /// with a tracking log, GNSS-SDR dumps or a PocketSDR log.
 #[derive(Args, Debug, Clone)]
-pub struct InputArgs {
+pub(crate) struct InputArgs {
     /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2.
     #[arg(long)]
     pub imu: PathBuf,
@@ -513,7 +513,7 @@ pub struct InputArgs {
 
 impl InputArgs {
     /// The inputs the options name, with their conversion settings.
-    pub fn inputs(&self) -> Result<Inputs> {
+    pub(crate) fn inputs(&self) -> Result<Inputs> {
         let imu = self.imu.clone();
         if let Some(log) = &self.pocketsdr.pocketsdr {
             let import = self.pocketsdr.conversion.import_settings()?;

@@ -11,7 +11,7 @@ use gsens_tui::progress::{observed, progress_bar, spinner};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct DemoArgs {
+pub(crate) struct DemoArgs {
     #[command(flatten)]
     pub scenario: crate::args::ScenarioArgs,
     /// Where the simulated logs go, kept (default: a fresh folder in the system's temporary
@@ -29,7 +29,7 @@ pub struct DemoArgs {
     pub analysis: AnalysisArgs,
 }
 
-pub fn run(args: &DemoArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &DemoArgs) -> Result<crate::Status> {
     args.analysis.check()?;
     // Without --out the logs go to a folder of this run's own, removed when `scratch` drops.
     let scratch = match &args.out {

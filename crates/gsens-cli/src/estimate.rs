@@ -10,7 +10,7 @@ use gsens_tui::progress::observed;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct EstimateArgs {
+pub(crate) struct EstimateArgs {
     #[command(flatten)]
     pub inputs: InputArgs,
     /// Write the result document (JSON) here.
@@ -27,7 +27,7 @@ pub struct EstimateArgs {
 
 /// The options that decide a calibration from logs (`estimate` and `report`).
 #[derive(Args, Debug, Clone)]
-pub struct CalibrationArgs {
+pub(crate) struct CalibrationArgs {
     /// Carrier frequency [Hz] for ppb/g (default GPS L1).
     #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
     pub carrier_hz: f64,
@@ -39,7 +39,7 @@ pub struct CalibrationArgs {
 
 impl CalibrationArgs {
     /// The options by name.
-    pub fn options(&self) -> gsens_calib::CalibrationOptions {
+    pub(crate) fn options(&self) -> gsens_calib::CalibrationOptions {
         let mut o = self.analysis.options();
         self.loop_args.apply(&mut o);
         o.carrier_hz = self.carrier_hz;
@@ -48,7 +48,7 @@ impl CalibrationArgs {
 
     /// The pipeline settings (every value checked; options the method
     /// ignores refused).
-    pub fn settings(&self) -> Result<PipelineSettings> {
+    pub(crate) fn settings(&self) -> Result<PipelineSettings> {
         self.loop_args.check()?;
         self.analysis.check()?;
         Ok(self.options().pipeline_settings()?)
@@ -58,7 +58,7 @@ impl CalibrationArgs {
 /// Runs the calibration of `inputs` (keeping the tracking log the estimate
 /// was made from when `keep_tracking`), printing what became of each track of
 /// a receiver's log and which receiver loop was modelled.
-pub fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
+pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
     let calibrated =
         observed(
             || {
@@ -75,9 +75,10 @@ pub fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: boo
 }
 
 /// The error of a receiver's configuration given with loop options.
-pub const LOOP_STATED_TWICE: &str = "--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like";
+pub(crate) const LOOP_STATED_TWICE: &str =
+    "--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like";
 
-pub fn run(args: &EstimateArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &EstimateArgs) -> Result<crate::Status> {
     let settings = args.calibration.settings()?;
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--epochs-out", args.epochs_out.as_deref(), None)?;

@@ -8,14 +8,14 @@ use gsens_tui::progress::with_spinner;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
-pub struct ImportArgs {
+pub(crate) struct ImportArgs {
     #[command(subcommand)]
     pub source: ImportSource,
 }
 
 /// The receivers `gsens import` reads.
 #[derive(Subcommand, Debug)]
-pub enum ImportSource {
+pub(crate) enum ImportSource {
     /// GNSS-SDR tracking dumps (Tracking_1C.dump=true: trk_ch_N.dat) → tracking.csv.
     GnssSdr(ImportGnssSdrArgs),
     /// A PocketSDR pocket_trk log (-log FILE: $CH lines) → tracking.csv.
@@ -27,7 +27,7 @@ pub enum ImportSource {
 
 /// `gsens import pocketsdr`.
 #[derive(Args, Debug)]
-pub struct ImportPocketSdrArgs {
+pub(crate) struct ImportPocketSdrArgs {
     /// The pocket_trk log.
     pub log: PathBuf,
     /// Output tracking.csv (`gsens estimate --tracking` reads it as written).
@@ -63,13 +63,13 @@ fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
 }
 
 /// A new file at `path`.
-pub fn create(path: &Path) -> Result<std::fs::File> {
+pub(crate) fn create(path: &Path) -> Result<std::fs::File> {
     std::fs::File::create(path).with_context(|| format!("{}: cannot create", path.display()))
 }
 
 /// `gsens import gnss-sdr`.
 #[derive(Args, Debug)]
-pub struct ImportGnssSdrArgs {
+pub(crate) struct ImportGnssSdrArgs {
     /// Directory of the dumps.
     pub dump_dir: PathBuf,
     /// The GNSS-SDR configuration the dumps were made with (default: GNSS-SDR 0.0.17's defaults).
@@ -91,7 +91,7 @@ pub struct ImportGnssSdrArgs {
     pub conversion: ConversionArgs,
 }
 
-pub fn run(args: &ImportArgs) -> Result<()> {
+pub(crate) fn run(args: &ImportArgs) -> Result<()> {
     let a = match &args.source {
         ImportSource::GnssSdr(a) => a,
         ImportSource::PocketSdr(a) => return run_pocketsdr(a),

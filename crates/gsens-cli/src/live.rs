@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 #[derive(Args, Debug)]
-pub struct LiveArgs {
+pub(crate) struct LiveArgs {
     /// Read one merged stream from standard input: lines `imu,t_s,fx_mps2,fy_mps2,fz_mps2`
     /// and `trk,t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad` (`gsens replay` writes it).
     #[arg(long, conflicts_with_all = ["follow_imu", "follow_tracking"])]
@@ -102,7 +102,7 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
     Ok(Inputs::Files { imu, tracking })
 }
 
-pub fn run(args: &LiveArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &LiveArgs) -> Result<crate::Status> {
     check_inputs(args)?;
     let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
     crate::check_dir("--out", &args.out)?;

@@ -14,7 +14,7 @@ use std::time::Duration;
 
 /// `gsens import gnss-sdr-monitor`.
 #[derive(Args, Debug)]
-pub struct ImportMonitorArgs {
+pub(crate) struct ImportMonitorArgs {
     /// Address to receive on: GNSS-SDR's TrackingMonitor.client_addresses and udp_port.
     #[arg(long, default_value = "127.0.0.1:1234")]
     pub listen: String,
@@ -39,7 +39,7 @@ pub struct ImportMonitorArgs {
     pub settle_s: Option<f64>,
 }
 
-pub fn run(a: &ImportMonitorArgs) -> Result<()> {
+pub(crate) fn run(a: &ImportMonitorArgs) -> Result<()> {
     if !(a.idle_timeout_s.is_finite() && a.idle_timeout_s > 0.0) {
         bail!("--idle-timeout-s must be positive, got {}", a.idle_timeout_s);
     }

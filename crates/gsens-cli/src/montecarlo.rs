@@ -11,7 +11,7 @@ use gsens_tui::progress::count_bar;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct MonteCarloArgs {
+pub(crate) struct MonteCarloArgs {
     #[command(flatten)]
     pub scenario: crate::args::ScenarioArgs,
     /// Number of runs.
@@ -35,7 +35,7 @@ pub struct MonteCarloArgs {
     pub systematic: SystematicArgs,
 }
 
-pub fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
     args.estimator.check_methods(&args.methods)?;
     crate::check_file("--json", args.json.as_deref(), None)?;
     let scenario = args.scenario.load()?;

@@ -19,7 +19,7 @@ use gsens_sim::oscillator::OscillatorConfig;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum OscillatorArg {
+pub(crate) enum OscillatorArg {
     /// The simulator's OCXO preset (the paper's class).
     Ocxo,
     /// The simulator's TCXO preset.
@@ -42,7 +42,7 @@ impl std::fmt::Display for OscillatorArg {
 }
 
 #[derive(Args, Debug)]
-pub struct PredictArgs {
+pub(crate) struct PredictArgs {
     /// Γ̂ and its covariance from a result document (`gsens estimate --json`, `report.json`).
     #[arg(long, required_unless_present = "gamma", conflicts_with_all = ["gamma", "sigma"])]
     pub from: Option<PathBuf>,
@@ -101,7 +101,7 @@ pub struct PredictArgs {
     pub figure: Option<PathBuf>,
 }
 
-pub fn run(args: &PredictArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--figure", args.figure.as_deref(), None)?;
     let (gamma, covariance) = match (&args.from, &args.gamma, &args.sigma) {

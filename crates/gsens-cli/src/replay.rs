@@ -8,7 +8,7 @@ use gsens_live::{ReplaySink, SystemClock, read_session_dir, replay};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct ReplayArgs {
+pub(crate) struct ReplayArgs {
     /// Directory with imu.csv and tracking.csv (e.g. from `gsens simulate`).
     pub dir: PathBuf,
     /// Speed relative to real time (2: twice as fast; 0: as fast as possible).
@@ -20,7 +20,7 @@ pub struct ReplayArgs {
     pub out: Option<PathBuf>,
 }
 
-pub fn run(args: &ReplayArgs) -> Result<()> {
+pub(crate) fn run(args: &ReplayArgs) -> Result<()> {
     if !(args.speed.is_finite() && args.speed >= 0.0) {
         anyhow::bail!("--speed {}: must be 0 (as fast as possible) or positive", args.speed);
     }

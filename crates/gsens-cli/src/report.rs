@@ -13,7 +13,7 @@ use gsens_tui::progress::spinner;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
-pub struct ReportArgs {
+pub(crate) struct ReportArgs {
     #[command(flatten)]
     pub inputs: InputArgs,
     /// truth.json of a simulated session: the true Γ is drawn dashed and the errors reported.
@@ -34,7 +34,7 @@ pub struct ReportArgs {
 
 /// Whether a report writes the C header of an estimate that is not trustworthy.
 #[derive(Args, Debug, Clone, Copy)]
-pub struct HeaderArgs {
+pub(crate) struct HeaderArgs {
     /// Write gsens_gamma.h even when the estimate is not trustworthy (it then defines
     /// GSENS_GAMMA_TRUSTWORTHY 0 and lists the warnings); by default none is written.
     #[arg(long)]
@@ -45,7 +45,7 @@ pub struct HeaderArgs {
 /// session's `truth.json` when it states one and no loop option is given (an
 /// estimate of a simulated session should model the loop that made its log);
 /// with a note saying which loop is modelled and why.
-pub fn settings_and_loop_note(
+pub(crate) fn settings_and_loop_note(
     calibration: &CalibrationArgs,
     truth: Option<&Path>,
 ) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
@@ -55,7 +55,7 @@ pub fn settings_and_loop_note(
     Ok((settings, Some(note)))
 }
 
-pub fn run(args: &ReportArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &ReportArgs) -> Result<crate::Status> {
     let inputs = args.inputs.inputs()?;
     // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
     let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
@@ -78,7 +78,7 @@ pub fn run(args: &ReportArgs) -> Result<crate::Status> {
 /// prints its text: report.html, report.json, gsens_gamma.h (for an
 /// untrustworthy estimate only as `header` asks; stderr says when it is not
 /// written) and figures/.
-pub fn write_report(
+pub(crate) fn write_report(
     outcome: &Outcome,
     tracking: &TrackingLog,
     truth: Option<[f64; 3]>,

@@ -10,7 +10,7 @@ use gsens_report::studies::response_json;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct ResponseArgs {
+pub(crate) struct ResponseArgs {
     #[command(flatten)]
     pub loop_args: LoopArgs,
     /// Lowest frequency of the table [Hz].
@@ -30,7 +30,7 @@ pub struct ResponseArgs {
     pub plot: Option<PathBuf>,
 }
 
-pub fn run(args: &ResponseArgs) -> Result<()> {
+pub(crate) fn run(args: &ResponseArgs) -> Result<()> {
     anyhow::ensure!(
         args.f_min_hz > 0.0 && args.f_max_hz > args.f_min_hz && args.points >= 2,
         "need 0 < --f-min-hz < --f-max-hz and --points ≥ 2"

@@ -6,13 +6,13 @@
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::positive;
-use gsens_gnss_sdr::conf::{IqConfOptions, write_iq_conf};
+use gsens_gnss_sdr::{IqConfOptions, write_iq_conf};
 use gsens_sim::iq::{IqConfig, IqFormat};
 use gsens_tui::progress::progress_bar;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct SimulateArgs {
+pub(crate) struct SimulateArgs {
     #[command(flatten)]
     pub scenario: crate::args::ScenarioArgs,
     /// Output directory for imu.csv, tracking.csv and truth.json.
@@ -44,7 +44,7 @@ pub struct SimulateArgs {
 
 /// IF sample formats on the command line.
 #[derive(Clone, Copy, Debug, clap::ValueEnum, PartialEq)]
-pub enum IqFormatArg {
+pub(crate) enum IqFormatArg {
     /// Interleaved signed 8-bit I/Q.
     Ibyte,
     /// Interleaved signed 16-bit I/Q.
@@ -53,7 +53,7 @@ pub enum IqFormatArg {
     GrComplex,
 }
 
-pub fn run(args: &SimulateArgs) -> Result<()> {
+pub(crate) fn run(args: &SimulateArgs) -> Result<()> {
     let scenario = args.scenario.load()?;
     crate::check_dir("--out", &args.out)?;
     crate::check_file("--iq", args.iq.as_deref(), Some(&args.out))?;

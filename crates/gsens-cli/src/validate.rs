@@ -17,7 +17,7 @@ use gsens_sim::compensation::CompensationSection;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct ValidateArgs {
+pub(crate) struct ValidateArgs {
     #[command(flatten)]
     pub scenario: crate::args::ScenarioArgs,
     /// Γ̂ to feed forward [Hz/(m/s²)], as gx,gy,gz (default: calibrate first on the
@@ -43,7 +43,7 @@ pub struct ValidateArgs {
     pub figure: Option<PathBuf>,
 }
 
-pub fn run(args: &ValidateArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &ValidateArgs) -> Result<crate::Status> {
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--figure", args.figure.as_deref(), None)?;
     let scenario = args.scenario.load()?;

@@ -56,26 +56,26 @@ pub struct GnssSdrConf {
 }
 
 /// GNSS-SDR 0.0.17's default `pll_filter_order` of the GPS L1 C/A DLL/PLL tracking.
-pub const DEFAULT_PLL_FILTER_ORDER: u8 = 3;
+pub(crate) const DEFAULT_PLL_FILTER_ORDER: u8 = 3;
 /// GNSS-SDR 0.0.17's default `pll_bw_hz` \[Hz\] (measured).
-pub const DEFAULT_PLL_BW_HZ: f64 = 35.0;
+pub(crate) const DEFAULT_PLL_BW_HZ: f64 = 35.0;
 /// GNSS-SDR 0.0.17's default `pll_bw_narrow_hz` \[Hz\] (measured).
-pub const DEFAULT_PLL_BW_NARROW_HZ: f64 = 5.0;
+pub(crate) const DEFAULT_PLL_BW_NARROW_HZ: f64 = 5.0;
 /// GNSS-SDR 0.0.17's default `pull_in_time_s` \[s\] (`dll_pll_conf.h`).
-pub const DEFAULT_PULL_IN_TIME_S: f64 = 10.0;
+pub(crate) const DEFAULT_PULL_IN_TIME_S: f64 = 10.0;
 /// GNSS-SDR's default `carrier_lock_th` (`FLAGS_carrier_lock_th`, `gnss_sdr_flags.cc`):
 /// the threshold of the smoothed carrier lock test (I² − Q²)/(I² + Q²) = cos 2φ.
-pub const DEFAULT_CARRIER_LOCK_TH: f64 = 0.7;
+pub(crate) const DEFAULT_CARRIER_LOCK_TH: f64 = 0.7;
 /// GNSS-SDR's default `cn0_min` \[dB-Hz\] (`FLAGS_cn0_min`).
-pub const DEFAULT_CN0_MIN_DBHZ: f64 = 25.0;
+pub(crate) const DEFAULT_CN0_MIN_DBHZ: f64 = 25.0;
 /// GNSS-SDR's default `max_lock_fail` (`FLAGS_max_lock_fail`): the code-lock (C/N0) fail counter's maximum.
-pub const DEFAULT_MAX_LOCK_FAIL: u32 = 50;
+pub(crate) const DEFAULT_MAX_LOCK_FAIL: u32 = 50;
 /// GNSS-SDR's default `max_carrier_lock_fail` (`FLAGS_max_carrier_lock_fail`).
-pub const DEFAULT_MAX_CARRIER_LOCK_FAIL: u32 = 5000;
+pub(crate) const DEFAULT_MAX_CARRIER_LOCK_FAIL: u32 = 5000;
 /// GNSS-SDR's default `cn0_samples` (`FLAGS_cn0_samples`): prompt outputs per C/N0 estimate.
-pub const DEFAULT_CN0_SAMPLES: u32 = 20;
+pub(crate) const DEFAULT_CN0_SAMPLES: u32 = 20;
 /// The tracking implementation whose loop [`gsens_core::gnss_sdr`] models.
-pub const SUPPORTED_TRACKING: &str = "GPS_L1_CA_DLL_PLL_Tracking";
+pub(crate) const SUPPORTED_TRACKING: &str = "GPS_L1_CA_DLL_PLL_Tracking";
 
 /// Where a setting's value comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -169,7 +169,7 @@ pub struct TrackingConf {
     /// `enable_fll_steady_state`: an FLL-assisted PLL throughout (not modelled).
     pub enable_fll_steady_state: bool,
     /// `pull_in_time_s`: how long the pull-in lasts \[s\], a whole number
-    /// ([`DEFAULT_PULL_IN_TIME_S`] when absent): the FLL's time when it is
+    /// (`DEFAULT_PULL_IN_TIME_S` when absent): the FLL's time when it is
     /// enabled, and always the time during which the lock detector counts no failure.
     pub pull_in_time_s: f64,
     /// The lock detector's settings.
@@ -482,7 +482,7 @@ impl GnssSdrConf {
     }
 }
 
-/// What [`iq_file_conf`] needs to know.
+/// What `iq_file_conf` needs to know.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IqConfOptions {
     /// Path of the sample file, as GNSS-SDR will open it.
@@ -543,7 +543,7 @@ impl IqConfOptions {
 /// narrow loops), DLL/PLL tracking with an FLL pull-in, a wide PLL and a
 /// narrow PLL after bit synchronization, dumps on (`dump_mat=false`: the raw `.dat` only),
 /// telemetry decoding, observables and a PVT that writes no files.
-pub fn iq_file_conf(o: &IqConfOptions) -> String {
+pub(crate) fn iq_file_conf(o: &IqConfOptions) -> String {
     let adapter = match o.item_type.as_str() {
         "ibyte" => "Ibyte_To_Complex",
         "ishort" => "Ishort_To_Complex",

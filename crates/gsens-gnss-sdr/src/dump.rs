@@ -162,7 +162,7 @@ impl FieldType {
 }
 
 /// The fields a layout must have for the conversion.
-pub const REQUIRED_FIELDS: [&str; 6] =
+pub(crate) const REQUIRED_FIELDS: [&str; 6] =
     ["PRN_start_sample_count", "carr_error_hz", "carrier_doppler_hz", "CN0_SNV_dB_Hz", "carrier_lock_test", "PRN"];
 
 /// What the block writes in `aux2`, checked on every record.
@@ -315,7 +315,7 @@ impl DumpLayout {
     /// A layout from a spec: the name of a [`DumpLayout::known`] one (e.g.
     /// `gnss-sdr-0.0.21`, to force it), or `name:type,name:type,…` (types f32,
     /// f64, u32, u64, i32) for dumps of versions or blocks the reader does not
-    /// know. Those must contain the [`REQUIRED_FIELDS`]; only the generic
+    /// know. Those must contain the `REQUIRED_FIELDS`; only the generic
     /// plausibility rules are checked, and the importer treats them as the
     /// modelled loop's.
     pub fn parse_spec(spec: &str) -> Result<Self, LayoutSpecError> {
@@ -381,7 +381,7 @@ pub struct TrackingRecord {
     /// Prompt quadrature correlator output.
     pub prompt_q: f64,
     /// Sample counter at the end of the integration (at its start for the
-    /// layouts with [`Aux2Rule::CounterPlusLength`]).
+    /// layouts with `Aux2Rule::CounterPlusLength`).
     pub prn_start_sample_count: u64,
     /// Accumulated carrier phase \[rad\].
     pub acc_carrier_phase_rad: f64,
@@ -726,7 +726,7 @@ fn mixed(bytes: &[u8], file: &str, candidates: &[DumpLayout]) -> Option<GnssSdrE
 }
 
 /// Whether `path` names a `.mat` dump.
-pub fn is_mat(path: &Path) -> bool {
+pub(crate) fn is_mat(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mat"))
 }
 
@@ -743,7 +743,7 @@ pub fn read_dump(path: impl AsRef<Path>, layout: Option<&DumpLayout>) -> Result<
 }
 
 /// The channel number at the end of a dump's file stem (`trk_ch_12.dat` → 12).
-pub fn channel_from_name(file: &str) -> Option<u32> {
+pub(crate) fn channel_from_name(file: &str) -> Option<u32> {
     trailing_digits(file)?.parse().ok()
 }
 

@@ -220,7 +220,7 @@ pub enum LayoutSpecError {
         /// The type given, trimmed.
         ty: String,
     },
-    /// One of the [`REQUIRED_FIELDS`] is missing.
+    /// One of the `REQUIRED_FIELDS` is missing.
     #[error("the layout lacks the field `{field}` (required: {})", REQUIRED_FIELDS.join(", "))]
     MissingField {
         /// The first required field missing.

@@ -8,7 +8,7 @@ use crate::import::{Imported, resample, write_imported_csv};
 impl Imported {
     /// Writes the rows to `w` on the common grid ([`resample`]) when
     /// `on_common_grid`, else at their own times with the extra column
-    /// `carrier_lock_test` ([`write_imported_csv`]); returns the rows written.
+    /// `carrier_lock_test` (`write_imported_csv`); returns the rows written.
     pub fn write_csv<W: std::io::Write>(&self, w: W, on_common_grid: bool) -> std::io::Result<usize> {
         if on_common_grid {
             let grid = resample(self, self.interval_s);

@@ -21,14 +21,14 @@
 //! - `phase_err_rad` = 2π·`carr_error_hz` (the discriminator output in cycles;
 //!   its sign is θ_signal − θ_replica, docs/conventions.md's);
 //! - `cn0_dbhz` = `CN0_SNV_dB_Hz`; the elevation is unknown (empty);
-//! - `carrier_lock_test`, an extra column ([`write_imported_csv`]).
+//! - `carrier_lock_test`, an extra column (`write_imported_csv`).
 //!
 //! # What is kept
 //!
 //! A track is judged by the receiver's own rule: GNSS-SDR's lock detector,
 //! with the configuration's `carrier_lock_th`, `max_carrier_lock_fail`,
 //! `cn0_min` and `max_lock_fail` (GNSS-SDR's defaults when absent; options may
-//! override them), is replayed over its records ([`replay_lock_detector`]).
+//! override them), is replayed over its records (`replay_lock_detector`).
 //! Where GNSS-SDR would have declared a loss of lock, the track ends: that
 //! record and the later ones are not tracking and are dropped. No record is
 //! dropped for a low lock test or C/N0 alone: GNSS-SDR went on tracking
@@ -48,7 +48,7 @@
 //! modelled loop is dropped. Every track is reported with what became of it
 //! ([`TrackSummary::fate`]) and the rule and values that decided
 //! ([`TrackSummary::reason`]); when nothing is kept, the error gives one line
-//! per channel and fate ([`nothing_usable_reason`]).
+//! per channel and fate (`nothing_usable_reason`).
 //!
 //! # A common epoch grid
 //!
@@ -288,7 +288,7 @@ impl ImportedRow {
 }
 
 /// GNSS-SDR's loss-of-lock rule replayed over one track's records
-/// ([`replay_lock_detector`]).
+/// (`replay_lock_detector`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LockReplay {
     /// Records judged (from the end of the pull-in transitory and the C/N0 buffer's filling on).
@@ -337,7 +337,7 @@ pub struct LockReplay {
 /// after it (GNSS-SDR logs one update in 20/N, module docs of
 /// [`gsens_core::gnss_sdr`]), each counted with the record's values; `lock`
 /// and `cn0` per record.
-pub fn replay_lock_detector(
+pub(crate) fn replay_lock_detector(
     start_sample: &[f64],
     calls: &[u32],
     lock_test: &[f64],
@@ -691,7 +691,7 @@ pub fn import_dump(
 /// Why no track of a dump directory gave a record: one line per channel and
 /// fate, with the number of tracks, their PRNs and the first one's reason (a
 /// dump cut into thousands of tracks still says it in a few lines).
-pub fn nothing_usable_reason(tracks: &[TrackSummary]) -> String {
+pub(crate) fn nothing_usable_reason(tracks: &[TrackSummary]) -> String {
     if tracks.is_empty() {
         return "the dumps hold no record".into();
     }
@@ -801,7 +801,7 @@ pub fn resample(imported: &Imported, interval_s: f64) -> Vec<TrackingRow> {
 
 /// [`resample`] of rows alone (their `track` numbers the tracks; the
 /// tracking monitor's rows have no [`TrackSummary`]).
-pub fn resample_rows(rows: &[ImportedRow], interval_s: f64) -> Vec<TrackingRow> {
+pub(crate) fn resample_rows(rows: &[ImportedRow], interval_s: f64) -> Vec<TrackingRow> {
     let n_tracks = rows.iter().map(|r| r.track + 1).max().unwrap_or(0);
     let mut by_track: Vec<Vec<&ImportedRow>> = vec![Vec::new(); n_tracks];
     for r in rows {
@@ -859,7 +859,7 @@ fn cubic(p0: f64, p1: f64, p2: f64, p3: f64, u: f64) -> f64 {
 /// elevation is empty. Written by [`gsens_io::TrackingWriter`]: numbers in
 /// the shortest round-trip form, and a non-finite value is refused
 /// (`InvalidInput`).
-pub fn write_imported_csv<W: std::io::Write>(w: W, rows: &[ImportedRow]) -> std::io::Result<W> {
+pub(crate) fn write_imported_csv<W: std::io::Write>(w: W, rows: &[ImportedRow]) -> std::io::Result<W> {
     let mut out = gsens_io::TrackingWriter::with_extra_columns(w, &["carrier_lock_test"])?;
     for r in rows {
         out.write_row_with(&r.tracking_row(), &[r.lock_test])?;

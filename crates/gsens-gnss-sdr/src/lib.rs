@@ -34,7 +34,7 @@ pub mod mat;
 pub mod monitor;
 
 pub use calibrate::{Conversion, GnssSdrOutcome, calibrate_gnss_sdr, gnss_sdr_tracking_log, with_gnss_sdr_loop};
-pub use conf::{GnssSdrConf, TrackingConf};
+pub use conf::{GnssSdrConf, IqConfOptions, TrackingConf, write_iq_conf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
 pub use error::{GnssSdrError, LayoutSpecError};
-pub use import::{ImportSettings, Imported, TrackFate, import_dir, render_tracks, resample};
+pub use import::{ImportSettings, Imported, TrackFate, import_dir, import_dump, render_tracks, resample};

@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 
 use gsens_calib::PipelineSettings;
 use gsens_gnss_sdr::calibrate_gnss_sdr;
-use gsens_gnss_sdr::import::{ImportSettings, TrackFate, import_dir};
 use gsens_gnss_sdr::{GnssSdrError, parse_dump};
+use gsens_gnss_sdr::{ImportSettings, TrackFate, import_dir};
 
 fn dir(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
@@ -62,7 +62,7 @@ fn a_track_that_ends_within_the_pull_in_never_reaches_the_1_ms_loop() {
     let s = settings("ext1");
     let bytes = std::fs::read(dir("ext1").join("trk_ch_0.dat")).unwrap();
     let head = parse_dump(&bytes[..100 * 96], "trk_ch_0.dat", None).unwrap();
-    let (rows, tracks) = gsens_gnss_sdr::import::import_dump(&head, &s, 0);
+    let (rows, tracks) = gsens_gnss_sdr::import_dump(&head, &s, 0);
     assert!(rows.is_empty());
     assert_eq!(tracks.len(), 1);
     assert_eq!(tracks[0].fate, TrackFate::NeverModelled, "{}", tracks[0].reason);

@@ -7,8 +7,8 @@
 
 use std::path::{Path, PathBuf};
 
-use gsens_gnss_sdr::dump::{TrackingRecord, find_dumps, read_dump};
-use gsens_gnss_sdr::import::{ImportSettings, import_dir};
+use gsens_gnss_sdr::{ImportSettings, import_dir};
+use gsens_gnss_sdr::{TrackingRecord, find_dumps, read_dump};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")

@@ -7,8 +7,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use gsens_gnss_sdr::dump::{TrackingRecord, read_dump};
 use gsens_gnss_sdr::monitor::{MonitorEvent, MonitorRow, MonitorStream, decode_datagram, split_capture};
+use gsens_gnss_sdr::{TrackingRecord, read_dump};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/monitor")

@@ -8,9 +8,9 @@ use gsens_calib::{EpochSeries, EstimateSettings, calibrate};
 use gsens_core::LoopModel;
 use gsens_core::gnss_sdr::{GnssSdrPll, GnssSdrStage};
 use gsens_core::{LinearLoop, LoopSpec};
-use gsens_gnss_sdr::conf::GnssSdrConf;
-use gsens_gnss_sdr::dump::{DumpLayout, TrackingRecord, parse_dump, read_dump};
-use gsens_gnss_sdr::import::{ImportSettings, import_dir, resample};
+use gsens_gnss_sdr::GnssSdrConf;
+use gsens_gnss_sdr::{DumpLayout, TrackingRecord, parse_dump, read_dump};
+use gsens_gnss_sdr::{ImportSettings, import_dir, resample};
 use gsens_io::read_imu_file;
 use gsens_session::{SelectionConfig, prepare_session};
 

@@ -11,7 +11,7 @@ use gsens_calib::{EpochSeries, EstimateSettings, PipelineSettings, calibrate};
 use gsens_core::gnss_sdr::GnssSdrPll;
 use gsens_core::{LinearLoop, LoopModel};
 use gsens_gnss_sdr::calibrate_gnss_sdr;
-use gsens_gnss_sdr::import::{ImportSettings, Imported, import_dir, resample};
+use gsens_gnss_sdr::{ImportSettings, Imported, import_dir, resample};
 use gsens_io::{ImuSeries, read_imu_file};
 use gsens_session::{SelectionConfig, prepare_session};
 

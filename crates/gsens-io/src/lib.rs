@@ -26,29 +26,90 @@
 //! assert_eq!(log.tracks()[0].phase_err_rad, [0.01]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! # `tracking.csv` in memory
+//!
+//! Reader of `tracking.csv`: one row per channel per epoch (long format), header
+//! `t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`, optionally with the
+//! carrier of each row in `signal`, `glo_k` and `carrier_hz` ([`CARRIER_COLUMNS`]).
+//!
+//! The columns may come in any order and extra columns are ignored, but the six
+//! must all be present. `elev_deg` may be empty (unknown elevation); every other
+//! cell must hold a finite number (`channel` and `prn`: non-negative integers).
+//! Channels may appear, disappear and reappear.
+//!
+//! Time stamps must be non-decreasing over the file (the rows of one epoch share
+//! one `t_s`) and strictly increasing per channel (a channel appears at most once
+//! per epoch).
+//!
+//! The log is read as a stream and stored column-wise per track, a track being
+//! one (channel, PRN) pair: a channel that is re-assigned to another satellite
+//! starts a new track.
+//!
+//! # Carrier
+//!
+//! Without any of the carrier columns every row is on GPS L1 (1575.42 MHz,
+//! [`Carrier::GPS_L1`]), as before they existed. With them, each row's carrier
+//! comes from
+//!
+//! - `signal`: a name of [`crate::SIGNALS`] (`L1CA`, `E1B`, `B1I`, `L5Q`, `G1`, …;
+//!   case-sensitive); an unknown name is an error listing the known ones;
+//! - `glo_k`: the GLONASS frequency channel number k (−7…+6) of a `G1`/`G2` row
+//!   (f = 1602 MHz + k·0.5625 MHz, 1246 MHz + k·0.4375 MHz), empty for the others;
+//! - `carrier_hz`: the carrier in Hz, within the GNSS bands 1.1–1.7 GHz. With a
+//!   `signal` it must agree with the signal's carrier within 1 Hz (and gives the k
+//!   of a `G1`/`G2` row without `glo_k`); alone (empty `signal` cell or no
+//!   `signal` column) it is the carrier of an unnamed signal.
+//!
+//! A row whose carrier cells are all empty is an error (no row is silently put on
+//! L1 in a log that names carriers). A track keeps one carrier: a row that puts
+//! a (channel, PRN) pair on another carrier is an error naming both lines (a
+//! receiver that moves a channel to another signal changes its PRN or channel
+//! number, which starts a new track).
+//!
+//! # Signals and carriers
+//!
+//! The GNSS signals gsens knows and their carriers: the one table
+//! ([`SIGNALS`]) that the tracking log's `signal` column, the session's
+//! scaling and the simulator's channels read.
+//!
+//! Carrier frequencies from the interface documents: GPS IS-GPS-200 (L1
+//! 1575.42 MHz, L2 1227.60 MHz) and IS-GPS-705 (L5 1176.45 MHz); Galileo OS
+//! SIS ICD (E1 1575.42, E5a 1176.45, E5b 1207.14 MHz); BeiDou ICDs (B1I
+//! 1561.098, B1C 1575.42, B2a 1176.45, B3I 1268.52 MHz); GLONASS ICD 5.1
+//! (FDMA: G1 f = 1602 MHz + k·0.5625 MHz, G2 f = 1246 MHz + k·0.4375 MHz,
+//! frequency channel number k = −7 … +6).
+//!
+//! The oscillator's fractional frequency error y moves every carrier by
+//! Δf_c = f_c·y, so one loop on f_c sees (f_c/f_L1) times the phase error of
+//! the same loop on L1: [`Carrier::scale_to_l1`] = f_L1/f_c brings it onto
+//! L1's scale (docs/conventions.md, "Tracking log").
 #![deny(missing_docs)]
 
-pub mod config;
-pub mod error;
-pub mod imu;
-pub mod output;
+mod config;
+mod error;
+mod imu;
+mod output;
 mod parse;
 mod plain;
-pub mod row;
-pub mod signal;
+mod row;
+mod signal;
 #[cfg(test)]
 mod test_files;
-pub mod tracking;
-pub mod vibration;
-pub mod writers;
+mod tracking;
+mod vibration;
+mod writers;
 
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use output::{OutputPathError, check_output_dir, check_output_file, check_output_file_in};
 pub use row::{RowError, parse_imu_row, parse_tracking_row};
-pub use signal::{Carrier, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
-pub use tracking::{CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file};
+pub use signal::{CARRIER_MATCH_HZ, Carrier, GLONASS_K, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
+pub use tracking::{
+    CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file,
+    read_tracking_file_in_chunks, read_tracking_file_plain,
+};
 pub use vibration::{VIBRATION_COLUMNS, read_vibration_psd, read_vibration_psd_file};
 pub use writers::{
     EPOCH_COLUMNS, ImuWriter, TrackingRow, TrackingWriter, write_epochs_csv, write_imu_csv, write_tracking_csv,

@@ -51,7 +51,7 @@ fn accepts_files(dir: &Path) -> std::io::Result<()> {
 }
 
 /// The directory a relative or bare file name lies in (`.` for a bare name).
-pub fn parent_of(path: &Path) -> &Path {
+pub(crate) fn parent_of(path: &Path) -> &Path {
     match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -80,7 +80,7 @@ pub(crate) struct CsvSource<R: Read> {
 impl<R: Read> CsvSource<R> {
     /// Reads the header of `input` and locates the `required` columns (in the
     /// order given; any order in the file, extra columns ignored).
-    pub fn open(input: R, file: &str, required: &[&str]) -> Result<(Self, Vec<usize>), FormatError> {
+    pub(crate) fn open(input: R, file: &str, required: &[&str]) -> Result<(Self, Vec<usize>), FormatError> {
         let reader = csv_reader(input);
         let mut src =
             CsvSource { reader, record: csv::ByteRecord::new(), line: 0, file: file.to_owned(), header: Vec::new() };
@@ -125,7 +125,7 @@ impl<R: Read> CsvSource<R> {
 
     /// The 0-based position of the optional column `name`, `None` when the
     /// header lacks it; a column named twice is an error.
-    pub fn optional_column(&self, name: &str) -> Result<Option<usize>, FormatError> {
+    pub(crate) fn optional_column(&self, name: &str) -> Result<Option<usize>, FormatError> {
         let mut found = self.header.iter().enumerate().filter(|(_, h)| *h == name).map(|(i, _)| i);
         match (found.next(), found.next()) {
             (Some(a), Some(b)) => Err(FormatError::DuplicateColumn {
@@ -139,7 +139,7 @@ impl<R: Read> CsvSource<R> {
     }
 
     /// Parses the cell at column `index` as an integer (`None` if empty).
-    pub fn opt_i64_at(&self, index: usize) -> Result<Option<i64>, FormatError> {
+    pub(crate) fn opt_i64_at(&self, index: usize) -> Result<Option<i64>, FormatError> {
         let raw = self.cell(index).trim_ascii();
         if raw.is_empty() {
             return Ok(None);
@@ -153,7 +153,7 @@ impl<R: Read> CsvSource<R> {
 
     /// Reads the next record into `self.record`; `false` at the end of the input.
     #[inline]
-    pub fn next_record(&mut self) -> Result<bool, FormatError> {
+    pub(crate) fn next_record(&mut self) -> Result<bool, FormatError> {
         let more = self.reader.read_byte_record(&mut self.record).map_err(|e| FormatError::csv(&self.file, e))?;
         if let Some(p) = self.record.position() {
             let (start, csv_line) = (p.byte(), p.line());
@@ -164,13 +164,13 @@ impl<R: Read> CsvSource<R> {
 
     /// The 1-based line the current record starts on.
     #[inline]
-    pub fn line(&self) -> u64 {
+    pub(crate) fn line(&self) -> u64 {
         self.line
     }
 
     /// Checks that the current record has as many fields as the header.
     #[inline]
-    pub fn check_field_count(&self) -> Result<(), FormatError> {
+    pub(crate) fn check_field_count(&self) -> Result<(), FormatError> {
         if self.record.len() == self.header.len() { Ok(()) } else { Err(self.field_count_error()) }
     }
 
@@ -185,19 +185,19 @@ impl<R: Read> CsvSource<R> {
     }
 
     /// The column at 0-based position `index`.
-    pub fn column(&self, index: usize) -> Column {
+    pub(crate) fn column(&self, index: usize) -> Column {
         Column { index: index + 1, name: self.header[index].clone() }
     }
 
     /// The raw (untrimmed) cell at 0-based column `index` of the current record.
     #[inline]
-    pub fn cell(&self, index: usize) -> &[u8] {
+    pub(crate) fn cell(&self, index: usize) -> &[u8] {
         self.record.get(index).unwrap_or(b"")
     }
 
     /// Parses the cell at column `index` as a finite `f64`.
     #[inline]
-    pub fn f64_at(&self, index: usize) -> Result<f64, FormatError> {
+    pub(crate) fn f64_at(&self, index: usize) -> Result<f64, FormatError> {
         match self.opt_f64_at(index)? {
             Some(v) => Ok(v),
             None => Err(self.empty_cell_error(index, "a number")),
@@ -206,7 +206,7 @@ impl<R: Read> CsvSource<R> {
 
     /// Parses the cell at column `index` as a finite `f64`, `None` if the cell is empty.
     #[inline]
-    pub fn opt_f64_at(&self, index: usize) -> Result<Option<f64>, FormatError> {
+    pub(crate) fn opt_f64_at(&self, index: usize) -> Result<Option<f64>, FormatError> {
         match cell_f64(self.cell(index)) {
             Ok(v) => Ok(v),
             Err(BadCell::NonFinite) => Err(self.non_finite_error(index)),
@@ -216,7 +216,7 @@ impl<R: Read> CsvSource<R> {
 
     /// Parses the cell at column `index` as a `u32`.
     #[inline]
-    pub fn u32_at(&self, index: usize) -> Result<u32, FormatError> {
+    pub(crate) fn u32_at(&self, index: usize) -> Result<u32, FormatError> {
         match cell_u32(self.cell(index)) {
             Ok(v) => Ok(v),
             Err(BadCell::Empty) => Err(self.empty_cell_error(index, "a non-negative integer")),

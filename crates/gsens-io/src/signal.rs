@@ -1,18 +1,4 @@
-//! The GNSS signals gsens knows and their carriers: the one table
-//! ([`SIGNALS`]) that the tracking log's `signal` column, the session's
-//! scaling and the simulator's channels read.
-//!
-//! Carrier frequencies from the interface documents: GPS IS-GPS-200 (L1
-//! 1575.42 MHz, L2 1227.60 MHz) and IS-GPS-705 (L5 1176.45 MHz); Galileo OS
-//! SIS ICD (E1 1575.42, E5a 1176.45, E5b 1207.14 MHz); BeiDou ICDs (B1I
-//! 1561.098, B1C 1575.42, B2a 1176.45, B3I 1268.52 MHz); GLONASS ICD 5.1
-//! (FDMA: G1 f = 1602 MHz + k·0.5625 MHz, G2 f = 1246 MHz + k·0.4375 MHz,
-//! frequency channel number k = −7 … +6).
-//!
-//! The oscillator's fractional frequency error y moves every carrier by
-//! Δf_c = f_c·y, so one loop on f_c sees (f_c/f_L1) times the phase error of
-//! the same loop on L1: [`Carrier::scale_to_l1`] = f_L1/f_c brings it onto
-//! L1's scale (docs/conventions.md, "Tracking log").
+//! The crate documentation's section "Signals and carriers" describes this module.
 
 use std::fmt;
 
@@ -32,7 +18,7 @@ pub struct SignalSpec {
     pub fdma_step_hz: Option<f64>,
 }
 
-/// The signals gsens knows (see the [module documentation](self) for the sources).
+/// The signals gsens knows (the crate documentation names the sources).
 pub const SIGNALS: [SignalSpec; 17] = {
     const fn cdma(name: &'static str, system: &'static str, carrier_hz: f64) -> SignalSpec {
         SignalSpec { name, system, carrier_hz, fdma_step_hz: None }

@@ -5,7 +5,7 @@ pub(crate) struct TempFile(pub std::path::PathBuf);
 
 impl TempFile {
     /// Writes `text` to a file named after `name` and the process.
-    pub fn new(name: &str, text: &str) -> Self {
+    pub(crate) fn new(name: &str, text: &str) -> Self {
         let path = std::env::temp_dir().join(format!("gsens-io-{}-{name}", std::process::id()));
         std::fs::write(&path, text).unwrap();
         TempFile(path)

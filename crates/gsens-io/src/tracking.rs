@@ -1,40 +1,4 @@
-//! Reader of `tracking.csv`: one row per channel per epoch (long format), header
-//! `t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad`, optionally with the
-//! carrier of each row in `signal`, `glo_k` and `carrier_hz` ([`CARRIER_COLUMNS`]).
-//!
-//! The columns may come in any order and extra columns are ignored, but the six
-//! must all be present. `elev_deg` may be empty (unknown elevation); every other
-//! cell must hold a finite number (`channel` and `prn`: non-negative integers).
-//! Channels may appear, disappear and reappear.
-//!
-//! Time stamps must be non-decreasing over the file (the rows of one epoch share
-//! one `t_s`) and strictly increasing per channel (a channel appears at most once
-//! per epoch).
-//!
-//! The log is read as a stream and stored column-wise per track, a track being
-//! one (channel, PRN) pair: a channel that is re-assigned to another satellite
-//! starts a new track.
-//!
-//! # Carrier
-//!
-//! Without any of the carrier columns every row is on GPS L1 (1575.42 MHz,
-//! [`Carrier::GPS_L1`]), as before they existed. With them, each row's carrier
-//! comes from
-//!
-//! - `signal`: a name of [`crate::SIGNALS`] (`L1CA`, `E1B`, `B1I`, `L5Q`, `G1`, …;
-//!   case-sensitive); an unknown name is an error listing the known ones;
-//! - `glo_k`: the GLONASS frequency channel number k (−7…+6) of a `G1`/`G2` row
-//!   (f = 1602 MHz + k·0.5625 MHz, 1246 MHz + k·0.4375 MHz), empty for the others;
-//! - `carrier_hz`: the carrier in Hz, within the GNSS bands 1.1–1.7 GHz. With a
-//!   `signal` it must agree with the signal's carrier within 1 Hz (and gives the k
-//!   of a `G1`/`G2` row without `glo_k`); alone (empty `signal` cell or no
-//!   `signal` column) it is the carrier of an unnamed signal.
-//!
-//! A row whose carrier cells are all empty is an error (no row is silently put on
-//! L1 in a log that names carriers). A track keeps one carrier: a row that puts
-//! a (channel, PRN) pair on another carrier is an error naming both lines (a
-//! receiver that moves a channel to another signal changes its PRN or channel
-//! number, which starts a new track).
+//! The crate documentation's section "`tracking.csv` in memory" describes this module.
 
 use std::borrow::Borrow;
 use std::collections::HashMap;
@@ -49,7 +13,7 @@ use crate::writers::TrackingRow;
 /// The columns of `tracking.csv`, in the order the writer emits them.
 pub const TRACKING_COLUMNS: [&str; 6] = ["t_s", "channel", "prn", "cn0_dbhz", "elev_deg", "phase_err_rad"];
 
-/// The optional carrier columns of `tracking.csv` (see the [module documentation](self));
+/// The optional carrier columns of `tracking.csv` (see the crate documentation);
 /// the writer emits `signal` and `carrier_hz` after the six of [`TRACKING_COLUMNS`]
 /// when some row is not on L1.
 pub const CARRIER_COLUMNS: [&str; 3] = ["signal", "glo_k", "carrier_hz"];

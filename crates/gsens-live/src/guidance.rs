@@ -171,7 +171,7 @@ impl core::fmt::Display for Instruction {
 }
 
 /// "N s more", or "over an hour more" past an hour (a target far out of reach).
-pub fn more_text(more_s: f64) -> String {
+pub(crate) fn more_text(more_s: f64) -> String {
     if more_s > 3600.0 { "over an hour more".to_string() } else { format!("{:.0} s more", more_s.ceil()) }
 }
 
@@ -200,7 +200,7 @@ pub struct Situation {
 
 /// Under the two-rate protocol, seconds by which the rate shaken may lead the
 /// other before the person is asked to change pace.
-pub const TWO_RATE_LEAD_S: f64 = 5.0;
+pub(crate) const TWO_RATE_LEAD_S: f64 = 5.0;
 
 /// The fraction of the discriminator's linear range at which "gentler" is
 /// said: the phase error's peaks then leave less than the 3σ of a Costas

@@ -1,27 +1,26 @@
 //! Live calibration: what `gsens live` runs between its inputs and its screen.
 //!
-//! - [`input`]: the inputs as they arrive, from lines of `imu.csv`,
-//!   `tracking.csv` or one merged stream ([`input::parse_merged_line`],
-//!   format in its docs), with every line that is not data reported as a
-//!   [`Notice`] (garbage, out of order, a logger restarting), never dropped
-//!   silently;
-//! - [`follow`]: a growing file read as it grows (`tail -f`), surviving a
+//! - the inputs as they arrive, from lines of `imu.csv`, `tracking.csv` or
+//!   one merged stream ([`parse_merged_line`], format in its docs), with
+//!   every line that is not data reported as a [`Notice`] (garbage, out of
+//!   order, a logger restarting), never dropped silently;
+//! - a growing file read as it grows ([`Follower`], `tail -f`), surviving a
 //!   partial last line and a file truncated by a restarting logger;
-//! - [`motion`]: the shaking seen by the IMU over the last seconds (which
-//!   axis, how hard, how fast);
-//! - [`guidance`]: the one plain instruction for the person holding the board;
-//! - [`stream`]: the estimate at every epoch ([`StreamEstimate`], the batch
-//!   path's least squares streamed on the channel average of each epoch);
-//! - [`session`]: [`LiveSession`] accumulates the received data, schedules the
-//!   batch estimate ([`BatchJob`], the same `gsens_calib::calibrate_logs` as
+//! - the shaking seen by the IMU over the last seconds ([`MotionWindow`]:
+//!   which axis, how hard, how fast);
+//! - the one plain instruction for the person holding the board ([`instruct`]);
+//! - the estimate at every epoch ([`StreamEstimate`], the batch path's least
+//!   squares streamed on the channel average of each epoch);
+//! - [`LiveSession`] accumulates the received data, schedules the batch
+//!   estimate ([`BatchJob`], the same `gsens_calib::calibrate_logs` as
 //!   `gsens estimate`, runnable in another thread) and answers a
 //!   [`LiveView`] for the screen at any moment;
-//! - [`runtime`]: a whole session, from its inputs (read by one thread each,
-//!   [`sources`], [`monitor`]) to the final estimate on the logs it keeps,
-//!   shown as plain lines or on a [`LiveScreen`]; wall time is read through
-//!   a [`Clock`], so tests run it without waiting;
-//! - [`pacing`]: a recorded session ([`read_session_dir`]) played back at
-//!   real time or a multiple of it, as a merged stream or growing files.
+//! - [`Runtime`]: a whole session, from its inputs (read by one thread each:
+//!   [`Source`], [`receive_monitor`]) to the final estimate on the logs it
+//!   keeps, shown as plain lines or on a [`LiveScreen`]; wall time is read
+//!   through a [`Clock`], so tests run it without waiting;
+//! - a recorded session ([`read_session_dir`]) played back at real time or a
+//!   multiple of it, as a merged stream or growing files ([`replay`]).
 //!
 //! The screen shows two estimates: the streamed one, new at every epoch, and
 //! the batch pipeline's on the data received so far, with its checks, which
@@ -29,28 +28,28 @@
 //! batch estimate of the logs that `gsens live` keeps.
 #![warn(missing_docs)]
 
-pub mod clock;
-pub mod follow;
-pub mod guidance;
-pub mod input;
+mod clock;
+mod follow;
+mod guidance;
+mod input;
 mod kept;
 mod merge;
-pub mod monitor;
-pub mod monitor_setup;
-pub mod motion;
-pub mod pacing;
+mod monitor;
+mod monitor_setup;
+mod motion;
+mod pacing;
 mod plain;
-pub mod replay;
-pub mod runtime;
-pub mod session;
-pub mod sources;
-pub mod stream;
-pub mod truth;
+mod replay;
+mod runtime;
+mod session;
+mod sources;
+mod stream;
+mod truth;
 
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
 pub use gsens_calib::{Warning, WarningCode};
-pub use guidance::{Instruction, LoopBand, Protocol};
+pub use guidance::{GENTLER_FRACTION, Instruction, LoopBand, Protocol, Situation, instruct};
 pub use input::{
     Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,
 };

@@ -60,9 +60,9 @@ impl MonitorSetup {
 }
 
 /// Notices of one kind shown before the rest are only counted.
-pub const NOTICES_SHOWN: usize = 10;
+pub(crate) const NOTICES_SHOWN: usize = 10;
 
-/// Which notices a recording shows: the first [`NOTICES_SHOWN`] of each
+/// Which notices a recording shows: the first `NOTICES_SHOWN` of each
 /// kind, then one line saying the rest are only counted.
 #[derive(Debug, Clone, Default)]
 pub struct NoticeLimit {

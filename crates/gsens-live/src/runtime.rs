@@ -48,7 +48,7 @@ const EVENTS_PER_ROUND: usize = 2000;
 
 /// The inputs of a session.
 pub enum Inputs {
-    /// One merged stream (`imu,…` and `trk,…` lines, [`crate::input`]), read to its end.
+    /// One merged stream (`imu,…` and `trk,…` lines, [`crate::parse_merged_line`]), read to its end.
     Merged {
         /// Its name in notices and in `received/` (`stdin`).
         name: String,

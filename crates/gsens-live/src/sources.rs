@@ -60,7 +60,7 @@ pub enum LineFormat {
     Imu,
     /// Lines of `tracking.csv`.
     Tracking,
-    /// The merged stream (`imu,…` and `trk,…`, see [`crate::input`]).
+    /// The merged stream (`imu,…` and `trk,…`, see [`crate::parse_merged_line`]).
     Merged,
 }
 

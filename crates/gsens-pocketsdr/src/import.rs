@@ -63,7 +63,7 @@ use crate::log::{ChRecord, Garbled, PocketSdrLog, read_log};
 use crate::options::{DEFAULT_EPOCH_S, PocketSdrOptions, Setting, SettingSource};
 
 /// The signal gsens estimates from.
-pub const L1CA: &str = "L1CA";
+pub(crate) const L1CA: &str = "L1CA";
 
 /// How a log is converted.
 #[derive(Debug, Clone, PartialEq, Serialize)]

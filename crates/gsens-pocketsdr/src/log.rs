@@ -34,12 +34,12 @@ use serde::Serialize;
 use crate::error::PocketSdrError;
 
 /// Fields of a `$CH` line of PocketSDR 0.17, the type included.
-pub const CH_FIELDS_V017: usize = 27;
+pub(crate) const CH_FIELDS_V017: usize = 27;
 /// The fewest fields a `$CH` line must have: up to `err_code` (older
 /// versions write fewer after it).
-pub const CH_FIELDS_MIN: usize = 19;
+pub(crate) const CH_FIELDS_MIN: usize = 19;
 /// The names of the `$CH` fields by index (0 = the type).
-pub const CH_FIELD_NAMES: [&str; CH_FIELDS_V017] = [
+pub(crate) const CH_FIELD_NAMES: [&str; CH_FIELDS_V017] = [
     "type", "time", "ch", "rfch", "sat", "sig", "prn", "lock", "cn0", "coff", "dop", "adr", "ssync", "bsync", "fsync",
     "rev", "srev", "err_phas", "err_code", "tow_v", "tow", "week", "type", "nnav", "nerr", "nlol", "nfec",
 ];
@@ -92,7 +92,7 @@ impl std::fmt::Display for Garbled {
 }
 
 /// Garbled lines kept with their details (the rest are counted).
-pub const GARBLED_KEPT: usize = 20;
+pub(crate) const GARBLED_KEPT: usize = 20;
 
 /// A parsed log.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -107,7 +107,7 @@ pub struct PocketSdrLog {
     pub ch_fields: usize,
     /// Lines per message type (`$CH`, `$LOG`, …; garbled lines under `garbled`).
     pub messages: BTreeMap<String, u64>,
-    /// The first [`GARBLED_KEPT`] garbled lines.
+    /// The first `GARBLED_KEPT` garbled lines.
     pub garbled: Vec<Garbled>,
     /// All garbled lines.
     pub garbled_count: u64,

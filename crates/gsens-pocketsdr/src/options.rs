@@ -22,10 +22,10 @@ use gsens_core::pocket_sdr::DEFAULT_BW_HZ;
 use crate::error::PocketSdrError;
 
 /// `pocket_trk`'s `epoch` when not set (PocketSDR's `SDR_EPOCH`) \[s\].
-pub const DEFAULT_EPOCH_S: f64 = 1.0;
+pub(crate) const DEFAULT_EPOCH_S: f64 = 1.0;
 
 /// The keys `pocket_trk` knows (`sdr_rcv_setopt`, and `fftw_wisdom`).
-pub const KNOWN_KEYS: [&str; 18] = [
+pub(crate) const KNOWN_KEYS: [&str; 18] = [
     "epoch",
     "lag_epoch",
     "el_mask",

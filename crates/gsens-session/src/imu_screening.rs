@@ -22,9 +22,9 @@ use gsens_io::ImuSeries;
 pub const SPIKE_SIGMAS: f64 = 12.0;
 
 /// The largest specific-force amplitude of a board shaken by hand \[m/s²\] (3 g).
-pub const HAND_MAX_ACCEL_MPS2: f64 = 30.0;
+pub(crate) const HAND_MAX_ACCEL_MPS2: f64 = 30.0;
 /// The highest frequency a hand shakes a board at \[Hz\].
-pub const HAND_MAX_FREQ_HZ: f64 = 5.0;
+pub(crate) const HAND_MAX_FREQ_HZ: f64 = 5.0;
 
 /// What [`despike_imu`] replaced.
 #[derive(Debug, Clone, Default, PartialEq)]

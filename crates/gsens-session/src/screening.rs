@@ -268,20 +268,20 @@ fn plural(n: usize) -> &'static str {
 
 /// Bit flags of why a row is excluded.
 pub(crate) mod flag {
-    pub const SLIP: u8 = 1;
-    pub const NOISY: u8 = 2;
-    pub const LOW_GAIN: u8 = 4;
-    pub const PHASE_RANGE: u8 = 8;
-    pub const CN0_DROP: u8 = 16;
-    pub const TRACK: u8 = 32;
+    pub(crate) const SLIP: u8 = 1;
+    pub(crate) const NOISY: u8 = 2;
+    pub(crate) const LOW_GAIN: u8 = 4;
+    pub(crate) const PHASE_RANGE: u8 = 8;
+    pub(crate) const CN0_DROP: u8 = 16;
+    pub(crate) const TRACK: u8 = 32;
     /// The start-up transient, as the slip test sees it (reset with SLIP in its second round).
-    pub const STARTUP: u8 = 64;
+    pub(crate) const STARTUP: u8 = 64;
     /// The start-up transient, as the C/N0 test sees it.
-    pub const STARTUP_CN0: u8 = 128;
+    pub(crate) const STARTUP_CN0: u8 = 128;
     /// Either start-up flag.
-    pub const ANY_STARTUP: u8 = STARTUP | STARTUP_CN0;
+    pub(crate) const ANY_STARTUP: u8 = STARTUP | STARTUP_CN0;
     /// The names in `ExcludedSpan::reasons` (a mask of several bits: one name for any of them).
-    pub const NAMES: [(u8, &str); 7] = [
+    pub(crate) const NAMES: [(u8, &str); 7] = [
         (SLIP, "slip"),
         (NOISY, "noisy"),
         (LOW_GAIN, "low_gain"),
@@ -314,7 +314,7 @@ pub(crate) struct Rows {
 }
 
 impl Rows {
-    pub fn tracks(&self) -> usize {
+    pub(crate) fn tracks(&self) -> usize {
         self.track_start.len().saturating_sub(1)
     }
 
@@ -359,7 +359,7 @@ pub(crate) struct Screened {
 
 impl Screened {
     /// Nothing excluded, one segment per track.
-    pub fn none(rows: &Rows) -> Self {
+    pub(crate) fn none(rows: &Rows) -> Self {
         let n = rows.epoch.len();
         Screened {
             flags: vec![0; n],
@@ -961,7 +961,7 @@ fn phase_range_margin_rad(sigma_rad: f64, rows: usize) -> f64 {
 
 /// Probability that noise alone flags any row of a track in the linear-range
 /// test (test 4): 1 %.
-pub const PHASE_RANGE_FALSE_ALARM: f64 = 0.01;
+pub(crate) const PHASE_RANGE_FALSE_ALARM: f64 = 0.01;
 
 fn spread_with_guard(epoch: &[u32], flags: &mut [u8], bits: u8, guard: u32) {
     if guard == 0 || !flags.iter().any(|&f| f & bits != 0) {

@@ -69,13 +69,13 @@ use gsens_core::LoggedPhase;
 /// Stream ids of [`crate::rng::substream`] for the session's components
 /// (shared with [`crate::iq`], so both draw the same oscillator, motion and IMU).
 pub(crate) mod stream {
-    pub const OSCILLATOR: u64 = 1;
-    pub const MOTION: u64 = 2;
-    pub const IMU_ERRORS: u64 = 3;
-    pub const IMU_NOISE: u64 = 4;
-    pub const CN0_OFFSETS: u64 = 5;
+    pub(crate) const OSCILLATOR: u64 = 1;
+    pub(crate) const MOTION: u64 = 2;
+    pub(crate) const IMU_ERRORS: u64 = 3;
+    pub(crate) const IMU_NOISE: u64 = 4;
+    pub(crate) const CN0_OFFSETS: u64 = 5;
     /// Channel streams: CHANNEL | prn << 32 | start second.
-    pub const CHANNEL: u64 = 0xC4A7 << 48;
+    pub(crate) const CHANNEL: u64 = 0xC4A7 << 48;
 }
 
 /// Interval of the satellite geometry updates \[s\].

@@ -1,8 +1,6 @@
 //! The screen: one [`LiveView`] drawn on a ratatui frame.
 
-use gsens_live::guidance::GENTLER_FRACTION;
-use gsens_live::session::ChannelStatus;
-use gsens_live::{AxisProgress, Instruction, LiveView};
+use gsens_live::{AxisProgress, ChannelStatus, GENTLER_FRACTION, Instruction, LiveView};
 use ratatui::Frame;
 use ratatui::backend::TestBackend;
 use ratatui::buffer::Buffer;

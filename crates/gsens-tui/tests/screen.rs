@@ -7,15 +7,15 @@
 //! The Γ̂, σ, RMS, C/N0 and phase values below are fixtures chosen to look
 //! like a session (of the order of the README's demo), not results; the
 //! loop's band is computed from the paper's loop, and each instruction by
-//! `gsens_live::guidance::instruct` from the fixture's situation, so the
+//! `gsens_live::instruct` from the fixture's situation, so the
 //! screen is drawn from views the session could produce.
 
 use std::path::PathBuf;
 
 use gsens_core::{LoopModel, LoopSpec};
-use gsens_live::guidance::{Situation, instruct};
-use gsens_live::session::ChannelStatus;
+use gsens_live::ChannelStatus;
 use gsens_live::{AxisProgress, Instruction, LiveView, LoopBand, Notice, Shaking};
+use gsens_live::{Situation, instruct};
 use gsens_tui::ratatui::backend::TestBackend;
 use gsens_tui::ratatui::style::Color;
 use gsens_tui::{phase_gauge_is_red, progress_to_target, render_text};

@@ -8,17 +8,17 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::{PI, TAU};
 
 /// The paper's Γ [Hz/(m/s²)].
-pub const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
+pub(crate) const GAMMA: [f64; 3] = [0.09, 0.08, -0.08];
 /// Log (and loop) interval [s].
-pub const T: f64 = 0.025;
+pub(crate) const T: f64 = 0.025;
 
 /// Epoch times k·T.
-pub fn times(n: usize) -> Vec<f64> {
+pub(crate) fn times(n: usize) -> Vec<f64> {
     (0..n).map(|k| k as f64 * T).collect()
 }
 
 /// The estimator's view of a series on the grid `t_s`.
-pub fn series<'a>(t_s: &'a [f64], phase: &'a [Option<f64>], accel: &'a [[f64; 3]]) -> EpochSeries<'a> {
+pub(crate) fn series<'a>(t_s: &'a [f64], phase: &'a [Option<f64>], accel: &'a [[f64; 3]]) -> EpochSeries<'a> {
     EpochSeries { log_interval_s: T, t_s, phase_err_rad: phase, accel_mps2: accel, imu_time_offset_s: 0.0 }
 }
 
@@ -26,7 +26,7 @@ pub fn series<'a>(t_s: &'a [f64], phase: &'a [Option<f64>], accel: &'a [[f64; 3]
 /// shaken for 20 s each at 0.9 Hz with 5 s rests; φ from the paper's discrete
 /// loop at T, plus `noise(rng, φ)` (which returns the logged phase, `None`
 /// for a gap).
-pub fn paper_session(
+pub(crate) fn paper_session(
     seed: u64,
     shake_z: bool,
     mut noise: impl FnMut(&mut Xoshiro256PlusPlus, usize, f64) -> Option<f64>,

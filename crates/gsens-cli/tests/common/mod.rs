@@ -5,12 +5,12 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 /// Runs `gsens` with `args`.
-pub fn run(args: &[&str]) -> Output {
+pub(crate) fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_gsens")).args(args).output().unwrap()
 }
 
 /// Runs `gsens` with `args`, asserts success and returns its standard output.
-pub fn gsens(args: &[&str]) -> String {
+pub(crate) fn gsens(args: &[&str]) -> String {
     let out = run(args);
     assert!(out.status.success(), "gsens {args:?}: {}", String::from_utf8_lossy(&out.stderr));
     String::from_utf8(out.stdout).unwrap()
@@ -19,7 +19,7 @@ pub fn gsens(args: &[&str]) -> String {
 /// Runs `gsens` with `args`, asserts that it produced an estimate (exit
 /// status 0, or 3: produced but not trustworthy) and returns its standard
 /// output and whether it was trustworthy.
-pub fn gsens_any(args: &[&str]) -> (String, bool) {
+pub(crate) fn gsens_any(args: &[&str]) -> (String, bool) {
     let out = run(args);
     let code = out.status.code();
     assert!(matches!(code, Some(0 | 3)), "gsens {args:?}: status {code:?}: {}", String::from_utf8_lossy(&out.stderr));
@@ -27,18 +27,18 @@ pub fn gsens_any(args: &[&str]) -> (String, bool) {
 }
 
 /// The JSON file at `path`.
-pub fn json(path: &Path) -> serde_json::Value {
+pub(crate) fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// A JSON array of three numbers (null → NaN).
-pub fn vec3(v: &serde_json::Value) -> [f64; 3] {
+pub(crate) fn vec3(v: &serde_json::Value) -> [f64; 3] {
     [0, 1, 2].map(|i| v[i].as_f64().unwrap_or(f64::NAN))
 }
 
 /// A scratch folder, removed with everything in it when dropped (at the end
 /// of the test, passed or failed); it derefs to its path.
-pub struct TestDir(tempfile::TempDir);
+pub(crate) struct TestDir(tempfile::TempDir);
 
 impl std::ops::Deref for TestDir {
     type Target = Path;
@@ -55,18 +55,18 @@ impl AsRef<Path> for TestDir {
 
 /// A fresh scratch folder for test `name` in the system's temporary
 /// directory, removed when the returned value is dropped.
-pub fn temp_dir(name: &str) -> TestDir {
+pub(crate) fn temp_dir(name: &str) -> TestDir {
     TestDir(tempfile::Builder::new().prefix(&format!("gsens-test-{name}-")).tempdir().unwrap())
 }
 
 /// A path as a string argument.
-pub fn s(p: &Path) -> String {
+pub(crate) fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
 /// Runs `gsens` with `args`, asserts exit status 2 (an error, not a panic)
 /// and returns its standard error.
-pub fn fails(args: &[&str]) -> String {
+pub(crate) fn fails(args: &[&str]) -> String {
     let out = run(args);
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
     assert_eq!(out.status.code(), Some(2), "gsens {args:?}: {err}");
@@ -76,7 +76,7 @@ pub fn fails(args: &[&str]) -> String {
 
 /// Writes `src` (an imu.csv in m/s²) as `dst` in g: fx, fy, fz divided by
 /// g₀ = 9.80665 m/s², as an IMU logging in g would have written it.
-pub fn imu_in_g(src: &Path, dst: &Path) {
+pub(crate) fn imu_in_g(src: &Path, dst: &Path) {
     let text = std::fs::read_to_string(src).unwrap();
     let mut lines = text.lines();
     let mut g = String::from(lines.next().unwrap());

@@ -11,7 +11,7 @@ use nalgebra::Complex;
 /// driven by Δf_k = cos(2πf·kT) for `settle_s` seconds, then correlated with
 /// the input over the whole cycles of `span_s`:
 /// L ≈ (2/N)·Σ φ_k·e^(−j2πf·kT).
-pub fn simulated_response(
+pub(crate) fn simulated_response(
     mut step: impl FnMut(f64) -> f64,
     f_hz: f64,
     t_s: f64,
@@ -36,7 +36,7 @@ pub fn simulated_response(
 /// Asserts that the loop stepped by `step` answers a sinusoid at `f_hz` as
 /// `model` says, within `rel_tol` of |model| ([`simulated_response`]);
 /// `what` names the case in the failure message.
-pub fn assert_sinusoid_response(
+pub(crate) fn assert_sinusoid_response(
     step: impl FnMut(f64) -> f64,
     f_hz: f64,
     t_s: f64,

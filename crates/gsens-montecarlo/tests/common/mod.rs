@@ -12,12 +12,12 @@ use gsens_sim::scenario::Scenario;
 use gsens_sim::{SimulatedLogs, simulate_logs};
 
 /// The default scenario (the paper's experiment) simulated with `seed`.
-pub fn session(seed: u64) -> SimulatedLogs {
+pub(crate) fn session(seed: u64) -> SimulatedLogs {
     simulate_logs(&Scenario::default(), seed).expect("the default scenario simulates")
 }
 
 /// The scenario of `toml` (on top of the defaults) simulated with `seed`.
-pub fn session_of(toml: &str, seed: u64) -> SimulatedLogs {
+pub(crate) fn session_of(toml: &str, seed: u64) -> SimulatedLogs {
     let scenario = Scenario::from_toml_str(toml).expect("a valid scenario");
     simulate_logs(&scenario, seed).expect("the scenario simulates")
 }
@@ -25,18 +25,18 @@ pub fn session_of(toml: &str, seed: u64) -> SimulatedLogs {
 /// A second clean session made another way: another seed, the latest
 /// discriminator output logged, a consumer MEMS IMU (16-bit over ±4 g) at
 /// 100 Hz.
-pub fn other_clean_session() -> SimulatedLogs {
+pub(crate) fn other_clean_session() -> SimulatedLogs {
     session_of("[log]\nphase = \"last\"\n[imu]\npreset = \"consumer_mems\"\nrate_hz = 100.0\n", 11)
 }
 
 /// The truth as the IMU sees it \[Hz/(m/s²)\].
-pub fn truth(logs: &SimulatedLogs) -> [f64; 3] {
+pub(crate) fn truth(logs: &SimulatedLogs) -> [f64; 3] {
     logs.truth.sensitivity.gamma_imu_axes_hz_per_mps2
 }
 
 /// The receiver's loop as the default scenario runs it: 2nd order, 3 Hz,
 /// updated every 1 ms, each row the mean of its 25 updates.
-pub fn right_loop() -> CalibrationOptions {
+pub(crate) fn right_loop() -> CalibrationOptions {
     CalibrationOptions {
         order: Some(2),
         bn_hz: Some(3.0),
@@ -48,7 +48,7 @@ pub fn right_loop() -> CalibrationOptions {
 
 /// The tracking log with every row changed by `f`, in the order the
 /// simulator wrote them (epoch by epoch).
-pub fn map_tracking(log: &TrackingLog, f: impl Fn(&mut TrackingRow)) -> TrackingLog {
+pub(crate) fn map_tracking(log: &TrackingLog, f: impl Fn(&mut TrackingRow)) -> TrackingLog {
     let mut rows: Vec<(usize, TrackingRow)> = Vec::with_capacity(log.rows());
     for (track, t) in log.tracks().iter().enumerate() {
         for k in 0..t.len() {
@@ -72,7 +72,7 @@ pub fn map_tracking(log: &TrackingLog, f: impl Fn(&mut TrackingRow)) -> Tracking
 
 /// The IMU log with every sample's time stamp changed by `t` and its specific
 /// force by `a`.
-pub fn map_imu(imu: &ImuSeries, t: impl Fn(f64) -> f64, a: impl Fn([f64; 3]) -> [f64; 3]) -> ImuSeries {
+pub(crate) fn map_imu(imu: &ImuSeries, t: impl Fn(f64) -> f64, a: impl Fn([f64; 3]) -> [f64; 3]) -> ImuSeries {
     ImuSeries {
         t_s: imu.t_s.iter().map(|&x| t(x)).collect(),
         accel_mps2: imu.accel_mps2.iter().map(|&x| a(x)).collect(),
@@ -80,26 +80,26 @@ pub fn map_imu(imu: &ImuSeries, t: impl Fn(f64) -> f64, a: impl Fn([f64; 3]) -> 
 }
 
 /// The result document of `tracking` and `imu` calibrated with `options`.
-pub fn estimate(tracking: &TrackingLog, imu: &ImuSeries, options: &CalibrationOptions) -> ResultDocument {
+pub(crate) fn estimate(tracking: &TrackingLog, imu: &ImuSeries, options: &CalibrationOptions) -> ResultDocument {
     let settings = options.pipeline_settings().expect("valid options");
     let outcome = calibrate_logs(tracking, imu, "imu", &settings).expect("the session calibrates");
     outcome.document(None)
 }
 
 /// The warning codes of a document, in its order.
-pub fn codes(doc: &ResultDocument) -> Vec<WarningCode> {
+pub(crate) fn codes(doc: &ResultDocument) -> Vec<WarningCode> {
     doc.warnings.iter().map(|w| w.code).collect()
 }
 
 /// The message of the warning `code`.
-pub fn message(doc: &ResultDocument, code: WarningCode) -> &str {
+pub(crate) fn message(doc: &ResultDocument, code: WarningCode) -> &str {
     let w = doc.warnings.iter().find(|w| w.code == code);
     &w.unwrap_or_else(|| panic!("no {}: {:?}", code.as_str(), codes(doc))).message
 }
 
 /// |Γ̂ − Γ|/|Γ| and the largest |Γ̂ − Γ|/σ over the axes (∞ for an axis with
 /// no estimate).
-pub fn error_and_z(doc: &ResultDocument, truth: [f64; 3]) -> (f64, f64) {
+pub(crate) fn error_and_z(doc: &ResultDocument, truth: [f64; 3]) -> (f64, f64) {
     let c = &doc.calibration;
     let norm = truth.iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut err2 = 0.0;
@@ -118,7 +118,7 @@ pub fn error_and_z(doc: &ResultDocument, truth: [f64; 3]) -> (f64, f64) {
 }
 
 /// Asserts that every axis's Γ̂ is within 3σ of the truth.
-pub fn assert_within_3_sigma(doc: &ResultDocument, truth: [f64; 3]) {
+pub(crate) fn assert_within_3_sigma(doc: &ResultDocument, truth: [f64; 3]) {
     let c = &doc.calibration;
     for i in 0..3 {
         let (g, s) = (c.gamma_hz_per_mps2[i].unwrap(), c.sigma_hz_per_mps2[i].unwrap());

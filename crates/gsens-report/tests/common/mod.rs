@@ -4,11 +4,11 @@
 use gsens_calib::{Calibration, EpochSeries, EstimateSettings, calibrate, regressors};
 
 /// The true Γ of the synthetic session \[Hz/(m/s²)\] (the paper's values).
-pub const TRUTH: [f64; 3] = [0.09, 0.08, -0.08];
+pub(crate) const TRUTH: [f64; 3] = [0.09, 0.08, -0.08];
 
 /// A 40 Hz, 60 s session: rest, then shaking along x, y, z in turn near the
 /// loop's natural frequency, then all at once; φ = φ_aᵀΓ + deterministic noise.
-pub struct Session {
+pub(crate) struct Session {
     pub t_s: Vec<f64>,
     pub accel_mps2: Vec<[f64; 3]>,
     pub phase_err_rad: Vec<Option<f64>>,
@@ -16,12 +16,12 @@ pub struct Session {
     pub calibration: Calibration,
 }
 
-pub fn session(shake: [bool; 3]) -> Session {
+pub(crate) fn session(shake: [bool; 3]) -> Session {
     session_shaken(shake, 3.0)
 }
 
 /// [`session`] with the shaking's amplitude `amplitude_mps2` \[m/s²\] (3 in [`session`]).
-pub fn session_shaken(shake: [bool; 3], amplitude_mps2: f64) -> Session {
+pub(crate) fn session_shaken(shake: [bool; 3], amplitude_mps2: f64) -> Session {
     let dt = 0.025;
     let n = 2400;
     let t_s: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
@@ -65,7 +65,7 @@ pub fn session_shaken(shake: [bool; 3], amplitude_mps2: f64) -> Session {
 }
 
 /// PNG facts: (width, height, distinct colours, fraction of non-white pixels).
-pub fn png_facts(bytes: &[u8]) -> (u32, u32, usize, f64) {
+pub(crate) fn png_facts(bytes: &[u8]) -> (u32, u32, usize, f64) {
     let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     let mut reader = decoder.read_info().expect("a PNG header");
     let mut buf = vec![0; reader.output_buffer_size().expect("a buffer size")];
@@ -85,7 +85,7 @@ pub fn png_facts(bytes: &[u8]) -> (u32, u32, usize, f64) {
 
 /// A minimal well-formedness check of an SVG document: one root `<svg>`
 /// element, every start tag closed in order, attribute quotes balanced.
-pub fn check_svg(svg: &str, size: (u32, u32)) {
+pub(crate) fn check_svg(svg: &str, size: (u32, u32)) {
     let body = svg.trim();
     let body = if body.starts_with("<?xml") { body.split_once("?>").unwrap().1.trim() } else { body };
     assert!(body.starts_with("<svg"), "no <svg> root: {}", &body[..body.len().min(80)]);
@@ -111,7 +111,7 @@ pub fn check_svg(svg: &str, size: (u32, u32)) {
 }
 
 /// Where the tests leave their figures, to be looked at.
-pub fn out_dir() -> std::path::PathBuf {
+pub(crate) fn out_dir() -> std::path::PathBuf {
     let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("gsens-report-figures");
     std::fs::create_dir_all(&d).unwrap();
     d
