@@ -478,17 +478,13 @@ fn deviations_span(
     let cells = BLOCK * n_tracks;
     let (mut present, mut value) = (vec![f64::NAN; cells], vec![f64::NAN; cells]);
     let mut dev = vec![f64::NAN; cells];
-    let mut vals = [0.0f64; MAX_AT_EPOCH];
-    let mut sorted = [0.0f64; MAX_AT_EPOCH];
-    let mut rank_of = [0usize; MAX_AT_EPOCH];
-    let mut keys = [0i32; MAX_AT_EPOCH];
-    let mut slot = vec![usize::MAX; n_tracks];
+    let mut scratch = MedianScratch::new(n_tracks);
     for e0 in (span_start..span_end).step_by(BLOCK) {
         let e1 = (e0 + BLOCK).min(span_end);
         present.fill(f64::NAN);
         value.fill(f64::NAN);
+        block_start.copy_from_slice(&cursor);
         for i in 0..n_tracks {
-            block_start[i] = cursor[i];
             let end = rows.track_start[i + 1];
             while cursor[i] < end && (rows.epoch[cursor[i]] as usize) < e1 {
                 let r = cursor[i];
@@ -503,54 +499,85 @@ fn deviations_span(
         }
         for e in 0..e1 - e0 {
             let (p_row, v_row) = (&present[e * n_tracks..][..n_tracks], &value[e * n_tracks..][..n_tracks]);
-            let d_row = &mut dev[e * n_tracks..][..n_tracks];
-            // The values entering the median (at most MAX_AT_EPOCH of them).
-            let mut m = 0;
-            for (i, &v) in v_row.iter().enumerate() {
-                slot[i] = usize::MAX;
-                if v.is_finite() && m < MAX_AT_EPOCH {
-                    vals[m] = v;
-                    slot[i] = m;
-                    m += 1;
-                }
-            }
-            // Rank sort of a dozen values: branch-free integer comparisons of
-            // order-preserving single-precision keys, their 6 low bits replaced
-            // by the index (distinct keys; values within ~1e-5 of each other may
-            // come out of order, which moves a median by as little).
-            for a in 0..m {
-                keys[a] = (order_key(vals[a]) & !63) | a as i32;
-            }
-            for a in 0..m {
-                let ka = keys[a];
-                let n_below = keys[..m].iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
-                rank_of[a] = n_below;
-                sorted[n_below] = vals[a];
-            }
-            for i in 0..n_tracks {
-                if !p_row[i].is_finite() {
-                    continue;
-                }
-                // The median of the others: of `sorted` without the track's own
-                // value (rank `own`, or past the end when not among them).
-                let inside = slot[i] != usize::MAX;
-                let own = if inside { rank_of[slot[i]] } else { usize::MAX };
-                let others = m - usize::from(inside);
-                if others < 2 {
-                    d_row[i] = f64::NAN;
-                    continue;
-                }
-                let get = |j: usize| sorted[j + usize::from(j >= own)];
-                let (lo, hi) = (get((others - 1) / 2), get(others / 2));
-                let md = 0.5 * (lo + hi);
-                d_row[i] = p_row[i] - md;
-            }
+            scratch.deviations(p_row, v_row, &mut dev[e * n_tracks..][..n_tracks]);
         }
         for i in 0..n_tracks {
             for r in block_start[i]..cursor[i] {
                 let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
                 out(i, r, dev[k]);
             }
+        }
+    }
+}
+
+/// The buffers of one epoch's medians of the others (at most
+/// [`MAX_AT_EPOCH`] values enter them).
+struct MedianScratch {
+    vals: [f64; MAX_AT_EPOCH],
+    sorted: [f64; MAX_AT_EPOCH],
+    rank_of: [usize; MAX_AT_EPOCH],
+    keys: [i32; MAX_AT_EPOCH],
+    /// Per track: the index of its value in `vals`, `usize::MAX` when none.
+    slot: Vec<usize>,
+}
+
+impl MedianScratch {
+    fn new(n_tracks: usize) -> Self {
+        MedianScratch {
+            vals: [0.0; MAX_AT_EPOCH],
+            sorted: [0.0; MAX_AT_EPOCH],
+            rank_of: [0; MAX_AT_EPOCH],
+            keys: [0; MAX_AT_EPOCH],
+            slot: vec![usize::MAX; n_tracks],
+        }
+    }
+
+    /// One epoch: per track present (`p_row` finite) its value less the
+    /// median of the other tracks' values `v_row` (those finite), into
+    /// `d_row`; NaN where fewer than two others.
+    #[inline]
+    fn deviations(&mut self, p_row: &[f64], v_row: &[f64], d_row: &mut [f64]) {
+        let MedianScratch { vals, sorted, rank_of, keys, slot } = self;
+        // The values entering the median (at most MAX_AT_EPOCH of them).
+        let mut m = 0;
+        for (i, &v) in v_row.iter().enumerate() {
+            slot[i] = usize::MAX;
+            if v.is_finite() && m < MAX_AT_EPOCH {
+                vals[m] = v;
+                slot[i] = m;
+                m += 1;
+            }
+        }
+        // Rank sort of a dozen values: branch-free integer comparisons of
+        // order-preserving single-precision keys, their 6 low bits replaced
+        // by the index (distinct keys; values within ~1e-5 of each other may
+        // come out of order, which moves a median by as little).
+        for a in 0..m {
+            keys[a] = (order_key(vals[a]) & !63) | a as i32;
+        }
+        for a in 0..m {
+            let ka = keys[a];
+            let n_below = keys[..m].iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
+            rank_of[a] = n_below;
+            sorted[n_below] = vals[a];
+        }
+        for i in 0..p_row.len() {
+            if !p_row[i].is_finite() {
+                continue;
+            }
+            // The median of the others: of `sorted` without the track's own
+            // value (rank `own`, or past the end when not among them).
+            let inside = slot[i] != usize::MAX;
+            let own = if inside { rank_of[slot[i]] } else { usize::MAX };
+            let others = m - usize::from(inside);
+            if others < 2 {
+                d_row[i] = f64::NAN;
+                continue;
+            }
+            let get = |j: usize| sorted[j + usize::from(j >= own)];
+            let (lo, hi) = (get((others - 1) / 2), get(others / 2));
+            let md = 0.5 * (lo + hi);
+            d_row[i] = p_row[i] - md;
         }
     }
 }
@@ -1126,6 +1153,12 @@ struct SlipEvents {
 /// Test 1 on one track: sets the SLIP flags (STARTUP for an event beginning
 /// before epoch `startup_end`: the pull-in, neither a slip nor a step), the
 /// level of every row and the segment of every row.
+///
+/// The deviation is followed around a level that adapts to the in-bound
+/// rows; a row out of bounds starts an event, which ends when the
+/// deviation has stayed in bounds for `settle_s` (a lone row out of bounds
+/// is noise, not a slip) or, after `step_min_s`, has settled on a new level
+/// (a step); one never settled is excluded to the end of the track.
 #[allow(clippy::too_many_arguments)]
 fn slip_events(
     epoch: &[u32],
@@ -1140,33 +1173,14 @@ fn slip_events(
     segment: &mut [u16],
     ev: &mut Vec<usize>,
 ) -> SlipEvents {
-    let n = epoch.len();
-    let thr = cfg.deviation_k * sigma;
-    let alpha = (log_interval_s / cfg.level_tau_s).min(1.0);
-    let to_epochs = |s: f64| ((s / log_interval_s).round() as u32).max(1);
-    let (settle, step_min, step_win) =
-        (to_epochs(cfg.settle_s), to_epochs(cfg.step_min_s), to_epochs(cfg.step_min_s / 2.0));
     let Some(first_valid) = d.iter().position(|v| v.is_finite()) else {
         return SlipEvents::default();
     };
+    let mut scan = SlipScan::new((epoch, d), sigma, log_interval_s, cfg, (guard, startup_end));
+    let alpha = (log_interval_s / cfg.level_tau_s).min(1.0);
+    let thr = scan.thr;
     // The offset makes the track's median deviation zero: the level of its bulk.
     let mut l = 0.0;
-    let mut found = SlipEvents::default();
-    // An event that began in the start-up is the pull-in: flagged as such, not counted as a slip.
-    let close = |first: usize, found: &mut SlipEvents| {
-        if epoch[first] < startup_end {
-            found.startup += 1;
-            flag::STARTUP
-        } else {
-            found.slips += 1;
-            flag::SLIP
-        }
-    };
-    // Where an event's exclusion starts: the guard before its first row, or
-    // the track's first row for the start-up (what precedes the pull-in's
-    // excursion is the pull-in too).
-    let excluded_from =
-        |bit: u8, first: usize| if bit == flag::STARTUP { epoch[0] } else { epoch[first].saturating_sub(guard) };
     let mut seg: u16 = 0;
     // The event: its rows with a deviation (`ev`), the latest out of bounds.
     ev.clear();
@@ -1175,74 +1189,39 @@ fn slip_events(
     // noise, not a slip (see `ScreeningConfig::deviation_k`).
     let mut n_out = 0usize;
     let mut window: Vec<f64> = Vec::new();
-    for j in 0..n {
+    for j in 0..epoch.len() {
         segment[j] = seg;
+        level[j] = l;
         let x = d[j] - l;
         if !x.is_finite() {
-            level[j] = l;
             continue;
         }
         if ev.is_empty() {
             if x.abs() <= thr {
                 l += alpha * x;
+                level[j] = l;
             } else {
                 ev.push(j);
-                last_out = j;
-                n_out = 1;
+                (last_out, n_out) = (j, 1);
             }
-            level[j] = l;
             continue;
         }
         ev.push(j);
-        level[j] = l;
         if x.abs() > thr {
             last_out = j;
             n_out += 1;
-        } else if epoch[j] - epoch[last_out] >= settle {
+        } else if epoch[j] - epoch[last_out] >= scan.settle {
             // Back within bounds long enough: the event ends.
-            if n_out < 2 {
-                ev.clear();
-                continue;
+            if n_out >= 2 {
+                scan.flag_event(ev[0], epoch[last_out] + guard, flags);
             }
-            let bit = close(ev[0], &mut found);
-            flag_epochs(epoch, flags, excluded_from(bit, ev[0]), epoch[last_out] + guard, bit);
             ev.clear();
             continue;
         }
-        // A step: after step_min, the last step_win epochs quiet around a new level.
-        if epoch[j] - epoch[ev[0]] < step_min {
-            continue;
-        }
-        let from = epoch[j].saturating_sub(step_win - 1);
-        let first = ev.partition_point(|&k| epoch[k] < from);
-        if ev.len() - first < (step_win as usize / 2).max(2) {
-            continue;
-        }
-        window.clear();
-        window.extend(ev[first..].iter().map(|&k| d[k]));
-        let m = median_in_place(&mut window);
-        if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
-            continue;
-        }
-        // Settled on the level m: the event ends at the earliest row fitting it.
-        let mut b = first;
-        while b > 0 && (d[ev[b - 1]] - m).abs() <= thr {
-            b -= 1;
-        }
+        let Some((b, m)) = scan.settled_level(ev, j, &mut window) else { continue };
         let rb = ev[b];
-        let eb = epoch[rb];
-        if rb != first_valid {
-            let bit = close(ev[0], &mut found);
-            let lo = excluded_from(bit, ev[0]);
-            flag_epochs(epoch, flags, lo, eb.saturating_sub(1).max(lo), bit);
-            flag_epochs(epoch, flags, eb, eb + guard, bit);
-            // A new level beyond the bounds of the old one (not at the
-            // track's start, nor the level a pull-in settles on): a step,
-            // and a new segment from row rb.
-            if bit == flag::SLIP && (m - l).abs() > thr {
-                found.steps += 1;
-                seg = seg.saturating_add(1);
-            }
+        if rb != first_valid && scan.end_at_step(ev[0], epoch[rb], m - l, flags) {
+            seg = seg.saturating_add(1);
         }
         l = m;
         level[rb..=j].fill(l);
@@ -1251,10 +1230,118 @@ fn slip_events(
     }
     if n_out >= 2 && !ev.is_empty() {
         // Never settled: excluded to the end of the track.
-        let bit = close(ev[0], &mut found);
-        flag_epochs(epoch, flags, excluded_from(bit, ev[0]), u32::MAX, bit);
+        scan.flag_event(ev[0], u32::MAX, flags);
     }
-    found
+    scan.found
+}
+
+/// What test 1 follows one track with: its rows' epochs and deviations, the
+/// bound, the settings in epochs, and the events found so far.
+struct SlipScan<'a> {
+    epoch: &'a [u32],
+    d: &'a [f64],
+    /// The bound k·σ \[rad\].
+    thr: f64,
+    guard: u32,
+    startup_end: u32,
+    /// `settle_s`, `step_min_s` and half of it, in epochs (at least 1).
+    settle: u32,
+    step_min: u32,
+    step_win: u32,
+    found: SlipEvents,
+}
+
+impl<'a> SlipScan<'a> {
+    fn new(
+        (epoch, d): (&'a [u32], &'a [f64]),
+        sigma: f64,
+        log_interval_s: f64,
+        cfg: &ScreeningConfig,
+        (guard, startup_end): (u32, u32),
+    ) -> Self {
+        let to_epochs = |s: f64| ((s / log_interval_s).round() as u32).max(1);
+        SlipScan {
+            epoch,
+            d,
+            thr: cfg.deviation_k * sigma,
+            guard,
+            startup_end,
+            settle: to_epochs(cfg.settle_s),
+            step_min: to_epochs(cfg.step_min_s),
+            step_win: to_epochs(cfg.step_min_s / 2.0),
+            found: SlipEvents::default(),
+        }
+    }
+
+    /// Counts an event beginning at row `first`: one that began in the
+    /// start-up is the pull-in, flagged as such and not counted as a slip.
+    /// Returns its flag.
+    fn close(&mut self, first: usize) -> u8 {
+        if self.epoch[first] < self.startup_end {
+            self.found.startup += 1;
+            flag::STARTUP
+        } else {
+            self.found.slips += 1;
+            flag::SLIP
+        }
+    }
+
+    /// Where an event's exclusion starts: the guard before its first row, or
+    /// the track's first row for the start-up (what precedes the pull-in's
+    /// excursion is the pull-in too).
+    fn excluded_from(&self, bit: u8, first: usize) -> u32 {
+        if bit == flag::STARTUP { self.epoch[0] } else { self.epoch[first].saturating_sub(self.guard) }
+    }
+
+    /// Counts the event beginning at row `first` and flags it up to epoch `last` (inclusive).
+    fn flag_event(&mut self, first: usize, last: u32, flags: &mut [u8]) {
+        let bit = self.close(first);
+        flag_epochs(self.epoch, flags, self.excluded_from(bit, first), last, bit);
+    }
+
+    /// The event of rows `ev` at row `j`: after `step_min`, the last
+    /// `step_win` epochs quiet around a new level m; then the index in `ev`
+    /// of the earliest row fitting it, and m.
+    fn settled_level(&self, ev: &[usize], j: usize, window: &mut Vec<f64>) -> Option<(usize, f64)> {
+        let (epoch, d, thr) = (self.epoch, self.d, self.thr);
+        if epoch[j] - epoch[ev[0]] < self.step_min {
+            return None;
+        }
+        let from = epoch[j].saturating_sub(self.step_win - 1);
+        let first = ev.partition_point(|&k| epoch[k] < from);
+        if ev.len() - first < (self.step_win as usize / 2).max(2) {
+            return None;
+        }
+        window.clear();
+        window.extend(ev[first..].iter().map(|&k| d[k]));
+        let m = median_in_place(window);
+        if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
+            return None;
+        }
+        // Settled on the level m: the event ends at the earliest row fitting it.
+        let mut b = first;
+        while b > 0 && (d[ev[b - 1]] - m).abs() <= thr {
+            b -= 1;
+        }
+        Some((b, m))
+    }
+
+    /// Ends the event beginning at row `first` on a level reached at epoch
+    /// `eb`, `jump` \[rad\] from the old one: flags it up to `eb` and the guard
+    /// after it. Returns whether it is a step: a new level beyond the bounds
+    /// of the old one (not the level a pull-in settles on), which begins a
+    /// new segment.
+    fn end_at_step(&mut self, first: usize, eb: u32, jump: f64, flags: &mut [u8]) -> bool {
+        let bit = self.close(first);
+        let lo = self.excluded_from(bit, first);
+        flag_epochs(self.epoch, flags, lo, eb.saturating_sub(1).max(lo), bit);
+        flag_epochs(self.epoch, flags, eb, eb + self.guard, bit);
+        let step = bit == flag::SLIP && jump.abs() > self.thr;
+        if step {
+            self.found.steps += 1;
+        }
+        step
+    }
 }
 
 /// Test 2 on one track: windows whose deviation RMS (about the level, over the
