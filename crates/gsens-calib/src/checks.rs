@@ -107,94 +107,108 @@ const BEYOND_PI_FRACTION: f64 = 0.01;
 ///   [`gsens_session::find_flat_runs`] found, and the epochs left out.
 pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Vec<Warning> {
     let mut w = Vec::new();
-    if let Some((median, how)) = magnitude_at_rest(&outcome.session.accel_mps2, outcome.session.log_interval_s) {
-        let g0 = STANDARD_GRAVITY_MPS2;
-        if (median / g0 - 1.0).abs() > GRAVITY_TOLERANCE {
-            let cause = if (median - 1.0).abs() < GRAVITY_TOLERANCE {
-                format!("the IMU log looks like it is in g: multiply fx, fy, fz by {g0} to get m/s²")
-            } else if (median / (1e3 * g0) - 1.0).abs() < GRAVITY_TOLERANCE {
-                format!("the IMU log looks like it is in mg: multiply fx, fy, fz by {} to get m/s²", Decimal(g0 / 1e3))
-            } else {
-                "check the IMU log's units and scale factor (imu.csv holds specific force in m/s²)".into()
-            };
-            w.push(Warning {
-                code: WarningCode::ImuUnits,
+    w.extend(imu_units(outcome));
+    let rates = Rates::new(loop_summary);
+    w.extend(rates.tracking_warning(outcome, c));
+    w.extend(highpass(outcome, c, loop_summary));
+    w.extend(rates.imu_warning(outcome.imu_flat_runs.sample_interval_s));
+    w.extend(phase_units(outcome, c));
+    w.extend(carrier_gain(&outcome.session.channels));
+    w.extend(phase_sign(outcome, c));
+    w.extend(flat_run_warnings(&outcome.imu_flat_runs, outcome.imu_flat_run_epochs));
+    w
+}
+
+/// `imu_units`: the specific force at rest against gravity, with the likely
+/// unit (g, mg) when it is one.
+fn imu_units(outcome: &Outcome) -> Option<Warning> {
+    let (median, how) = magnitude_at_rest(&outcome.session.accel_mps2, outcome.session.log_interval_s)?;
+    let g0 = STANDARD_GRAVITY_MPS2;
+    if (median / g0 - 1.0).abs() <= GRAVITY_TOLERANCE {
+        return None;
+    }
+    let cause = if (median - 1.0).abs() < GRAVITY_TOLERANCE {
+        format!("the IMU log looks like it is in g: multiply fx, fy, fz by {g0} to get m/s²")
+    } else if (median / (1e3 * g0) - 1.0).abs() < GRAVITY_TOLERANCE {
+        format!("the IMU log looks like it is in mg: multiply fx, fy, fz by {} to get m/s²", Decimal(g0 / 1e3))
+    } else {
+        "check the IMU log's units and scale factor (imu.csv holds specific force in m/s²)".into()
+    };
+    Some(Warning {
+        code: WarningCode::ImuUnits,
+        message: format!(
+            "the specific force at rest, {how}, is {median:.4} where gravity gives {g0} m/s²: {cause}; \
+             Γ̂ scales inversely with it"
+        ),
+    })
+}
+
+/// What the logs' rates are held to: the loop's peak response and the
+/// longest interval that still samples it 4 times a period.
+struct Rates {
+    peak_hz: Option<f64>,
+    longest_s: Option<f64>,
+}
+
+impl Rates {
+    fn new(loop_summary: &LoopSummary) -> Self {
+        let longest_s = loop_summary.peak_hz.map(|f| 1.0 / (MIN_SAMPLES_PER_PEAK_PERIOD * f));
+        Rates { peak_hz: loop_summary.peak_hz, longest_s }
+    }
+
+    /// Whether an interval of 1 s or more would satisfy the rule in milliseconds.
+    fn in_ms(&self, interval_s: f64) -> bool {
+        interval_s >= MS_SUSPECT_INTERVAL_S && self.longest_s.is_none_or(|l| interval_s * 1e-3 <= l && interval_s > l)
+    }
+
+    /// `time_units` for the tracking log's interval, else `log_rate`.
+    fn tracking_warning(&self, outcome: &Outcome, c: &Calibration) -> Option<Warning> {
+        let span_s = |t: &[f64]| t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a);
+        if self.in_ms(c.log_interval_s) {
+            return Some(Warning {
+                code: WarningCode::TimeUnits,
                 message: format!(
-                    "the specific force at rest, {how}, is {median:.4} where gravity gives {g0} m/s²: {cause}; \
-                     Γ̂ scales inversely with it"
+                    "the tracking log's interval is {} s and it lasts {:.0} s ({:.1} h) for a session shaken by hand: \
+                     its time stamps look like milliseconds ({} ms would be a usual log interval); divide t_s by 1000 \
+                     (and the IMU's if it is in milliseconds too)",
+                    Decimal(c.log_interval_s),
+                    span_s(&outcome.session.t_s),
+                    span_s(&outcome.session.t_s) / 3600.0,
+                    Decimal(c.log_interval_s)
                 ),
             });
         }
+        let (f_peak, longest_s) = (self.peak_hz?, self.longest_s?);
+        (c.log_interval_s > longest_s).then(|| {
+            let samples = 1.0 / (f_peak * c.log_interval_s);
+            Warning {
+                code: WarningCode::LogRate,
+                message: format!(
+                    "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
+                     ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
+                     resolved; log at least every {longest_s:.3} s",
+                    Decimal(c.log_interval_s),
+                ),
+            }
+        })
     }
-    // The longest interval that still samples the loop's peak 4 times a period.
-    let longest_s = loop_summary.peak_hz.map(|f| 1.0 / (MIN_SAMPLES_PER_PEAK_PERIOD * f));
-    let in_ms = |interval_s: f64| {
-        interval_s >= MS_SUSPECT_INTERVAL_S && longest_s.is_none_or(|l| interval_s * 1e-3 <= l && interval_s > l)
-    };
-    let span_s = |t: &[f64]| t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a);
-    if in_ms(c.log_interval_s) {
-        w.push(Warning {
-            code: WarningCode::TimeUnits,
-            message: format!(
-                "the tracking log's interval is {} s and it lasts {:.0} s ({:.1} h) for a session shaken by hand: \
-                 its time stamps look like milliseconds ({} ms would be a usual log interval); divide t_s by 1000 \
-                 (and the IMU's if it is in milliseconds too)",
-                Decimal(c.log_interval_s),
-                span_s(&outcome.session.t_s),
-                span_s(&outcome.session.t_s) / 3600.0,
-                Decimal(c.log_interval_s)
-            ),
-        });
-    } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
-        && c.log_interval_s > longest_s
-    {
-        let samples = 1.0 / (f_peak * c.log_interval_s);
-        w.push(Warning {
-            code: WarningCode::LogRate,
-            message: format!(
-                "the log interval {} s gives {samples:.1} samples per period of the loop's peak response \
-                 ({f_peak:.2} Hz), fewer than {MIN_SAMPLES_PER_PEAK_PERIOD}: the g-induced phase error is not \
-                 resolved; log at least every {longest_s:.3} s",
-                Decimal(c.log_interval_s),
-            ),
-        });
-    }
-    // A high-pass above the loop's band (or the log's Nyquist frequency)
-    // removes the g-induced phase error with the drift it is meant for.
-    let highpass_hz = outcome.settings.estimate.highpass_hz;
-    let nyquist_hz = 0.5 / c.log_interval_s;
-    let band_top_hz = loop_summary.half_power_band_hz.map_or(nyquist_hz, |b| b[1].min(nyquist_hz));
-    if highpass_hz >= band_top_hz {
-        let limit = if band_top_hz < nyquist_hz {
-            format!("the top of the loop's half-power band, {band_top_hz:.2} Hz")
-        } else {
-            format!("the log's Nyquist frequency 1/(2T), {nyquist_hz:.2} Hz")
-        };
-        w.push(Warning {
-            code: WarningCode::Highpass,
-            message: format!(
-                "the high-pass at {highpass_hz} Hz is at or above {limit}: it removes the g-induced phase error \
-                 along with the drift it is meant for; use a corner well below the loop's band (the default is \
-                 0.05 Hz, --highpass-hz)"
-            ),
-        });
-    }
-    let imu_h = outcome.imu_flat_runs.sample_interval_s;
-    if imu_h > 0.0 && in_ms(imu_h) {
-        w.push(Warning {
-            code: WarningCode::TimeUnits,
-            message: format!(
-                "the IMU's sample interval is {} s: its time stamps look like milliseconds ({} ms would \
-                 be a usual IMU interval), so the tracking epochs see the specific force of a few samples \
-                 stretched over the session; divide the IMU's t_s by 1000",
-                Decimal(imu_h),
-                Decimal(imu_h)
-            ),
-        });
-    } else if let (Some(f_peak), Some(longest_s)) = (loop_summary.peak_hz, longest_s)
-        && imu_h > longest_s
-    {
-        w.push(Warning {
+
+    /// `time_units` for the IMU's sample interval `imu_h` \[s\], else `imu_rate`.
+    fn imu_warning(&self, imu_h: f64) -> Option<Warning> {
+        if imu_h > 0.0 && self.in_ms(imu_h) {
+            return Some(Warning {
+                code: WarningCode::TimeUnits,
+                message: format!(
+                    "the IMU's sample interval is {} s: its time stamps look like milliseconds ({} ms would \
+                     be a usual IMU interval), so the tracking epochs see the specific force of a few samples \
+                     stretched over the session; divide the IMU's t_s by 1000",
+                    Decimal(imu_h),
+                    Decimal(imu_h)
+                ),
+            });
+        }
+        let (f_peak, longest_s) = (self.peak_hz?, self.longest_s?);
+        (imu_h > longest_s).then(|| Warning {
             code: WarningCode::ImuRate,
             message: format!(
                 "the IMU's sample interval {} s gives {:.1} samples per period of the loop's peak response \
@@ -203,13 +217,32 @@ pub(crate) fn input_warnings(outcome: &Outcome, c: &Calibration, loop_summary: &
                 Decimal(imu_h),
                 1.0 / (f_peak * imu_h)
             ),
-        });
+        })
     }
-    w.extend(phase_units(outcome, c));
-    w.extend(carrier_gain(&outcome.session.channels));
-    w.extend(phase_sign(outcome, c));
-    w.extend(flat_run_warnings(&outcome.imu_flat_runs, outcome.imu_flat_run_epochs));
-    w
+}
+
+/// `highpass`: a high-pass above the loop's band (or the log's Nyquist
+/// frequency) removes the g-induced phase error with the drift it is meant for.
+fn highpass(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> Option<Warning> {
+    let highpass_hz = outcome.settings.estimate.highpass_hz;
+    let nyquist_hz = 0.5 / c.log_interval_s;
+    let band_top_hz = loop_summary.half_power_band_hz.map_or(nyquist_hz, |b| b[1].min(nyquist_hz));
+    if highpass_hz < band_top_hz {
+        return None;
+    }
+    let limit = if band_top_hz < nyquist_hz {
+        format!("the top of the loop's half-power band, {band_top_hz:.2} Hz")
+    } else {
+        format!("the log's Nyquist frequency 1/(2T), {nyquist_hz:.2} Hz")
+    };
+    Some(Warning {
+        code: WarningCode::Highpass,
+        message: format!(
+            "the high-pass at {highpass_hz} Hz is at or above {limit}: it removes the g-induced phase error \
+             along with the drift it is meant for; use a corner well below the loop's band (the default is \
+             0.05 Hz, --highpass-hz)"
+        ),
+    })
 }
 
 /// Largest Doppler rate magnitude a static antenna sees from a GPS satellite

@@ -182,23 +182,7 @@ fn calibrate_all_axes(
     }
     let model = build_model(series.log_interval_s, settings)?;
     let substeps = model.substeps();
-    // The model is fed the specific force compensated for its interpolation between epochs.
-    let accel = model_input(series.accel_mps2, &model);
-    let model_series = EpochSeries { accel_mps2: &accel, ..*series };
-    let skip = warmup_epochs(settings, series.log_interval_s);
-    let (hp, t) = (settings.highpass_hz, series.log_interval_s);
-    let (estimate, fed, batch, history) = match settings.method {
-        Method::Batch | Method::Gls => {
-            run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), &model_series)
-        }
-        Method::Rls { lambda } => run(
-            Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip, hp, t),
-            &model_series,
-        ),
-        Method::Gradient { gain_k } => {
-            run(Calibrator::new(model, GradientObserver::new(gain_k, t), skip, hp, t), &model_series)
-        }
-    };
+    let (estimate, fed, batch, history) = run_method(model, series, settings);
     if batch.normal_equations().n < 10 {
         return Err(CalibError::TooFewEpochs { epochs: batch.normal_equations().n, warmup_s: settings.warmup_s });
     }
@@ -226,26 +210,7 @@ fn calibrate_all_axes(
         },
         None => estimate,
     };
-    let gamma = estimate.gamma_hz_per_mps2;
-
-    // Residuals over the used epochs (high-passed), for the robust covariance and the RMS.
-    let used: Vec<&FedEpoch> = fed.iter().filter(|e| e.used).collect();
-    let mut used_phi_a = Vec::with_capacity(used.len());
-    let mut resid = Vec::with_capacity(used.len());
-    let (mut ss_before, mut ss_after, mut ss_g) = (0.0, 0.0, 0.0);
-    for e in &used {
-        let phi = e.phase_err_rad.unwrap_or(0.0);
-        let r = compensated_phase_rad(phi, &e.phi_a, &gamma);
-        ss_before += phi * phi;
-        ss_after += r * r;
-        ss_g += (phi - r) * (phi - r);
-        used_phi_a.push(e.phi_a);
-        resid.push(r);
-    }
-    let m = used.len().max(1) as f64;
-    // The least-squares covariance under the residuals' own noise: the
-    // sandwich with the AR model fitted for the bound (exact in the model),
-    // or Newey–West where no model could be fitted.
+    let residuals = Residuals::of(&fed, &estimate.gamma_hz_per_mps2);
     let robust_ls = match &noise_fit {
         Some(g) => {
             let m = spectra.middle(&g.noise);
@@ -254,85 +219,214 @@ fn calibrate_all_axes(
         }
         None => {
             let max_lag = (settings.hac_lag_s / series.log_interval_s).round() as usize;
-            hac_covariance(&used_phi_a, &resid, max_lag)
+            hac_covariance(&residuals.phi_a, &residuals.resid, max_lag)
         }
     };
-    // The robust/white variance ratio of the batch solution scales the chosen
-    // estimator's own covariance (the same residual colour affects them all).
-    let white_batch = batch.estimate();
     let obs = assess(batch.normal_equations(), &estimate, &settings.criteria);
-    let mut observable = [false; 3];
-    let mut sigma = [None; 3];
-    let mut sigma_stat = [None; 3];
-    let mut sigma_imu = [None; 3];
-    let sys = imu_systematic_sigma(&gamma, settings.imu_scale_sigma, settings.imu_misalignment_sigma_rad);
-    let mut sigma_white = [0.0; 3];
-    let mut gamma_out = [None; 3];
-    let mut ratios = [1.0; 3];
-    for i in 0..3 {
-        let own = estimate.covariance[i][i];
-        let ratio = match (&settings.method, &noise_fit) {
-            // Huber: its own sandwich, with the autocorrelation terms.
-            _ if huber.is_some() => {
-                huber.as_ref().map_or(1.0, |h| if own > 0.0 { (h.covariance[i][i] / own).max(1.0) } else { 1.0 })
-            }
-            // GLS: what colour its AR model missed, from its own prewhitened residuals.
-            (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance.map_or(own, |c| c[i][i]) / own).max(1.0),
-            _ if white_batch.covariance[i][i] > 0.0 => (robust_ls[i][i] / white_batch.covariance[i][i]).max(1.0),
-            _ => 1.0,
-        };
-        ratios[i] = ratio;
-        sigma_white[i] = own.max(0.0).sqrt();
-        // An axis is observable only with a finite estimate and σ (a
-        // diverged estimator's NaN is not a number to present).
-        let finite = gamma[i].is_finite() && (own * ratio).is_finite() && sys[i].is_finite();
-        observable[i] = obs.observable[i] && finite;
-        if observable[i] {
-            let stat = (own * ratio).sqrt();
-            sigma_stat[i] = Some(stat);
-            sigma_imu[i] = Some(sys[i]);
-            sigma[i] = Some(stat.hypot(sys[i]));
-            gamma_out[i] = Some(gamma[i]);
+    let fits = Fits { estimate: &estimate, batch: &batch, noise_fit: noise_fit.as_ref(), huber: huber.as_ref() };
+    let u = Uncertainty::of(&fits, &robust_ls, &obs, settings);
+    let parts = CalibrationParts { estimate, obs, fed, normal: *batch.normal_equations(), noise_fit, huber, history };
+    let calibration = assemble(series, settings, parts, u, residuals, substeps);
+    Ok((calibration, *batch.normal_equations()))
+}
+
+/// Runs `settings.method` (GLS starts from the batch pass) from `model`
+/// over `series`, the model fed the specific force compensated for its
+/// interpolation between epochs.
+fn run_method(
+    model: RegressorModel,
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+) -> (GammaEstimate, Vec<FedEpoch>, BatchLeastSquares, History<'static>) {
+    let accel = model_input(series.accel_mps2, &model);
+    let model_series = EpochSeries { accel_mps2: &accel, ..*series };
+    let skip = warmup_epochs(settings, series.log_interval_s);
+    let (hp, t) = (settings.highpass_hz, series.log_interval_s);
+    match settings.method {
+        Method::Batch | Method::Gls => {
+            run(Calibrator::new(model, BatchLeastSquares::new(), skip, hp, t), &model_series)
+        }
+        Method::Rls { lambda } => run(
+            Calibrator::new(model, RecursiveLeastSquares::new(lambda, RecursiveLeastSquares::DEFAULT_P0), skip, hp, t),
+            &model_series,
+        ),
+        Method::Gradient { gain_k } => {
+            run(Calibrator::new(model, GradientObserver::new(gain_k, t), skip, hp, t), &model_series)
         }
     }
-    let covariance = [0, 1, 2].map(|i| {
-        [0, 1, 2].map(|j| {
-            let stat = estimate.covariance[i][j] * (ratios[i] * ratios[j]).sqrt();
-            let imu = if i == j { sys[i] * sys[i] } else { 0.0 };
-            (observable[i] && observable[j]).then_some(stat + imu)
-        })
-    });
+}
+
+/// The residuals over the used epochs (high-passed) of an estimate Γ̂, for
+/// the robust covariance and the RMS.
+struct Residuals {
+    /// The used epochs' φ_a.
+    phi_a: Vec<[f64; 3]>,
+    /// Their compensated phase φ − φ_aᵀΓ̂ \[rad\].
+    resid: Vec<f64>,
+    /// The phase's RMS before and after compensation, and of the g-induced part φ_aᵀΓ̂ \[rad\].
+    rms_before_rad: f64,
+    rms_after_rad: f64,
+    rms_g_induced_rad: f64,
+}
+
+impl Residuals {
+    fn of(fed: &[FedEpoch], gamma: &[f64; 3]) -> Self {
+        let used: Vec<&FedEpoch> = fed.iter().filter(|e| e.used).collect();
+        let mut phi_a = Vec::with_capacity(used.len());
+        let mut resid = Vec::with_capacity(used.len());
+        let (mut ss_before, mut ss_after, mut ss_g) = (0.0, 0.0, 0.0);
+        for e in &used {
+            let phi = e.phase_err_rad.unwrap_or(0.0);
+            let r = compensated_phase_rad(phi, &e.phi_a, gamma);
+            ss_before += phi * phi;
+            ss_after += r * r;
+            ss_g += (phi - r) * (phi - r);
+            phi_a.push(e.phi_a);
+            resid.push(r);
+        }
+        let m = used.len().max(1) as f64;
+        Residuals {
+            phi_a,
+            resid,
+            rms_before_rad: (ss_before / m).sqrt(),
+            rms_after_rad: (ss_after / m).sqrt(),
+            rms_g_induced_rad: (ss_g / m).sqrt(),
+        }
+    }
+}
+
+/// The fits an estimate's uncertainty draws on.
+struct Fits<'a> {
+    /// The estimate given (the method's, GLS's or Huber's).
+    estimate: &'a GammaEstimate,
+    /// The batch least squares over the same epochs.
+    batch: &'a BatchLeastSquares,
+    noise_fit: Option<&'a gls::GlsFit>,
+    huber: Option<&'a robust::HuberFit>,
+}
+
+/// Per axis: Γ̂ and its σ where observable, and the covariance.
+struct Uncertainty {
+    observable: [bool; 3],
+    gamma: [Option<f64>; 3],
+    sigma: [Option<f64>; 3],
+    sigma_stat: [Option<f64>; 3],
+    sigma_imu: [Option<f64>; 3],
+    sigma_white: [f64; 3],
+    covariance: [[Option<f64>; 3]; 3],
+    /// The axes whose statistical σ came out exactly 0.
+    no_information: Vec<usize>,
+}
+
+impl Uncertainty {
+    /// The estimator's own covariance scaled per axis by the robust over the
+    /// white variance (the same residual colour affects every estimator):
+    /// Huber's own sandwich, GLS's prewhitened residuals, or the batch
+    /// solution's `robust_ls` over its white covariance; combined with the
+    /// IMU's systematic σ. An axis is observable only with a finite
+    /// estimate and σ (a diverged estimator's NaN is not a number to present).
+    fn of(f: &Fits, robust_ls: &[[f64; 3]; 3], obs: &gsens_core::Observability, settings: &EstimateSettings) -> Self {
+        let (estimate, gamma) = (f.estimate, f.estimate.gamma_hz_per_mps2);
+        let white_batch = f.batch.estimate();
+        let sys = imu_systematic_sigma(&gamma, settings.imu_scale_sigma, settings.imu_misalignment_sigma_rad);
+        let mut u = Uncertainty {
+            observable: [false; 3],
+            gamma: [None; 3],
+            sigma: [None; 3],
+            sigma_stat: [None; 3],
+            sigma_imu: [None; 3],
+            sigma_white: [0.0; 3],
+            covariance: [[None; 3]; 3],
+            no_information: Vec::new(),
+        };
+        let mut ratios = [1.0; 3];
+        for i in 0..3 {
+            let own = estimate.covariance[i][i];
+            let ratio = match (&settings.method, f.noise_fit) {
+                _ if f.huber.is_some() => {
+                    f.huber.map_or(1.0, |h| if own > 0.0 { (h.covariance[i][i] / own).max(1.0) } else { 1.0 })
+                }
+                (Method::Gls, Some(g)) if own > 0.0 => (g.robust_covariance.map_or(own, |c| c[i][i]) / own).max(1.0),
+                _ if white_batch.covariance[i][i] > 0.0 => (robust_ls[i][i] / white_batch.covariance[i][i]).max(1.0),
+                _ => 1.0,
+            };
+            ratios[i] = ratio;
+            u.sigma_white[i] = own.max(0.0).sqrt();
+            let finite = gamma[i].is_finite() && (own * ratio).is_finite() && sys[i].is_finite();
+            u.observable[i] = obs.observable[i] && finite;
+            if u.observable[i] {
+                let stat = (own * ratio).sqrt();
+                u.sigma_stat[i] = Some(stat);
+                u.sigma_imu[i] = Some(sys[i]);
+                u.sigma[i] = Some(stat.hypot(sys[i]));
+                u.gamma[i] = Some(gamma[i]);
+            }
+        }
+        let observable = u.observable;
+        u.covariance = [0, 1, 2].map(|i| {
+            [0, 1, 2].map(|j| {
+                let stat = estimate.covariance[i][j] * (ratios[i] * ratios[j]).sqrt();
+                let imu = if i == j { sys[i] * sys[i] } else { 0.0 };
+                (observable[i] && observable[j]).then_some(stat + imu)
+            })
+        });
+        // σ exactly 0 is no uncertainty but no information (the estimator's
+        // covariance dropped the axis, e.g. the pseudo-inverse's cut).
+        u.no_information = (0..3).filter(|&i| observable[i] && u.sigma_stat[i] == Some(0.0)).collect();
+        u
+    }
+}
+
+/// What a [`Calibration`] is assembled from besides its uncertainty.
+struct CalibrationParts {
+    estimate: GammaEstimate,
+    obs: gsens_core::Observability,
+    fed: Vec<FedEpoch>,
+    normal: gsens_core::NormalEquations,
+    noise_fit: Option<gls::GlsFit>,
+    huber: Option<robust::HuberFit>,
+    history: Vec<HistoryPoint>,
+}
+
+/// The [`Calibration`] of an estimate: Γ̂ and σ in both units, the bound,
+/// the shaking verdicts, the predicted peak phase and the RMS figures.
+fn assemble(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    parts: CalibrationParts,
+    u: Uncertainty,
+    residuals: Residuals,
+    substeps: u32,
+) -> Calibration {
+    let CalibrationParts { estimate, obs, fed, normal, noise_fit, huber, history } = parts;
+    let gamma = estimate.gamma_hz_per_mps2;
     let ppb = |x: Option<f64>| x.map(|v| hz_per_mps2_to_ppb_per_g(v, settings.carrier_hz));
     let loop_used = settings.loop_at(series.log_interval_s);
     let axes = verdict::axis_verdicts(
         series.accel_mps2,
         series.log_interval_s,
         &loop_used,
-        observable,
+        u.observable,
         obs.excitation_rms,
         settings.criteria.min_excitation_rms,
     );
-    // σ exactly 0 is no uncertainty but no information (the estimator's
-    // covariance dropped the axis, e.g. the pseudo-inverse's cut).
-    let no_information: Vec<usize> = (0..3).filter(|&i| observable[i] && sigma_stat[i] == Some(0.0)).collect();
     let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
-    let normal = *batch.normal_equations();
     let mut calibration = Calibration {
-        gamma_hz_per_mps2: gamma_out,
-        sigma_hz_per_mps2: sigma,
-        sigma_statistical_hz_per_mps2: sigma_stat,
-        sigma_imu_hz_per_mps2: sigma_imu,
-        gamma_ppb_per_g: gamma_out.map(ppb),
-        sigma_ppb_per_g: sigma.map(ppb),
-        observable,
+        gamma_hz_per_mps2: u.gamma,
+        sigma_hz_per_mps2: u.sigma,
+        sigma_statistical_hz_per_mps2: u.sigma_stat,
+        sigma_imu_hz_per_mps2: u.sigma_imu,
+        gamma_ppb_per_g: u.gamma.map(ppb),
+        sigma_ppb_per_g: u.sigma.map(ppb),
+        observable: u.observable,
         excitation_rms: obs.excitation_rms,
-        covariance_hz_per_mps2_sq: covariance,
+        covariance_hz_per_mps2_sq: u.covariance,
         condition_number: obs.condition_number.is_finite().then_some(obs.condition_number),
         gamma_raw_hz_per_mps2: gamma,
-        sigma_white_hz_per_mps2: sigma_white.map(|s| s.is_finite().then_some(s)),
+        sigma_white_hz_per_mps2: u.sigma_white.map(|s| s.is_finite().then_some(s)),
         crlb_hz_per_mps2: [0, 1, 2].map(|i| {
             let c = noise_fit.as_ref().map(|g| g.crlb_hz_per_mps2()[i]);
-            c.filter(|c| c.is_finite() && observable[i])
+            c.filter(|c| c.is_finite() && u.observable[i])
         }),
         noise_ar_order: noise_fit.as_ref().map_or(0, |g| g.noise.order()),
         imu_time_offset_s: series.imu_time_offset_s,
@@ -343,22 +437,22 @@ fn calibrate_all_axes(
         axes,
         predicted_peak_phase_err_rad: peak_phase,
         discriminator_linear_range_rad: settings.discriminator.unambiguous_range_rad(),
-        rms_before_rad: (ss_before / m).sqrt(),
-        rms_after_rad: (ss_after / m).sqrt(),
-        rms_g_induced_rad: (ss_g / m).sqrt(),
+        rms_before_rad: residuals.rms_before_rad,
+        rms_after_rad: residuals.rms_after_rad,
+        rms_g_induced_rad: residuals.rms_g_induced_rad,
         residual_sigma_rad: estimate.residual_variance_rad2.sqrt(),
-        epochs_used: batch.normal_equations().n,
-        epochs_total: n,
+        epochs_used: normal.n,
+        epochs_total: series.accel_mps2.len(),
         log_interval_s: series.log_interval_s,
         history,
         model_substeps: substeps,
         loop_used,
         settings: *settings,
     };
-    for i in no_information {
+    for i in u.no_information {
         calibration.make_unobservable(i, "its σ came out 0: the estimator's covariance holds no information on it");
     }
-    Ok((calibration, normal))
+    calibration
 }
 
 /// P·M·P for a symmetric 3×3 P (nalgebra's) and M.
@@ -408,10 +502,10 @@ type History<'a> = Box<dyn FnOnce() -> Vec<HistoryPoint> + Send + 'a>;
 
 /// Runs an estimator and, alongside, a batch accumulator (for the
 /// observability verdict and the robust covariance) over the series.
-fn run<'a, E: GammaEstimator + Copy + Send + Sync + 'a>(
+fn run<'h, E: GammaEstimator + Copy + Send + Sync + 'h>(
     mut cal: Calibrator<E>,
-    series: &EpochSeries<'a>,
-) -> (GammaEstimate, Vec<FedEpoch>, BatchLeastSquares, History<'a>) {
+    series: &EpochSeries<'_>,
+) -> (GammaEstimate, Vec<FedEpoch>, BatchLeastSquares, History<'h>) {
     use rayon::prelude::*;
     let mut batch = BatchLeastSquares::new();
     let every = ((HISTORY_INTERVAL_S / series.log_interval_s).round() as usize).max(1);
@@ -429,7 +523,7 @@ fn run<'a, E: GammaEstimator + Copy + Send + Sync + 'a>(
             states.push((series.t_s[k], *cal.estimator()));
         }
     }
-    let history: History<'a> = Box::new(move || {
+    let history: History<'h> = Box::new(move || {
         states
             .par_iter()
             .map(|(t_s, state)| {

@@ -25,10 +25,13 @@
 //! confounded (a constant shaking rate, whose phase lag a loop error and a
 //! delay both explain) it grows, instead of one absorbing the other.
 
+mod params;
+
 use crate::search::{Shift, batch_pass, offset_profile, scaled_loop};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
+use params::{Fitted, Theta};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -211,15 +214,15 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     let (ln_s_post, var_post) = (w * ln_s, w * c_ss);
     // The second fit: the loop held at ln s*, everything else free.
     let mut at_post = *settings;
-    at_post.receiver_loop = scaled_loop(&stated, ln_s_post.exp(), free.zeta);
-    let fed_post = if ln_s_post == 0.0 && free.zeta == zeta_of(&stated) {
+    at_post.receiver_loop = scaled_loop(&stated, ln_s_post.exp(), free.theta.zeta);
+    let fed_post = if ln_s_post == 0.0 && free.theta.zeta == zeta_of(&stated) {
         Cow::Owned(fed0)
     } else {
         drop(fed0);
         Cow::Owned(triad_pass(series, settings, &at_post.receiver_loop)?)
     };
     let held = JointSpec { natural_frequency: false, loop_tolerance: None, ..spec };
-    let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.dtau), true)?;
+    let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.theta.dtau_s), true)?;
     let posterior = free.posterior(&refit, ln_s_post, var_post);
     // Held exact, the free fit's linearization is not used: the held fit's σ_τ is what must hold.
     let linearization_sigma_tau_s = if tol == 0.0 { posterior.sigma_tau_s() } else { free.sigma_tau_s() };
@@ -241,17 +244,15 @@ struct Solution {
     gamma: [f64; 3],
     /// Γ̂ under the loop the fit started from, at the fitted offset.
     gamma_stated: [f64; 3],
-    /// ln s of the loop the fit is under (relative to the starting loop).
-    ln_s: f64,
-    zeta: Option<f64>,
-    dtau: f64,
+    /// θ: ln s of the loop the fit is under (relative to the starting loop),
+    /// its damping and the offset.
+    theta: Theta,
     /// Covariance of (Γ on the fit's axes, ln s, ζ, τ: those estimated).
     cov: DMatrix<f64>,
     /// Covariance of Γ̂ with the nuisance parameters known.
     cov3: DMatrix<f64>,
-    loop_idx: Option<usize>,
-    zeta_idx: Option<usize>,
-    tau_idx: Option<usize>,
+    /// What was fitted: the rows and columns of `cov`.
+    fitted: Fitted,
     rss_rad2: f64,
     epochs: usize,
     iterations: u32,
@@ -260,19 +261,19 @@ struct Solution {
 impl Solution {
     /// 1σ of the offset, when it was estimated \[s\].
     fn sigma_tau_s(&self) -> Option<f64> {
-        self.tau_idx.map(|t| self.cov[(t, t)].max(0.0).sqrt())
+        self.fitted.tau_index().map(|t| self.cov[(t, t)].max(0.0).sqrt())
     }
 
     /// ln ŝ and its variance, when the natural frequency was estimated.
     fn ln_s_and_variance(&self) -> Option<(f64, f64)> {
-        self.loop_idx.map(|l| (self.ln_s, self.cov[(l, l)]))
+        self.fitted.loop_index().map(|l| (self.theta.ln_s, self.cov[(l, l)]))
     }
 
     /// The posterior of [`joint_fit`]'s combination: `held`, a fit with the
     /// loop held at `ln_s_post` (no loop column), with the free fit's (self's)
     /// regression on ln s adding the posterior variance `var_post`.
     fn posterior(&self, held: &Solution, ln_s_post: f64, var_post: f64) -> Solution {
-        let l = self.loop_idx.expect("a free fit with the natural frequency estimated");
+        let l = self.fitted.loop_index().expect("a free fit with the natural frequency estimated");
         let c_ss = self.cov[(l, l)];
         let b: Vec<f64> = (0..self.cov.nrows()).map(|m| self.cov[(m, l)] / c_ss).collect();
         // The held fit's index of each of the free fit's parameters (the
@@ -295,19 +296,176 @@ impl Solution {
         Solution {
             gamma: held.gamma,
             gamma_stated: self.gamma_stated,
-            ln_s: ln_s_post,
-            zeta: held.zeta,
-            dtau: held.dtau,
+            theta: Theta { ln_s: ln_s_post, ..held.theta },
             cov,
             cov3: held.cov3.clone(),
-            loop_idx: self.loop_idx,
-            zeta_idx: self.zeta_idx,
-            tau_idx: self.tau_idx,
+            fitted: self.fitted,
             rss_rad2: held.rss_rad2,
             epochs: held.epochs,
             iterations: self.iterations + held.iterations,
         }
     }
+}
+
+/// The step in ln s and in ζ of the central differences of the Jacobian.
+const LOOP_DIFFERENCE_STEP: f64 = 0.01;
+/// The step in τ of the offset column's central difference, in log intervals.
+const OFFSET_DIFFERENCE_STEP: f64 = 0.1;
+/// The most Gauss–Newton iterations.
+const MAX_ITERATIONS: u32 = 12;
+/// Converged when every nuisance step is below this fraction of its (white-noise) σ.
+const CONVERGED_STEP_SIGMAS: f64 = 0.02;
+
+/// What a joint fit runs over: the series, the loop it starts from, what it
+/// fits, and the epochs it uses with their phases.
+struct Problem<'a> {
+    series: &'a EpochSeries<'a>,
+    settings: &'a EstimateSettings,
+    /// The loop the fit starts from (`settings`' at the log interval).
+    stated: LoopModel,
+    fitted: Fitted,
+    axes: &'a [usize],
+    /// The epochs fitted: used by the estimator, with a phase, and clear of
+    /// the offset's search margin at both ends.
+    used: Vec<usize>,
+    /// Their phases \[rad\].
+    phi: Vec<f64>,
+}
+
+impl<'a> Problem<'a> {
+    /// The problem of [`solve`] and its start: the stated loop, the offset
+    /// `start_dtau_s` clamped to its range (`None`: the global search's
+    /// under the stated loop; 0 when not fitted). Fewer than 20 epochs are
+    /// an error.
+    fn new(
+        series: &'a EpochSeries<'a>,
+        settings: &'a EstimateSettings,
+        (spec, axes): (JointSpec, &'a [usize]),
+        fed0: &[FedEpoch],
+        start_dtau_s: Option<f64>,
+    ) -> Result<(Self, Theta), CalibError> {
+        let t = series.log_interval_s;
+        let stated = settings.loop_at(t);
+        let zeta0 = zeta_of(&stated);
+        let fitted = Fitted {
+            axes: axes.len(),
+            natural_frequency: spec.natural_frequency && stated.natural_frequency_hz().is_some(),
+            damping: spec.damping && zeta0.is_some(),
+            offset_max_abs_s: spec.offset_max_abs_s,
+        };
+        let margin = spec.offset_max_abs_s.map_or(0, |m| (m / t).ceil() as usize + 2);
+        let dtau_s = match (spec.offset_max_abs_s, start_dtau_s) {
+            (Some(max), Some(d)) => d.clamp(-max, max),
+            (Some(max), None) => offset_profile(fed0, t, max)?.dtau_s,
+            (None, _) => 0.0,
+        };
+        let n = fed0.len();
+        let used: Vec<usize> =
+            (margin..n.saturating_sub(margin)).filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some()).collect();
+        if used.len() < 20 {
+            return Err(CalibError::TooFewEpochs { epochs: used.len() as u64, warmup_s: settings.warmup_s });
+        }
+        let phi: Vec<f64> = used.iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
+        let problem = Problem { series, settings, stated, fitted, axes, used, phi };
+        Ok((problem, Theta { ln_s: 0.0, zeta: zeta0, dtau_s }))
+    }
+
+    /// The stated loop with ln s and ζ of θ.
+    fn loop_at(&self, ln_s: f64, zeta: Option<f64>) -> LoopModel {
+        scaled_loop(&self.stated, ln_s.exp(), zeta)
+    }
+
+    /// Γ̂ of the least squares of the phases on the regressors `a` (one per
+    /// used epoch), 0 on the axes left out.
+    fn gamma_on_axes(&self, a: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+        let mut ne = gsens_core::NormalEquations::default();
+        for (ak, pk) in a.zip(&self.phi) {
+            ne.add(*pk, &ak);
+        }
+        let mut g = ne.solve().gamma_hz_per_mps2;
+        for (i, gi) in g.iter_mut().enumerate() {
+            if !self.axes.contains(&i) {
+                *gi = 0.0;
+            }
+        }
+        g
+    }
+
+    /// The Jacobian of φ_aᵀΓ at θ over the used epochs, one column per
+    /// parameter in the solver's order: φ_a on the fit's axes, then the
+    /// central differences in ln s and ζ (two more passes each) and the time
+    /// derivative in τ, at Γ̂ of θ (`fed0`: the stated loop's pass).
+    fn jacobian(&self, fed0: &[FedEpoch], theta: &Theta) -> Result<DMatrix<f64>, CalibError> {
+        let t = self.series.log_interval_s;
+        let (h, eps, dtau) = (LOOP_DIFFERENCE_STEP, OFFSET_DIFFERENCE_STEP * t, theta.dtau_s);
+        let center = if theta.ln_s == 0.0 && theta.zeta == zeta_of(&self.stated) {
+            Cow::Borrowed(fed0)
+        } else {
+            Cow::Owned(triad_pass(self.series, self.settings, &self.loop_at(theta.ln_s, theta.zeta))?)
+        };
+        let by = Shift::samples(dtau / t);
+        let used = &self.used;
+        let a: Vec<[f64; 3]> = used.par_iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
+        // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
+        let g = self.gamma_on_axes(a.iter().copied());
+        let mut columns: Vec<Vec<f64>> = self.axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
+        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
+        let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
+            let fed = triad_pass(self.series, self.settings, model)?;
+            Ok(used.iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
+        };
+        let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
+            // Two independent passes over the log.
+            let (pl, ph) = rayon::join(|| predicted(lo), || predicted(hi));
+            let (pl, ph) = (pl?, ph?);
+            Ok(ph.iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
+        };
+        let (ln_s, zeta) = (theta.ln_s, theta.zeta);
+        if self.fitted.natural_frequency {
+            columns.push(diff(&self.loop_at(ln_s - h, zeta), &self.loop_at(ln_s + h, zeta), 2.0 * h)?);
+        }
+        if self.fitted.damping {
+            let z = zeta.unwrap_or(0.707);
+            columns.push(diff(&self.loop_at(ln_s, Some(z - h)), &self.loop_at(ln_s, Some(z + h)), 2.0 * h)?);
+        }
+        if self.fitted.offset_max_abs_s.is_some() {
+            let (later, earlier) = (Shift::samples((dtau + eps) / t), Shift::samples((dtau - eps) / t));
+            let n_c = center.len();
+            columns.push(
+                used.par_iter()
+                    .map(|&k| {
+                        let phi_a = |j: usize| center[j].phi_a;
+                        (dot(&later.at(n_c, k, phi_a), &g) - dot(&earlier.at(n_c, k, phi_a), &g)) / (2.0 * eps)
+                    })
+                    .collect(),
+            );
+        }
+        Ok(DMatrix::from_fn(used.len(), self.fitted.len(), |r, c| columns[c][r]))
+    }
+}
+
+/// One Gauss–Newton step: the least-squares solution on the Jacobian (Γ
+/// and the nuisance steps, laid out as the solver's vector) and whether
+/// every nuisance step, limited, lies within [`CONVERGED_STEP_SIGMAS`] of
+/// its white-noise σ.
+fn gauss_newton_step(
+    jac: &DMatrix<f64>,
+    y: &DVector<f64>,
+    fitted: &Fitted,
+) -> Result<(DVector<f64>, bool), CalibError> {
+    let jtj = jac.tr_mul(jac);
+    let Some(jtj_inv) = jtj.clone().try_inverse() else {
+        return Err(CalibError::Unsupported("the joint fit of Γ, the loop and the time offset is singular"));
+    };
+    let beta = &jtj_inv * jac.tr_mul(y);
+    let white_var = {
+        let r = y - jac * &beta;
+        r.norm_squared() / (jac.nrows() as f64 - fitted.len() as f64).max(1.0)
+    };
+    let small = |c: usize, d: f64| d.abs() <= CONVERGED_STEP_SIGMAS * (jtj_inv[(c, c)] * white_var).max(0.0).sqrt();
+    let step = Theta::limited_step(&fitted.read(beta.as_slice()), fitted.offset_max_abs_s);
+    let converged = step.nuisance(fitted).iter().fold(true, |all, &(c, d)| all & small(c, d));
+    Ok((beta, converged))
 }
 
 /// Gauss–Newton on Γ (on `axes`) and the nuisance parameters `spec` asks
@@ -324,168 +482,72 @@ fn solve(
     start_dtau_s: Option<f64>,
     covariance: bool,
 ) -> Result<Solution, CalibError> {
-    let t = series.log_interval_s;
-    let stated = settings.loop_at(t);
-    let wn_stated = stated.natural_frequency_hz();
-    let fit_loop = spec.natural_frequency && wn_stated.is_some();
-    let zeta0 = zeta_of(&stated);
-    let fit_zeta = spec.damping && zeta0.is_some();
-    let margin = spec.offset_max_abs_s.map_or(0, |m| (m / t).ceil() as usize + 2);
-
-    // Start: the stated loop, the offset from the global search under it.
-    let mut ln_s = 0.0f64;
-    let mut zeta = zeta0;
-    let mut dtau = match (spec.offset_max_abs_s, start_dtau_s) {
-        (Some(max), Some(d)) => d.clamp(-max, max),
-        (Some(max), None) => offset_profile(&fed0, t, max)?.dtau_s,
-        (None, _) => 0.0,
-    };
-    let n = fed0.len();
-    let used: Vec<usize> =
-        (margin..n.saturating_sub(margin)).filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some()).collect();
-    if used.len() < 20 {
-        return Err(CalibError::TooFewEpochs { epochs: used.len() as u64, warmup_s: settings.warmup_s });
-    }
-    let phi: Vec<f64> = used.iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
-    let h = 0.01;
-    let eps = 0.1 * t;
-    let loop_at = |ln_s: f64, zeta: Option<f64>| scaled_loop(&stated, ln_s.exp(), zeta);
-
-    let na = axes.len();
-    let p = na + fit_loop as usize + fit_zeta as usize + spec.offset_max_abs_s.is_some() as usize;
+    let (problem, mut theta) = Problem::new(series, settings, (spec, axes), &fed0, start_dtau_s)?;
+    let fitted = problem.fitted;
+    let y = DVector::from_column_slice(&problem.phi);
     let mut iterations = 0;
-    let (jac, resid, gamma, gamma_stated) = loop {
+    let (jac, resid, gamma) = loop {
         iterations += 1;
-        let center = if ln_s == 0.0 && zeta == zeta0 {
-            Cow::Borrowed(&fed0[..])
-        } else {
-            Cow::Owned(triad_pass(series, settings, &loop_at(ln_s, zeta))?)
-        };
-        let by = Shift::samples(dtau / t);
-        let a: Vec<[f64; 3]> = used.par_iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
-        // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
-        let mut ne = gsens_core::NormalEquations::default();
-        for (ak, pk) in a.iter().zip(&phi) {
-            ne.add(*pk, ak);
-        }
-        let mut g = ne.solve().gamma_hz_per_mps2;
-        for (i, gi) in g.iter_mut().enumerate() {
-            if !axes.contains(&i) {
-                *gi = 0.0;
-            }
-        }
-        let mut columns: Vec<Vec<f64>> = axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
-        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
-        let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
-            let fed = triad_pass(series, settings, model)?;
-            Ok(used.iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
-        };
-        let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
-            // Two independent passes over the log.
-            let (pl, ph) = rayon::join(|| predicted(lo), || predicted(hi));
-            let (pl, ph) = (pl?, ph?);
-            Ok(ph.iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
-        };
-        if fit_loop {
-            columns.push(diff(&loop_at(ln_s - h, zeta), &loop_at(ln_s + h, zeta), 2.0 * h)?);
-        }
-        if fit_zeta {
-            let z = zeta.unwrap_or(0.707);
-            columns.push(diff(&loop_at(ln_s, Some(z - h)), &loop_at(ln_s, Some(z + h)), 2.0 * h)?);
-        }
-        if spec.offset_max_abs_s.is_some() {
-            let (later, earlier) = (Shift::samples((dtau + eps) / t), Shift::samples((dtau - eps) / t));
-            let n_c = center.len();
-            columns.push(
-                used.par_iter()
-                    .map(|&k| {
-                        let phi_a = |j: usize| center[j].phi_a;
-                        (dot(&later.at(n_c, k, phi_a), &g) - dot(&earlier.at(n_c, k, phi_a), &g)) / (2.0 * eps)
-                    })
-                    .collect(),
-            );
-        }
-        let jac = DMatrix::from_fn(used.len(), p, |r, c| columns[c][r]);
-        let y = DVector::from_column_slice(&phi);
-        let jtj = jac.tr_mul(&jac);
-        let Some(jtj_inv) = jtj.clone().try_inverse() else {
-            return Err(CalibError::Unsupported("the joint fit of Γ, the loop and the time offset is singular"));
-        };
-        let beta = &jtj_inv * jac.tr_mul(&y);
-        // Converged when every step is far below its (white-noise) σ.
-        let white_var = {
-            let r = &y - &jac * &beta;
-            r.norm_squared() / (used.len() as f64 - p as f64).max(1.0)
-        };
-        let small = |c: usize, d: f64| d.abs() <= 0.02 * (jtj_inv[(c, c)] * white_var).max(0.0).sqrt();
-        let mut converged = true;
-        let mut c = na;
-        if fit_loop {
-            let d = beta[c].clamp(-0.3, 0.3);
-            converged &= small(c, d);
-            ln_s = (ln_s + d).clamp(-1.5, 1.5);
-            c += 1;
-        }
-        if fit_zeta {
-            let d = beta[c].clamp(-0.2, 0.2);
-            converged &= small(c, d);
-            zeta = zeta.map(|z| (z + d).clamp(0.25, 2.0));
-            c += 1;
-        }
-        if let Some(max) = spec.offset_max_abs_s {
-            let d = beta[c].clamp(-0.25 * max, 0.25 * max);
-            converged &= small(c, d);
-            dtau = (dtau + d).clamp(-max, max);
-        }
+        let jac = problem.jacobian(&fed0, &theta)?;
+        let (beta, converged) = gauss_newton_step(&jac, &y, &fitted)?;
+        let step = Theta::limited_step(&fitted.read(beta.as_slice()), spec.offset_max_abs_s);
+        theta = theta.advanced(&step, spec.offset_max_abs_s);
         // Converged (steps far below any σ) or out of iterations: Γ at the
         // final θ and the Jacobian there give the covariance.
-        if converged || iterations >= 12 || p == na {
+        if converged || iterations >= MAX_ITERATIONS || !fitted.any_nuisance() {
             let resid = &y - &jac * &beta;
             let mut gamma = [0.0; 3];
-            for (k, &i) in axes.iter().enumerate() {
-                gamma[i] = beta[k];
+            for (&i, g) in axes.iter().zip(&step.gamma) {
+                gamma[i] = *g;
             }
-            let gamma_stated = if fit_loop || fit_zeta {
-                let by = Shift::samples(dtau / t);
-                let mut ne = gsens_core::NormalEquations::default();
-                for (&k, pk) in used.iter().zip(&phi) {
-                    ne.add(*pk, &shifted(&fed0, k, dtau, &by));
-                }
-                ne.solve().gamma_hz_per_mps2
-            } else {
-                gamma
-            };
-            break (jac, resid, gamma, gamma_stated);
+            break (jac, resid, gamma);
         }
     };
-
-    let mut next = na..;
-    let loop_idx = fit_loop.then(|| next.next()).flatten();
-    let zeta_idx = fit_zeta.then(|| next.next()).flatten();
-    let tau_idx = spec.offset_max_abs_s.and_then(|_| next.next());
-    let solution = |cov: DMatrix<f64>, cov3: DMatrix<f64>| Solution {
+    let gamma_stated = if fitted.natural_frequency || fitted.damping {
+        let by = Shift::samples(theta.dtau_s / series.log_interval_s);
+        let mut ne = gsens_core::NormalEquations::default();
+        for (&k, pk) in problem.used.iter().zip(&problem.phi) {
+            ne.add(*pk, &shifted(&fed0, k, theta.dtau_s, &by));
+        }
+        ne.solve().gamma_hz_per_mps2
+    } else {
+        gamma
+    };
+    let (p, na) = (fitted.len(), fitted.axes);
+    let (cov, cov3) = if covariance {
+        sandwich_covariance(&jac, &resid, &problem.used, fed0.len(), series.log_interval_s, na)
+    } else {
+        (DMatrix::from_element(p, p, f64::NAN), DMatrix::from_element(na, na, f64::NAN))
+    };
+    Ok(Solution {
         gamma,
         gamma_stated,
-        ln_s,
-        zeta,
-        dtau,
+        theta,
         cov,
         cov3,
-        loop_idx,
-        zeta_idx,
-        tau_idx,
+        fitted,
         rss_rad2: resid.norm_squared(),
-        epochs: used.len(),
+        epochs: problem.used.len(),
         iterations,
-    };
-    if !covariance {
-        return Ok(solution(DMatrix::from_element(p, p, f64::NAN), DMatrix::from_element(na, na, f64::NAN)));
-    }
+    })
+}
 
-    // The sandwich with an AR model of the residuals (over the used epochs'
-    // contiguous runs).
+/// The least-squares sandwich (JᵀJ)⁻¹·JᵀΣJ·(JᵀJ)⁻¹ of the Jacobian `jac`
+/// (rows: the `used` epochs of a series of `n`, log interval `t`), Σ the
+/// autocovariance of an AR model of the residuals `resid` over the used
+/// epochs' contiguous runs; and the same sandwich on the first `na` (Γ)
+/// columns alone, Γ's covariance with θ known.
+fn sandwich_covariance(
+    jac: &DMatrix<f64>,
+    resid: &DVector<f64>,
+    used: &[usize],
+    n: usize,
+    t: f64,
+    na: usize,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let p = jac.ncols();
     let mut mask = vec![false; n];
-    for &k in &used {
+    for &k in used {
         mask[k] = true;
     }
     let segments = gls::segments_of(mask.iter().copied());
@@ -511,16 +573,15 @@ fn solve(
     let middle = spectra.middle(&noise);
     // A singular normal matrix leaves σ undefined (NaN), never 0: the axes
     // then come out unobservable (`Calibration::include_nuisance`).
-    let jtj_inv = jac.tr_mul(&jac).try_inverse().unwrap_or_else(|| DMatrix::from_element(p, p, f64::NAN));
+    let jtj_inv = jac.tr_mul(jac).try_inverse().unwrap_or_else(|| DMatrix::from_element(p, p, f64::NAN));
     let cov = &jtj_inv * &middle * &jtj_inv;
-    // Γ's covariance with θ known: the same sandwich on the Γ columns alone.
     let a3 = jac.columns(0, na).into_owned();
     let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::from_element(na, na, f64::NAN));
     // Entry (i, j) of the middle depends on columns i and j alone: the Γ
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();
     let cov3 = &a3_inv * middle3 * &a3_inv;
-    Ok(solution(cov, cov3))
+    (cov, cov3)
 }
 
 /// What the loop test and the linearity check of a solution rest on.
@@ -554,7 +615,7 @@ fn describe(
     // No variance (a singular fit, or rounding below 0) is no σ: NaN, not 0.
     let sd = |i: usize| if cov[(i, i)] > 0.0 { cov[(i, i)].sqrt() } else { f64::NAN };
     let wn_stated = stated.natural_frequency_hz();
-    let fitted_free = data.and_then(|(ln_s, _)| scaled_loop(stated, ln_s.exp(), sol.zeta).natural_frequency_hz());
+    let fitted_free = data.and_then(|(ln_s, _)| scaled_loop(stated, ln_s.exp(), sol.theta.zeta).natural_frequency_hz());
     let sigma_data_ln = data.map(|(_, v)| v.max(0.0).sqrt());
     let z = data.map(|(ln_s, v)| {
         let total = v.max(0.0) + tolerance.unwrap_or(0.0).powi(2);
@@ -562,13 +623,13 @@ fn describe(
     });
     // Without a tolerance nothing was claimed of the loop: there is nothing to reject.
     let rejected = tolerance.is_some() && z.is_some_and(|z| z.abs() > LOOP_TEST_Z);
-    let used = scaled_loop(stated, sol.ln_s.exp(), sol.zeta);
-    let fit_loop = sol.loop_idx.is_some();
-    let correlation = match (sol.loop_idx, sol.tau_idx) {
+    let used = scaled_loop(stated, sol.theta.ln_s.exp(), sol.theta.zeta);
+    let fit_loop = sol.fitted.natural_frequency;
+    let correlation = match (sol.fitted.loop_index(), sol.fitted.tau_index()) {
         (Some(l), Some(o)) if sd(l) > 0.0 && sd(o) > 0.0 => Some(cov[(l, o)] / (sd(l) * sd(o))),
         _ => None,
     };
-    let offset_at_limit = spec.offset_max_abs_s.is_some_and(|m| sol.dtau.abs() >= 0.999 * m);
+    let offset_at_limit = spec.offset_max_abs_s.is_some_and(|m| sol.theta.dtau_s.abs() >= 0.999 * m);
     JointFit {
         stated_loop: stated.to_string(),
         fitted_loop: if fit_loop { used.to_string() } else { stated.to_string() },
@@ -576,8 +637,8 @@ fn describe(
         natural_frequency_hz: fitted_free,
         sigma_natural_frequency_hz: sigma_data_ln.zip(fitted_free).map(|(s, f)| s * f),
         bn_hz: used.bn_hz(),
-        stated_zeta: sol.zeta_idx.and_then(|_| zeta_of(stated)),
-        zeta: sol.zeta_idx.and_then(|i| sol.zeta.map(|z| [z, sd(i)])),
+        stated_zeta: sol.fitted.zeta_index().and_then(|_| zeta_of(stated)),
+        zeta: sol.fitted.zeta_index().and_then(|i| sol.theta.zeta.map(|z| [z, sd(i)])),
         loop_test_z: z,
         loop_test_threshold_z: LOOP_TEST_Z,
         loop_test_false_alarm: LOOP_TEST_FALSE_ALARM,
@@ -586,11 +647,12 @@ fn describe(
         used_natural_frequency_hz: fit_loop.then(|| used.natural_frequency_hz()).flatten(),
         // 0 for a loop held exact (a tolerance of 0).
         sigma_used_natural_frequency_hz: sol
-            .loop_idx
+            .fitted
+            .loop_index()
             .zip(used.natural_frequency_hz())
             .map(|(l, f)| cov[(l, l)].max(0.0).sqrt() * f),
-        imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + sol.dtau),
-        sigma_imu_time_offset_s: sol.tau_idx.map(sd),
+        imu_time_offset_s: spec.offset_max_abs_s.map(|_| series.imu_time_offset_s + sol.theta.dtau_s),
+        sigma_imu_time_offset_s: sol.fitted.tau_index().map(sd),
         linearization_sigma_imu_time_offset_s: linearization_sigma_tau_s,
         offset_max_abs_s: spec.offset_max_abs_s,
         offset_at_limit,
@@ -598,7 +660,7 @@ fn describe(
         gamma_hz_per_mps2: sol.gamma,
         gamma_stated_loop_hz_per_mps2: sol.gamma_stated,
         variance_inflation,
-        fitted_loop_used: fit_loop && (sol.ln_s != 0.0 || sol.zeta != zeta_of(stated)),
+        fitted_loop_used: fit_loop && (sol.theta.ln_s != 0.0 || sol.theta.zeta != zeta_of(stated)),
         rss_rad2: sol.rss_rad2,
         epochs: sol.epochs,
         gamma_covariance_hz_per_mps2_sq: [0, 1, 2].map(|i| {

@@ -4,7 +4,8 @@
 
 use crate::document::{ResultDocument, SourceConversion};
 use crate::{
-    CalibError, Calibration, EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit, session_linear_range_rad,
+    CalibError, Calibration, EpochSeries, EstimateSettings, JointFit, JointSpec, calibrate, joint_fit,
+    session_linear_range_rad,
 };
 use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
@@ -303,6 +304,10 @@ fn calibrate_tracking(
     calibrate_prepared(tracking, PreparedImu::new(imu, settings), imu_name, settings)
 }
 
+/// The pipeline's stages: the settings' checks, the session, the checks of
+/// its span, the flat IMU runs masked, the loop chosen when none was stated,
+/// the joint fit of the loop and the offset, then the estimate beside the
+/// loop's response check.
 fn calibrate_prepared(
     tracking: Cow<'_, TrackingLog>,
     imu: PreparedImu,
@@ -310,73 +315,19 @@ fn calibrate_prepared(
     settings: &PipelineSettings,
 ) -> Result<Outcome, PipelineError> {
     settings.estimate.validate()?;
-    let (assumed, max_abs_s) = match settings.time_offset {
-        TimeOffset::Fixed { imu_time_offset_s } => {
-            if !imu_time_offset_s.is_finite() {
-                let expected = "finite";
-                return Err(
-                    CalibError::Setting { name: "imu_time_offset_s", value: imu_time_offset_s, expected }.into()
-                );
-            }
-            (imu_time_offset_s, None)
-        }
-        TimeOffset::Auto { max_abs_s } => {
-            crate::settings::check_range("time_offset.max_abs_s", max_abs_s, true)?;
-            (0.0, Some(max_abs_s))
-        }
-    };
-    // A log with carriers is scaled to L1 (gsens_session): Γ̂ is at L1, and so must be its ppb/g.
-    let l1 = gsens_core::units::GPS_L1_HZ;
-    if settings.estimate.carrier_hz != l1 && tracking.tracks().iter().any(|t| !t.carrier.is_default()) {
-        return Err(CalibError::Setting {
-            name: "carrier_hz",
-            value: settings.estimate.carrier_hz,
-            expected: "GPS L1, 1575420000 Hz, for a tracking log with carrier columns: every channel's phase \
-                       error is scaled to L1 and Γ̂ is at L1 (leave --carrier-hz out)",
-        }
-        .into());
-    }
+    let (assumed, max_abs_s) = time_offset_start(settings.time_offset)?;
+    check_carrier(settings, &tracking)?;
     let PreparedImu { despiked, spikes_t_s, flat_runs } = imu;
     let imu = &despiked;
     // The session holds what the estimate needs of the log; a log given to
     // the pipeline is freed as soon as its rows are taken.
     crate::progress::stage("preparing the session", None);
     let mut session = prepare_session_from(tracking, imu, imu_name, &settings.selection, assumed)?;
-    // An offset beyond half the log's span leaves no overlap to compare (and
-    // an absurd bound would size the search's grid without limit).
-    if let (Some(max), Some((t0, t1))) = (max_abs_s, session.t_s.first().zip(session.t_s.last()))
-        && max > 0.5 * (t1 - t0)
-    {
-        return Err(CalibError::Setting {
-            name: "time_offset.max_abs_s",
-            value: max,
-            expected: "at most half the log's span (beyond it no overlap of IMU and tracking is left to compare)",
-        }
-        .into());
-    }
-    if let Some((t0, t1)) = session.t_s.first().zip(session.t_s.last())
-        && settings.estimate.warmup_s >= t1 - t0
-    {
-        return Err(CalibError::WarmupBeyondLog { warmup_s: settings.estimate.warmup_s, log_s: t1 - t0 }.into());
-    }
+    check_span(&session, max_abs_s, settings.estimate.warmup_s)?;
     // A stuck or clipped stretch would enter every regressor: its epochs become gaps before any search.
     let mut flat_run_epochs = mask_flat_runs(&mut session, &flat_runs);
     let mut estimate = settings.estimate;
-    let tolerance = settings.loop_tolerance.unwrap_or(DEFAULT_LOOP_TOLERANCE);
-    if tolerance.is_nan() || tolerance < 0.0 {
-        return Err(CalibError::Setting {
-            name: "loop_tolerance",
-            value: tolerance,
-            expected: "at least 0 (a relative 1σ; infinite: only the loop's shape is known)",
-        }
-        .into());
-    }
-    let mut spec = JointSpec {
-        natural_frequency: settings.loop_identification != LoopIdentificationMode::Off,
-        damping: settings.loop_identification == LoopIdentificationMode::NaturalFrequencyAndDamping,
-        offset_max_abs_s: max_abs_s,
-        loop_tolerance: tolerance.is_finite().then_some(tolerance),
-    };
+    let mut spec = joint_spec(settings, max_abs_s)?;
     let mut chosen_loop = None;
     if !settings.loop_stated {
         let chosen = crate::choose_loop(&series_of(&session), &estimate, max_abs_s)
@@ -401,32 +352,7 @@ fn calibrate_prepared(
         estimate.receiver_loop = fit.fitted(&estimate.loop_at(session.log_interval_s));
         joint = Some(fit);
     }
-    // The estimate and the response check need only the loop and the
-    // offset fixed above: they run at once. The response check tests the
-    // loop, not the estimator: it is measured against the least-squares Γ̂
-    // (a gradient observer's noisier Γ̂ would show as a loop mismatch).
-    let series = series_of(&session);
-    let response_check = || -> Result<Result<crate::ResponseCheck, crate::ResponseCheckError>, CalibError> {
-        let gamma_ls = match &joint {
-            Some(fit) => fit.gamma_hz_per_mps2,
-            None => crate::search::batch_pass(&series, &estimate)?.1.solve().gamma_hz_per_mps2,
-        };
-        let response_settings =
-            crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
-        Ok(crate::measure_response_with(&series, &estimate, &gamma_ls, &response_settings)
-            .and_then(|c| if c.bins_tested == 0 { Err(crate::ResponseCheckError::NothingCoherent) } else { Ok(c) }))
-    };
-    crate::progress::stage("estimating Γ and checking the loop's response", None);
-    // The estimate and the loop's response check need nothing of each other: two tasks at once.
-    let (calibration, loop_response) = rayon::join(|| calibrate(&series, &estimate), response_check);
-    let (mut calibration, loop_response) = (calibration?, loop_response?);
-    if let Some(fit) = joint {
-        calibration.include_nuisance(&fit);
-    }
-    // The channels' C/N0 is known here, not to the estimator: the range narrows by their noise.
-    let interval_s = calibration.loop_used.interval_s().unwrap_or(session.log_interval_s);
-    calibration.discriminator_linear_range_rad =
-        session_linear_range_rad(&session.channels, estimate.discriminator, interval_s);
+    let (calibration, loop_response) = estimate_and_check_response(&session, &estimate, joint)?;
     Ok(Outcome {
         session,
         calibration,
@@ -439,6 +365,115 @@ fn calibrate_prepared(
         imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
     })
+}
+
+/// The IMU time offset the session is prepared with, and the range it is
+/// searched in when searched: a fixed offset must be finite, a range valid.
+fn time_offset_start(time_offset: TimeOffset) -> Result<(f64, Option<f64>), CalibError> {
+    match time_offset {
+        TimeOffset::Fixed { imu_time_offset_s } => {
+            if !imu_time_offset_s.is_finite() {
+                let expected = "finite";
+                return Err(CalibError::Setting { name: "imu_time_offset_s", value: imu_time_offset_s, expected });
+            }
+            Ok((imu_time_offset_s, None))
+        }
+        TimeOffset::Auto { max_abs_s } => {
+            crate::settings::check_range("time_offset.max_abs_s", max_abs_s, true)?;
+            Ok((0.0, Some(max_abs_s)))
+        }
+    }
+}
+
+/// A log with carriers is scaled to L1 (gsens_session): Γ̂ is at L1, and so
+/// must be its ppb/g.
+fn check_carrier(settings: &PipelineSettings, tracking: &TrackingLog) -> Result<(), CalibError> {
+    let l1 = gsens_core::units::GPS_L1_HZ;
+    if settings.estimate.carrier_hz != l1 && tracking.tracks().iter().any(|t| !t.carrier.is_default()) {
+        return Err(CalibError::Setting {
+            name: "carrier_hz",
+            value: settings.estimate.carrier_hz,
+            expected: "GPS L1, 1575420000 Hz, for a tracking log with carrier columns: every channel's phase \
+                       error is scaled to L1 and Γ̂ is at L1 (leave --carrier-hz out)",
+        });
+    }
+    Ok(())
+}
+
+/// The session's span against the settings: an offset searched beyond half
+/// of it leaves no overlap to compare (and an absurd bound would size the
+/// search's grid without limit); a warm-up must end inside it.
+fn check_span(session: &PreparedSession, max_abs_s: Option<f64>, warmup_s: f64) -> Result<(), CalibError> {
+    if let (Some(max), Some((t0, t1))) = (max_abs_s, session.t_s.first().zip(session.t_s.last()))
+        && max > 0.5 * (t1 - t0)
+    {
+        return Err(CalibError::Setting {
+            name: "time_offset.max_abs_s",
+            value: max,
+            expected: "at most half the log's span (beyond it no overlap of IMU and tracking is left to compare)",
+        });
+    }
+    if let Some((t0, t1)) = session.t_s.first().zip(session.t_s.last())
+        && warmup_s >= t1 - t0
+    {
+        return Err(CalibError::WarmupBeyondLog { warmup_s, log_s: t1 - t0 });
+    }
+    Ok(())
+}
+
+/// What the joint fit estimates with Γ, as the settings ask: the natural
+/// frequency (and the damping), the offset within `max_abs_s`, the stated
+/// loop within its tolerance (at least 0; infinite: only its shape known).
+fn joint_spec(settings: &PipelineSettings, max_abs_s: Option<f64>) -> Result<JointSpec, CalibError> {
+    let tolerance = settings.loop_tolerance.unwrap_or(DEFAULT_LOOP_TOLERANCE);
+    if tolerance.is_nan() || tolerance < 0.0 {
+        return Err(CalibError::Setting {
+            name: "loop_tolerance",
+            value: tolerance,
+            expected: "at least 0 (a relative 1σ; infinite: only the loop's shape is known)",
+        });
+    }
+    Ok(JointSpec {
+        natural_frequency: settings.loop_identification != LoopIdentificationMode::Off,
+        damping: settings.loop_identification == LoopIdentificationMode::NaturalFrequencyAndDamping,
+        offset_max_abs_s: max_abs_s,
+        loop_tolerance: tolerance.is_finite().then_some(tolerance),
+    })
+}
+
+/// The estimate under `estimate`'s loop and offset, and the loop's response
+/// check, at once: they need only the loop and the offset, not each other.
+/// The response check tests the loop, not the estimator: it is measured
+/// against the least-squares Γ̂ (the joint fit's, else the batch pass's; a
+/// gradient observer's noisier Γ̂ would show as a loop mismatch). The joint
+/// fit's nuisance parameters enter the calibration, and the channels' C/N0
+/// (known here, not to the estimator) narrows the discriminator's range.
+fn estimate_and_check_response(
+    session: &PreparedSession,
+    estimate: &EstimateSettings,
+    joint: Option<JointFit>,
+) -> Result<(Calibration, Result<crate::ResponseCheck, crate::ResponseCheckError>), CalibError> {
+    let series = series_of(session);
+    let response_check = || -> Result<Result<crate::ResponseCheck, crate::ResponseCheckError>, CalibError> {
+        let gamma_ls = match &joint {
+            Some(fit) => fit.gamma_hz_per_mps2,
+            None => crate::search::batch_pass(&series, estimate)?.1.solve().gamma_hz_per_mps2,
+        };
+        let response_settings =
+            crate::ResponseSettings { false_alarm: RESPONSE_CHECK_FALSE_ALARM, ..Default::default() };
+        Ok(crate::measure_response_with(&series, estimate, &gamma_ls, &response_settings)
+            .and_then(|c| if c.bins_tested == 0 { Err(crate::ResponseCheckError::NothingCoherent) } else { Ok(c) }))
+    };
+    crate::progress::stage("estimating Γ and checking the loop's response", None);
+    let (calibration, loop_response) = rayon::join(|| calibrate(&series, estimate), response_check);
+    let (mut calibration, loop_response) = (calibration?, loop_response?);
+    if let Some(fit) = joint {
+        calibration.include_nuisance(&fit);
+    }
+    let interval_s = calibration.loop_used.interval_s().unwrap_or(session.log_interval_s);
+    calibration.discriminator_linear_range_rad =
+        session_linear_range_rad(&session.channels, estimate.discriminator, interval_s);
+    Ok((calibration, loop_response))
 }
 
 /// [`calibrate_logs`] on files: `imu.csv` and `tracking.csv`.

@@ -354,16 +354,72 @@ pub fn measure_response_with(
     let phi: Vec<f64> = fed.iter().map(|e| e.phase_err_rad.unwrap_or(0.0)).collect();
     let phi_m: Vec<f64> = fed.iter().map(|e| e.phi_a[0] * g[0] + e.phi_a[1] * g[1] + e.phi_a[2] * g[2]).collect();
 
-    // Segments inside the runs of used epochs.
-    let step = ((n_seg as f64) * (1.0 - OVERLAP)).round() as usize;
-    let window: Vec<f64> = (0..n_seg).map(|n| 0.5 * (1.0 - (TAU * n as f64 / n_seg as f64).cos())).collect();
-    let w2: f64 = window.iter().map(|w| w * w).sum();
-    let rho = |lag: usize| -> f64 {
+    let window = HannWindow::new(n_seg);
+    let (starts, effective) = segment_starts(&fed, &window);
+    if effective < MIN_EFFECTIVE_SEGMENTS {
+        return Err(ResponseCheckError::TooShort { segment_s, effective, needed: MIN_EFFECTIVE_SEGMENTS });
+    }
+    let sums = WelchSums::new(&window, &starts, [&u, &phi, &phi_m]);
+    let total_u: f64 = sums.suu[1..].iter().sum();
+    if total_u.is_nan() || total_u <= 0.0 {
+        return Err(ResponseCheckError::NoExcitation);
+    }
+    let in_band = shaken_band(&sums.suu, check.power_fraction * total_u);
+    let dof = effective - 1.0;
+    let coherence_threshold = 1.0 - check.coherence_alpha.powf(1.0 / dof);
+    let bins = response_bins(&sums, &in_band, (segment_s, total_u), coherence_threshold, starts.len());
+    let spectrum = MeasuredSpectrum { segment_s, loop_band_lo_hz: f_lo, segments: starts.len(), effective };
+    Ok(verdict(check, &window, spectrum, coherence_threshold, bins))
+}
+
+/// The Hann window of a segment of `n` epochs, and its sum of squares.
+struct HannWindow {
+    w: Vec<f64>,
+    w2: f64,
+}
+
+impl HannWindow {
+    fn new(n_seg: usize) -> Self {
+        let w: Vec<f64> = (0..n_seg).map(|n| 0.5 * (1.0 - (TAU * n as f64 / n_seg as f64).cos())).collect();
+        let w2 = w.iter().map(|w| w * w).sum();
+        HannWindow { w, w2 }
+    }
+
+    fn len(&self) -> usize {
+        self.w.len()
+    }
+
+    /// The correlation of white noise's windowed segments `lag` epochs apart,
+    /// ρ(Δ) = Σ w(n)w(n + Δ)/Σ w².
+    fn rho(&self, lag: usize) -> f64 {
+        let n_seg = self.len();
         if lag >= n_seg {
             return 0.0;
         }
-        (0..n_seg - lag).map(|n| window[n] * window[n + lag]).sum::<f64>() / w2
-    };
+        (0..n_seg - lag).map(|n| self.w[n] * self.w[n + lag]).sum::<f64>() / self.w2
+    }
+
+    /// The step between overlapping segments, in epochs.
+    fn step(&self) -> usize {
+        ((self.len() as f64) * (1.0 - OVERLAP)).round() as usize
+    }
+
+    /// The windowed spectrum of `x[s..s + n]` less its mean.
+    fn spectrum(&self, fft: &dyn rustfft::Fft<f64>, x: &[f64], s: usize) -> Vec<Complex64> {
+        let n_seg = self.len();
+        let seg = &x[s..s + n_seg];
+        let mean = seg.iter().sum::<f64>() / n_seg as f64;
+        let mut buf: Vec<Complex64> =
+            seg.iter().zip(&self.w).map(|(v, w)| Complex64::new((v - mean) * w, 0.0)).collect();
+        fft.process(&mut buf);
+        buf
+    }
+}
+
+/// The segments' starts inside the runs of used epochs, and their effective
+/// number under overlap, K²/Σ_ij ρ_ij² (0 without any).
+fn segment_starts(fed: &[gsens_core::FedEpoch], window: &HannWindow) -> (Vec<usize>, f64) {
+    let (n_seg, step) = (window.len(), window.step());
     let mut starts = Vec::new();
     let mut overlap_sum = 0.0;
     let mut k = 0;
@@ -383,59 +439,75 @@ pub fn measure_response_with(
         let kr = (run_len - n_seg) / step + 1;
         starts.extend((0..kr).map(|j| run_start + j * step));
         // Σ_{i,j in the run} ρ_ij² = K_r + 2·Σ_{d≥1} (K_r − d)·ρ(d·D)².
-        overlap_sum += kr as f64 + 2.0 * (1..kr).map(|d| (kr - d) as f64 * rho(d * step).powi(2)).sum::<f64>();
+        overlap_sum += kr as f64 + 2.0 * (1..kr).map(|d| (kr - d) as f64 * window.rho(d * step).powi(2)).sum::<f64>();
     }
     let segments = starts.len();
     let effective = if segments == 0 { 0.0 } else { (segments * segments) as f64 / overlap_sum };
-    if effective < MIN_EFFECTIVE_SEGMENTS {
-        return Err(ResponseCheckError::TooShort { segment_s, effective, needed: MIN_EFFECTIVE_SEGMENTS });
-    }
+    (starts, effective)
+}
 
-    // Welch sums over the segments, bins 1 … below Nyquist.
-    let n_bins = (n_seg - 1) / 2;
-    let fft = crate::fft::forward(n_seg);
-    let spectrum = |x: &[f64], s: usize| -> Vec<Complex64> {
-        let seg = &x[s..s + n_seg];
-        let mean = seg.iter().sum::<f64>() / n_seg as f64;
-        let mut buf: Vec<Complex64> =
-            seg.iter().zip(&window).map(|(v, w)| Complex64::new((v - mean) * w, 0.0)).collect();
-        fft.process(&mut buf);
-        buf
-    };
-    let zero = Complex64::new(0.0, 0.0);
-    let (mut suu, mut spp) = (vec![0.0; n_bins + 1], vec![0.0; n_bins + 1]);
-    let (mut sup, mut sum_) = (vec![zero; n_bins + 1], vec![zero; n_bins + 1]);
-    let (mut sur, mut srr) = (vec![zero; n_bins + 1], vec![0.0; n_bins + 1]);
-    let mut u_spectra = Vec::with_capacity(segments);
-    for &s in &starts {
-        let (fu, fp, fm) = (spectrum(&u, s), spectrum(&phi, s), spectrum(&phi_m, s));
-        for b in 1..=n_bins {
-            let r = fp[b] - fm[b];
-            suu[b] += fu[b].norm_sqr();
-            spp[b] += fp[b].norm_sqr();
-            sup[b] += fu[b].conj() * fp[b];
-            sum_[b] += fu[b].conj() * fm[b];
-            sur[b] += fu[b].conj() * r;
-            srr[b] += r.norm_sqr();
+/// Welch's sums over the segments, bins 1 … below Nyquist (index 0 unused):
+/// the auto- and cross-spectra of u, φ, φ_m and the residual r = φ − φ_m,
+/// and each bin's overlap factor's cross term.
+struct WelchSums {
+    suu: Vec<f64>,
+    spp: Vec<f64>,
+    sup: Vec<Complex64>,
+    sum_: Vec<Complex64>,
+    sur: Vec<Complex64>,
+    srr: Vec<f64>,
+    /// Σ_{i<k} U_i*·U_k·c_ik per bin (`cross_terms`).
+    cross: Vec<Complex64>,
+}
+
+impl WelchSums {
+    fn new(window: &HannWindow, starts: &[usize], [u, phi, phi_m]: [&[f64]; 3]) -> Self {
+        let n_seg = window.len();
+        let n_bins = (n_seg - 1) / 2;
+        let fft = crate::fft::forward(n_seg);
+        let zero = Complex64::new(0.0, 0.0);
+        let (mut suu, mut spp) = (vec![0.0; n_bins + 1], vec![0.0; n_bins + 1]);
+        let (mut sup, mut sum_) = (vec![zero; n_bins + 1], vec![zero; n_bins + 1]);
+        let (mut sur, mut srr) = (vec![zero; n_bins + 1], vec![0.0; n_bins + 1]);
+        let mut u_spectra = Vec::with_capacity(starts.len());
+        for &s in starts {
+            let spectrum = |x: &[f64]| window.spectrum(&*fft, x, s);
+            let (fu, fp, fm) = (spectrum(u), spectrum(phi), spectrum(phi_m));
+            for b in 1..=n_bins {
+                let r = fp[b] - fm[b];
+                suu[b] += fu[b].norm_sqr();
+                spp[b] += fp[b].norm_sqr();
+                sup[b] += fu[b].conj() * fp[b];
+                sum_[b] += fu[b].conj() * fm[b];
+                sur[b] += fu[b].conj() * r;
+                srr[b] += r.norm_sqr();
+            }
+            u_spectra.push(fu);
         }
-        u_spectra.push(fu);
+        let cross = cross_terms(window, starts, &u_spectra, n_bins);
+        WelchSums { suu, spp, sup, sum_, sur, srr, cross }
     }
-    // The overlap factor of each bin, κ = Σ_ij U_i*·U_j·c_ij / Σ|U_i|², c_ij =
-    // ρ(Δ)·e^{−j2πbΔ/N} the correlation of white noise's spectra in segments
-    // Δ epochs apart: var(S_un/S_uu) = κ·E|N|²/S_uu exactly (κ = 1 without
-    // overlap, 1 + 2ρ(D)(K − 1)/K for a steady tone).
-    let mut cross = vec![zero; n_bins + 1];
+}
+
+/// The overlap factor's cross term of each bin, Σ_{i<k} U_i*·U_k·c_ik, c_ik =
+/// ρ(Δ)·e^{−j2πbΔ/N} the correlation of white noise's spectra in segments
+/// Δ epochs apart: κ = 1 + 2·Re(cross)/S_uu gives var(S_un/S_uu) =
+/// κ·E|N|²/S_uu exactly (κ = 1 without overlap, 1 + 2ρ(D)(K − 1)/K for a
+/// steady tone).
+fn cross_terms(window: &HannWindow, starts: &[usize], u_spectra: &[Vec<Complex64>], n_bins: usize) -> Vec<Complex64> {
+    let n_seg = window.len();
+    let mut cross = vec![Complex64::new(0.0, 0.0); n_bins + 1];
     // c_ij depends on the lag alone, and the segments take few lags (one
     // step within a run): each lag's factors are made once.
     let mut factors: Vec<Option<Vec<Complex64>>> = vec![None; n_seg];
-    for i in 0..segments {
-        for k in (i + 1)..segments {
+    for i in 0..starts.len() {
+        for k in (i + 1)..starts.len() {
             let lag = starts[k] - starts[i];
             if lag >= n_seg {
                 break;
             }
             let c = factors[lag].get_or_insert_with(|| {
-                let r = rho(lag);
+                let r = window.rho(lag);
                 (0..=n_bins).map(|b| Complex64::from_polar(r, -TAU * (b * lag) as f64 / n_seg as f64)).collect()
             });
             for b in 1..=n_bins {
@@ -443,26 +515,39 @@ pub fn measure_response_with(
             }
         }
     }
-    let total_u: f64 = suu[1..].iter().sum();
-    if total_u.is_nan() || total_u <= 0.0 {
-        return Err(ResponseCheckError::NoExcitation);
-    }
+    cross
+}
 
-    // The shaken band: the fewest bins holding `power_fraction` of S_uu.
+/// The shaken band: the fewest bins (largest S_uu first) holding `power` of
+/// S_uu, as a flag per bin.
+fn shaken_band(suu: &[f64], power: f64) -> Vec<bool> {
+    let n_bins = suu.len() - 1;
     let mut order: Vec<usize> = (1..=n_bins).collect();
     order.sort_by(|&a, &b| suu[b].total_cmp(&suu[a]));
     let mut in_band = vec![false; n_bins + 1];
     let mut acc = 0.0;
     for &b in &order {
-        if acc >= check.power_fraction * total_u {
+        if acc >= power {
             break;
         }
         in_band[b] = true;
         acc += suu[b];
     }
+    in_band
+}
 
-    let dof = effective - 1.0;
-    let coherence_threshold = 1.0 - check.coherence_alpha.powf(1.0 / dof);
+/// Every bin's measured and modelled response, their deviation in σ and
+/// whether it is tested (`segment_s`: the segment length \[s\]; `total_u`:
+/// S_uu over the bins; `segments`: K).
+fn response_bins(
+    sums: &WelchSums,
+    in_band: &[bool],
+    (segment_s, total_u): (f64, f64),
+    coherence_threshold: f64,
+    segments: usize,
+) -> Vec<ResponseBin> {
+    let WelchSums { suu, spp, sup, sum_, sur, srr, cross } = sums;
+    let n_bins = suu.len() - 1;
     let mut bins = Vec::with_capacity(n_bins);
     for b in 1..=n_bins {
         let hm = sup[b] / suu[b];
@@ -501,16 +586,37 @@ pub fn measure_response_with(
             tested,
         });
     }
+    bins
+}
 
+/// What the spectra were measured over.
+struct MeasuredSpectrum {
+    segment_s: f64,
+    loop_band_lo_hz: f64,
+    segments: usize,
+    effective: f64,
+}
+
+/// The check's verdict from its bins: the largest deviations, magnitude and
+/// phase, over the tested bins against the Student-t quantile of the Šidák
+/// correction for the independent tests among them.
+fn verdict(
+    check: &ResponseSettings,
+    window: &HannWindow,
+    spectrum: MeasuredSpectrum,
+    coherence_threshold: f64,
+    bins: Vec<ResponseBin>,
+) -> ResponseCheck {
+    let MeasuredSpectrum { segment_s, loop_band_lo_hz, segments, effective } = spectrum;
     let tested: Vec<&ResponseBin> = bins.iter().filter(|b| b.tested).collect();
     let worst =
         |f: fn(&ResponseBin) -> f64| tested.iter().copied().max_by(|a, b| f(a).abs().total_cmp(&f(b).abs())).copied();
     let wm = worst(|b| b.magnitude_deviation_sigma);
     let wp = worst(|b| b.phase_deviation_sigma);
     // ENBW of the window in bins, N·Σw²/(Σw)² (1.5 for Hann).
-    let enbw = n_seg as f64 * w2 / window.iter().sum::<f64>().powi(2);
+    let enbw = window.len() as f64 * window.w2 / window.w.iter().sum::<f64>().powi(2);
     let m = (2.0 * tested.len() as f64 / enbw).max(1.0);
-    let nu = 2.0 * dof;
+    let nu = 2.0 * (effective - 1.0);
     let per_test = 1.0 - (1.0 - check.false_alarm).powf(1.0 / m);
     let threshold_sigma = student_t_quantile_two_sided(per_test, nu);
     let max_t =
@@ -521,11 +627,11 @@ pub fn measure_response_with(
         Complex64::from_polar(b.measured_magnitude_rad_per_hz, b.measured_phase_rad)
             / Complex64::from_polar(b.model_magnitude_rad_per_hz, b.model_phase_rad)
     };
-    Ok(ResponseCheck {
+    ResponseCheck {
         settings: *check,
         segment_s,
         resolution_hz: 1.0 / segment_s,
-        loop_band_lo_hz: f_lo,
+        loop_band_lo_hz,
         segments,
         effective_segments: effective,
         coherence_threshold,
@@ -542,7 +648,7 @@ pub fn measure_response_with(
         p_value,
         consistent: !tested.is_empty() && max_t <= threshold_sigma,
         bins,
-    })
+    }
 }
 
 /// P(|T| > t) for Student's t with ν degrees of freedom: 2·(1 − F_ν(|t|)),

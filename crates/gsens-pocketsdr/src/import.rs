@@ -266,17 +266,82 @@ fn ms(t_s: f64) -> i64 {
     (t_s * 1e3).round() as i64
 }
 
-/// Converts a parsed log (module docs).
+/// Converts a parsed log (module docs): the GPS L1 C/A lines, the log
+/// interval and the epoch grid they are on, each channel's lines split into
+/// tracks, and the rows of the tracks' settled lines.
 pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Imported, PocketSdrError> {
+    check_settings(settings)?;
+    let stage = settings.stage();
+    let PocketSdrLog { file, records, messages, garbled, garbled_count, fs_hz, version, .. } = log;
+    let mut garbled = GarbledLines { kept: garbled, count: garbled_count };
+    let (l1, other_signals) = split_signals(records);
+    if l1.is_empty() {
+        let signals = other_signals.iter().map(|(s, n)| format!("{s} ({n})")).collect::<Vec<_>>().join(", ");
+        return Err(PocketSdrError::NoL1ca { file, signals });
+    }
+    let epoch = log_interval(&l1, settings.options.epoch_s.as_ref(), &file)?;
+    let grid = EpochGrid::of(&l1, epoch.value);
+    let settle_s = settings.settle_time_s();
+    let conversion = Conversion {
+        keep_after_s: FLL_PULL_IN_S + settle_s,
+        settle_s,
+        t_block_s: stage.interval_s,
+        toff_s: settings.toff_s,
+    };
+    let mut tracker = Tracker { grid, conversion, open: BTreeMap::new(), done: Vec::new(), rows: Vec::new() };
+    for r in &l1 {
+        tracker.take(r, &mut garbled);
+    }
+    let (tracks, rows) = tracker.finish();
+    if rows.is_empty() {
+        let why = tracks.iter().map(|s| format!("ch {} PRN {}: {}", s.channel, s.prn, s.reason)).collect::<Vec<_>>();
+        return Err(PocketSdrError::NoTracks { file, settle_s, why: why.join("; ") });
+    }
+    Ok(Imported {
+        file,
+        version,
+        fs_hz,
+        rows,
+        tracks,
+        epoch,
+        stage,
+        settle_s,
+        messages,
+        other_signals,
+        garbled: garbled.kept,
+        garbled_count: garbled.count,
+        settings: settings.clone(),
+    })
+}
+
+/// The settings' own checks: `toff_s` and `settle_s` finite and ≥ 0.
+fn check_settings(settings: &ImportSettings) -> Result<(), PocketSdrError> {
     if !(settings.toff_s.is_finite() && settings.toff_s >= 0.0) {
         return Err(PocketSdrError::Setting { name: "toff_s", value: settings.toff_s, expected: "≥ 0 and finite" });
     }
     if let Some(v) = settings.settle_s.filter(|v| !(v.is_finite() && *v >= 0.0)) {
         return Err(PocketSdrError::Setting { name: "settle_s", value: v, expected: "≥ 0 and finite" });
     }
-    let stage = settings.stage();
-    let t_block = stage.interval_s;
-    let PocketSdrLog { file, records, messages, mut garbled, mut garbled_count, fs_hz, version, .. } = log;
+    Ok(())
+}
+
+/// The log's garbled lines: the first [`crate::log::GARBLED_KEPT`], and how many.
+struct GarbledLines {
+    kept: Vec<Garbled>,
+    count: u64,
+}
+
+impl GarbledLines {
+    fn push(&mut self, g: Garbled) {
+        self.count += 1;
+        if self.kept.len() < crate::log::GARBLED_KEPT {
+            self.kept.push(g);
+        }
+    }
+}
+
+/// The GPS L1 C/A lines, in log order, and the count of every other signal's.
+fn split_signals(records: Vec<ChRecord>) -> (Vec<ChRecord>, BTreeMap<String, u64>) {
     let mut other_signals: BTreeMap<String, u64> = BTreeMap::new();
     let mut l1: Vec<ChRecord> = Vec::new();
     for r in records {
@@ -286,20 +351,16 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
             *other_signals.entry(r.sig.clone()).or_default() += 1;
         }
     }
-    if l1.is_empty() {
-        let signals = other_signals.iter().map(|(s, n)| format!("{s} ({n})")).collect::<Vec<_>>().join(", ");
-        return Err(PocketSdrError::NoL1ca { file, signals });
-    }
-    let mut garble = |g: Garbled| {
-        garbled_count += 1;
-        if garbled.len() < crate::log::GARBLED_KEPT {
-            garbled.push(g);
-        }
-    };
-    // The log interval: the most common step between a channel's consecutive lines.
+    (l1, other_signals)
+}
+
+/// The log interval: the most common step between a channel's consecutive
+/// lines (ties: the shorter), which must be the `stated` one if the options
+/// state one; without lines two apart, the stated one or PocketSDR's default.
+fn log_interval(l1: &[ChRecord], stated: Option<&Setting>, file: &str) -> Result<Setting, PocketSdrError> {
     let mut last_by_ch: BTreeMap<u32, (i64, u64)> = BTreeMap::new();
     let mut steps: BTreeMap<i64, (u64, u64, u64)> = BTreeMap::new();
-    for r in &l1 {
+    for r in l1 {
         let t = ms(r.time_s);
         if let Some((t0, line0)) = last_by_ch.insert(r.ch, (t, r.line))
             && t > t0
@@ -308,11 +369,11 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
         }
     }
     let measured = steps.iter().max_by_key(|(d, (n, _, _))| (*n, -**d)).map(|(d, (_, a, b))| (*d, *a, *b));
-    let epoch = match (&settings.options.epoch_s, measured) {
+    Ok(match (stated, measured) {
         (Some(stated), Some((d, a, b))) => {
             if ms(stated.value) != d {
                 return Err(PocketSdrError::EpochMismatch {
-                    file,
+                    file: file.to_owned(),
                     measured_s: d as f64 * 1e-3,
                     line_a: a,
                     line_b: b,
@@ -328,26 +389,144 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
         (Some(stated), None) => stated.clone(),
         (None, Some((d, _, _))) => Setting { value: d as f64 * 1e-3, source: SettingSource::Log },
         (None, None) => Setting { value: DEFAULT_EPOCH_S, source: SettingSource::Default },
-    };
-    let step_ms = ms(epoch.value).max(1);
-    // The epoch grid's phase: the most common time modulo the interval.
-    let mut phases: BTreeMap<i64, u64> = BTreeMap::new();
-    for r in &l1 {
-        *phases.entry(ms(r.time_s).rem_euclid(step_ms)).or_default() += 1;
+    })
+}
+
+/// The epoch grid of most lines: the log interval in whole milliseconds
+/// (at least 1) and the grid's phase, the most common time modulo it (ties:
+/// the smaller).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct EpochGrid {
+    epoch_s: f64,
+    step_ms: i64,
+    phase_ms: i64,
+}
+
+impl EpochGrid {
+    fn of(l1: &[ChRecord], epoch_s: f64) -> Self {
+        let step_ms = ms(epoch_s).max(1);
+        let mut phases: BTreeMap<i64, u64> = BTreeMap::new();
+        for r in l1 {
+            *phases.entry(ms(r.time_s).rem_euclid(step_ms)).or_default() += 1;
+        }
+        let phase_ms = phases.iter().max_by_key(|(p, n)| (**n, -**p)).map_or(0, |(p, _)| *p);
+        EpochGrid { epoch_s, step_ms, phase_ms }
     }
-    let phase = phases.iter().max_by_key(|(p, n)| (**n, -**p)).map_or(0, |(p, _)| *p);
-    let settle_s = settings.settle_time_s();
-    let keep_after_s = FLL_PULL_IN_S + settle_s;
-    struct Open {
-        summary: TrackSummary,
-        last_t_ms: i64,
-        last_lock_s: f64,
-        cn0_sum: f64,
+
+    /// Whether a line at `t_ms` lies on the grid.
+    fn holds(&self, t_ms: i64) -> bool {
+        t_ms.rem_euclid(self.step_ms) == self.phase_ms
     }
-    let mut done: Vec<TrackSummary> = Vec::new();
-    let mut open: BTreeMap<u32, Open> = BTreeMap::new();
-    let mut rows: Vec<TrackingRow> = Vec::new();
-    let close = |o: Open, why: &str, done: &mut Vec<TrackSummary>| {
+}
+
+/// How a settled line becomes a row: the lock time it must exceed, the
+/// loop's update interval, the IF file's `toff`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Conversion {
+    /// The FLL pull-in plus the PLL's settling \[s\].
+    keep_after_s: f64,
+    /// The settling time \[s\].
+    settle_s: f64,
+    /// The loop's update interval T \[s\].
+    t_block_s: f64,
+    /// `-toff` \[s\].
+    toff_s: f64,
+}
+
+impl Conversion {
+    /// Whether a line with lock time `lock_s` is kept.
+    fn keeps(&self, lock_s: f64) -> bool {
+        lock_s > self.keep_after_s + 1e-9
+    }
+
+    /// The row of line `r` at `t_ms`: stamped at the middle of its
+    /// integration on the file's sample time, `time + T/2 + toff`, its phase
+    /// 2π·`err_phas`.
+    fn row(&self, r: &ChRecord, t_ms: i64) -> TrackingRow {
+        TrackingRow {
+            t_s: (t_ms as f64 + 500.0 * self.t_block_s) * 1e-3 + self.toff_s,
+            channel: r.ch,
+            prn: r.prn,
+            cn0_dbhz: r.cn0_dbhz,
+            elev_deg: None,
+            phase_err_rad: core::f64::consts::TAU * r.err_phas_cyc,
+        }
+    }
+}
+
+/// A track being followed: its summary so far and what the next line must continue.
+struct Open {
+    summary: TrackSummary,
+    last_t_ms: i64,
+    last_lock_s: f64,
+    cn0_sum: f64,
+}
+
+/// The channels' lines split into tracks, line by line.
+struct Tracker {
+    grid: EpochGrid,
+    conversion: Conversion,
+    /// The track each channel is on.
+    open: BTreeMap<u32, Open>,
+    done: Vec<TrackSummary>,
+    rows: Vec<TrackingRow>,
+}
+
+impl Tracker {
+    /// Takes the next line: off the grid, or repeated or back in time on its
+    /// channel, it is garbled; else it ends its channel's track when that
+    /// changes satellite, was reacquired or has a gap, and continues (or
+    /// begins) one, with a row when settled.
+    fn take(&mut self, r: &ChRecord, garbled: &mut GarbledLines) {
+        let t = ms(r.time_s);
+        if !self.grid.holds(t) {
+            garbled.push(Garbled {
+                line: r.line,
+                field: Some((1, "time")),
+                reason: format!(
+                    "{:.3} s is off the {} s epoch grid of most lines (pocket_trk moves its $CH epochs to its PVT \
+                     epochs, multiples of 20 ms, once it has decoded the navigation data; an epoch dividing 0.02 s \
+                     keeps one grid)",
+                    r.time_s, self.grid.epoch_s
+                ),
+            });
+            return;
+        }
+        if let Some(o) = self.open.get(&r.ch) {
+            if t <= o.last_t_ms {
+                garbled.push(Garbled {
+                    line: r.line,
+                    field: Some((1, "time")),
+                    reason: format!(
+                        "channel {} at {:.3} s again or back in time (its previous line was at {:.3} s)",
+                        r.ch,
+                        r.time_s,
+                        o.last_t_ms as f64 * 1e-3
+                    ),
+                });
+                return;
+            }
+            if let Some(why) = track_break(o, r, t, self.grid.step_ms) {
+                let o = self.open.remove(&r.ch).expect("open track");
+                self.close(o, &why);
+            }
+        }
+        let o = self.open.entry(r.ch).or_insert_with(|| open(r, t));
+        o.summary.records += 1;
+        o.summary.lines[1] = r.line;
+        o.summary.time_s[1] = r.time_s;
+        o.last_t_ms = t;
+        o.last_lock_s = r.lock_s;
+        o.cn0_sum += r.cn0_dbhz;
+        if self.conversion.keeps(r.lock_s) {
+            o.summary.kept += 1;
+            self.rows.push(self.conversion.row(r, t));
+        }
+    }
+
+    /// Ends a track for reason `why`: its mean C/N0, whether used, and why.
+    fn close(&mut self, o: Open, why: &str) {
+        let settle_s = self.conversion.settle_s;
         let mut s = o.summary;
         s.mean_cn0_dbhz = o.cn0_sum / s.records as f64;
         s.used = s.kept > 0;
@@ -363,119 +542,62 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
                  ({span:.2} s tracked)"
             )
         };
-        done.push(s);
-    };
-    for r in &l1 {
-        let t = ms(r.time_s);
-        if (t.rem_euclid(step_ms)) != phase {
-            garble(Garbled {
-                line: r.line,
-                field: Some((1, "time")),
-                reason: format!(
-                    "{:.3} s is off the {} s epoch grid of most lines (pocket_trk moves its $CH epochs to its PVT \
-                     epochs, multiples of 20 ms, once it has decoded the navigation data; an epoch dividing 0.02 s \
-                     keeps one grid)",
-                    r.time_s, epoch.value
-                ),
-            });
-            continue;
-        }
-        let mut why_new = None;
-        if let Some(o) = open.get(&r.ch) {
-            if t <= o.last_t_ms {
-                garble(Garbled {
-                    line: r.line,
-                    field: Some((1, "time")),
-                    reason: format!(
-                        "channel {} at {:.3} s again or back in time (its previous line was at {:.3} s)",
-                        r.ch,
-                        r.time_s,
-                        o.last_t_ms as f64 * 1e-3
-                    ),
-                });
-                continue;
-            }
-            if o.summary.prn != r.prn || o.summary.sig != r.sig {
-                why_new = Some(format!("the channel turned to {} PRN {} at line {}", r.sig, r.prn, r.line));
-            } else if r.lock_s + 1e-9 < o.last_lock_s {
-                why_new = Some(format!(
-                    "lost and reacquired (lock time {} s at line {}, after {} s)",
-                    r.lock_s, r.line, o.last_lock_s
-                ));
-            } else if t - o.last_t_ms > step_ms + step_ms / 2 {
-                why_new = Some(format!(
-                    "no line from {:.3} s to {:.3} s (line {}): not tracked between",
-                    o.last_t_ms as f64 * 1e-3,
-                    r.time_s,
-                    r.line
-                ));
-            }
-        }
-        if let Some(why) = why_new {
-            let o = open.remove(&r.ch).expect("open track");
-            close(o, &why, &mut done);
-        }
-        let o = open.entry(r.ch).or_insert_with(|| Open {
-            summary: TrackSummary {
-                channel: r.ch,
-                prn: r.prn,
-                sat: r.sat.clone(),
-                sig: r.sig.clone(),
-                lines: [r.line, r.line],
-                time_s: [r.time_s, r.time_s],
-                first_lock_s: r.lock_s,
-                records: 0,
-                kept: 0,
-                mean_cn0_dbhz: 0.0,
-                used: false,
-                reason: String::new(),
-            },
-            last_t_ms: t,
-            last_lock_s: r.lock_s,
-            cn0_sum: 0.0,
-        });
-        o.summary.records += 1;
-        o.summary.lines[1] = r.line;
-        o.summary.time_s[1] = r.time_s;
-        o.last_t_ms = t;
-        o.last_lock_s = r.lock_s;
-        o.cn0_sum += r.cn0_dbhz;
-        if r.lock_s > keep_after_s + 1e-9 {
-            o.summary.kept += 1;
-            rows.push(TrackingRow {
-                t_s: (t as f64 + 500.0 * t_block) * 1e-3 + settings.toff_s,
-                channel: r.ch,
-                prn: r.prn,
-                cn0_dbhz: r.cn0_dbhz,
-                elev_deg: None,
-                phase_err_rad: core::f64::consts::TAU * r.err_phas_cyc,
-            });
-        }
+        self.done.push(s);
     }
-    for (_, o) in std::mem::take(&mut open) {
-        close(o, "tracked to the end of the log", &mut done);
+
+    /// Ends the tracks still open; every track by its first line, the rows by time then channel.
+    fn finish(mut self) -> (Vec<TrackSummary>, Vec<TrackingRow>) {
+        for (_, o) in std::mem::take(&mut self.open) {
+            self.close(o, "tracked to the end of the log");
+        }
+        let (mut done, mut rows) = (self.done, self.rows);
+        done.sort_by(|a, b| (a.lines[0]).cmp(&b.lines[0]));
+        rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
+        (done, rows)
     }
-    done.sort_by(|a, b| (a.lines[0]).cmp(&b.lines[0]));
-    rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
-    if rows.is_empty() {
-        let why = done.iter().map(|s| format!("ch {} PRN {}: {}", s.channel, s.prn, s.reason)).collect::<Vec<_>>();
-        return Err(PocketSdrError::NoTracks { file, settle_s, why: why.join("; ") });
+}
+
+/// Why line `r` at `t_ms` does not continue the open track `o` (lines
+/// `step_ms` apart): another satellite or signal, a lock time that fell
+/// (lost and reacquired), or a gap over 1.5 epochs; `None` when it does.
+fn track_break(o: &Open, r: &ChRecord, t_ms: i64, step_ms: i64) -> Option<String> {
+    if o.summary.prn != r.prn || o.summary.sig != r.sig {
+        Some(format!("the channel turned to {} PRN {} at line {}", r.sig, r.prn, r.line))
+    } else if r.lock_s + 1e-9 < o.last_lock_s {
+        Some(format!("lost and reacquired (lock time {} s at line {}, after {} s)", r.lock_s, r.line, o.last_lock_s))
+    } else if t_ms - o.last_t_ms > step_ms + step_ms / 2 {
+        Some(format!(
+            "no line from {:.3} s to {:.3} s (line {}): not tracked between",
+            o.last_t_ms as f64 * 1e-3,
+            r.time_s,
+            r.line
+        ))
+    } else {
+        None
     }
-    Ok(Imported {
-        file,
-        version,
-        fs_hz,
-        rows,
-        tracks: done,
-        epoch,
-        stage,
-        settle_s,
-        messages,
-        other_signals,
-        garbled,
-        garbled_count,
-        settings: settings.clone(),
-    })
+}
+
+/// A track begun by line `r` at `t_ms`, with no line counted yet.
+fn open(r: &ChRecord, t_ms: i64) -> Open {
+    Open {
+        summary: TrackSummary {
+            channel: r.ch,
+            prn: r.prn,
+            sat: r.sat.clone(),
+            sig: r.sig.clone(),
+            lines: [r.line, r.line],
+            time_s: [r.time_s, r.time_s],
+            first_lock_s: r.lock_s,
+            records: 0,
+            kept: 0,
+            mean_cn0_dbhz: 0.0,
+            used: false,
+            reason: String::new(),
+        },
+        last_t_ms: t_ms,
+        last_lock_s: r.lock_s,
+        cn0_sum: 0.0,
+    }
 }
 
 /// What the conversion did, as text: the loop, the interval, every track,

@@ -131,10 +131,25 @@ fn verdict_comment(h: &mut String, doc: &ResultDocument) {
 
 /// The header text of `doc`, named `gsens_gamma.h` by the CLI (include guard `GSENS_GAMMA_H`).
 pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
-    let c = &doc.calibration;
     let mut h = String::new();
-    let date = meta.generated_utc.split(' ').next().unwrap_or("").to_string();
-    let carrier = c.settings.carrier_hz;
+    comment(&mut h, doc, meta);
+    defines(&mut h, doc, meta);
+    let mut mask = 0u32;
+    for i in 0..3 {
+        let _ = writeln!(h);
+        if axis_defines(&mut h, &doc.calibration, i) {
+            mask |= 1 << i;
+        }
+    }
+    mask_and_initializers(&mut h, mask);
+    h
+}
+
+/// The header's opening comment: where it comes from, the model and its
+/// conventions, the estimate and its verdict, and a warning for an axis
+/// not observable.
+fn comment(h: &mut String, doc: &ResultDocument, meta: &ReportMeta) {
+    let c = &doc.calibration;
     let _ = writeln!(h, "/*");
     let _ = writeln!(h, " * gsens_gamma.h - crystal-oscillator g-sensitivity compensation parameters.");
     let _ = writeln!(h, " *");
@@ -171,7 +186,7 @@ pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
         c.rms_before_rad, c.rms_after_rad
     );
     let _ = writeln!(h, " * autocorrelation-robust.");
-    verdict_comment(&mut h, doc);
+    verdict_comment(h, doc);
     if c.observable.iter().any(|o| !o) {
         let _ = writeln!(h, " *");
         let _ = writeln!(h, " * WARNING: at least one axis was NOT observable in this log (too little");
@@ -179,6 +194,11 @@ pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
         let _ = writeln!(h, " * repeat the calibration shaking along that axis.");
     }
     let _ = writeln!(h, " */");
+}
+
+/// The include guard, the calibration's date, sources and carrier, and whether it is trustworthy.
+fn defines(h: &mut String, doc: &ResultDocument, meta: &ReportMeta) {
+    let date = meta.generated_utc.split(' ').next().unwrap_or("").to_string();
     let _ = writeln!(h, "#ifndef GSENS_GAMMA_H");
     let _ = writeln!(h, "#define GSENS_GAMMA_H");
     let _ = writeln!(h);
@@ -189,48 +209,54 @@ pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
             role.chars().map(|ch| if ch.is_ascii_alphanumeric() { ch.to_ascii_uppercase() } else { '_' }).collect();
         let _ = writeln!(h, "#define GSENS_SOURCE_{name}_LOG {}", c_string(path));
     }
-    let _ = writeln!(h, "#define GSENS_CARRIER_HZ {}", c_double(carrier));
+    let _ = writeln!(h, "#define GSENS_CARRIER_HZ {}", c_double(doc.calibration.settings.carrier_hz));
     let _ = writeln!(h, "#define GSENS_STANDARD_GRAVITY_MPS2 {}", c_double(STANDARD_GRAVITY_MPS2));
     let _ = writeln!(h);
     let _ =
         writeln!(h, "/* 1 when gsens's checks found the estimate trustworthy, 0 when not (see the warnings above). */");
     let _ = writeln!(h, "#define GSENS_GAMMA_TRUSTWORTHY {}", u8::from(doc.trustworthy));
-    let mut mask = 0u32;
-    for i in 0..3 {
-        let a = crate::AXES[i].to_ascii_uppercase();
-        let _ = writeln!(h);
-        match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i], c.gamma_ppb_per_g[i], c.sigma_ppb_per_g[i]) {
-            (Some(g), Some(s), Some(gp), Some(sp)) if c.observable[i] => {
-                mask |= 1 << i;
-                let _ = writeln!(
-                    h,
-                    "/* {} axis: observable. {g:+.6} +/- {s:.6} Hz/(m/s^2) (1 sigma) = {gp:+.4} +/- {sp:.4} ppb/g */",
-                    crate::AXES[i]
-                );
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_OBSERVABLE 1");
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_HZ_PER_MPS2 {}", c_double(g));
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_SIGMA_HZ_PER_MPS2 {}", c_double(s));
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_PPB_PER_G {}", c_double(gp));
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_SIGMA_PPB_PER_G {}", c_double(sp));
-            }
-            _ => {
-                let _ = writeln!(
-                    h,
-                    "/* {} axis: NOT OBSERVABLE (unexplained excitation RMS {:.4} rad per Hz/(m/s^2),",
-                    crate::AXES[i],
-                    c.excitation_rms[i]
-                );
-                let _ = writeln!(
-                    h,
-                    " * floor {}). Set to 0 = no compensation on this axis; not an estimate. No sigma. */",
-                    c.settings.criteria.min_excitation_rms
-                );
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_OBSERVABLE 0");
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_HZ_PER_MPS2 (0.0)");
-                let _ = writeln!(h, "#define GSENS_GAMMA_{a}_PPB_PER_G (0.0)");
-            }
+}
+
+/// Axis `i`'s defines: Γ̂ and its σ in both units when observable (returns
+/// true), else 0 with why.
+fn axis_defines(h: &mut String, c: &gsens_calib::Calibration, i: usize) -> bool {
+    let a = crate::AXES[i].to_ascii_uppercase();
+    match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i], c.gamma_ppb_per_g[i], c.sigma_ppb_per_g[i]) {
+        (Some(g), Some(s), Some(gp), Some(sp)) if c.observable[i] => {
+            let _ = writeln!(
+                h,
+                "/* {} axis: observable. {g:+.6} +/- {s:.6} Hz/(m/s^2) (1 sigma) = {gp:+.4} +/- {sp:.4} ppb/g */",
+                crate::AXES[i]
+            );
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_OBSERVABLE 1");
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_HZ_PER_MPS2 {}", c_double(g));
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_SIGMA_HZ_PER_MPS2 {}", c_double(s));
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_PPB_PER_G {}", c_double(gp));
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_SIGMA_PPB_PER_G {}", c_double(sp));
+            true
+        }
+        _ => {
+            let _ = writeln!(
+                h,
+                "/* {} axis: NOT OBSERVABLE (unexplained excitation RMS {:.4} rad per Hz/(m/s^2),",
+                crate::AXES[i],
+                c.excitation_rms[i]
+            );
+            let _ = writeln!(
+                h,
+                " * floor {}). Set to 0 = no compensation on this axis; not an estimate. No sigma. */",
+                c.settings.criteria.min_excitation_rms
+            );
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_OBSERVABLE 0");
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_HZ_PER_MPS2 (0.0)");
+            let _ = writeln!(h, "#define GSENS_GAMMA_{a}_PPB_PER_G (0.0)");
+            false
         }
     }
+}
+
+/// The mask of the axes compensated and the arrays' initializers; the guard's end.
+fn mask_and_initializers(h: &mut String, mask: u32) {
     let _ = writeln!(h);
     let _ = writeln!(h, "/* Bit i set when axis i (0 x, 1 y, 2 z) is observable and compensated. */");
     let _ = writeln!(h, "#define GSENS_GAMMA_OBSERVABLE_MASK {mask}u");
@@ -244,7 +270,6 @@ pub fn render_c_header(doc: &ResultDocument, meta: &ReportMeta) -> String {
     );
     let _ = writeln!(h);
     let _ = writeln!(h, "#endif /* GSENS_GAMMA_H */");
-    h
 }
 
 #[cfg(test)]

@@ -150,41 +150,59 @@ impl<'a> FigureInputs<'a> {
 
     /// The figures: Figs. 3–5 of the paper, C/N0, the residual spectrum.
     pub fn figures(&self) -> Vec<Figure<'_>> {
-        let c = self.calibration;
-        let s = self.session;
-        let desc = c.loop_used.to_string();
-        let response = ResponseData::from_loop(&c.loop_used, 0.05, 20.0, 300, desc.clone()).ok();
-        let mut figs = Vec::new();
-        if let Some(r) = response {
-            let period = 1.0 / r.peak_hz;
-            figs.push(Figure {
-                id: "fig3_response",
-                title: "Fig. 3: the loop's frequency response".into(),
-                caption: format!(
-                    "|L(j2πf)| = |φ/Δf| and its phase for the receiver loop modelled ({desc}). A frequency bias \
-                     Δf = aᵀΓ leaves the largest phase error when the specific force varies near the peak, \
-                     {:.3} Hz: shake with a period of about {period:.2} s (shaded: the half-power band).",
-                    r.peak_hz
-                ),
-                render: Box::new(move |f| fig_response(&r, f, DEFAULT_SIZE)),
-            });
-        }
-        if let Some(m) = self.measured_response.as_ref().filter(|m| !m.points.is_empty()) {
-            figs.push(Figure {
-                id: "measured_response",
-                title: "The loop's response measured from the session".into(),
-                caption: "The response of the averaged phase error to the modelled excitation aᵀΓ̂, estimated from \
-                          the session (Welch cross-spectrum), beside the model's. Red: the bins the check tests (the \
-                          shaken band), each with a bar as long as the deviation the check allows; a red bar that \
-                          misses its black dot (the model through the same segments, window leakage included, which \
-                          is what Ĥ is compared with, not the smooth curve) means the stated loop is not the \
-                          receiver's. Grey: other bins with significant coherence, ±2σ from the coherence; they are \
-                          not tested, and with little excitation they scatter about the curve."
-                    .into(),
-                render: Box::new(move |f| fig_measured_response(m, f, (DEFAULT_SIZE.0, 720))),
-            });
-        }
-        figs.push(Figure {
+        [
+            self.response_figure(),
+            self.measured_response_figure(),
+            Some(self.estimation_figure()),
+            Some(self.compensation_figure()),
+            self.cn0_figure(),
+            self.spectrum_figure(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
+    /// Fig. 3: the modelled loop's response, when it has one.
+    fn response_figure(&self) -> Option<Figure<'_>> {
+        let desc = self.calibration.loop_used.to_string();
+        let r = ResponseData::from_loop(&self.calibration.loop_used, 0.05, 20.0, 300, desc.clone()).ok()?;
+        let period = 1.0 / r.peak_hz;
+        Some(Figure {
+            id: "fig3_response",
+            title: "Fig. 3: the loop's frequency response".into(),
+            caption: format!(
+                "|L(j2πf)| = |φ/Δf| and its phase for the receiver loop modelled ({desc}). A frequency bias \
+                 Δf = aᵀΓ leaves the largest phase error when the specific force varies near the peak, \
+                 {:.3} Hz: shake with a period of about {period:.2} s (shaded: the half-power band).",
+                r.peak_hz
+            ),
+            render: Box::new(move |f| fig_response(&r, f, DEFAULT_SIZE)),
+        })
+    }
+
+    /// The loop's response measured from the session, when it was.
+    fn measured_response_figure(&self) -> Option<Figure<'_>> {
+        let m = self.measured_response.as_ref().filter(|m| !m.points.is_empty())?;
+        Some(Figure {
+            id: "measured_response",
+            title: "The loop's response measured from the session".into(),
+            caption: "The response of the averaged phase error to the modelled excitation aᵀΓ̂, estimated from \
+                      the session (Welch cross-spectrum), beside the model's. Red: the bins the check tests (the \
+                      shaken band), each with a bar as long as the deviation the check allows; a red bar that \
+                      misses its black dot (the model through the same segments, window leakage included, which \
+                      is what Ĥ is compared with, not the smooth curve) means the stated loop is not the \
+                      receiver's. Grey: other bins with significant coherence, ±2σ from the coherence; they are \
+                      not tested, and with little excitation they scatter about the curve."
+                .into(),
+            render: Box::new(move |f| fig_measured_response(m, f, (DEFAULT_SIZE.0, 720))),
+        })
+    }
+
+    /// Fig. 4: the specific force and Γ̂ as the estimator runs.
+    fn estimation_figure(&self) -> Figure<'_> {
+        let (c, s) = (self.calibration, self.session);
+        Figure {
             id: "fig4_estimation",
             title: "Fig. 4: the estimation process".into(),
             caption: format!(
@@ -202,8 +220,13 @@ impl<'a> FigureInputs<'a> {
                 };
                 fig_estimation(&d, f, (DEFAULT_SIZE.0, 720))
             }),
-        });
-        figs.push(Figure {
+        }
+    }
+
+    /// Fig. 5: the phase error before and after compensation.
+    fn compensation_figure(&self) -> Figure<'_> {
+        let (c, s) = (self.calibration, self.session);
+        Figure {
             id: "fig5_compensation",
             title: "Fig. 5: phase error before and after compensation".into(),
             caption: format!(
@@ -232,55 +255,64 @@ impl<'a> FigureInputs<'a> {
                 };
                 fig_compensation(&d, f, (DEFAULT_SIZE.0, 520))
             }),
-        });
-        if let Some(log) = self.tracking {
-            let used: Vec<(u32, u32)> = s.channels.iter().filter(|ch| ch.used).map(|ch| (ch.channel, ch.prn)).collect();
-            figs.push(Figure {
-                id: "cn0",
-                title: "C/N0 per channel".into(),
-                caption: format!(
-                    "Carrier-to-noise density of every track in the log; the {} averaged into φ are drawn bold.",
-                    used.len()
-                ),
-                render: Box::new(move |f| {
-                    let tracks: Vec<Cn0Track> = log
-                        .tracks()
-                        .iter()
-                        .map(|t| Cn0Track {
-                            channel: t.channel,
-                            prn: t.prn,
-                            t_s: &t.t_s,
-                            cn0_dbhz: &t.cn0_dbhz,
-                            used: used.contains(&(t.channel, t.prn)),
-                        })
-                        .collect();
-                    fig_cn0(&tracks, f, (DEFAULT_SIZE.0, 520))
-                }),
-            });
         }
-        if self.spectrum.1.len() >= 64 {
-            let fn_hz = c.loop_used.natural_frequency_hz();
-            figs.push(Figure {
-                id: "residual_spectrum",
-                title: "Residual spectrum".into(),
-                caption: format!(
-                    "Welch power spectral density of φ and of the residual φ − φ_aᵀΓ̂ over the longest gap-free \
-                     stretch after the warm-up ({:.0} s). What compensation removes is concentrated around the \
-                     loop's natural frequency; a residual peak there would mean a model mismatch.",
-                    self.spectrum.1.len() as f64 * s.log_interval_s
-                ),
-                render: Box::new(move |f| {
-                    let d = SpectrumData {
-                        interval_s: s.log_interval_s,
-                        residual_rad: &self.spectrum.1,
-                        before_rad: Some(&self.spectrum.0),
-                        marker_hz: fn_hz,
-                    };
-                    fig_residual_spectrum(&d, f, (DEFAULT_SIZE.0, 560))
-                }),
-            });
+    }
+
+    /// Every track's C/N0, when the tracking log is at hand.
+    fn cn0_figure(&self) -> Option<Figure<'_>> {
+        let log = self.tracking?;
+        let s = self.session;
+        let used: Vec<(u32, u32)> = s.channels.iter().filter(|ch| ch.used).map(|ch| (ch.channel, ch.prn)).collect();
+        Some(Figure {
+            id: "cn0",
+            title: "C/N0 per channel".into(),
+            caption: format!(
+                "Carrier-to-noise density of every track in the log; the {} averaged into φ are drawn bold.",
+                used.len()
+            ),
+            render: Box::new(move |f| {
+                let tracks: Vec<Cn0Track> = log
+                    .tracks()
+                    .iter()
+                    .map(|t| Cn0Track {
+                        channel: t.channel,
+                        prn: t.prn,
+                        t_s: &t.t_s,
+                        cn0_dbhz: &t.cn0_dbhz,
+                        used: used.contains(&(t.channel, t.prn)),
+                    })
+                    .collect();
+                fig_cn0(&tracks, f, (DEFAULT_SIZE.0, 520))
+            }),
+        })
+    }
+
+    /// The residual's spectrum, over a gap-free stretch of at least 64 epochs.
+    fn spectrum_figure(&self) -> Option<Figure<'_>> {
+        if self.spectrum.1.len() < 64 {
+            return None;
         }
-        figs
+        let s = self.session;
+        let fn_hz = self.calibration.loop_used.natural_frequency_hz();
+        Some(Figure {
+            id: "residual_spectrum",
+            title: "Residual spectrum".into(),
+            caption: format!(
+                "Welch power spectral density of φ and of the residual φ − φ_aᵀΓ̂ over the longest gap-free \
+                 stretch after the warm-up ({:.0} s). What compensation removes is concentrated around the \
+                 loop's natural frequency; a residual peak there would mean a model mismatch.",
+                self.spectrum.1.len() as f64 * s.log_interval_s
+            ),
+            render: Box::new(move |f| {
+                let d = SpectrumData {
+                    interval_s: s.log_interval_s,
+                    residual_rad: &self.spectrum.1,
+                    before_rad: Some(&self.spectrum.0),
+                    marker_hz: fn_hz,
+                };
+                fig_residual_spectrum(&d, f, (DEFAULT_SIZE.0, 560))
+            }),
+        })
     }
 }
 

@@ -729,10 +729,26 @@ impl Plot for ResponseData {
         let area = titled(root, &title, st)?;
         let f = &self.frequency_hz;
         let (f0, f1) = (f[0], f[f.len() - 1]);
-        let line = AFTER_COLOR.mix(1.0);
-        let peak_color = BEFORE_COLOR.mix(1.0);
-        let shade = RGBColor(255, 200, 120).mix(0.35);
         let band = self.half_power_band_hz.map(|[lo, hi]| (lo.max(f0), hi.min(f1))).filter(|(lo, hi)| hi > lo);
+        let y_area = st.i(70.0);
+        let area = legend_strip(&area, &self.legend(band.is_some()), y_area + st.i(10.0), st)?;
+        let h = area.dim_in_pixel().1 as i32;
+        let (top, bottom) = area.split_vertically(h * 60 / 100);
+        self.magnitude_panel(&top, st, y_area, band)?;
+        self.phase_panel(&bottom, st, y_area, band)
+    }
+}
+
+impl ResponseData {
+    /// Fig. 3's colours: the response's line, the peak's, the half-power band's shade.
+    fn colors() -> (RGBAColor, RGBAColor, RGBAColor) {
+        (AFTER_COLOR.mix(1.0), BEFORE_COLOR.mix(1.0), RGBColor(255, 200, 120).mix(0.35))
+    }
+
+    /// The legend: |L|, its peak with the shaking period it implies, and the
+    /// half-power band when it is drawn (`band`).
+    fn legend(&self, band: bool) -> Vec<(String, Mark)> {
+        let (line, peak_color, shade) = Self::colors();
         let mut entries = vec![
             ("|L(j2πf)|".to_string(), Mark::Line(line, 3)),
             (
@@ -745,18 +761,25 @@ impl Plot for ResponseData {
                 Mark::Dot(peak_color),
             ),
         ];
-        if let (Some((lo, hi)), Some([blo, bhi])) = (band, self.half_power_band_hz) {
-            let _ = (lo, hi);
+        if let (true, Some([blo, bhi])) = (band, self.half_power_band_hz) {
             entries.push((
                 format!("half-power band {blo:.2}–{bhi:.2} Hz (periods {:.2}–{:.2} s)", 1.0 / bhi, 1.0 / blo),
                 Mark::Band(shade),
             ));
         }
-        let y_area = st.i(70.0);
-        let area = legend_strip(&area, &entries, y_area + st.i(10.0), st)?;
-        let h = area.dim_in_pixel().1 as i32;
-        let (top, bottom) = area.split_vertically(h * 60 / 100);
-        let xr = || log_axis(f0..f1);
+        entries
+    }
+
+    /// The top panel: |L| on a log frequency axis, the peak marked, the band shaded.
+    fn magnitude_panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        st: &Style,
+        y_area: i32,
+        band: Option<(f64, f64)>,
+    ) -> DrawResult<DB> {
+        let (line, peak_color, shade) = Self::colors();
+        let f = &self.frequency_hz;
         let ymax = self.magnitude_rad_per_hz.iter().cloned().fold(self.peak_rad_per_hz, f64::max) * 1.1;
         let fmt_log = |v: &f64| fmt_tick(*v, 0.0);
         let fmt_mag = |v: &f64| fmt_tick(*v, ymax);
@@ -770,7 +793,7 @@ impl Plot for ResponseData {
             fmt_x: &fmt_log,
             fmt_y: &fmt_mag,
         };
-        let mut chart = framed_chart(&top, st, &frame, xr(), 0.0..ymax)?;
+        let mut chart = framed_chart(area, st, &frame, log_axis(f[0]..f[f.len() - 1]), 0.0..ymax)?;
         if let Some((lo, hi)) = band {
             chart.draw_series(std::iter::once(Rectangle::new([(lo, 0.0), (hi, ymax)], shade.filled())))?;
         }
@@ -783,10 +806,24 @@ impl Plot for ResponseData {
             st.i(6.0).max(3),
             peak_color.filled(),
         )))?;
+        Ok(())
+    }
 
+    /// The bottom panel: the phase of L in whole multiples of 45°, the peak's
+    /// frequency dashed, the band shaded.
+    fn phase_panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        st: &Style,
+        y_area: i32,
+        band: Option<(f64, f64)>,
+    ) -> DrawResult<DB> {
+        let (line, peak_color, shade) = Self::colors();
+        let f = &self.frequency_hz;
         let (plo, phi) =
             self.phase_deg.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &p| (a.min(p), b.max(p)));
         let pr = (plo / 45.0).floor() * 45.0..(phi / 45.0).ceil() * 45.0;
+        let fmt_log = |v: &f64| fmt_tick(*v, 0.0);
         let fmt_deg = |v: &f64| format!("{v:.0}");
         let frame = Frame {
             top: 10.0,
@@ -798,7 +835,7 @@ impl Plot for ResponseData {
             fmt_x: &fmt_log,
             fmt_y: &fmt_deg,
         };
-        let mut chart = framed_chart(&bottom, st, &frame, xr(), pr.clone())?;
+        let mut chart = framed_chart(area, st, &frame, log_axis(f[0]..f[f.len() - 1]), pr.clone())?;
         if let Some((lo, hi)) = band {
             chart.draw_series(std::iter::once(Rectangle::new([(lo, pr.start), (hi, pr.end)], shade.filled())))?;
         }
@@ -861,18 +898,29 @@ impl Plot for EstimationData<'_> {
         let h = area.dim_in_pixel().1 as i32;
         let (top, bottom) = area.split_vertically(h * 42 / 100);
         let y_area = st.i(78.0);
-        let x0 = y_area + st.i(10.0);
         let t0 = self.t_s.iter().cloned().fold(f64::INFINITY, f64::min);
         let t1 = self.t_s.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let t1 = self.history.iter().map(|p| p.t_s).fold(t1, f64::max);
         let xr = t0..if t1 > t0 { t1 } else { t0 + 1.0 };
+        self.accel_panel(&top, st, y_area, xr.clone())?;
+        self.gamma_panel(&bottom, st, y_area, xr)
+    }
+}
+
+impl EstimationData<'_> {
+    /// The top panel: the specific force's components over the time range `xr`.
+    fn accel_panel<DB: DrawingBackend>(
+        &self,
+        top: &DrawingArea<DB, Shift>,
+        st: &Style,
+        y_area: i32,
+        xr: Range<f64>,
+    ) -> DrawResult<DB> {
         let fmt_x = span_fmt(&xr);
         let buckets = (top.dim_in_pixel().0 as usize).max(200);
-
-        // Top: specific force.
         let entries: Vec<(String, Mark)> =
             (0..3).map(|i| (format!("a{}", crate::AXES[i]), Mark::Line(AXIS_COLORS[i].mix(0.9), 3))).collect();
-        let top = legend_strip(&top, &entries, x0, st)?;
+        let top = legend_strip(top, &entries, y_area + st.i(10.0), st)?;
         let ar = padded_range(self.accel_mps2.iter().flat_map(|a| a.iter().cloned()), 0.05).unwrap_or(-1.0..1.0);
         let fmt_a = span_fmt(&ar);
         let frame = Frame {
@@ -885,23 +933,24 @@ impl Plot for EstimationData<'_> {
             fmt_x: &fmt_x,
             fmt_y: &fmt_a,
         };
-        let mut chart = framed_chart(&top, st, &frame, xr.clone(), ar)?;
+        let mut chart = framed_chart(&top, st, &frame, xr, ar)?;
         for i in 0..3 {
             let style = AXIS_COLORS[i].mix(0.9).stroke_width(st.i(1.3).max(1) as u32);
             draw_polylines(&mut chart, self.t_s, |k| self.accel_mps2.get(k).map(|a| a[i]), buckets, style)?;
         }
+        Ok(())
+    }
 
-        // Bottom: Γ̂ with ±1σ bands and the truth.
-        let hist = self.history;
+    /// The Γ̂ panel's view: around the final estimates and the truth (of the
+    /// observable axes, or all when none is), wide enough for ±4σ; the early,
+    /// undetermined estimates are clipped to its edges.
+    fn gamma_view(&self) -> Range<f64> {
         let any_obs = self.observable.iter().any(|&o| o);
         let ranged = |i: usize| self.observable[i] || !any_obs;
-        let last = hist.last();
-        // The view: around the final estimates and the truth, wide enough for
-        // ±4σ; the early, undetermined estimates are clipped to its edges.
         let mut vals: Vec<f64> = vec![0.0];
         let mut sigma_max = 0.0f64;
         for i in (0..3).filter(|&i| ranged(i)) {
-            if let Some(p) = last {
+            if let Some(p) = self.history.last() {
                 vals.push(p.gamma_hz_per_mps2[i]);
                 if p.sigma_hz_per_mps2[i].is_finite() {
                     sigma_max = sigma_max.max(p.sigma_hz_per_mps2[i]);
@@ -914,14 +963,17 @@ impl Plot for EstimationData<'_> {
         let (lo, hi) = vals.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
         let span = (hi - lo).max(1e-6);
         let pad = (0.3 * span).max(4.0 * sigma_max);
-        let gr = lo - pad..hi + pad;
-        // An estimate counts as determined once its σ is small against the view.
-        let determined = |p: &HistoryPoint, i: usize| p.sigma_hz_per_mps2[i] <= 0.25 * (gr.end - gr.start);
+        lo - pad..hi + pad
+    }
+
+    /// The Γ̂ panel's legend: each component with its final value (or
+    /// unobservable), the σ band, the truth when known.
+    fn gamma_legend(&self) -> Vec<(String, Mark)> {
         let mut entries = Vec::new();
         for i in 0..3 {
             let strong = self.observable[i];
             let color = AXIS_COLORS[i].mix(if strong { 1.0 } else { 0.35 });
-            let value = match last {
+            let value = match self.history.last() {
                 Some(p) if strong => format!(" → {:+.4}", p.gamma_hz_per_mps2[i]),
                 _ => " (unobservable)".to_string(),
             };
@@ -931,8 +983,24 @@ impl Plot for EstimationData<'_> {
         if self.truth.is_some() {
             entries.push(("truth (dashed)".to_string(), Mark::Dashed(BLACK.mix(0.8))));
         }
-        let bottom = legend_strip(&bottom, &entries, x0, st)?;
+        entries
+    }
+
+    /// The bottom panel: Γ̂ with ±1σ bands and the truth, each component
+    /// drawn where determined (its σ small against the view).
+    fn gamma_panel<DB: DrawingBackend>(
+        &self,
+        bottom: &DrawingArea<DB, Shift>,
+        st: &Style,
+        y_area: i32,
+        xr: Range<f64>,
+    ) -> DrawResult<DB> {
+        let gr = self.gamma_view();
+        let bottom = legend_strip(bottom, &self.gamma_legend(), y_area + st.i(10.0), st)?;
         let mut chart = time_chart(&bottom, st, y_area, "Γ estimate [Hz/(m/s²)]", xr.clone(), gr.clone())?;
+        // An estimate counts as determined once its σ is small against the view.
+        let determined = |p: &HistoryPoint, i: usize| p.sigma_hz_per_mps2[i] <= 0.25 * (gr.end - gr.start);
+        let hist = self.history;
         for i in 0..3 {
             let strong = self.observable[i];
             let color = AXIS_COLORS[i].mix(if strong { 1.0 } else { 0.35 });

@@ -144,11 +144,30 @@ fn verdict_banner(h: &mut String, d: &ReportData) {
     let _ = writeln!(h, "</div>");
 }
 
-/// The report as one HTML document.
+/// The report as one HTML document: the head, then one section after the
+/// other (estimate, compensation, figures, channels, settings, all results,
+/// the C header) and the footer.
 pub fn render_html(d: &ReportData) -> String {
-    let c = &d.document.calibration;
-    let truth = d.document.truth_gamma_hz_per_mps2;
     let mut h = String::with_capacity(64 * 1024 + d.figures.iter().map(|f| f.svg.len()).sum::<usize>());
+    head(&mut h, d);
+    // Verdict and estimate: the document's verdict and warnings first, then what the shaking observed.
+    let _ = writeln!(h, "<h2 id=\"estimate\">Estimate</h2>");
+    verdict_banner(&mut h, d);
+    observability_banner(&mut h, d);
+    estimate_table(&mut h, d);
+    estimate_notes(&mut h, d);
+    compensation(&mut h, d);
+    figures(&mut h, d);
+    channels(&mut h, d);
+    settings(&mut h, d);
+    all_results(&mut h, d);
+    c_header_and_footer(&mut h, d);
+    let _ = writeln!(h, "</main>\n</body>\n</html>");
+    h
+}
+
+/// The document's head (title, style sheet), its title, inputs and navigation.
+fn head(h: &mut String, d: &ReportData) {
     let _ = write!(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
@@ -173,10 +192,11 @@ pub fn render_html(d: &ReportData) -> String {
          <a href=\"#channels\">Channels</a><a href=\"#settings\">Settings</a>{}</nav>",
         if d.c_header.is_some() { "<a href=\"#header\">C header</a>" } else { "" }
     );
+}
 
-    // Verdict and estimate: the document's verdict and warnings first, then what the shaking observed.
-    let _ = writeln!(h, "<h2 id=\"estimate\">Estimate</h2>");
-    verdict_banner(&mut h, d);
+/// Whether every axis was observable (and so Γ̂ complete), or which were not.
+fn observability_banner(h: &mut String, d: &ReportData) {
+    let c = &d.document.calibration;
     let n_obs = c.observable.iter().filter(|&&o| o).count();
     if n_obs == 3 && d.document.trustworthy {
         let _ = writeln!(
@@ -199,6 +219,13 @@ pub fn render_html(d: &ReportData) -> String {
             if missing.len() == 1 { "that axis" } else { "those axes" }
         );
     }
+}
+
+/// Γ̂ per axis with its 1σ, excitation and verdict (beside the truth when
+/// known); the Γ̂ cells of an untrustworthy estimate struck through.
+fn estimate_table(h: &mut String, d: &ReportData) {
+    let c = &d.document.calibration;
+    let truth = d.document.truth_gamma_hz_per_mps2;
     let peak_hz = d.document.loop_summary.peak_hz;
     let _ = write!(
         h,
@@ -253,6 +280,12 @@ pub fn render_html(d: &ReportData) -> String {
         let _ = writeln!(h, "</tr>");
     }
     let _ = writeln!(h, "</tbody></table>");
+}
+
+/// |Γ̂ − Γ| against the truth when known, and what the 1σ are.
+fn estimate_notes(h: &mut String, d: &ReportData) {
+    let c = &d.document.calibration;
+    let truth = d.document.truth_gamma_hz_per_mps2;
     if let Some(t) = truth {
         let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
         let err: f64 = (0..3).filter_map(|i| c.gamma_hz_per_mps2[i].map(|g| (g - t[i]).powi(2))).sum::<f64>().sqrt();
@@ -277,8 +310,11 @@ pub fn render_html(d: &ReportData) -> String {
         c.condition_number.map(|x| format!("{x:.1}")).unwrap_or_else(|| "∞ (singular)".into()),
         c.settings.carrier_hz
     );
+}
 
-    // Compensation.
+/// The compensation's figures: the phase error RMS before and after.
+fn compensation(h: &mut String, d: &ReportData) {
+    let c = &d.document.calibration;
     let reduction = if c.rms_before_rad > 0.0 { 100.0 * (1.0 - c.rms_after_rad / c.rms_before_rad) } else { 0.0 };
     let _ = writeln!(h, "<h2 id=\"compensation\">Compensation</h2>");
     let _ = writeln!(
@@ -299,8 +335,10 @@ pub fn render_html(d: &ReportData) -> String {
         1.0 / c.log_interval_s,
         c.settings.warmup_s
     );
+}
 
-    // Figures.
+/// Every figure, inline, with its caption.
+fn figures(h: &mut String, d: &ReportData) {
     let _ = writeln!(h, "<h2 id=\"figures\">Figures</h2>");
     for f in &d.figures {
         let _ = writeln!(
@@ -312,8 +350,10 @@ pub fn render_html(d: &ReportData) -> String {
             escape(&f.caption)
         );
     }
+}
 
-    // Channels.
+/// Every track: its C/N0, epochs, whether used, its offset and reason.
+fn channels(h: &mut String, d: &ReportData) {
     let _ = writeln!(h, "<h2 id=\"channels\">Channels</h2>");
     let _ = writeln!(
         h,
@@ -335,8 +375,11 @@ pub fn render_html(d: &ReportData) -> String {
         );
     }
     let _ = writeln!(h, "</tbody></table>");
+}
 
-    // Settings: everything that decided the estimate.
+/// Everything that decided the estimate.
+fn settings(h: &mut String, d: &ReportData) {
+    let c = &d.document.calibration;
     let _ = writeln!(h, "<h2 id=\"settings\">Settings</h2>");
     let mut rows = vec![
         ("receiver loop".to_string(), c.loop_used.to_string()),
@@ -366,8 +409,11 @@ pub fn render_html(d: &ReportData) -> String {
         let _ = writeln!(h, "<tr><td><code>{}</code></td><td>{}</td></tr>", escape(&k), escape(&v));
     }
     let _ = writeln!(h, "</tbody></table>");
+}
 
-    // Every result of the calibration, including those not discussed above.
+/// Every result of the calibration, including those not discussed above.
+fn all_results(h: &mut String, d: &ReportData) {
+    let c = &d.document.calibration;
     if let Ok(Value::Object(mut all)) = serde_json::to_value(c) {
         all.remove("settings");
         let mut rows = Vec::new();
@@ -383,7 +429,10 @@ pub fn render_html(d: &ReportData) -> String {
         }
         let _ = writeln!(h, "</tbody></table></details>");
     }
+}
 
+/// The C header when one was written, and the footer with the signs and units.
+fn c_header_and_footer(h: &mut String, d: &ReportData) {
     if let Some(header) = &d.c_header {
         let _ = writeln!(h, "<h2 id=\"header\">C header for firmware</h2>");
         let _ = writeln!(
@@ -398,8 +447,6 @@ pub fn render_html(d: &ReportData) -> String {
          commanded frequency; a is the specific force in the IMU body frame [m/s²]. {}</footer>",
         escape(&d.meta.tool)
     );
-    let _ = writeln!(h, "</main>\n</body>\n</html>");
-    h
 }
 
 #[cfg(test)]

@@ -13,19 +13,40 @@ use std::fmt::Write as _;
 /// channels, Γ̂ with its uncertainty (and the truth when known), the shaking
 /// verdicts and the compensation figures.
 pub fn render_text(doc: &ResultDocument) -> String {
-    let c = &doc.calibration;
-    let truth = doc.truth_gamma_hz_per_mps2;
     let mut s = String::new();
-    let s_ = &mut s;
-    let dur = c.epochs_total as f64 * c.log_interval_s;
+    warnings(&mut s, doc);
+    log_and_loop(&mut s, doc);
+    channels(&mut s, doc);
+    method(&mut s, doc);
+    loop_check(&mut s, doc);
+    if let Some(r) = &doc.loop_response {
+        let _ = writeln!(s, "{}", r.summary());
+    }
+    estimate_table(&mut s, doc);
+    shaking(&mut s, doc);
+    compensation(&mut s, doc);
+    let _ = writeln!(s, "\n{}", verdict_line(doc));
+    s
+}
+
+/// Each warning on its line, and for an untrustworthy estimate the verdict
+/// ahead of everything else.
+fn warnings(s: &mut String, doc: &ResultDocument) {
     for w in &doc.warnings {
-        let _ = writeln!(s_, "warning [{}]: {}", w.code, w.message);
+        let _ = writeln!(s, "warning [{}]: {}", w.code, w.message);
     }
     if !doc.trustworthy {
-        let _ = writeln!(s_, "{}\n", verdict_line(doc));
+        let _ = writeln!(s, "{}\n", verdict_line(doc));
     }
+}
+
+/// The log (epochs, rate, duration, warm-up) and the loop model with its
+/// peak and the shaking period it implies.
+fn log_and_loop(s: &mut String, doc: &ResultDocument) {
+    let c = &doc.calibration;
+    let dur = c.epochs_total as f64 * c.log_interval_s;
     let _ = writeln!(
-        s_,
+        s,
         "log: {} epochs at {:.3} Hz ({dur:.1} s), {} used after a {} s warm-up",
         c.epochs_total,
         1.0 / c.log_interval_s,
@@ -33,7 +54,7 @@ pub fn render_text(doc: &ResultDocument) -> String {
         c.settings.warmup_s
     );
     let _ = writeln!(
-        s_,
+        s,
         "loop model: {} ({} per log epoch, logged: {})",
         c.loop_used,
         c.model_substeps,
@@ -44,14 +65,19 @@ pub fn render_text(doc: &ResultDocument) -> String {
     );
     if let (Some(p), Some([lo, hi])) = (doc.loop_summary.peak_hz, doc.loop_summary.half_power_band_hz) {
         let _ = writeln!(
-            s_,
+            s,
             "  |L| peaks at {p:.3} Hz: shake with a period of about {:.2} s (half-power band {lo:.2}–{hi:.2} Hz)",
             1.0 / p
         );
     }
+}
+
+/// The channels: how many used and how, the signals when other than GPS
+/// L1 C/A, and every track's line.
+fn channels(s: &mut String, doc: &ResultDocument) {
     let used: Vec<_> = doc.channels.iter().filter(|ch| ch.used).collect();
     let _ = writeln!(
-        s_,
+        s,
         "channels: {} used of {} ({}, {} weights)",
         used.len(),
         doc.channels.len(),
@@ -82,12 +108,12 @@ pub fn render_text(doc: &ResultDocument) -> String {
                 )
             })
             .collect();
-        let _ = writeln!(s_, "signals (phase × f_L1/f_c, averaged on L1): {}", list.join("; "));
+        let _ = writeln!(s, "signals (phase × f_L1/f_c, averaged on L1): {}", list.join("; "));
     }
     for ch in &doc.channels {
         let signal = if mixed { format!("  {:<6}", ch.signal) } else { String::new() };
         let _ = writeln!(
-            s_,
+            s,
             "  ch {:>3}  PRN {:>3}{signal}  C/N0 {:>5.1} dB-Hz  {:>7} epochs  {}{}",
             ch.channel,
             ch.prn,
@@ -97,10 +123,15 @@ pub fn render_text(doc: &ResultDocument) -> String {
             ch.screening.brief().map(|b| format!("; {b}")).unwrap_or_default()
         );
     }
-    let _ = writeln!(s_, "method: {}", c.settings.method);
+}
+
+/// The estimator, its robust weighting if any, and the IMU time offset.
+fn method(s: &mut String, doc: &ResultDocument) {
+    let c = &doc.calibration;
+    let _ = writeln!(s, "method: {}", c.settings.method);
     if let Some(h) = &c.huber {
         let _ = writeln!(
-            s_,
+            s,
             "robust: Huber, c = 1.345·σ̂ = {:.4} rad, {} of {} epochs down-weighted, {} iterations{}",
             h.threshold_rad,
             h.epochs_downweighted,
@@ -112,106 +143,123 @@ pub fn render_text(doc: &ResultDocument) -> String {
     match c.imu_time_offset_sigma_s {
         Some(sd) => {
             let _ = writeln!(
-                s_,
+                s,
                 "IMU time offset (IMU stamp − true time): {:+.4} s ± {:.4} s, estimated jointly with Γ and applied",
                 c.imu_time_offset_s, sd
             );
         }
         None => {
-            let _ = writeln!(s_, "IMU time offset: {:+.4} s, assumed", c.imu_time_offset_s);
+            let _ = writeln!(s, "IMU time offset: {:+.4} s, assumed", c.imu_time_offset_s);
         }
     }
-    if let Some(j) = &c.joint_fit
-        && let (Some(f), Some(sf), Some(f0), Some(z)) =
-            (j.natural_frequency_hz, j.sigma_natural_frequency_hz, j.stated_natural_frequency_hz, j.loop_test_z)
-    {
-        let _ = writeln!(
-            s_,
-            "loop check: ωn/2π fits at {f:.4} ± {sf:.4} Hz{} (stated {f0:.4} Hz{}{}), z = {z:+.2}: {}",
-            j.zeta.map(|z| format!(", ζ {:.3} ± {:.3}", z[0], z[1])).unwrap_or_default(),
-            j.stated_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
-            match j.loop_tolerance {
-                Some(t) if t > 0.0 => format!(" ± {} %", percent(t)),
-                Some(_) => ", exact".to_string(),
-                None => String::new(),
-            },
-            if j.stated_loop_rejected {
-                format!("the data REJECT the stated loop (|z| > {:.2})", j.loop_test_threshold_z)
-            } else if j.loop_tolerance.is_none() {
-                "not tested (no tolerance: only the loop's shape is taken as known)".to_string()
-            } else {
-                format!(
-                    "consistent with the stated loop (|z| ≤ {:.2}, {} % false alarms)",
-                    j.loop_test_threshold_z,
-                    Decimal(100.0 * j.loop_test_false_alarm)
-                )
-            }
-        );
-        let inflation = j.variance_inflation.map(f64::sqrt);
-        let used = match (j.used_natural_frequency_hz, j.sigma_used_natural_frequency_hz) {
-            (Some(f), Some(s)) if s > 0.0 => format!("ωn/2π {f:.4} ± {s:.4} Hz"),
-            (Some(f), _) => format!("ωn/2π {f:.4} Hz"),
-            _ => String::new(),
-        };
-        let _ = writeln!(
-            s_,
-            "  {}widens σ by ×{:.2}, ×{:.2}, ×{:.2} (x, y, z){}",
-            match (j.fitted_loop_used, j.loop_tolerance, j.imu_time_offset_s.is_some()) {
-                (true, None, true) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop and the offset "),
-                (true, None, false) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop "),
-                (true, Some(_), true) if !j.stated_loop_rejected => format!(
-                    "Γ̂ under the fit and the stated loop's tolerance combined ({used}); not knowing the loop and the \
-                     offset exactly "
-                ),
-                (true, Some(_), false) if !j.stated_loop_rejected => format!(
-                    "Γ̂ under the fit and the stated loop's tolerance combined ({used}); not knowing the loop exactly "
-                ),
-                (true, _, true) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop and the offset "),
-                (true, _, false) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop "),
-                (false, _, true) => "Γ̂ under the stated loop, taken as exact; not knowing the offset ".to_string(),
-                (false, _, false) => "Γ̂ under the stated loop, taken as exact; ".to_string(),
-            },
-            inflation[0],
-            inflation[1],
-            inflation[2],
-            j.correlation_loop_offset
-                .filter(|r| r.abs() > 0.9)
-                .map(|r| format!(
-                    "; loop and offset are confounded (correlation {r:+.2}): to separate them, {}",
-                    gsens_calib::two_rate_advice(&c.loop_used)
-                ))
-                .unwrap_or_default()
-        );
+}
+
+/// The joint fit's check of the stated loop, and what not knowing the loop
+/// and the offset costs.
+fn loop_check(s: &mut String, doc: &ResultDocument) {
+    let c = &doc.calibration;
+    let Some(j) = &c.joint_fit else { return };
+    let (Some(f), Some(sf), Some(f0), Some(z)) =
+        (j.natural_frequency_hz, j.sigma_natural_frequency_hz, j.stated_natural_frequency_hz, j.loop_test_z)
+    else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "loop check: ωn/2π fits at {f:.4} ± {sf:.4} Hz{} (stated {f0:.4} Hz{}{}), z = {z:+.2}: {}",
+        j.zeta.map(|z| format!(", ζ {:.3} ± {:.3}", z[0], z[1])).unwrap_or_default(),
+        j.stated_zeta.map(|z| format!(", ζ {z:.3}")).unwrap_or_default(),
+        match j.loop_tolerance {
+            Some(t) if t > 0.0 => format!(" ± {} %", percent(t)),
+            Some(_) => ", exact".to_string(),
+            None => String::new(),
+        },
+        if j.stated_loop_rejected {
+            format!("the data REJECT the stated loop (|z| > {:.2})", j.loop_test_threshold_z)
+        } else if j.loop_tolerance.is_none() {
+            "not tested (no tolerance: only the loop's shape is taken as known)".to_string()
+        } else {
+            format!(
+                "consistent with the stated loop (|z| ≤ {:.2}, {} % false alarms)",
+                j.loop_test_threshold_z,
+                Decimal(100.0 * j.loop_test_false_alarm)
+            )
+        }
+    );
+    let inflation = j.variance_inflation.map(f64::sqrt);
+    let _ = writeln!(
+        s,
+        "  {}widens σ by ×{:.2}, ×{:.2}, ×{:.2} (x, y, z){}",
+        loop_used_phrase(j),
+        inflation[0],
+        inflation[1],
+        inflation[2],
+        j.correlation_loop_offset
+            .filter(|r| r.abs() > 0.9)
+            .map(|r| format!(
+                "; loop and offset are confounded (correlation {r:+.2}): to separate them, {}",
+                gsens_calib::two_rate_advice(&c.loop_used)
+            ))
+            .unwrap_or_default()
+    );
+}
+
+/// Which loop Γ̂ is under and what is not known, leading the joint fit's
+/// second line.
+fn loop_used_phrase(j: &gsens_calib::JointFit) -> String {
+    let used = match (j.used_natural_frequency_hz, j.sigma_used_natural_frequency_hz) {
+        (Some(f), Some(s)) if s > 0.0 => format!("ωn/2π {f:.4} ± {s:.4} Hz"),
+        (Some(f), _) => format!("ωn/2π {f:.4} Hz"),
+        _ => String::new(),
+    };
+    match (j.fitted_loop_used, j.loop_tolerance, j.imu_time_offset_s.is_some()) {
+        (true, None, true) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop and the offset "),
+        (true, None, false) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop "),
+        (true, Some(_), true) if !j.stated_loop_rejected => format!(
+            "Γ̂ under the fit and the stated loop's tolerance combined ({used}); not knowing the loop and the \
+             offset exactly "
+        ),
+        (true, Some(_), false) if !j.stated_loop_rejected => {
+            format!("Γ̂ under the fit and the stated loop's tolerance combined ({used}); not knowing the loop exactly ")
+        }
+        (true, _, true) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop and the offset "),
+        (true, _, false) => format!("Γ̂ under the fitted loop ({used}); not knowing the loop "),
+        (false, _, true) => "Γ̂ under the stated loop, taken as exact; not knowing the offset ".to_string(),
+        (false, _, false) => "Γ̂ under the stated loop, taken as exact; ".to_string(),
     }
-    if let Some(r) = &doc.loop_response {
-        let _ = writeln!(s_, "{}", r.summary());
-    }
+}
+
+/// Γ̂ per axis in Hz/(m/s²) and ppb/g with its 1σ (beside the truth when
+/// known), or why the axis is unobservable; then |Γ̂ − Γ| against the truth.
+fn estimate_table(s: &mut String, doc: &ResultDocument) {
+    let c = &doc.calibration;
+    let truth = doc.truth_gamma_hz_per_mps2;
     let head = if truth.is_some() { "      truth       error" } else { "" };
-    let _ = writeln!(s_, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
+    let _ = writeln!(s, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
     for i in 0..3 {
         match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i]) {
             (Some(g), Some(sg)) => {
                 let ppb = hz_per_mps2_to_ppb_per_g(g, c.settings.carrier_hz);
                 let sppb = hz_per_mps2_to_ppb_per_g(sg, c.settings.carrier_hz);
-                let _ = write!(s_, "  {}  {g:+.5}  ±{sg:.5}     {ppb:+.4}  ±{sppb:.4}", AXES[i]);
+                let _ = write!(s, "  {}  {g:+.5}  ±{sg:.5}     {ppb:+.4}  ±{sppb:.4}", AXES[i]);
                 if let Some(t) = truth {
-                    let _ = write!(s_, "     {:+.5}  {:+.5} ({:+.2}σ)", t[i], g - t[i], (g - t[i]) / sg);
+                    let _ = write!(s, "     {:+.5}  {:+.5} ({:+.2}σ)", t[i], g - t[i], (g - t[i]) / sg);
                 }
-                let _ = writeln!(s_);
+                let _ = writeln!(s);
             }
             _ => {
                 // The verdict's reason ("x: too little excitation — …"), without its axis.
                 let text = &c.axes[i].text;
                 let reason = text.split_once(": ").map_or(text.as_str(), |(_, r)| r);
                 let _ = write!(
-                    s_,
+                    s,
                     "  {}  unobservable: {reason} (excitation RMS {:.3} rad per Hz/(m/s²))",
                     AXES[i], c.excitation_rms[i]
                 );
                 if let Some(t) = truth {
-                    let _ = write!(s_, "  [truth {:+.5}]", t[i]);
+                    let _ = write!(s, "  [truth {:+.5}]", t[i]);
                 }
-                let _ = writeln!(s_);
+                let _ = writeln!(s);
             }
         }
     }
@@ -226,47 +274,57 @@ pub fn render_text(doc: &ResultDocument) -> String {
             format!(" (over {})", axes.iter().map(|&i| AXES[i]).collect::<Vec<_>>().join(", "))
         };
         if !axes.is_empty() && norm > 0.0 {
-            let _ = writeln!(s_, "  |Γ̂ − Γ|{over} = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|{over}", 100.0 * err / norm);
+            let _ = writeln!(s, "  |Γ̂ − Γ|{over} = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|{over}", 100.0 * err / norm);
         }
     }
-    let _ = writeln!(s_, "\nshaking:");
+}
+
+/// The shaking verdict of every axis and the predicted g-induced phase
+/// error against the discriminator's linear range.
+fn shaking(s: &mut String, doc: &ResultDocument) {
+    let c = &doc.calibration;
+    let _ = writeln!(s, "\nshaking:");
     for v in &c.axes {
-        let _ = writeln!(s_, "  {}", v.text);
+        let _ = writeln!(s, "  {}", v.text);
     }
     let peak = c.predicted_peak_phase_err_rad;
     let lin = c.discriminator_linear_range_rad;
     if peak > lin {
         let _ = writeln!(
-            s_,
+            s,
             "  the predicted g-induced phase error reaches {peak:.2} rad, beyond the discriminator's linear range \
              ({lin:.2} rad): see the warning above"
         );
     } else {
         let _ = writeln!(
-            s_,
+            s,
             "  predicted g-induced phase error peaks at {peak:.3} rad, inside the discriminator's linear range ({lin:.2} rad)"
         );
     }
+}
+
+/// The phase error's RMS before and after compensation, the information
+/// matrix's condition number and the Cramér–Rao bound.
+fn compensation(s: &mut String, doc: &ResultDocument) {
+    let c = &doc.calibration;
     let _ = writeln!(
-        s_,
+        s,
         "\nphase error RMS: {:.4} rad before compensation, {:.4} rad after (g-induced part {:.4} rad)",
         c.rms_before_rad, c.rms_after_rad, c.rms_g_induced_rad
     );
     let _ = writeln!(
-        s_,
+        s,
         "information matrix condition number: {}",
         c.condition_number.map(|x| format!("{x:.1}")).unwrap_or_else(|| "∞ (singular)".into())
     );
     if c.crlb_hz_per_mps2.iter().any(Option::is_some) {
         let b = c.crlb_hz_per_mps2.map(|v| v.map_or("—".to_owned(), |v| format!("{v:.5}")));
         let _ = writeln!(
-            s_,
+            s,
             "Cramér–Rao bound [Hz/(m/s²)]: x {}, y {}, z {} (residual noise: AR({}) model)",
             b[0], b[1], b[2], c.noise_ar_order
         );
     }
-    let _ = writeln!(s_, "\n{}", verdict_line(doc));
-    s
 }
 
 /// The one-line verdict: trustworthy, or not and why (the warning codes).

@@ -2,6 +2,7 @@
 //! the crate root, section "Screening").
 
 use gsens_core::stats::median_in_place;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ScreeningConfigError;
@@ -411,7 +412,6 @@ const WAVE_SPANS: usize = 8;
 /// the spans' outputs held at once stay small whatever the thread count),
 /// and copied into `d`.
 fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], shift: Option<&[f64]>, d: &mut [f64]) {
-    use rayon::prelude::*;
     const SPAN_EPOCHS: usize = 1 << 14;
     let n_tracks = rows.tracks();
     // The first row of each track at or after epoch `e`.
@@ -478,17 +478,13 @@ fn deviations_span(
     let cells = BLOCK * n_tracks;
     let (mut present, mut value) = (vec![f64::NAN; cells], vec![f64::NAN; cells]);
     let mut dev = vec![f64::NAN; cells];
-    let mut vals = [0.0f64; MAX_AT_EPOCH];
-    let mut sorted = [0.0f64; MAX_AT_EPOCH];
-    let mut rank_of = [0usize; MAX_AT_EPOCH];
-    let mut keys = [0i32; MAX_AT_EPOCH];
-    let mut slot = vec![usize::MAX; n_tracks];
+    let mut scratch = MedianScratch::new(n_tracks);
     for e0 in (span_start..span_end).step_by(BLOCK) {
         let e1 = (e0 + BLOCK).min(span_end);
         present.fill(f64::NAN);
         value.fill(f64::NAN);
+        block_start.copy_from_slice(&cursor);
         for i in 0..n_tracks {
-            block_start[i] = cursor[i];
             let end = rows.track_start[i + 1];
             while cursor[i] < end && (rows.epoch[cursor[i]] as usize) < e1 {
                 let r = cursor[i];
@@ -503,54 +499,85 @@ fn deviations_span(
         }
         for e in 0..e1 - e0 {
             let (p_row, v_row) = (&present[e * n_tracks..][..n_tracks], &value[e * n_tracks..][..n_tracks]);
-            let d_row = &mut dev[e * n_tracks..][..n_tracks];
-            // The values entering the median (at most MAX_AT_EPOCH of them).
-            let mut m = 0;
-            for (i, &v) in v_row.iter().enumerate() {
-                slot[i] = usize::MAX;
-                if v.is_finite() && m < MAX_AT_EPOCH {
-                    vals[m] = v;
-                    slot[i] = m;
-                    m += 1;
-                }
-            }
-            // Rank sort of a dozen values: branch-free integer comparisons of
-            // order-preserving single-precision keys, their 6 low bits replaced
-            // by the index (distinct keys; values within ~1e-5 of each other may
-            // come out of order, which moves a median by as little).
-            for a in 0..m {
-                keys[a] = (order_key(vals[a]) & !63) | a as i32;
-            }
-            for a in 0..m {
-                let ka = keys[a];
-                let n_below = keys[..m].iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
-                rank_of[a] = n_below;
-                sorted[n_below] = vals[a];
-            }
-            for i in 0..n_tracks {
-                if !p_row[i].is_finite() {
-                    continue;
-                }
-                // The median of the others: of `sorted` without the track's own
-                // value (rank `own`, or past the end when not among them).
-                let inside = slot[i] != usize::MAX;
-                let own = if inside { rank_of[slot[i]] } else { usize::MAX };
-                let others = m - usize::from(inside);
-                if others < 2 {
-                    d_row[i] = f64::NAN;
-                    continue;
-                }
-                let get = |j: usize| sorted[j + usize::from(j >= own)];
-                let (lo, hi) = (get((others - 1) / 2), get(others / 2));
-                let md = 0.5 * (lo + hi);
-                d_row[i] = p_row[i] - md;
-            }
+            scratch.deviations(p_row, v_row, &mut dev[e * n_tracks..][..n_tracks]);
         }
         for i in 0..n_tracks {
             for r in block_start[i]..cursor[i] {
                 let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
                 out(i, r, dev[k]);
             }
+        }
+    }
+}
+
+/// The buffers of one epoch's medians of the others (at most
+/// [`MAX_AT_EPOCH`] values enter them).
+struct MedianScratch {
+    vals: [f64; MAX_AT_EPOCH],
+    sorted: [f64; MAX_AT_EPOCH],
+    rank_of: [usize; MAX_AT_EPOCH],
+    keys: [i32; MAX_AT_EPOCH],
+    /// Per track: the index of its value in `vals`, `usize::MAX` when none.
+    slot: Vec<usize>,
+}
+
+impl MedianScratch {
+    fn new(n_tracks: usize) -> Self {
+        MedianScratch {
+            vals: [0.0; MAX_AT_EPOCH],
+            sorted: [0.0; MAX_AT_EPOCH],
+            rank_of: [0; MAX_AT_EPOCH],
+            keys: [0; MAX_AT_EPOCH],
+            slot: vec![usize::MAX; n_tracks],
+        }
+    }
+
+    /// One epoch: per track present (`p_row` finite) its value less the
+    /// median of the other tracks' values `v_row` (those finite), into
+    /// `d_row`; NaN where fewer than two others.
+    #[inline]
+    fn deviations(&mut self, p_row: &[f64], v_row: &[f64], d_row: &mut [f64]) {
+        let MedianScratch { vals, sorted, rank_of, keys, slot } = self;
+        // The values entering the median (at most MAX_AT_EPOCH of them).
+        let mut m = 0;
+        for (i, &v) in v_row.iter().enumerate() {
+            slot[i] = usize::MAX;
+            if v.is_finite() && m < MAX_AT_EPOCH {
+                vals[m] = v;
+                slot[i] = m;
+                m += 1;
+            }
+        }
+        // Rank sort of a dozen values: branch-free integer comparisons of
+        // order-preserving single-precision keys, their 6 low bits replaced
+        // by the index (distinct keys; values within ~1e-5 of each other may
+        // come out of order, which moves a median by as little).
+        for a in 0..m {
+            keys[a] = (order_key(vals[a]) & !63) | a as i32;
+        }
+        for a in 0..m {
+            let ka = keys[a];
+            let n_below = keys[..m].iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
+            rank_of[a] = n_below;
+            sorted[n_below] = vals[a];
+        }
+        for i in 0..p_row.len() {
+            if !p_row[i].is_finite() {
+                continue;
+            }
+            // The median of the others: of `sorted` without the track's own
+            // value (rank `own`, or past the end when not among them).
+            let inside = slot[i] != usize::MAX;
+            let own = if inside { rank_of[slot[i]] } else { usize::MAX };
+            let others = m - usize::from(inside);
+            if others < 2 {
+                d_row[i] = f64::NAN;
+                continue;
+            }
+            let get = |j: usize| sorted[j + usize::from(j >= own)];
+            let (lo, hi) = (get((others - 1) / 2), get(others / 2));
+            let md = 0.5 * (lo + hi);
+            d_row[i] = p_row[i] - md;
         }
     }
 }
@@ -593,7 +620,6 @@ fn local_sigma(epoch: &[u32], d: &[f64], window: u32, scratch: &mut Vec<f64>) ->
 /// [`MEDIAN_SAMPLE`]) of each track's departure from the mean of the tracks
 /// present (at least two; rows in C/N0 drops, start-up ones included, left out of the mean).
 fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
-    use rayon::prelude::*;
     let n_tracks = rows.tracks();
     let stride = n_epochs.div_ceil(MEDIAN_SAMPLE).max(1);
     let sampled: Vec<usize> = (0..n_epochs).step_by(stride).collect();
@@ -661,20 +687,69 @@ fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64
 
 /// Screens the rows (see the crate documentation, section "Screening"). `n_epochs`: the epoch
 /// indices are below it; `log_interval_s`: the epoch spacing.
+///
+/// The stages: C/N0 drops (test 5), the deviations from the other tracks
+/// with each track's offset and σ and its slips and levels (test 1, two
+/// rounds), the linear range (test 4), noisy stretches (test 2), low gain
+/// (test 3), what could not be checked, and each track's outcome.
 pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &ScreeningConfig) -> Screened {
-    use rayon::prelude::*;
-    let n_tracks = rows.tracks();
-    let n_rows = rows.epoch.len();
     let mut out = Screened::none(rows);
-    if !cfg.enabled || n_rows == 0 {
+    if !cfg.enabled || rows.epoch.is_empty() {
         return out;
     }
-    let epochs_of = |s: f64| (s / log_interval_s).round().max(0.0) as u32;
-    let guard = epochs_of(cfg.guard_s);
-    let flags = &mut out.flags;
+    let windows = Windows::new(log_interval_s, cfg);
+    let cn0_medians = cn0_drops(rows, cfg, windows.guard, &mut out.flags);
+    for (sum, median_cn0) in out.summaries.iter_mut().zip(cn0_medians) {
+        sum.median_cn0_dbhz = Some(median_cn0).filter(|v| v.is_finite());
+    }
+    let dev = deviations_and_slips(rows, n_epochs, log_interval_s, cfg, &windows, &mut out);
+    if let Some(limit) = cfg.max_abs_phase_rad {
+        phase_range(rows, &dev, limit, windows.guard, &mut out.flags);
+    }
+    for (sum, s) in out.summaries.iter_mut().zip(&dev.sigma) {
+        sum.deviation_sigma_rad = Some(*s).filter(|v| v.is_finite());
+    }
+    per_track(&mut out.flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
+        if dev.sigma[i].is_finite() {
+            let range = rows.range(i);
+            let (ep, d, lvl) = (&rows.epoch[range.clone()], &dev.d[range.clone()], &dev.level[range]);
+            noisy_windows(ep, d, lvl, dev.sigma[i], windows.noisy, cfg.noisy_rms_k, windows.guard, fl);
+        }
+    });
+    let (tested, pooled) = low_gain(rows, &dev, cfg, &windows, &mut out.flags);
+    for (sum, p) in out.summaries.iter_mut().zip(pooled) {
+        (sum.relative_gain, sum.relative_gain_se) = (p.map(|p| p.0), p.map(|p| p.1));
+    }
+    note_not_checked(rows, &dev.sigma, &tested, cfg, windows.gain, &mut out.summaries);
+    track_outcomes(rows, cfg, &mut out);
+    out
+}
 
-    // Test 5: C/N0 drops (each track on its own, the tracks in parallel).
-    let cn0_medians: Vec<f64> = per_track(flags, &rows.track_start)
+/// The screening's windows in epochs: the guard around every exclusion,
+/// the noisy-stretch and the gain test's windows.
+struct Windows {
+    guard: u32,
+    noisy: u32,
+    gain: u32,
+}
+
+impl Windows {
+    fn new(log_interval_s: f64, cfg: &ScreeningConfig) -> Self {
+        let epochs_of = |s: f64| (s / log_interval_s).round().max(0.0) as u32;
+        Windows {
+            guard: epochs_of(cfg.guard_s),
+            noisy: epochs_of(cfg.noisy_window_s).max(1),
+            gain: epochs_of(cfg.gain_window_s).max(2),
+        }
+    }
+}
+
+/// Test 5, C/N0 drops: rows more than `cfg.cn0_drop_db` below their track's
+/// median C/N0, with the guard; a drop whose first low row lies in the
+/// track's start-up is the start-up, and so is every row before it. Each
+/// track on its own, the tracks in parallel; returns their median C/N0.
+fn cn0_drops(rows: &Rows, cfg: &ScreeningConfig, guard: u32, flags: &mut [u8]) -> Vec<f64> {
+    per_track(flags, &rows.track_start)
         .into_par_iter()
         .enumerate()
         .map_init(Vec::new, |scratch, (i, fl)| {
@@ -685,106 +760,84 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
                 let low: Vec<bool> = cn0.iter().map(|&v| v < median_cn0 - x).collect();
                 let mut drop: Vec<u8> = low.iter().map(|&l| if l { flag::CN0_DROP } else { 0 }).collect();
                 spread_with_guard(ep, &mut drop, flag::CN0_DROP, guard);
-                // Each stretch (drops closer than two guards merged) is the
-                // start-up when its first low row lies in the track's start-up;
-                // then so is every row before it: the estimator averaged them
-                // (the pull-in) into that low C/N0.
-                let startup_end = rows.startup_end(i);
-                let mut j = 0;
-                while j < drop.len() {
-                    if drop[j] == 0 {
-                        j += 1;
-                        continue;
-                    }
-                    let a = j;
-                    while j < drop.len() && drop[j] != 0 {
-                        j += 1;
-                    }
-                    let first_low = (a..j).find(|&r| low[r]).unwrap_or(a);
-                    let (bit, from) =
-                        if ep[first_low] < startup_end { (flag::STARTUP_CN0, 0) } else { (flag::CN0_DROP, a) };
-                    for f in &mut fl[from..j] {
-                        *f |= bit;
-                    }
-                }
+                mark_drops(ep, &low, &drop, rows.startup_end(i), fl);
             }
             median_cn0
         })
-        .collect();
-    for (sum, median_cn0) in out.summaries.iter_mut().zip(cn0_medians) {
-        sum.median_cn0_dbhz = Some(median_cn0).filter(|v| v.is_finite());
-    }
+        .collect()
+}
 
-    // Offsets, σ and the deviations (tests 1–4 use them).
+/// Flags each stretch of `drop` (drops closer than two guards merged) in
+/// `fl`: the start-up when its first `low` row lies before `startup_end`
+/// (then so is every row before it: the estimator averaged them, the
+/// pull-in, into that low C/N0), else a C/N0 drop.
+fn mark_drops(ep: &[u32], low: &[bool], drop: &[u8], startup_end: u32, fl: &mut [u8]) {
+    let mut j = 0;
+    while j < drop.len() {
+        if drop[j] == 0 {
+            j += 1;
+            continue;
+        }
+        let a = j;
+        while j < drop.len() && drop[j] != 0 {
+            j += 1;
+        }
+        let first_low = (a..j).find(|&r| low[r]).unwrap_or(a);
+        let (bit, from) = if ep[first_low] < startup_end { (flag::STARTUP_CN0, 0) } else { (flag::CN0_DROP, a) };
+        for f in &mut fl[from..j] {
+            *f |= bit;
+        }
+    }
+}
+
+/// What the comparison with the other tracks gives (tests 1–4 use it).
+struct Deviation {
+    /// Per track: its offset.
+    c: Vec<f64>,
+    /// Per row: its deviation from the other tracks' median, less its track's offset refinement.
+    d: Vec<f64>,
+    /// Per row: its track's level there (steps included).
+    level: Vec<f64>,
+    /// Per track: its deviation's robust σ (NaN: never compared with two others).
+    sigma: Vec<f64>,
+}
+
+/// Test 1 and the deviations it rests on, in two rounds: the first finds
+/// each track's levels (steps) and slips against the others as they are;
+/// the second (when the first found any) compares every track with the
+/// others less their levels and without their slips, and is the one kept.
+/// Sets the slips' flags, the segments, and the summaries' slips and steps.
+fn deviations_and_slips(
+    rows: &Rows,
+    n_epochs: usize,
+    log_interval_s: f64,
+    cfg: &ScreeningConfig,
+    windows: &Windows,
+    out: &mut Screened,
+) -> Deviation {
+    let n_tracks = rows.tracks();
     // Initial offsets: the median of each track's departure from the mean of
     // the tracks present (exact up to a common constant while the set of
     // tracks does not change), over a regular subsample of the epochs.
-    let c = initial_offsets(rows, n_epochs, flags);
-    let mut c = c;
-    let mut d = vec![f64::NAN; n_rows];
-    // Two rounds: the first finds each track's levels (steps) and slips
-    // against the others as they are; the second (when the first found any)
-    // compares every track with the others less their levels and without
-    // their slips, and is the one kept.
-    let mut level = vec![0.0; n_rows];
-    let mut sigma = vec![f64::NAN; n_tracks];
-    let noisy_window = epochs_of(cfg.noisy_window_s).max(1);
+    let mut dev = Deviation {
+        c: initial_offsets(rows, n_epochs, &out.flags),
+        d: vec![f64::NAN; rows.epoch.len()],
+        level: vec![0.0; rows.epoch.len()],
+        sigma: vec![f64::NAN; n_tracks],
+    };
     let mut startup_events = vec![0usize; n_tracks];
     for round in 0..2 {
         // The rows kept out of the medians: C/N0 drops, and the first round's
         // slips; start-up transients as either.
         let cn0_mask = flag::CN0_DROP | flag::STARTUP_CN0;
-        let (mask, shift) =
-            if round == 0 { (cn0_mask, None) } else { (cn0_mask | flag::SLIP | flag::STARTUP, Some(level.as_slice())) };
-        deviations(rows, n_epochs, flags, mask, &c, shift, &mut d);
-        // Each track's own offset refined by the median of its deviations (the
-        // others' medians are robust to their small errors); σ from the local
-        // MAD. Each track on its own, the tracks in parallel.
-        let refined: Vec<Option<(f64, f64)>> = per_track(&mut d, &rows.track_start)
-            .into_par_iter()
-            .enumerate()
-            .map_init(Vec::new, |scratch, (i, dev)| {
-                let m = sampled_median(dev, scratch, |v| v);
-                m.is_finite().then(|| {
-                    for v in dev.iter_mut() {
-                        *v -= m;
-                    }
-                    (m, local_sigma(&rows.epoch[rows.range(i)], dev, noisy_window, scratch).max(cfg.min_sigma_rad))
-                })
-            })
-            .collect();
-        for (i, r) in refined.into_iter().enumerate() {
-            if let Some((m, s)) = r {
-                c[i] += m;
-                sigma[i] = s;
-            }
-        }
-        // Test 1 (slips, steps, levels), track by track in parallel.
-        let per_row = per_track(&mut level, &rows.track_start)
-            .into_iter()
-            .zip(per_track(flags, &rows.track_start))
-            .zip(per_track(&mut out.segment, &rows.track_start))
-            .collect::<Vec<_>>();
-        let events: Vec<Option<SlipEvents>> = per_row
-            .into_par_iter()
-            .enumerate()
-            .map_init(Vec::new, |buf, (i, ((lvl, fl), seg))| {
-                if round == 1 {
-                    seg.fill(0);
-                    lvl.fill(0.0);
-                    for f in fl.iter_mut() {
-                        *f &= !(flag::SLIP | flag::STARTUP);
-                    }
-                }
-                if !sigma[i].is_finite() {
-                    return None;
-                }
-                let range = rows.range(i);
-                let (ep, dev) = (&rows.epoch[range.clone()], &d[range]);
-                let startup_end = rows.startup_end(i);
-                Some(slip_events(ep, dev, sigma[i], log_interval_s, cfg, guard, startup_end, lvl, fl, seg, buf))
-            })
-            .collect();
+        let (mask, shift) = if round == 0 {
+            (cn0_mask, None)
+        } else {
+            (cn0_mask | flag::SLIP | flag::STARTUP, Some(dev.level.as_slice()))
+        };
+        deviations(rows, n_epochs, &out.flags, mask, &dev.c, shift, &mut dev.d);
+        refine_offsets(rows, windows.noisy, cfg, &mut dev);
+        let events = slip_round(rows, round, &mut dev, (log_interval_s, cfg, windows.guard), out);
         for (i, ev) in events.into_iter().enumerate() {
             if let Some(ev) = ev {
                 out.summaries[i].slips = ev.slips;
@@ -793,88 +846,158 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
                 startup_events[i] = ev.startup;
             }
         }
-        if round == 0 {
-            // Nothing found: the second round would find the same.
-            if out.summaries.iter().zip(&startup_events).all(|(s, &st)| s.slips == 0 && st == 0) {
-                break;
-            }
+        // Nothing found: the second round would find the same.
+        if round == 0 && out.summaries.iter().zip(&startup_events).all(|(s, &st)| s.slips == 0 && st == 0) {
+            break;
         }
     }
-    // Test 4: beyond the linear range on its own: |φ| above the limit by more
-    // than the track's noise explains, while the common level (the others'
-    // median plus the track's offset, φ − d) is well within it; a log of a
-    // single track has no common level (and no σ) to compare with.
-    // Tests 4 and 2 look at one track at a time: the tracks in parallel.
-    if let Some(limit) = cfg.max_abs_phase_rad {
-        per_track(flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
-            let range = rows.range(i);
-            // In the discriminator's own units: the phase on L1's scale over f_L1/f_c,
-            // plus the noise margin (docs of `phase_range_margin_rad`).
-            let limit = limit * rows.to_l1(i) + phase_range_margin_rad(sigma[i], range.len());
-            for (f, r) in fl.iter_mut().zip(range.clone()) {
-                let p = rows.phase[r];
-                // A start-up row is excluded already, as the pull-in it is.
-                if *f & flag::ANY_STARTUP != 0 {
-                    continue;
+    dev
+}
+
+/// Each track's own offset refined by the median of its deviations (the
+/// others' medians are robust to their small errors), which leaves them;
+/// σ from the local MAD over windows of `noisy_window` epochs. Each track on
+/// its own, the tracks in parallel.
+fn refine_offsets(rows: &Rows, noisy_window: u32, cfg: &ScreeningConfig, dev: &mut Deviation) {
+    let refined: Vec<Option<(f64, f64)>> = per_track(&mut dev.d, &rows.track_start)
+        .into_par_iter()
+        .enumerate()
+        .map_init(Vec::new, |scratch, (i, d)| {
+            let m = sampled_median(d, scratch, |v| v);
+            m.is_finite().then(|| {
+                for v in d.iter_mut() {
+                    *v -= m;
                 }
-                if p.abs() > limit && (!d[r].is_finite() || (p - d[r]).abs() < 0.5 * limit) {
-                    *f |= flag::PHASE_RANGE;
-                }
-            }
-            spread_with_guard(&rows.epoch[range], fl, flag::PHASE_RANGE, guard);
-        });
-    }
-    let gain_window = epochs_of(cfg.gain_window_s).max(2);
-    for (sum, s) in out.summaries.iter_mut().zip(&sigma) {
-        sum.deviation_sigma_rad = Some(*s).filter(|v| v.is_finite());
-    }
-    per_track(flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
-        if sigma[i].is_finite() {
-            let range = rows.range(i);
-            let (ep, dev, lvl) = (&rows.epoch[range.clone()], &d[range.clone()], &level[range]);
-            noisy_windows(ep, dev, lvl, sigma[i], noisy_window, cfg.noisy_rms_k, guard, fl);
-        }
-    });
-    let inputs: Vec<Option<GainInput>> = (0..n_tracks)
-        .map(|i| {
-            let range = rows.range(i);
-            sigma[i].is_finite().then(|| GainInput {
-                epoch: &rows.epoch[range.clone()],
-                phase: &rows.phase[range.clone()],
-                dev: &d[range.clone()],
-                level: &level[range],
-                offset: c[i],
+                (m, local_sigma(&rows.epoch[rows.range(i)], d, noisy_window, scratch).max(cfg.min_sigma_rad))
             })
         })
         .collect();
-    // Each track's windows on either core, gathered in track order.
+    for (i, r) in refined.into_iter().enumerate() {
+        if let Some((m, s)) = r {
+            dev.c[i] += m;
+            dev.sigma[i] = s;
+        }
+    }
+}
+
+/// One round of test 1 (slips, steps, levels), track by track in parallel
+/// (the second round first clears the first's flags, levels and segments);
+/// a track without a σ is not tested (`None`).
+fn slip_round(
+    rows: &Rows,
+    round: usize,
+    dev: &mut Deviation,
+    (log_interval_s, cfg, guard): (f64, &ScreeningConfig, u32),
+    out: &mut Screened,
+) -> Vec<Option<SlipEvents>> {
+    let per_row = per_track(&mut dev.level, &rows.track_start)
+        .into_iter()
+        .zip(per_track(&mut out.flags, &rows.track_start))
+        .zip(per_track(&mut out.segment, &rows.track_start))
+        .collect::<Vec<_>>();
+    let (d, sigma) = (&dev.d, &dev.sigma);
+    per_row
+        .into_par_iter()
+        .enumerate()
+        .map_init(Vec::new, |buf, (i, ((lvl, fl), seg))| {
+            if round == 1 {
+                seg.fill(0);
+                lvl.fill(0.0);
+                for f in fl.iter_mut() {
+                    *f &= !(flag::SLIP | flag::STARTUP);
+                }
+            }
+            if !sigma[i].is_finite() {
+                return None;
+            }
+            let range = rows.range(i);
+            let (ep, dv) = (&rows.epoch[range.clone()], &d[range]);
+            let startup_end = rows.startup_end(i);
+            Some(slip_events(ep, dv, sigma[i], log_interval_s, cfg, guard, startup_end, lvl, fl, seg, buf))
+        })
+        .collect()
+}
+
+/// Test 4, beyond the linear range on its own: |φ| above the limit by more
+/// than the track's noise explains, while the common level (the others'
+/// median plus the track's offset, φ − d) is well within it; a log of a
+/// single track has no common level (and no σ) to compare with. The tracks
+/// in parallel.
+fn phase_range(rows: &Rows, dev: &Deviation, limit: f64, guard: u32, flags: &mut [u8]) {
+    per_track(flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
+        let range = rows.range(i);
+        // In the discriminator's own units: the phase on L1's scale over f_L1/f_c,
+        // plus the noise margin (docs of `phase_range_margin_rad`).
+        let limit = limit * rows.to_l1(i) + phase_range_margin_rad(dev.sigma[i], range.len());
+        for (f, r) in fl.iter_mut().zip(range.clone()) {
+            let (p, d) = (rows.phase[r], dev.d[r]);
+            // A start-up row is excluded already, as the pull-in it is.
+            if *f & flag::ANY_STARTUP != 0 {
+                continue;
+            }
+            if p.abs() > limit && (!d.is_finite() || (p - d).abs() < 0.5 * limit) {
+                *f |= flag::PHASE_RANGE;
+            }
+        }
+        spread_with_guard(&rows.epoch[range], fl, flag::PHASE_RANGE, guard);
+    });
+}
+
+/// Test 3, low gain: each track's windows fitted on either core, gathered
+/// in track order, then tested ([`low_gain_windows`]). Returns per track
+/// the windows tested and the pooled gain with its standard error.
+fn low_gain(
+    rows: &Rows,
+    dev: &Deviation,
+    cfg: &ScreeningConfig,
+    windows: &Windows,
+    flags: &mut [u8],
+) -> (Vec<usize>, Vec<Option<(f64, f64)>>) {
+    let inputs: Vec<Option<GainInput>> = (0..rows.tracks())
+        .map(|i| {
+            let range = rows.range(i);
+            dev.sigma[i].is_finite().then(|| GainInput {
+                epoch: &rows.epoch[range.clone()],
+                phase: &rows.phase[range.clone()],
+                dev: &dev.d[range.clone()],
+                level: &dev.level[range],
+                offset: dev.c[i],
+            })
+        })
+        .collect();
     let per_track_fits: Vec<Vec<GainFit>> = inputs
         .par_iter()
         .enumerate()
         .map(|(i, g)| {
             let mut track_fits = Vec::new();
             if let Some(g) = g {
-                gain_fits(g, i, gain_window, &flags[rows.range(i)], &mut track_fits);
+                gain_fits(g, i, windows.gain, &flags[rows.range(i)], &mut track_fits);
             }
             track_fits
         })
         .collect();
     let fits: Vec<GainFit> = per_track_fits.into_iter().flatten().collect();
-    let (tested, pooled) = low_gain_windows(&inputs, rows, &fits, cfg, guard, flags);
-    drop(inputs);
-    for (sum, p) in out.summaries.iter_mut().zip(pooled) {
-        (sum.relative_gain, sum.relative_gain_se) = (p.map(|p| p.0), p.map(|p| p.1));
-    }
-    // What could not be checked, track by track.
-    for i in 0..n_tracks {
-        let not_checked = &mut out.summaries[i].not_checked;
+    low_gain_windows(&inputs, rows, &fits, cfg, windows.guard, flags)
+}
+
+/// What could not be checked, track by track: everything without a σ;
+/// the gain test without a window tested, the whole-track gain with one.
+fn note_not_checked(
+    rows: &Rows,
+    sigma: &[f64],
+    tested: &[usize],
+    cfg: &ScreeningConfig,
+    gain_window: u32,
+    summaries: &mut [TrackScreening],
+) {
+    for i in 0..rows.tracks() {
+        let not_checked = &mut summaries[i].not_checked;
         if !sigma[i].is_finite() {
             not_checked
                 .push("slips, noisy stretches, low gain (never two other tracks at its epochs to compare with)".into());
             continue;
         }
-        let range = rows.range(i);
-        let rows_i = range.len();
+        let rows_i = rows.range(i).len();
         let min_rows = (gain_window as usize / 4).max(10);
         match tested[i] {
             0 if rows_i < min_rows => not_checked.push(format!(
@@ -889,10 +1012,13 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
             _ => {}
         }
     }
+}
 
-    // Whole tracks (the fraction flagged by the cross-channel tests), counts,
-    // spans: the tracks in parallel.
-    let per_row = per_track(flags, &rows.track_start);
+/// Each track's outcome: excluded whole when the cross-channel tests flag
+/// more than `cfg.max_excluded_fraction` of its rows; its counts per reason
+/// and its excluded spans (at most [`MAX_SPANS`]). The tracks in parallel.
+fn track_outcomes(rows: &Rows, cfg: &ScreeningConfig, out: &mut Screened) {
+    let per_row = per_track(&mut out.flags, &rows.track_start);
     let each = per_row.into_par_iter().zip(out.summaries.par_iter_mut()).zip(out.spans.par_iter_mut());
     each.enumerate().for_each(|(i, ((fl, sum), spans))| {
         let range = rows.range(i);
@@ -904,44 +1030,53 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
                 *f |= flag::TRACK;
             }
         }
-        let mut counts = [0usize; 8];
-        let mut excluded_rows = 0;
-        for &f in fl.iter() {
-            excluded_rows += usize::from(f != 0);
-            for (b, n) in counts.iter_mut().enumerate() {
-                *n += usize::from(f >> b & 1 != 0);
-            }
-        }
-        let count = |bit: u8| counts[bit.trailing_zeros() as usize];
-        sum.rows_excluded = excluded_rows;
-        sum.rows_slip = count(flag::SLIP);
-        sum.rows_noisy = count(flag::NOISY);
-        sum.rows_low_gain = count(flag::LOW_GAIN);
-        sum.rows_phase_range = count(flag::PHASE_RANGE);
-        sum.rows_cn0_drop = count(flag::CN0_DROP);
-        sum.rows_startup = fl.iter().filter(|&&f| f & flag::ANY_STARTUP != 0).count();
-        let ep = &rows.epoch[range];
-        let mut j = 0;
-        while j < n && spans.len() < MAX_SPANS {
-            if fl[j] == 0 {
-                j += 1;
-                continue;
-            }
-            let mut span = EpochSpan { first_epoch: ep[j], last_epoch: ep[j], rows: 0, flags: 0 };
-            while j < n && fl[j] != 0 {
-                span.last_epoch = ep[j];
-                span.rows += 1;
-                span.flags |= fl[j];
-                j += 1;
-            }
-            spans.push(span);
-        }
+        count_rows(fl, sum);
+        *spans = excluded_spans(&rows.epoch[range], fl);
     });
-    out
 }
 
-/// Extends the rows carrying any of `bits` by `guard` epochs on each side
-/// (within the track), setting the same bits there.
+/// A track's excluded rows in `sum`: in all, and per reason.
+fn count_rows(fl: &[u8], sum: &mut TrackScreening) {
+    let mut counts = [0usize; 8];
+    let mut excluded_rows = 0;
+    for &f in fl {
+        excluded_rows += usize::from(f != 0);
+        for (b, n) in counts.iter_mut().enumerate() {
+            *n += usize::from(f >> b & 1 != 0);
+        }
+    }
+    let count = |bit: u8| counts[bit.trailing_zeros() as usize];
+    sum.rows_excluded = excluded_rows;
+    sum.rows_slip = count(flag::SLIP);
+    sum.rows_noisy = count(flag::NOISY);
+    sum.rows_low_gain = count(flag::LOW_GAIN);
+    sum.rows_phase_range = count(flag::PHASE_RANGE);
+    sum.rows_cn0_drop = count(flag::CN0_DROP);
+    sum.rows_startup = fl.iter().filter(|&&f| f & flag::ANY_STARTUP != 0).count();
+}
+
+/// The runs of a track's flagged rows (epochs `ep`), at most [`MAX_SPANS`].
+fn excluded_spans(ep: &[u32], fl: &[u8]) -> Vec<EpochSpan> {
+    let n = fl.len();
+    let mut spans = Vec::new();
+    let mut j = 0;
+    while j < n && spans.len() < MAX_SPANS {
+        if fl[j] == 0 {
+            j += 1;
+            continue;
+        }
+        let mut span = EpochSpan { first_epoch: ep[j], last_epoch: ep[j], rows: 0, flags: 0 };
+        while j < n && fl[j] != 0 {
+            span.last_epoch = ep[j];
+            span.rows += 1;
+            span.flags |= fl[j];
+            j += 1;
+        }
+        spans.push(span);
+    }
+    spans
+}
+
 /// The noise margin of the linear-range test \[rad\]: z·σ, σ the track's
 /// deviation σ (its noise, from the comparison with the other tracks) and z
 /// the two-sided normal quantile at [`PHASE_RANGE_FALSE_ALARM`] over the
@@ -963,6 +1098,8 @@ fn phase_range_margin_rad(sigma_rad: f64, rows: usize) -> f64 {
 /// test (test 4): 1 %.
 pub(crate) const PHASE_RANGE_FALSE_ALARM: f64 = 0.01;
 
+/// Extends the rows carrying any of `bits` by `guard` epochs on each side
+/// (within the track), setting the same bits there.
 fn spread_with_guard(epoch: &[u32], flags: &mut [u8], bits: u8, guard: u32) {
     if guard == 0 || !flags.iter().any(|&f| f & bits != 0) {
         return;
@@ -1016,6 +1153,12 @@ struct SlipEvents {
 /// Test 1 on one track: sets the SLIP flags (STARTUP for an event beginning
 /// before epoch `startup_end`: the pull-in, neither a slip nor a step), the
 /// level of every row and the segment of every row.
+///
+/// The deviation is followed around a level that adapts to the in-bound
+/// rows; a row out of bounds starts an event, which ends when the
+/// deviation has stayed in bounds for `settle_s` (a lone row out of bounds
+/// is noise, not a slip) or, after `step_min_s`, has settled on a new level
+/// (a step); one never settled is excluded to the end of the track.
 #[allow(clippy::too_many_arguments)]
 fn slip_events(
     epoch: &[u32],
@@ -1030,33 +1173,14 @@ fn slip_events(
     segment: &mut [u16],
     ev: &mut Vec<usize>,
 ) -> SlipEvents {
-    let n = epoch.len();
-    let thr = cfg.deviation_k * sigma;
-    let alpha = (log_interval_s / cfg.level_tau_s).min(1.0);
-    let to_epochs = |s: f64| ((s / log_interval_s).round() as u32).max(1);
-    let (settle, step_min, step_win) =
-        (to_epochs(cfg.settle_s), to_epochs(cfg.step_min_s), to_epochs(cfg.step_min_s / 2.0));
     let Some(first_valid) = d.iter().position(|v| v.is_finite()) else {
         return SlipEvents::default();
     };
+    let mut scan = SlipScan::new((epoch, d), sigma, log_interval_s, cfg, (guard, startup_end));
+    let alpha = (log_interval_s / cfg.level_tau_s).min(1.0);
+    let thr = scan.thr;
     // The offset makes the track's median deviation zero: the level of its bulk.
     let mut l = 0.0;
-    let mut found = SlipEvents::default();
-    // An event that began in the start-up is the pull-in: flagged as such, not counted as a slip.
-    let close = |first: usize, found: &mut SlipEvents| {
-        if epoch[first] < startup_end {
-            found.startup += 1;
-            flag::STARTUP
-        } else {
-            found.slips += 1;
-            flag::SLIP
-        }
-    };
-    // Where an event's exclusion starts: the guard before its first row, or
-    // the track's first row for the start-up (what precedes the pull-in's
-    // excursion is the pull-in too).
-    let excluded_from =
-        |bit: u8, first: usize| if bit == flag::STARTUP { epoch[0] } else { epoch[first].saturating_sub(guard) };
     let mut seg: u16 = 0;
     // The event: its rows with a deviation (`ev`), the latest out of bounds.
     ev.clear();
@@ -1065,74 +1189,39 @@ fn slip_events(
     // noise, not a slip (see `ScreeningConfig::deviation_k`).
     let mut n_out = 0usize;
     let mut window: Vec<f64> = Vec::new();
-    for j in 0..n {
+    for j in 0..epoch.len() {
         segment[j] = seg;
+        level[j] = l;
         let x = d[j] - l;
         if !x.is_finite() {
-            level[j] = l;
             continue;
         }
         if ev.is_empty() {
             if x.abs() <= thr {
                 l += alpha * x;
+                level[j] = l;
             } else {
                 ev.push(j);
-                last_out = j;
-                n_out = 1;
+                (last_out, n_out) = (j, 1);
             }
-            level[j] = l;
             continue;
         }
         ev.push(j);
-        level[j] = l;
         if x.abs() > thr {
             last_out = j;
             n_out += 1;
-        } else if epoch[j] - epoch[last_out] >= settle {
+        } else if epoch[j] - epoch[last_out] >= scan.settle {
             // Back within bounds long enough: the event ends.
-            if n_out < 2 {
-                ev.clear();
-                continue;
+            if n_out >= 2 {
+                scan.flag_event(ev[0], epoch[last_out] + guard, flags);
             }
-            let bit = close(ev[0], &mut found);
-            flag_epochs(epoch, flags, excluded_from(bit, ev[0]), epoch[last_out] + guard, bit);
             ev.clear();
             continue;
         }
-        // A step: after step_min, the last step_win epochs quiet around a new level.
-        if epoch[j] - epoch[ev[0]] < step_min {
-            continue;
-        }
-        let from = epoch[j].saturating_sub(step_win - 1);
-        let first = ev.partition_point(|&k| epoch[k] < from);
-        if ev.len() - first < (step_win as usize / 2).max(2) {
-            continue;
-        }
-        window.clear();
-        window.extend(ev[first..].iter().map(|&k| d[k]));
-        let m = median_in_place(&mut window);
-        if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
-            continue;
-        }
-        // Settled on the level m: the event ends at the earliest row fitting it.
-        let mut b = first;
-        while b > 0 && (d[ev[b - 1]] - m).abs() <= thr {
-            b -= 1;
-        }
+        let Some((b, m)) = scan.settled_level(ev, j, &mut window) else { continue };
         let rb = ev[b];
-        let eb = epoch[rb];
-        if rb != first_valid {
-            let bit = close(ev[0], &mut found);
-            let lo = excluded_from(bit, ev[0]);
-            flag_epochs(epoch, flags, lo, eb.saturating_sub(1).max(lo), bit);
-            flag_epochs(epoch, flags, eb, eb + guard, bit);
-            // A new level beyond the bounds of the old one (not at the
-            // track's start, nor the level a pull-in settles on): a step,
-            // and a new segment from row rb.
-            if bit == flag::SLIP && (m - l).abs() > thr {
-                found.steps += 1;
-                seg = seg.saturating_add(1);
-            }
+        if rb != first_valid && scan.end_at_step(ev[0], epoch[rb], m - l, flags) {
+            seg = seg.saturating_add(1);
         }
         l = m;
         level[rb..=j].fill(l);
@@ -1141,10 +1230,118 @@ fn slip_events(
     }
     if n_out >= 2 && !ev.is_empty() {
         // Never settled: excluded to the end of the track.
-        let bit = close(ev[0], &mut found);
-        flag_epochs(epoch, flags, excluded_from(bit, ev[0]), u32::MAX, bit);
+        scan.flag_event(ev[0], u32::MAX, flags);
     }
-    found
+    scan.found
+}
+
+/// What test 1 follows one track with: its rows' epochs and deviations, the
+/// bound, the settings in epochs, and the events found so far.
+struct SlipScan<'a> {
+    epoch: &'a [u32],
+    d: &'a [f64],
+    /// The bound k·σ \[rad\].
+    thr: f64,
+    guard: u32,
+    startup_end: u32,
+    /// `settle_s`, `step_min_s` and half of it, in epochs (at least 1).
+    settle: u32,
+    step_min: u32,
+    step_win: u32,
+    found: SlipEvents,
+}
+
+impl<'a> SlipScan<'a> {
+    fn new(
+        (epoch, d): (&'a [u32], &'a [f64]),
+        sigma: f64,
+        log_interval_s: f64,
+        cfg: &ScreeningConfig,
+        (guard, startup_end): (u32, u32),
+    ) -> Self {
+        let to_epochs = |s: f64| ((s / log_interval_s).round() as u32).max(1);
+        SlipScan {
+            epoch,
+            d,
+            thr: cfg.deviation_k * sigma,
+            guard,
+            startup_end,
+            settle: to_epochs(cfg.settle_s),
+            step_min: to_epochs(cfg.step_min_s),
+            step_win: to_epochs(cfg.step_min_s / 2.0),
+            found: SlipEvents::default(),
+        }
+    }
+
+    /// Counts an event beginning at row `first`: one that began in the
+    /// start-up is the pull-in, flagged as such and not counted as a slip.
+    /// Returns its flag.
+    fn close(&mut self, first: usize) -> u8 {
+        if self.epoch[first] < self.startup_end {
+            self.found.startup += 1;
+            flag::STARTUP
+        } else {
+            self.found.slips += 1;
+            flag::SLIP
+        }
+    }
+
+    /// Where an event's exclusion starts: the guard before its first row, or
+    /// the track's first row for the start-up (what precedes the pull-in's
+    /// excursion is the pull-in too).
+    fn excluded_from(&self, bit: u8, first: usize) -> u32 {
+        if bit == flag::STARTUP { self.epoch[0] } else { self.epoch[first].saturating_sub(self.guard) }
+    }
+
+    /// Counts the event beginning at row `first` and flags it up to epoch `last` (inclusive).
+    fn flag_event(&mut self, first: usize, last: u32, flags: &mut [u8]) {
+        let bit = self.close(first);
+        flag_epochs(self.epoch, flags, self.excluded_from(bit, first), last, bit);
+    }
+
+    /// The event of rows `ev` at row `j`: after `step_min`, the last
+    /// `step_win` epochs quiet around a new level m; then the index in `ev`
+    /// of the earliest row fitting it, and m.
+    fn settled_level(&self, ev: &[usize], j: usize, window: &mut Vec<f64>) -> Option<(usize, f64)> {
+        let (epoch, d, thr) = (self.epoch, self.d, self.thr);
+        if epoch[j] - epoch[ev[0]] < self.step_min {
+            return None;
+        }
+        let from = epoch[j].saturating_sub(self.step_win - 1);
+        let first = ev.partition_point(|&k| epoch[k] < from);
+        if ev.len() - first < (self.step_win as usize / 2).max(2) {
+            return None;
+        }
+        window.clear();
+        window.extend(ev[first..].iter().map(|&k| d[k]));
+        let m = median_in_place(window);
+        if !ev[first..].iter().all(|&k| (d[k] - m).abs() <= thr) {
+            return None;
+        }
+        // Settled on the level m: the event ends at the earliest row fitting it.
+        let mut b = first;
+        while b > 0 && (d[ev[b - 1]] - m).abs() <= thr {
+            b -= 1;
+        }
+        Some((b, m))
+    }
+
+    /// Ends the event beginning at row `first` on a level reached at epoch
+    /// `eb`, `jump` \[rad\] from the old one: flags it up to `eb` and the guard
+    /// after it. Returns whether it is a step: a new level beyond the bounds
+    /// of the old one (not the level a pull-in settles on), which begins a
+    /// new segment.
+    fn end_at_step(&mut self, first: usize, eb: u32, jump: f64, flags: &mut [u8]) -> bool {
+        let bit = self.close(first);
+        let lo = self.excluded_from(bit, first);
+        flag_epochs(self.epoch, flags, lo, eb.saturating_sub(1).max(lo), bit);
+        flag_epochs(self.epoch, flags, eb, eb + self.guard, bit);
+        let step = bit == flag::SLIP && jump.abs() > self.thr;
+        if step {
+            self.found.steps += 1;
+        }
+        step
+    }
 }
 
 /// Test 2 on one track: windows whose deviation RMS (about the level, over the

@@ -20,7 +20,7 @@
 //!
 //! Time advances in blocks of 1 ms of receiver time. During block b
 //! (τ ∈ \[b·1ms, (b+1)·1ms)) the oscillator's fractional frequency error is
-//! y_b = ȳ_b + a(τ_mid)ᵀΓ/f_L1 (the scenario's [`Oscillator`] noise averaged
+//! y_b = ȳ_b + a(τ_mid)ᵀΓ/f_L1 (the scenario's [`crate::oscillator::Oscillator`] noise averaged
 //! over the block plus Filler's g-sensitivity at the block's centre, exactly
 //! the Δf_b = f_L1·y_b of docs/conventions.md), and each satellite's Doppler f_D
 //! is its line-of-sight Doppler at the block centre (the satellite geometry is
@@ -69,13 +69,12 @@ use gsens_core::units::SPEED_OF_LIGHT_MPS;
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
-use crate::imu::{ImuErrors, specific_force_body};
-use crate::motion::Motion;
-use crate::oscillator::Oscillator;
+use crate::imu::ImuErrors;
 use crate::rng::{Xoshiro256PlusPlus, substream};
-use crate::satellites::{Constellation, LineOfSight};
+use crate::satellites::LineOfSight;
 use crate::scenario::Scenario;
-use crate::session::{SessionSink, SimError, stream};
+use crate::session::{SessionSink, SimError};
+use crate::world::{ImuUntil, World};
 
 use ca_code::{CA_CHIP_RATE_HZ, CA_CODE_LENGTH, MAX_CA_PRN, ca_code_bipolar};
 use lnav::{SUBFRAME_BITS, subframe_bits};
@@ -341,6 +340,43 @@ impl Sat {
         }
     }
 
+    /// Adds the satellite to a block's samples `bi`, `bq` at `fs` \[Hz\],
+    /// the first `lead_s` \[s\] from the block's start, with the baseband
+    /// carrier `f_bb` \[Hz\] and the code `rate` \[chips/s\] constant over
+    /// it, and advances its phases to the next block's start.
+    fn mix(
+        &mut self,
+        bi: &mut [f32],
+        bq: &mut [f32],
+        lut: &[[f32; 2]],
+        (f_bb, rate, fs): (f64, f64, f64),
+        lead_s: f64,
+    ) {
+        let two32 = 4_294_967_296.0f64;
+        // Phases at the first sample.
+        let theta = self.carrier_cycles + f_bb * lead_s;
+        let chip0 = self.chip + rate * lead_s;
+        let first = chip0.floor();
+        let frac = chip0 - first;
+        let first = first as i64;
+        // Chip table: the chips this block touches (with a margin), amplitude and data applied.
+        let chips_needed = (rate * bi.len() as f64 / fs).ceil() as i64 + 3;
+        self.fill_table(first, chips_needed as usize);
+        let acc = Accumulators {
+            code: (frac * two32) as u64,
+            code_step: (rate / fs * two32).round() as u64,
+            carrier: (theta.rem_euclid(1.0) * two32) as u64 as u32,
+            carrier_step: (f_bb / fs * two32).round() as i64 as u32,
+        };
+        mix_satellite(bi, bq, &self.table, lut, acc);
+        // Advance to the next block start.
+        self.carrier_cycles = (self.carrier_cycles + f_bb * BLOCK_S).rem_euclid(1.0);
+        self.chip += rate * BLOCK_S;
+        let wraps = (self.chip / CA_CODE_LENGTH as f64).floor();
+        self.chip -= wraps * CA_CODE_LENGTH as f64;
+        self.period += wraps as i64;
+    }
+
     fn data_sign(&mut self, period: i64) -> f32 {
         if !self.data {
             return 1.0;
@@ -514,27 +550,81 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
     if !scenario.satellites.signals.is_empty() {
         return Err(IqError::SignalsNotSupported(scenario.satellites.signals.join(", ")).into());
     }
-    let sc = scenario;
-    let fs = cfg.fs_hz;
-    let duration_s = sc.duration_s();
-    let start_gps_s = sc.start_gps_s()?;
-    let carrier_hz = sc.oscillator.carrier_hz;
-    let gamma = sc.oscillator.gamma_hz_per_mps2;
-    let n_blocks = (duration_s / BLOCK_S + 1e-6).floor() as u64;
+    let mut world = World::new(scenario, seed, BLOCK_S)?;
+    let n_blocks = (world.duration_s / BLOCK_S + 1e-6).floor() as u64;
     let blocks_per_geo = (GEOMETRY_STEP_S / BLOCK_S).round() as u64;
-
-    let mut osc = Oscillator::try_new(&sc.oscillator.config(), BLOCK_S, substream(seed, stream::OSCILLATOR))?;
-    let motion = Motion::try_new(&sc.motion, &mut substream(seed, stream::MOTION))?;
-    let imu = ImuErrors::draw(&sc.imu.config(), &mut substream(seed, stream::IMU_ERRORS));
-    let mut imu_rng = substream(seed, stream::IMU_NOISE);
-    let cn0 = sc.satellites.cn0.draw_offsets(&mut substream(seed, stream::CN0_OFFSETS));
     let mut noise_rng = substream(seed, STREAM_IQ_NOISE);
-    let mut phase_rng = substream(seed, STREAM_IQ_PHASES);
-    let constellation = Constellation::builtin();
-    let antenna = sc.antenna;
+    let (mut sats, truth_sats) = start_satellites(&world, scenario, cfg, &mut substream(seed, STREAM_IQ_PHASES))?;
+    let mut mixer = Mixer::new(cfg);
+    let mut carrier_hz_now = vec![0.0; sats.len()];
+    let prns: Vec<u32> = sats.iter().map(|s| s.prn).collect();
+    let io_err = |e: std::io::Error| SimError::Sink(Box::new(e));
+    let mut samples = 0u64;
 
-    // Satellites in view at the start.
-    let visible: Vec<LineOfSight> = constellation
+    for b in 0..n_blocks {
+        let t0 = b as f64 * BLOCK_S;
+        let tm = t0 + 0.5 * BLOCK_S;
+        let y = world.osc.next_y();
+        let a = world.specific_force(tm);
+        let g_induced_hz = world.g_induced_hz(&a);
+        let delta_f_hz = world.carrier_hz * y + g_induced_hz;
+        if b % blocks_per_geo == 0 {
+            update_geometry(&mut sats, &world, scenario, cfg, (b, t0));
+            progress((t0 / world.duration_s).min(1.0));
+        }
+        let bytes = mixer.block(b, &mut sats, (delta_f_hz, world.carrier_hz), &mut noise_rng, &mut carrier_hz_now);
+        out.write_all(bytes).map_err(io_err)?;
+        samples += (bytes.len() / cfg.format.bytes_per_sample()) as u64;
+        on_block(&IqBlock {
+            t_mid_s: tm,
+            delta_f_hz,
+            g_induced_hz,
+            accel_true_mps2: a,
+            carrier_hz: &carrier_hz_now,
+            prns: &prns,
+        });
+        // IMU samples stamped within this block (and the duration).
+        world.log_imu(ImuUntil::Before(t0 + BLOCK_S), sink, |_, _| {})?;
+    }
+    // IMU stamps at the very end of the duration.
+    world.log_imu(ImuUntil::End, sink, |_, _| {})?;
+    out.flush().map_err(io_err)?;
+    progress(1.0);
+    Ok(IqTruth {
+        sensitivity: world.sensitivity(),
+        seed,
+        generator: format!("{} {} (iq)", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
+        start_gps_s: world.start_gps_s,
+        duration_s: n_blocks as f64 * BLOCK_S,
+        fs_hz: cfg.fs_hz,
+        format: cfg.format,
+        noise_sigma: cfg.noise_sigma,
+        samples,
+        block_s: BLOCK_S,
+        sample_time: "sample n at receiver time n/fs_hz; Δf and Dopplers constant over 1 ms blocks \
+                      [b·1ms, (b+1)·1ms) of receiver time, evaluated at the block centre"
+            .into(),
+        satellites: truth_sats,
+        imu_time_offset_s: world.imu.time_offset_s,
+        imu_errors: world.imu,
+        scenario: scenario.clone(),
+    })
+}
+
+/// The satellites of the file: those with a C/A code above the elevation
+/// mask at the start, highest first, at most `cfg.max_satellites`; each
+/// with its code phase from the geometric range, a carrier phase drawn
+/// uniform from `phase_rng` and its geometry for the first second; and
+/// their truth.
+fn start_satellites(
+    world: &World,
+    sc: &Scenario,
+    cfg: &IqConfig,
+    phase_rng: &mut Xoshiro256PlusPlus,
+) -> Result<(Vec<Sat>, Vec<IqSatelliteTruth>), SimError> {
+    let (start_gps_s, carrier_hz, antenna) = (world.start_gps_s, world.carrier_hz, sc.antenna);
+    let visible: Vec<LineOfSight> = world
+        .constellation
         .visible_lines_of_sight(&antenna, start_gps_s, sc.satellites.elevation_mask_deg)
         .into_iter()
         .filter(|l| (1..=MAX_CA_PRN).contains(&l.prn))
@@ -547,22 +637,22 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
     let start_ms_f = start_gps_s * 1000.0;
     let start_ms = start_ms_f.floor() as i64;
     let start_ms_frac = start_ms_f - start_ms as f64;
-
     let mut sats: Vec<Sat> = Vec::with_capacity(visible.len());
     let mut truth_sats = Vec::with_capacity(visible.len());
     for los in &visible {
-        let next = constellation.line_of_sight(los.prn, &antenna, start_gps_s + GEOMETRY_STEP_S).expect("visible PRN");
+        let next_gps_s = start_gps_s + GEOMETRY_STEP_S;
+        let next = world.constellation.line_of_sight(los.prn, &antenna, next_gps_s).expect("visible PRN");
         let code = ca_code_bipolar(los.prn).expect("PRN with a C/A code").map(f32::from);
         // Transmit time = GPS time − ρ/c, in code periods (ms) and chips.
         let tx_ms = start_ms_frac - los.range_m / SPEED_OF_LIGHT_MPS * 1000.0;
         let whole = tx_ms.floor();
         let chip = (tx_ms - whole) * CA_CODE_LENGTH as f64;
         let u: f64 = phase_rng.random();
-        let cn0_dbhz = cn0.cn0_dbhz(los.prn, los.elevation_deg);
+        let cn0_dbhz = world.cn0.cn0_dbhz(los.prn, los.elevation_deg);
         let mut sat = Sat {
             prn: los.prn,
             code,
-            amp: amplitude(cfg.noise_sigma, cn0_dbhz, fs),
+            amp: amplitude(cfg.noise_sigma, cn0_dbhz, cfg.fs_hz),
             carrier_cycles: u,
             period: start_ms + whole as i64,
             chip,
@@ -586,136 +676,82 @@ pub fn generate_iq<W: Write, S: SessionSink + ?Sized>(
         });
         sats.push(sat);
     }
+    Ok((sats, truth_sats))
+}
 
-    let lut = carrier_lut();
-    let max_block = (fs * BLOCK_S).ceil() as usize + 1;
-    let mut buf_i = vec![0f32; max_block];
-    let mut buf_q = vec![0f32; max_block];
-    let mut bytes: Vec<u8> = Vec::with_capacity(max_block * cfg.format.bytes_per_sample());
-    let noise = NoiseTable::new(cfg.noise_sigma);
-    let two32 = 4_294_967_296.0f64;
-    let mut next_imu = 0u64;
-    let mut samples = 0u64;
-    let mut carrier_hz_now = vec![0.0; sats.len()];
-    let prns: Vec<u32> = sats.iter().map(|s| s.prn).collect();
-    let io_err = |e: std::io::Error| SimError::Sink(Box::new(e));
-
-    for b in 0..n_blocks {
-        let t0 = b as f64 * BLOCK_S;
-        let tm = t0 + 0.5 * BLOCK_S;
-        let y = osc.next_y();
-        let a = specific_force_body(&motion.state(tm));
-        let g_induced_hz = a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2];
-        let delta_f_hz = carrier_hz * y + g_induced_hz;
-        let scale = 1.0 / (1.0 + delta_f_hz / carrier_hz);
-
-        if b % blocks_per_geo == 0 {
-            let t_next_gps = start_gps_s + t0 + GEOMETRY_STEP_S;
-            for sat in sats.iter_mut() {
-                let now = sat.next;
-                let next = constellation.line_of_sight(sat.prn, &antenna, t_next_gps).expect("PRN exists");
-                if b > 0 {
-                    set_segment(sat, &now, &next, t0, carrier_hz);
-                }
-                sat.amp = amplitude(cfg.noise_sigma, cn0.cn0_dbhz(sat.prn, now.elevation_deg), fs);
-            }
-            progress((t0 / duration_s).min(1.0));
+/// The satellites' geometry for the second from block `b` at `t0` \[s\]
+/// (the first block's is set at the start) and their amplitudes from the
+/// C/N0 at their elevation now.
+fn update_geometry(sats: &mut [Sat], world: &World, sc: &Scenario, cfg: &IqConfig, (b, t0): (u64, f64)) {
+    let t_next_gps = world.start_gps_s + t0 + GEOMETRY_STEP_S;
+    for sat in sats.iter_mut() {
+        let now = sat.next;
+        let next = world.constellation.line_of_sight(sat.prn, &sc.antenna, t_next_gps).expect("PRN exists");
+        if b > 0 {
+            set_segment(sat, &now, &next, t0, world.carrier_hz);
         }
+        sat.amp = amplitude(cfg.noise_sigma, world.cn0.cn0_dbhz(sat.prn, now.elevation_deg), cfg.fs_hz);
+    }
+}
 
-        let n0 = block_start_sample(b, fs);
-        let n1 = block_start_sample(b + 1, fs);
-        let len = (n1 - n0) as usize;
-        let (bi, bq) = (&mut buf_i[..len], &mut buf_q[..len]);
-        noise.fill(&mut noise_rng, bi);
-        noise.fill(&mut noise_rng, bq);
+/// What turns the satellites into a block of samples: the noise, the
+/// carrier table, the buffers of I and Q and of the block's bytes.
+struct Mixer {
+    fs_hz: f64,
+    format: IqFormat,
+    lut: Vec<[f32; 2]>,
+    noise: NoiseTable,
+    buf_i: Vec<f32>,
+    buf_q: Vec<f32>,
+    bytes: Vec<u8>,
+}
+
+impl Mixer {
+    fn new(cfg: &IqConfig) -> Self {
+        let max_block = (cfg.fs_hz * BLOCK_S).ceil() as usize + 1;
+        Mixer {
+            fs_hz: cfg.fs_hz,
+            format: cfg.format,
+            lut: carrier_lut(),
+            noise: NoiseTable::new(cfg.noise_sigma),
+            buf_i: vec![0f32; max_block],
+            buf_q: vec![0f32; max_block],
+            bytes: Vec::with_capacity(max_block * cfg.format.bytes_per_sample()),
+        }
+    }
+
+    /// Block `b`'s samples in the output format: the thermal noise plus
+    /// every satellite under the oscillator's error Δf (`delta_f_hz` at the
+    /// carrier `carrier_hz`), each satellite's phases advanced to the next
+    /// block and its baseband carrier written to `carrier_hz_now`.
+    fn block(
+        &mut self,
+        b: u64,
+        sats: &mut [Sat],
+        (delta_f_hz, carrier_hz): (f64, f64),
+        noise_rng: &mut Xoshiro256PlusPlus,
+        carrier_hz_now: &mut [f64],
+    ) -> &[u8] {
+        let fs = self.fs_hz;
+        let (t0, n0) = (b as f64 * BLOCK_S, block_start_sample(b, fs));
+        let len = (block_start_sample(b + 1, fs) - n0) as usize;
+        let (bi, bq) = (&mut self.buf_i[..len], &mut self.buf_q[..len]);
+        self.noise.fill(noise_rng, bi);
+        self.noise.fill(noise_rng, bq);
+        let scale = 1.0 / (1.0 + delta_f_hz / carrier_hz);
         // Receiver time of the first sample minus the block start (≤ 0, above −1/fs).
         let lead_s = n0 as f64 / fs - t0;
+        let tm = t0 + 0.5 * BLOCK_S;
         for (sat, f_now) in sats.iter_mut().zip(carrier_hz_now.iter_mut()) {
             let f_d = sat.doppler0_hz + sat.doppler_slope_hz_per_s * (tm - sat.seg_t0_s);
             let f_bb = (f_d - delta_f_hz) * scale;
             *f_now = f_bb;
             let rate = CA_CHIP_RATE_HZ * (1.0 + f_d / carrier_hz) * scale;
-            // Phases at the first sample.
-            let theta = sat.carrier_cycles + f_bb * lead_s;
-            let chip0 = sat.chip + rate * lead_s;
-            let first = chip0.floor();
-            let frac = chip0 - first;
-            let first = first as i64;
-            // Chip table: the chips this block touches (with a margin), amplitude and data applied.
-            let chips_needed = (rate * len as f64 / fs).ceil() as i64 + 3;
-            sat.fill_table(first, chips_needed as usize);
-            let acc = Accumulators {
-                code: (frac * two32) as u64,
-                code_step: (rate / fs * two32).round() as u64,
-                carrier: (theta.rem_euclid(1.0) * two32) as u64 as u32,
-                carrier_step: (f_bb / fs * two32).round() as i64 as u32,
-            };
-            mix_satellite(bi, bq, &sat.table, &lut, acc);
-            // Advance to the next block start.
-            sat.carrier_cycles = (sat.carrier_cycles + f_bb * BLOCK_S).rem_euclid(1.0);
-            sat.chip += rate * BLOCK_S;
-            let wraps = (sat.chip / CA_CODE_LENGTH as f64).floor();
-            sat.chip -= wraps * CA_CODE_LENGTH as f64;
-            sat.period += wraps as i64;
+            sat.mix(bi, bq, &self.lut, (f_bb, rate, fs), lead_s);
         }
-        quantize(cfg.format, bi, bq, &mut bytes);
-        out.write_all(&bytes).map_err(io_err)?;
-        samples += len as u64;
-        on_block(&IqBlock {
-            t_mid_s: tm,
-            delta_f_hz,
-            g_induced_hz,
-            accel_true_mps2: a,
-            carrier_hz: &carrier_hz_now,
-            prns: &prns,
-        });
-
-        // IMU samples stamped within this block (and the duration).
-        let t_end = t0 + BLOCK_S;
-        loop {
-            let stamp = imu.stamp_s(next_imu);
-            if stamp >= t_end || stamp > duration_s + 1e-9 {
-                break;
-            }
-            let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
-            let m = imu.measure(f_true, &mut imu_rng);
-            sink.imu(stamp, m).map_err(SimError::Sink)?;
-            next_imu += 1;
-        }
+        quantize(self.format, bi, bq, &mut self.bytes);
+        &self.bytes
     }
-    // IMU stamps at the very end of the duration.
-    loop {
-        let stamp = imu.stamp_s(next_imu);
-        if stamp > duration_s + 1e-9 {
-            break;
-        }
-        let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
-        let m = imu.measure(f_true, &mut imu_rng);
-        sink.imu(stamp, m).map_err(SimError::Sink)?;
-        next_imu += 1;
-    }
-    out.flush().map_err(io_err)?;
-    progress(1.0);
-
-    Ok(IqTruth {
-        sensitivity: crate::session::SensitivityTruth::new(gamma, carrier_hz, &imu.sensing_matrix()),
-        seed,
-        generator: format!("{} {} (iq)", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
-        start_gps_s,
-        duration_s: n_blocks as f64 * BLOCK_S,
-        fs_hz: fs,
-        format: cfg.format,
-        noise_sigma: cfg.noise_sigma,
-        samples,
-        block_s: BLOCK_S,
-        sample_time: "sample n at receiver time n/fs_hz; Δf and Dopplers constant over 1 ms blocks \
-                      [b·1ms, (b+1)·1ms) of receiver time, evaluated at the block centre"
-            .into(),
-        satellites: truth_sats,
-        imu_time_offset_s: imu.time_offset_s,
-        imu_errors: imu,
-        scenario: sc.clone(),
-    })
 }
 
 /// A [`SessionSink`] that ignores tracking rows and forwards IMU samples to a closure.

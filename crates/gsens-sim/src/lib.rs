@@ -32,6 +32,7 @@ pub mod rng;
 pub mod satellites;
 pub mod scenario;
 pub mod session;
+mod world;
 
 pub use error::{AlmanacError, ConfigError, UtcError};
 pub use iq::IqError;

@@ -570,22 +570,43 @@ impl Scenario {
         Ok(self.validate_values()?)
     }
 
+    /// Every section's values, in the order of the file; the first error found.
     fn validate_values(&self) -> Result<(), ConfigError> {
-        // [session]
+        self.validate_session()?;
+        self.antenna.validate().map_err(|e| e.under("antenna"))?;
+        self.validate_oscillator()?;
+        self.validate_loop()?;
+        self.validate_log()?;
+        self.imu.config().validate()?;
+        self.motion.validate()?;
+        self.validate_satellites()?;
+        self.validate_compensation()
+    }
+
+    /// `[session]`: the start and a duration in (0, 1e6\] s.
+    fn validate_session(&self) -> Result<(), ConfigError> {
         self.start_gps_s_checked()?;
         if let Some(d) = self.session.duration_s {
             range(d.is_finite() && d > 0.0 && d <= 1e6, "session.duration_s", d, "in (0, 1e6] s")?;
         }
         check(self.duration_s() > 0.0, || ConfigError::EmptySession)?;
-        // [antenna]
-        self.antenna.validate().map_err(|e| e.under("antenna"))?;
-        // [oscillator]
+        Ok(())
+    }
+
+    /// `[oscillator]`: its noise model, Γ and a carrier within \[1e8, 1e11\] Hz.
+    fn validate_oscillator(&self) -> Result<(), ConfigError> {
         let o = &self.oscillator;
         self.oscillator.config().validate()?;
         gamma_in_range("oscillator.gamma_hz_per_mps2", &o.gamma_hz_per_mps2)?;
         let c = o.carrier_hz;
         range(c.is_finite() && (1e8..=1e11).contains(&c), "oscillator.carrier_hz", c, "within [1e8, 1e11] Hz")?;
-        // [loop]
+        Ok(())
+    }
+
+    /// `[loop]`: order, bandwidth and shape, an interval of whole code periods
+    /// in a data bit at which the discrete loop is stable, the initial
+    /// frequency error and the lock detector.
+    fn validate_loop(&self) -> Result<(), ConfigError> {
         let l = &self.tracking_loop;
         range(l.order == 2 || l.order == 3, "loop.order", f64::from(l.order), "2 or 3")?;
         range(l.bn_hz.is_finite() && l.bn_hz > 0.0, "loop.bn_hz", l.bn_hz, "> 0")?;
@@ -618,7 +639,12 @@ impl Scenario {
         let th = l.lock_threshold;
         range(th > 0.0 && th < 1.0, "loop.lock_threshold", th, "in (0, 1)")?;
         range(l.lock_tau_s.is_finite() && l.lock_tau_s > 0.0, "loop.lock_tau_s", l.lock_tau_s, "> 0")?;
-        // [log]
+        Ok(())
+    }
+
+    /// `[log]`: an interval in (0, 10\] s, a whole number of loop intervals.
+    fn validate_log(&self) -> Result<(), ConfigError> {
+        let t = self.tracking_loop.interval_s;
         let li = self.log.interval_s;
         range(li.is_finite() && li > 0.0 && li <= 10.0, "log.interval_s", li, "in (0, 10] s")?;
         let r = li / t;
@@ -626,11 +652,13 @@ impl Scenario {
             log_interval_s: li,
             loop_interval_s: t,
         })?;
-        // [imu]
-        self.imu.config().validate()?;
-        // [motion]
-        self.motion.validate()?;
-        // [satellites]
+        Ok(())
+    }
+
+    /// `[satellites]`: the mask, the channels, the C/N0 model and the named
+    /// signals (at L1's carrier, at most one per channel).
+    fn validate_satellites(&self) -> Result<(), ConfigError> {
+        let o = &self.oscillator;
         let s = &self.satellites;
         let m = s.elevation_mask_deg;
         range(m.is_finite() && (-5.0..=80.0).contains(&m), "satellites.elevation_mask_deg", m, "within [-5, 80]")?;
@@ -658,7 +686,11 @@ impl Scenario {
             key: "satellites.signals".into(),
             message: format!("{} signals for {} channels (one per channel at most)", s.signals.len(), s.max_channels),
         })?;
-        // [compensation]
+        Ok(())
+    }
+
+    /// `[compensation]`, when given: Γ̂ in range and a latency within \[0, 10\] s.
+    fn validate_compensation(&self) -> Result<(), ConfigError> {
         if let Some(c) = &self.compensation {
             gamma_in_range("compensation.gamma_hz_per_mps2", &c.gamma_hz_per_mps2)?;
             let l = c.latency_s;

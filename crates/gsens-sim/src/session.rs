@@ -8,9 +8,9 @@
 //! centre is t_k = kT. Every step k, once for all channels:
 //!
 //! - the oscillator gives ȳ_k, its fractional frequency averaged over the
-//!   step ([`Oscillator::next_y`]);
+//!   step ([`crate::oscillator::Oscillator::next_y`]);
 //! - the true specific force a(t_k) in the body frame comes from the motion
-//!   ([`specific_force_body`]), evaluated exactly on a 5 ms grid and
+//!   ([`crate::imu::specific_force_body`]), evaluated exactly on a 5 ms grid and
 //!   interpolated linearly in between (error < 1e-4 relative for a 1 s shake);
 //! - Δf_k = f_carrier·ȳ_k + a(t_k)ᵀΓ \[Hz\], added to every NCO's command
 //!   (docs/conventions.md); a channel on another carrier f_c
@@ -58,25 +58,12 @@ use rand::RngExt;
 use serde::Serialize;
 
 use crate::channel::{Channel, ChannelConfig, ChannelStart, ChannelStats};
-use crate::imu::{ImuErrors, specific_force_body};
-use crate::motion::Motion;
-use crate::oscillator::Oscillator;
+use crate::imu::ImuErrors;
 use crate::rng::{Xoshiro256PlusPlus, normal, substream};
-use crate::satellites::{Cn0Offsets, Constellation, LineOfSight};
+use crate::satellites::{Cn0Offsets, LineOfSight};
 use crate::scenario::{Cn0Logged, Scenario, ScenarioError};
+use crate::world::{ImuUntil, World, stream};
 use gsens_core::LoggedPhase;
-
-/// Stream ids of [`crate::rng::substream`] for the session's components
-/// (shared with [`crate::iq`], so both draw the same oscillator, motion and IMU).
-pub(crate) mod stream {
-    pub(crate) const OSCILLATOR: u64 = 1;
-    pub(crate) const MOTION: u64 = 2;
-    pub(crate) const IMU_ERRORS: u64 = 3;
-    pub(crate) const IMU_NOISE: u64 = 4;
-    pub(crate) const CN0_OFFSETS: u64 = 5;
-    /// Channel streams: CHANNEL | prn << 32 | start second.
-    pub(crate) const CHANNEL: u64 = 0xC4A7 << 48;
-}
 
 /// Interval of the satellite geometry updates \[s\].
 const GEOMETRY_STEP_S: f64 = 1.0;
@@ -378,200 +365,238 @@ pub fn simulate<S: SessionSink + ?Sized>(
     let sc = scenario;
     let t_s = sc.tracking_loop.interval_s;
     let coeffs = sc.tracking_loop.coeffs()?;
-    let duration_s = sc.duration_s();
-    let start_gps_s = sc.start_gps_s()?;
-    let carrier_hz = sc.oscillator.carrier_hz;
-    let gamma = sc.oscillator.gamma_hz_per_mps2;
-    let aiding = sc.tracking_loop.doppler_aiding;
+    let mut world = World::new(sc, seed, t_s)?;
+    let (duration_s, carrier_hz, gamma) = (world.duration_s, world.carrier_hz, world.gamma);
     // 20 ms is a whole number of loop intervals, so 1/T is an integer and
     // t = k/(1/T) is the correctly rounded time stamp.
     let updates_per_s = (1.0 / t_s).round();
     let n_steps = (duration_s * updates_per_s + 1e-6).floor() as u64;
     let per_row = u64::from(sc.integrations_per_row());
     let geo_steps = (GEOMETRY_STEP_S / t_s).round() as u64;
-    let force_m = ((FORCE_GRID_S / t_s).round() as u64).max(1);
-    let force_h_s = force_m as f64 * t_s;
-
-    let mut osc = Oscillator::try_new(&sc.oscillator.config(), t_s, substream(seed, stream::OSCILLATOR))
-        .map_err(SimError::Model)?;
-    let motion = Motion::try_new(&sc.motion, &mut substream(seed, stream::MOTION)).map_err(SimError::Model)?;
-    let imu_cfg = sc.imu.config();
-    let imu = ImuErrors::draw(&imu_cfg, &mut substream(seed, stream::IMU_ERRORS));
-    let mut imu_rng = substream(seed, stream::IMU_NOISE);
-    let cn0 = sc.satellites.cn0.draw_offsets(&mut substream(seed, stream::CN0_OFFSETS));
-    let constellation = Constellation::builtin();
-    let antenna = sc.antenna;
-    let mask_deg = sc.satellites.elevation_mask_deg;
-    let max_channels = sc.satellites.max_channels;
-
-    let mut ch_cfg = ChannelConfig::new(coeffs, t_s, sc.tracking_loop.discriminator);
-    ch_cfg.lock_threshold = sc.tracking_loop.lock_threshold;
-    ch_cfg.lock_tau_s = sc.tracking_loop.lock_tau_s;
-
-    let force_at = |t: f64| specific_force_body(&motion.state(t));
-    let mut force_j = 0u64;
-    let mut force_a = force_at(0.0);
-    let mut force_b = force_at(force_h_s);
-
+    let mut force = ForceGrid::new(&world, t_s);
     // The receiver's feed-forward of Γ̂ into its NCOs, from its IMU's samples.
     let mut feed_forward = sc.compensation.as_ref().map(crate::compensation::FeedForward::new);
-
-    let mut tracks: Vec<Track> = Vec::with_capacity(max_channels as usize);
-    let mut done: Vec<ChannelSummary> = Vec::new();
-    let mut next_imu = 0u64;
-    let sink_err = SimError::Sink;
+    let mut receiver = Receiver::new(sc, seed, coeffs, t_s);
 
     for k in 0..=n_steps {
         let t = k as f64 / updates_per_s;
-
         // IMU samples whose stamp has been reached (first: the feed-forward
-        // uses the newest sample at this very step).
-        loop {
-            let stamp = imu.stamp_s(next_imu);
-            if stamp > t || stamp > duration_s + 1e-9 {
-                break;
-            }
-            let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
-            let m = imu.measure(f_true, &mut imu_rng);
-            sink.imu(stamp, m).map_err(sink_err)?;
+        // uses the newest sample at this very step), in the receiver's hands
+        // once both stamped and measured.
+        world.log_imu(ImuUntil::Through(t), sink, |at_s, m| {
             if let Some(f) = &mut feed_forward {
-                // In the receiver's hands once it is both stamped and measured.
-                f.sample(stamp.max(imu.true_time_s(next_imu)), m);
+                f.sample(at_s, m);
             }
-            next_imu += 1;
-        }
-
+        })?;
         // Shared per-step inputs: oscillator and specific force → Δf.
-        let y = osc.next_y();
-        let j = k / force_m;
-        if j != force_j {
-            if j == force_j + 1 {
-                force_a = force_b;
-            } else {
-                force_a = force_at(j as f64 * force_h_s);
-            }
-            force_b = force_at((j + 1) as f64 * force_h_s);
-            force_j = j;
-        }
-        let w = (k - j * force_m) as f64 / force_m as f64;
-        let a = [
-            force_a[0] + w * (force_b[0] - force_a[0]),
-            force_a[1] + w * (force_b[1] - force_a[1]),
-            force_a[2] + w * (force_b[2] - force_a[2]),
-        ];
+        let y = world.osc.next_y();
+        let a = force.at(&world, k);
         // What reaches the NCOs: the oscillator's error, less the feed-forward's correction.
         let correction_hz = feed_forward.as_mut().map_or(0.0, |f| f.correction_hz(t));
         let delta_f_hz = carrier_hz * y + a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2] + correction_hz;
-
-        // Satellite geometry, risings and settings, once per second.
         if k % geo_steps == 0 {
-            let t_gps = start_gps_s + t;
-            let t_next_gps = t_gps + GEOMETRY_STEP_S;
-            let mut i = 0;
-            while i < tracks.len() {
-                let tr = &mut tracks[i];
-                let now = tr.next;
-                if now.elevation_deg < mask_deg {
-                    done.push(tr.summary(t));
-                    tracks.swap_remove(i);
-                    continue;
-                }
-                let next = constellation.line_of_sight(tr.prn, &antenna, t_next_gps).expect("tracked PRN exists");
-                set_segment(tr, &now, &next, t);
-                tr.ch.set_cn0_dbhz(cn0.cn0_dbhz(tr.prn, now.elevation_deg));
-                i += 1;
-            }
-            if tracks.len() < max_channels as usize {
-                for los in constellation.visible_lines_of_sight(&antenna, t_gps, mask_deg) {
-                    if tracks.len() >= max_channels as usize {
-                        break;
-                    }
-                    if tracks.iter().any(|tr| tr.prn == los.prn) {
-                        continue;
-                    }
-                    let channel = (0..).find(|c| !tracks.iter().any(|tr| tr.channel == *c)).unwrap_or(0);
-                    let next = constellation.line_of_sight(los.prn, &antenna, t_next_gps).expect("visible PRN exists");
-                    let rng = substream(seed, stream::CHANNEL | u64::from(los.prn) << 32 | (t as u64 & 0xFFFF_FFFF));
-                    let carrier = sc.satellites.carrier_of(channel, carrier_hz);
-                    let start = (carrier, t, channel, delta_f_hz);
-                    tracks.push(start_track(&ch_cfg, &los, &next, start, aiding, sc, &cn0, rng));
-                }
-                tracks.sort_by_key(|tr| tr.channel);
-            }
+            receiver.update_sky(&world, t, delta_f_hz);
             progress((t / duration_s).min(1.0));
         }
+        receiver.integrate(t, delta_f_hz);
+        if k > 0 && k % per_row == 0 {
+            receiver.log_rows(t, sink)?;
+        }
+    }
+    // Any IMU stamp after the last integration but within the duration.
+    world.log_imu(ImuUntil::End, sink, |_, _| {})?;
+    progress(1.0);
+    let channels = receiver.finish(n_steps as f64 / updates_per_s);
+    Ok(truth(world, sc, seed, (t_s, per_row as f64 * t_s), coeffs, channels))
+}
 
-        // One integration per channel.
-        for tr in tracks.iter_mut() {
+/// The truth of a session: `world`'s, the loop and log intervals
+/// `intervals_s` \[s\] and the loop filter `coeffs`, every channel pass.
+fn truth(
+    world: World,
+    sc: &Scenario,
+    seed: u64,
+    (loop_interval_s, log_interval_s): (f64, f64),
+    coeffs: LoopFilterCoeffs,
+    channels: Vec<ChannelSummary>,
+) -> Truth {
+    Truth {
+        sensitivity: world.sensitivity(),
+        seed,
+        generator: format!("{} {}", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
+        start_gps_s: world.start_gps_s,
+        duration_s: world.duration_s,
+        loop_interval_s,
+        log_interval_s,
+        logged_phase: sc.log.phase,
+        row_time_stamp: "centre of the latest integration (t = k*T, integration k covering [kT - T/2, kT + T/2])"
+            .into(),
+        loop_coeffs: coeffs.into(),
+        imu_time_offset_s: world.imu.time_offset_s,
+        imu_errors: world.imu,
+        channels,
+        scenario: sc.clone(),
+    }
+}
+
+/// The specific force at the loop steps: exact every [`FORCE_GRID_S`] (a
+/// whole number `m` of steps), linear in between.
+struct ForceGrid {
+    m: u64,
+    /// The grid's spacing \[s\].
+    h_s: f64,
+    /// The grid interval the steps are in, and the force at its two ends.
+    j: u64,
+    a: [f64; 3],
+    b: [f64; 3],
+}
+
+impl ForceGrid {
+    /// The grid for loop steps of `t_s` \[s\], at its first interval.
+    fn new(world: &World, t_s: f64) -> Self {
+        let m = ((FORCE_GRID_S / t_s).round() as u64).max(1);
+        let h_s = m as f64 * t_s;
+        ForceGrid { m, h_s, j: 0, a: world.specific_force(0.0), b: world.specific_force(h_s) }
+    }
+
+    /// The specific force at step `k` (steps in increasing order) \[m/s²\].
+    fn at(&mut self, world: &World, k: u64) -> [f64; 3] {
+        let j = k / self.m;
+        if j != self.j {
+            if j == self.j + 1 {
+                self.a = self.b;
+            } else {
+                self.a = world.specific_force(j as f64 * self.h_s);
+            }
+            self.b = world.specific_force((j + 1) as f64 * self.h_s);
+            self.j = j;
+        }
+        let w = (k - j * self.m) as f64 / self.m as f64;
+        let (a, b) = (self.a, self.b);
+        [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1]), a[2] + w * (b[2] - a[2])]
+    }
+}
+
+/// The simulated receiver's tracking channels: those tracking, and the
+/// passes that ended.
+struct Receiver<'a> {
+    sc: &'a Scenario,
+    seed: u64,
+    cfg: ChannelConfig,
+    tracks: Vec<Track>,
+    done: Vec<ChannelSummary>,
+}
+
+impl<'a> Receiver<'a> {
+    /// No channel tracking yet; channels with the loop filter `coeffs` at `t_s`.
+    fn new(sc: &'a Scenario, seed: u64, coeffs: LoopFilterCoeffs, t_s: f64) -> Self {
+        let mut cfg = ChannelConfig::new(coeffs, t_s, sc.tracking_loop.discriminator);
+        cfg.lock_threshold = sc.tracking_loop.lock_threshold;
+        cfg.lock_tau_s = sc.tracking_loop.lock_tau_s;
+        let tracks = Vec::with_capacity(sc.satellites.max_channels as usize);
+        Receiver { sc, seed, cfg, tracks, done: Vec::new() }
+    }
+
+    /// The sky at `t` \[s\], once per geometry step: a track whose satellite
+    /// has set stops, the others get their geometry for the next second and
+    /// its C/N0; then risen satellites take free channels, highest first
+    /// (`delta_f_hz`: Δf now, for the acquisition's hand-over).
+    fn update_sky(&mut self, world: &World, t: f64, delta_f_hz: f64) {
+        let sc = self.sc;
+        let (antenna, mask_deg) = (sc.antenna, sc.satellites.elevation_mask_deg);
+        let max_channels = sc.satellites.max_channels as usize;
+        let t_gps = world.start_gps_s + t;
+        let t_next_gps = t_gps + GEOMETRY_STEP_S;
+        let tracks = &mut self.tracks;
+        let mut i = 0;
+        while i < tracks.len() {
+            let tr = &mut tracks[i];
+            let now = tr.next;
+            if now.elevation_deg < mask_deg {
+                self.done.push(tr.summary(t));
+                tracks.swap_remove(i);
+                continue;
+            }
+            let next = world.constellation.line_of_sight(tr.prn, &antenna, t_next_gps).expect("tracked PRN exists");
+            set_segment(tr, &now, &next, t);
+            tr.ch.set_cn0_dbhz(world.cn0.cn0_dbhz(tr.prn, now.elevation_deg));
+            i += 1;
+        }
+        if tracks.len() >= max_channels {
+            return;
+        }
+        for los in world.constellation.visible_lines_of_sight(&antenna, t_gps, mask_deg) {
+            if tracks.len() >= max_channels {
+                break;
+            }
+            if tracks.iter().any(|tr| tr.prn == los.prn) {
+                continue;
+            }
+            let channel = (0..).find(|c| !tracks.iter().any(|tr| tr.channel == *c)).unwrap_or(0);
+            let next = world.constellation.line_of_sight(los.prn, &antenna, t_next_gps).expect("visible PRN exists");
+            let rng = substream(self.seed, stream::CHANNEL | u64::from(los.prn) << 32 | (t as u64 & 0xFFFF_FFFF));
+            let carrier = sc.satellites.carrier_of(channel, world.carrier_hz);
+            let start = (carrier, t, channel, delta_f_hz);
+            let aiding = sc.tracking_loop.doppler_aiding;
+            tracks.push(start_track(&self.cfg, &los, &next, start, aiding, sc, &world.cn0, rng));
+        }
+        tracks.sort_by_key(|tr| tr.channel);
+    }
+
+    /// One integration per channel at `t` \[s\], the oscillator's error
+    /// `delta_f_hz` on its carrier (with Doppler aiding, the NCO also follows
+    /// the Doppler).
+    fn integrate(&mut self, t: f64, delta_f_hz: f64) {
+        let aiding = self.sc.tracking_loop.doppler_aiding;
+        for tr in self.tracks.iter_mut() {
             let f_sig = tr.doppler0_hz + tr.doppler_slope_hz_per_s * (t - tr.seg_t0_s);
             let delta_f_c_hz = delta_f_hz * tr.carrier_ratio;
             let bias = if aiding { delta_f_c_hz + f_sig } else { delta_f_c_hz };
             tr.ch.step(f_sig, bias);
         }
+    }
 
-        // Tracking rows.
-        if k > 0 && k % per_row == 0 {
-            for tr in tracks.iter_mut() {
-                let snap = tr.ch.take_log();
-                if sc.log.drop_unlocked && !snap.locked {
-                    continue;
-                }
-                let (phase, truth) = match sc.log.phase {
-                    LoggedPhase::Last => (snap.last_rad, snap.true_last_rad),
-                    LoggedPhase::Mean => (snap.mean_rad, snap.true_mean_rad),
-                };
-                let row = SimulatedRow {
-                    t_s: t,
-                    channel: tr.channel,
-                    prn: tr.prn,
-                    cn0_dbhz: match sc.log.cn0 {
-                        Cn0Logged::Estimated => snap.cn0_est_dbhz,
-                        Cn0Logged::True => tr.ch.cn0_true_dbhz(),
-                    },
-                    elev_deg: tr.elev0_deg + tr.elev_slope_deg_per_s * (t - tr.seg_t0_s),
-                    phase_err_rad: phase,
-                    locked: snap.locked,
-                    true_phase_err_rad: truth,
-                    true_cn0_dbhz: tr.ch.cn0_true_dbhz(),
-                    carrier: tr.carrier,
-                };
-                sink.tracking(&row).map_err(sink_err)?;
+    /// Every channel's tracking row at `t` \[s\] into `sink` (not the unlocked
+    /// ones with `log.drop_unlocked`).
+    fn log_rows<S: SessionSink + ?Sized>(&mut self, t: f64, sink: &mut S) -> Result<(), SimError> {
+        let log = &self.sc.log;
+        for tr in self.tracks.iter_mut() {
+            let snap = tr.ch.take_log();
+            if log.drop_unlocked && !snap.locked {
+                continue;
             }
+            let (phase, truth) = match log.phase {
+                LoggedPhase::Last => (snap.last_rad, snap.true_last_rad),
+                LoggedPhase::Mean => (snap.mean_rad, snap.true_mean_rad),
+            };
+            let row = SimulatedRow {
+                t_s: t,
+                channel: tr.channel,
+                prn: tr.prn,
+                cn0_dbhz: match log.cn0 {
+                    Cn0Logged::Estimated => snap.cn0_est_dbhz,
+                    Cn0Logged::True => tr.ch.cn0_true_dbhz(),
+                },
+                elev_deg: tr.elev0_deg + tr.elev_slope_deg_per_s * (t - tr.seg_t0_s),
+                phase_err_rad: phase,
+                locked: snap.locked,
+                true_phase_err_rad: truth,
+                true_cn0_dbhz: tr.ch.cn0_true_dbhz(),
+                carrier: tr.carrier,
+            };
+            sink.tracking(&row).map_err(SimError::Sink)?;
         }
+        Ok(())
     }
-    // Any IMU stamp after the last integration but within the duration.
-    loop {
-        let stamp = imu.stamp_s(next_imu);
-        if stamp > duration_s + 1e-9 {
-            break;
-        }
-        let f_true = specific_force_body(&motion.state(imu.true_time_s(next_imu)));
-        let m = imu.measure(f_true, &mut imu_rng);
-        sink.imu(stamp, m).map_err(sink_err)?;
-        next_imu += 1;
-    }
-    progress(1.0);
 
-    let end_s = n_steps as f64 / updates_per_s;
-    done.extend(tracks.iter().map(|tr| tr.summary(end_s)));
-    done.sort_by(|a, b| a.start_s.total_cmp(&b.start_s).then(a.channel.cmp(&b.channel)));
-    Ok(Truth {
-        sensitivity: SensitivityTruth::new(gamma, carrier_hz, &imu.sensing_matrix()),
-        seed,
-        generator: format!("{} {}", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION")),
-        start_gps_s,
-        duration_s,
-        loop_interval_s: t_s,
-        log_interval_s: per_row as f64 * t_s,
-        logged_phase: sc.log.phase,
-        row_time_stamp: "centre of the latest integration (t = k*T, integration k covering [kT - T/2, kT + T/2])"
-            .into(),
-        loop_coeffs: coeffs.into(),
-        imu_time_offset_s: imu.time_offset_s,
-        imu_errors: imu,
-        channels: done,
-        scenario: sc.clone(),
-    })
+    /// Every channel pass, those still tracking ending at `end_s` \[s\], by
+    /// start then channel.
+    fn finish(self, end_s: f64) -> Vec<ChannelSummary> {
+        let mut done = self.done;
+        done.extend(self.tracks.iter().map(|tr| tr.summary(end_s)));
+        done.sort_by(|a, b| a.start_s.total_cmp(&b.start_s).then(a.channel.cmp(&b.channel)));
+        done
+    }
 }
 
 /// M⁻ᵀ·v for a 3×3 matrix M (adjugate / determinant).

@@ -10,6 +10,7 @@ use gsens_calib::{ResponseCheck, epoch_response};
 use gsens_core::{LoggedPhase, LoopModel};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use std::ops::Range;
 
 /// Standard errors drawn either side of each measured point.
 pub const MEASURED_BAND_SIGMA: f64 = 2.0;
@@ -167,40 +168,103 @@ impl Plot for MeasuredResponseData {
     fn plot<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, st: &Style) -> DrawResult<DB> {
         let title = format!("Measured loop response: {}", self.description);
         let area = titled(root, &title, st)?;
-        let f = &self.model_frequency_hz;
-        let (f0, f1) = (f[0], f[f.len() - 1]);
-        let model_color = AFTER_COLOR.mix(1.0);
-        let tested_color = BEFORE_COLOR.mix(1.0);
-        let other_color = RGBColor(127, 127, 127).mix(1.0);
-        let ref_color = BLACK.mix(1.0);
+        let y_area = st.i(70.0);
+        let area = legend_strip(&area, &self.legend(), y_area + st.i(10.0), st)?;
+        let h = area.dim_in_pixel().1 as i32;
+        let (top, bottom) = area.split_vertically(h * 58 / 100);
+        self.magnitude_panel(&top, st, y_area)?;
+        self.phase_panel(&bottom, st, y_area)
+    }
+}
+
+/// The measured response figure's colours.
+struct Palette {
+    model: RGBAColor,
+    tested: RGBAColor,
+    other: RGBAColor,
+    reference: RGBAColor,
+}
+
+/// The marks' sizes in pixels: the model's line, a measured dot, the
+/// reference's dot, an error bar's width.
+struct Marks {
+    width: u32,
+    dot: i32,
+    small: i32,
+    bar_w: u32,
+}
+
+impl MeasuredResponseData {
+    fn palette() -> Palette {
+        Palette {
+            model: AFTER_COLOR.mix(1.0),
+            tested: BEFORE_COLOR.mix(1.0),
+            other: RGBColor(127, 127, 127).mix(1.0),
+            reference: BLACK.mix(1.0),
+        }
+    }
+
+    fn marks(st: &Style) -> Marks {
+        Marks {
+            width: st.i(2.5).max(1) as u32,
+            dot: st.i(5.0).max(3),
+            small: st.i(2.5).max(2),
+            bar_w: st.i(1.5).max(1) as u32,
+        }
+    }
+
+    /// The legend: the model, the tested and the other bins, the reference
+    /// through the same segments, the verdict (green when consistent).
+    fn legend(&self) -> Vec<(String, Mark)> {
+        let c = Self::palette();
         let verdict_color = if self.consistent { RGBColor(44, 160, 44) } else { BEFORE_COLOR }.mix(1.0);
         let k = MEASURED_BAND_SIGMA;
         let mut entries = vec![
-            ("model |L| (loop and logging)".to_string(), Mark::Line(model_color, 3)),
+            ("model |L| (loop and logging)".to_string(), Mark::Line(c.model, 3)),
             (
                 "measured Ĥ, tested bins (shaken band), bar: the deviation the check allows".to_string(),
-                Mark::Dot(tested_color),
+                Mark::Dot(c.tested),
             ),
         ];
         if self.points.iter().any(|p| !p.tested) {
             entries.push((
                 format!("measured Ĥ ±{k:.0}σ, other bins with significant coherence (not tested)"),
-                Mark::Dot(other_color),
+                Mark::Dot(c.other),
             ));
         }
-        entries.push(("model through the same segments (what Ĥ is tested against)".to_string(), Mark::Dot(ref_color)));
+        entries
+            .push(("model through the same segments (what Ĥ is tested against)".to_string(), Mark::Dot(c.reference)));
         entries.push((self.verdict.clone(), Mark::Band(verdict_color)));
-        let y_area = st.i(70.0);
-        let area = legend_strip(&area, &entries, y_area + st.i(10.0), st)?;
-        let h = area.dim_in_pixel().1 as i32;
-        let (top, bottom) = area.split_vertically(h * 58 / 100);
-        let xr = || log_axis(f0..f1);
-        let in_x = |p: &&MeasuredPoint| p.f_hz >= f0 && p.f_hz <= f1;
+        entries
+    }
+
+    /// The model's frequency range \[Hz\].
+    fn f_range(&self) -> Range<f64> {
+        let f = &self.model_frequency_hz;
+        f[0]..f[f.len() - 1]
+    }
+
+    /// The measured bins within the model's frequency range.
+    fn points_in_range(&self) -> impl Iterator<Item = &MeasuredPoint> {
+        let fr = self.f_range();
+        self.points.iter().filter(move |p| p.f_hz >= fr.start && p.f_hz <= fr.end)
+    }
+
+    /// The top panel: the model's |L|, each bin's |Ĥ| with its bar and the
+    /// reference's dot.
+    fn magnitude_panel<DB: DrawingBackend>(
+        &self,
+        top: &DrawingArea<DB, Shift>,
+        st: &Style,
+        y_area: i32,
+    ) -> DrawResult<DB> {
+        let (c, mk) = (Self::palette(), Self::marks(st));
+        let f = &self.model_frequency_hz;
         let ymax = self
             .model_magnitude_rad_per_hz
             .iter()
             .cloned()
-            .chain(self.points.iter().filter(in_x).map(|p| p.magnitude_rad_per_hz + p.magnitude_bar_rad_per_hz()))
+            .chain(self.points_in_range().map(|p| p.magnitude_rad_per_hz + p.magnitude_bar_rad_per_hz()))
             .filter(|v| v.is_finite())
             .fold(0.0, f64::max)
             * 1.1;
@@ -217,47 +281,52 @@ impl Plot for MeasuredResponseData {
             fmt_x: &fmt_log,
             fmt_y: &fmt_mag,
         };
-        let width = st.i(2.5).max(1) as u32;
-        let dot = st.i(5.0).max(3);
-        let small = st.i(2.5).max(2);
-        let bar_w = st.i(1.5).max(1) as u32;
-        let color = |p: &MeasuredPoint| if p.tested { tested_color } else { other_color };
-        let mut chart = framed_chart(&top, st, &frame, xr(), 0.0..ymax)?;
+        let color = |p: &MeasuredPoint| if p.tested { c.tested } else { c.other };
+        let mut chart = framed_chart(top, st, &frame, log_axis(self.f_range()), 0.0..ymax)?;
         chart.draw_series(LineSeries::new(
             f.iter().cloned().zip(self.model_magnitude_rad_per_hz.iter().cloned()),
-            model_color.stroke_width(width),
+            c.model.stroke_width(mk.width),
         ))?;
-        for p in self.points.iter().filter(in_x) {
+        for p in self.points_in_range() {
             let (lo, hi) = (
                 (p.magnitude_rad_per_hz - p.magnitude_bar_rad_per_hz()).max(0.0),
                 (p.magnitude_rad_per_hz + p.magnitude_bar_rad_per_hz()).min(ymax),
             );
-            chart.draw_series(error_bar(p.f_hz, lo, hi, color(p).stroke_width(bar_w)))?;
+            chart.draw_series(error_bar(p.f_hz, lo, hi, color(p).stroke_width(mk.bar_w)))?;
             chart.draw_series(std::iter::once(Circle::new(
                 (p.f_hz, p.magnitude_rad_per_hz),
-                dot,
+                mk.dot,
                 color(p).filled(),
             )))?;
             chart.draw_series(std::iter::once(Circle::new(
                 (p.f_hz, p.model_magnitude_rad_per_hz.min(ymax)),
-                small,
-                ref_color.filled(),
+                mk.small,
+                c.reference.filled(),
             )))?;
         }
+        Ok(())
+    }
 
+    /// The bottom panel: the phases likewise, on whole multiples of 45°.
+    fn phase_panel<DB: DrawingBackend>(
+        &self,
+        bottom: &DrawingArea<DB, Shift>,
+        st: &Style,
+        y_area: i32,
+    ) -> DrawResult<DB> {
+        let (c, mk) = (Self::palette(), Self::marks(st));
+        let f = &self.model_frequency_hz;
         let phases = self
             .model_phase_deg
             .iter()
             .cloned()
             .chain(
-                self.points
-                    .iter()
-                    .filter(in_x)
-                    .flat_map(|p| [p.phase_deg - p.phase_bar_deg(), p.phase_deg + p.phase_bar_deg()]),
+                self.points_in_range().flat_map(|p| [p.phase_deg - p.phase_bar_deg(), p.phase_deg + p.phase_bar_deg()]),
             )
             .filter(|v| v.is_finite());
         let (plo, phi) = phases.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)));
         let pr = (plo / 45.0).floor() * 45.0..((phi / 45.0).ceil() * 45.0).max((plo / 45.0).floor() * 45.0 + 45.0);
+        let fmt_log = |v: &f64| fmt_tick(*v, 0.0);
         let fmt_deg = |v: &f64| format!("{v:.0}");
         let frame = Frame {
             top: 10.0,
@@ -269,18 +338,19 @@ impl Plot for MeasuredResponseData {
             fmt_x: &fmt_log,
             fmt_y: &fmt_deg,
         };
-        let mut chart = framed_chart(&bottom, st, &frame, xr(), pr.clone())?;
+        let color = |p: &MeasuredPoint| if p.tested { c.tested } else { c.other };
+        let mut chart = framed_chart(bottom, st, &frame, log_axis(self.f_range()), pr.clone())?;
         chart.draw_series(LineSeries::new(
             f.iter().cloned().zip(self.model_phase_deg.iter().cloned()),
-            model_color.stroke_width(width),
+            c.model.stroke_width(mk.width),
         ))?;
-        for p in self.points.iter().filter(in_x) {
+        for p in self.points_in_range() {
             let s = p.phase_bar_deg();
             let (lo, hi) = ((p.phase_deg - s).max(pr.start), (p.phase_deg + s).min(pr.end));
-            chart.draw_series(error_bar(p.f_hz, lo, hi, color(p).stroke_width(bar_w)))?;
-            chart.draw_series(std::iter::once(Circle::new((p.f_hz, p.phase_deg), dot, color(p).filled())))?;
+            chart.draw_series(error_bar(p.f_hz, lo, hi, color(p).stroke_width(mk.bar_w)))?;
+            chart.draw_series(std::iter::once(Circle::new((p.f_hz, p.phase_deg), mk.dot, color(p).filled())))?;
             let m = p.model_phase_deg.clamp(pr.start, pr.end);
-            chart.draw_series(std::iter::once(Circle::new((p.f_hz, m), small, ref_color.filled())))?;
+            chart.draw_series(std::iter::once(Circle::new((p.f_hz, m), mk.small, c.reference.filled())))?;
         }
         Ok(())
     }
