@@ -719,7 +719,7 @@ pub struct ChosenLoop {
 ///
 /// Every candidate is fitted on the whole series, the candidates in
 /// parallel and without the covariance (the residual decides). Progress:
-/// one step per candidate fitted, to the observer of [`crate::progress`].
+/// one step per candidate fitted, to the observer of `crate::progress`.
 pub fn choose_loop(
     series: &EpochSeries,
     settings: &EstimateSettings,

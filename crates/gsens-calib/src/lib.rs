@@ -64,7 +64,7 @@ pub mod option_values;
 mod options;
 mod pipeline;
 pub mod predict;
-pub mod progress;
+mod progress;
 mod response_check;
 mod result;
 mod robust;

@@ -13,7 +13,7 @@ use gsens_calib::predict::{
     render_sweep_text,
 };
 use gsens_montecarlo::frequency_noise;
-use gsens_report::Format;
+use gsens_report::figures::Format;
 use gsens_report::studies::fig_lock_margin_at;
 use gsens_sim::oscillator::OscillatorConfig;
 use std::path::PathBuf;

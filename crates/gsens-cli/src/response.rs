@@ -4,7 +4,7 @@
 use crate::args::LoopArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_report::Format;
+use gsens_report::figures::Format;
 use gsens_report::figures::{DEFAULT_SIZE, ResponseData, fig_response};
 use gsens_report::studies::response_json;
 use std::path::PathBuf;

@@ -11,7 +11,7 @@ use gsens_montecarlo::{
     ValidateError, calibrate_scenario, default_bandwidths_hz, render_gamma_hat, render_trial_row,
     render_validate_footer, render_validate_header, validate,
 };
-use gsens_report::Format;
+use gsens_report::figures::Format;
 use gsens_report::studies::fig_in_the_loop;
 use gsens_sim::compensation::CompensationSection;
 use std::path::PathBuf;

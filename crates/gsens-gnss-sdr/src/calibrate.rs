@@ -1,8 +1,4 @@
-//! The estimate from GNSS-SDR's tracking dumps with GNSS-SDR's own loop: the
-//! dumps converted to the pipeline's tracking log ([`gnss_sdr_tracking_log`]),
-//! the settings given the loop of the configuration they were made with
-//! ([`with_gnss_sdr_loop`]), and what the conversion did kept in the result
-//! document ([`Conversion::source`]).
+//! The crate documentation's section "The estimate with GNSS-SDR's own loop" describes this module.
 
 use gsens_calib::{Outcome, PipelineSettings, SourceConversion, calibrate_logs};
 use gsens_core::units::Decimal;

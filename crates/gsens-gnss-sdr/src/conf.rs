@@ -1,37 +1,4 @@
-//! GNSS-SDR configuration files (`.conf`): the reader of what decides the
-//! carrier loop of each tracking record, and the writer of a configuration
-//! that tracks a file of `gsens simulate --iq`.
-//!
-//! # Format
-//!
-//! GNSS-SDR reads an INI file: `[section]` lines, `key=value` lines with keys
-//! such as `Tracking_1C.pll_bw_hz`, comments from `;` or `#` at the start of a
-//! line, and a `;` anywhere in a value starts a comment too (the shipped
-//! examples write `Tracking_1C.pll_bw_hz=40.0;`). Keys are case-sensitive and
-//! the last occurrence of a key wins. Numbers are read like a C++ stream reads
-//! them: the longest numeric prefix of the value.
-//!
-//! # Tracking settings and their defaults
-//!
-//! [`TrackingConf`] collects the `Tracking_1C.*` keys that shape the carrier
-//! loop of GNSS-SDR 0.0.17's `GPS_L1_CA_DLL_PLL_Tracking` (the
-//! `dll_pll_veml_tracking` block). Where the file leaves a key out, the
-//! defaults are GNSS-SDR 0.0.17's: `pll_filter_order` 3, `pll_bw_hz` 35 and
-//! `pll_bw_narrow_hz` 5 (measured: the loop-filter coefficients fitted on the
-//! dumps of a run without these keys are those of a 3rd-order 35 Hz loop at
-//! 1 ms and a 5 Hz one at 20 ms, residual 1e-4 Hz), `extend_correlation_symbols`
-//! 1 (GNSS-SDR's documentation; not measured), `pull_in_time_s` 10 s
-//! (`dll_pll_conf.h`).
-//!
-//! # The lock detector
-//!
-//! [`LockDetectorConf`] holds the keys of the tracking's loss-of-lock rule
-//! (read in GNSS-SDR's `dll_pll_conf.cc`; their defaults are the command-line
-//! flags of `gnss_sdr_flags.cc`, the same in 0.0.17 and 0.0.20):
-//! `carrier_lock_th` 0.7, `cn0_min` 25 dB-Hz, `max_lock_fail` 50,
-//! `max_carrier_lock_fail` 5000 and `cn0_samples` 20. GNSS-SDR reads the
-//! integer ones as a C++ stream reads an `int` (`25.5` is 25); so does this
-//! reader. How the rule is applied: [`crate::import`].
+//! The crate documentation's section "Configuration files" describes this module.
 
 use gsens_core::units::Decimal;
 use std::path::Path;

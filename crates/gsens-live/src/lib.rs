@@ -48,7 +48,6 @@ mod truth;
 
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
-pub use gsens_calib::{Warning, WarningCode};
 pub use guidance::{GENTLER_FRACTION, Instruction, LoopBand, Protocol, Situation, instruct};
 pub use input::{
     Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,

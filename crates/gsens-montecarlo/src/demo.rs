@@ -6,10 +6,11 @@
 use crate::{MonteCarloError, scenario_settings};
 use gsens_calib::{CalibError, CalibrationOptions, Outcome, PipelineError, PipelineSettings, ResultDocument};
 use gsens_core::units::{Decimal, GPS_L1_HZ};
+use gsens_sim::LogsError;
+use gsens_sim::error::ConfigError;
 use gsens_sim::oscillator::{AllanComparison, allan_comparison};
 use gsens_sim::scenario::Scenario;
 use gsens_sim::session::Truth;
-use gsens_sim::{ConfigError, LogsError};
 use std::path::{Path, PathBuf};
 
 /// Why a demo could not run.

@@ -22,7 +22,7 @@
 //! within 3σ (the statistical σ the method reported) and the RMS of the error
 //! over that σ.
 
-pub mod demo;
+mod demo;
 mod methods;
 mod predict;
 mod validate;

@@ -1,30 +1,4 @@
-//! The log of `pocket_trk -log FILE` (PocketSDR 0.17).
-//!
-//! One message per line, comma-separated, each starting with its type:
-//! `$CH` (a tracked channel, every `epoch` seconds), `$LOG` (events: start,
-//! signal found or lost, stop), `$TIME`, `$POS`, `$OBS`, `$SAT`, `$EPH`, … .
-//! Only `$CH` is read; the others are counted. Its fields (1-based after the
-//! type, as PocketSDR's `out_log_ch` writes them):
-//!
-//! ```text
-//! 1 time [s]   2 ch   3 rfch   4 sat   5 sig   6 prn   7 lock [s]   8 cn0 [dB-Hz]   9 coff [ms]
-//! 10 dop [Hz]   11 adr [cyc]   12 ssync   13 bsync   14 fsync   15 rev   16 srev
-//! 17 err_phas [cyc]   18 err_code [µs]   19 tow_v   20 tow [ms]   21 week   22 type
-//! 23 nnav   24 nerr   25 nlol   26 nfec
-//! ```
-//!
-//! `time` is the receiver time of the start of the 1 ms block the channel
-//! last processed (its cycle counter × 1 ms, 3 decimals), `lock` the time
-//! since acquisition, `err_phas` the Costas discriminator atan(Q/I)/2π of that
-//! single block (3 decimals: 1e-3 cycle steps), `nlol` the channel's count of
-//! losses of lock.
-//!
-//! Real logs are not always clean: a line may be cut (the receiver was
-//! stopped while writing), two messages may share a line (interleaved
-//! writes), bytes may be damaged. A `$CH` line with another number of fields
-//! than the log's (the most common among its `$CH` lines), a second `$`, or a
-//! field that does not read as its type is *garbled*: it is skipped and
-//! reported ([`Garbled`]: line, field, reason), never guessed at.
+//! The crate documentation's section "The log" describes this module.
 
 use std::collections::BTreeMap;
 use std::path::Path;

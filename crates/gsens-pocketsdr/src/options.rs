@@ -1,16 +1,4 @@
-//! `pocket_trk`'s options file (`-opt FILE`; PocketSDR's
-//! `app/pocket_trk/pocket_trk_default.conf` is one).
-//!
-//! One `key = value` per line; `#` starts a comment; blank lines are
-//! skipped. `pocket_trk` reads every value as a number and ignores lines
-//! without `=` and unknown keys (with a message on its standard error); the
-//! last of repeated keys wins. Of its keys, the carrier loop gsens models
-//! depends on `b_pll` (the PLL's noise bandwidth, 5 Hz by default, PocketSDR's
-//! `B_PLL`), and the log on `epoch` (the `$CH` interval, 1 s by default).
-//! The FLL's `b_fll_w`/`b_fll_n` only act during the first second of a
-//! track, which is not used. A value gsens needs that does not read as a
-//! number is an error naming the file, line and key (where `pocket_trk`
-//! would have read 0 or a prefix); other keys are kept as text.
+//! The crate documentation's section "The options file" describes this module.
 
 use gsens_core::units::Decimal;
 use std::path::Path;

@@ -46,7 +46,6 @@ mod time;
 pub use calibration_report::{ReportError, write_calibration_report};
 pub use demo_figures::{DemoFiguresError, write_demo_figures};
 pub use figure_set::{Figure, FigureInputs, ReportFiles, WriteError, write_figures, write_report_dir};
-pub use figures::{Format, Image, RenderError};
 pub use montecarlo_text::render_montecarlo_text;
 pub use text::{render_response_text, render_text};
 pub use time::{utc_date_string, utc_now_string, utc_timestamp_string};
@@ -85,7 +84,7 @@ pub struct FigureBlock {
     pub title: String,
     /// What the figure shows and how to read it (plain text).
     pub caption: String,
-    /// The SVG document (from [`figures`] with [`Format::Svg`]).
+    /// The SVG document (from [`figures`] with [`figures::Format::Svg`]).
     pub svg: String,
 }
 

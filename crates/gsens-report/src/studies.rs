@@ -7,7 +7,7 @@
 use crate::figures::{
     CompensationData, CompensationKind, DEFAULT_SIZE, LockMarginData, ResponseData, fig_compensation, fig_lock_margin,
 };
-use crate::{Format, Image, RenderError};
+use crate::figures::{Format, Image, RenderError};
 use gsens_calib::LoopSummary;
 use gsens_calib::predict::{COSTAS_LOCK_RULE_RAD, SweepContext, SweepSettings};
 use gsens_core::LoopModel;

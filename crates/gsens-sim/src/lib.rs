@@ -15,8 +15,8 @@
 //! - [`session`]: the whole session, streamed through a [`session::SessionSink`];
 //! - [`iq`]: complex baseband GPS L1 C/A samples of the same scenario, for
 //!   software receivers (GNSS-SDR);
-//! - [`error`]: the typed errors of the configuration ([`ConfigError`],
-//!   [`UtcError`], [`AlmanacError`]).
+//! - [`error`]: the typed errors of the configuration (`ConfigError`,
+//!   `UtcError`, `AlmanacError`).
 #![deny(missing_docs)]
 
 pub mod channel;
@@ -34,11 +34,7 @@ pub mod scenario;
 pub mod session;
 mod world;
 
-pub use error::{AlmanacError, ConfigError, UtcError};
-pub use iq::IqError;
 pub use logs::{
     IqSession, LoadError, LogsError, SimulatedLogs, TruthLoop, load_scenario, read_truth_gamma, read_truth_loop,
     simulate_iq_to_dir, simulate_logs, simulate_to_dir,
 };
-pub use scenario::ScenarioError;
-pub use session::SimError;

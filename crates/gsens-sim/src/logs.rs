@@ -153,7 +153,7 @@ pub enum LoadError {
         /// The file.
         path: String,
         /// Why.
-        error: crate::ScenarioError,
+        error: crate::scenario::ScenarioError,
     },
     /// A truth file without `gamma_hz_per_mps2` as 3 numbers.
     #[error("{path}: no `gamma_hz_per_mps2` with 3 numbers: {reason}")]
@@ -174,13 +174,17 @@ pub enum LoadError {
     },
     /// The embedded default does not parse (a bug).
     #[error(transparent)]
-    Default(#[from] crate::ScenarioError),
+    Default(#[from] crate::scenario::ScenarioError),
 }
 
 /// Streams the simulator's output into the two CSV files.
 struct FileSink {
     imu: ImuWriter<File>,
     tracking: TrackingWriter<File>,
+    /// Whether `tracking.csv` names each row's carrier (channels on named
+    /// signals); without, every row is on the oscillator's carrier, which the
+    /// estimate is told (`carrier_hz`), as the file's rows carry no carrier.
+    carrier_columns: bool,
 }
 
 impl SessionSink for FileSink {
@@ -188,7 +192,11 @@ impl SessionSink for FileSink {
         Ok(self.imu.write_sample(t_s, &f_mps2)?)
     }
     fn tracking(&mut self, row: &SimulatedRow) -> Result<(), SinkError> {
-        Ok(self.tracking.write_row_on(&row.tracking_row(), &row.carrier, &[])?)
+        if self.carrier_columns {
+            Ok(self.tracking.write_row_on(&row.tracking_row(), &row.carrier, &[])?)
+        } else {
+            Ok(self.tracking.write_row(&row.tracking_row())?)
+        }
     }
 }
 
@@ -210,15 +218,17 @@ pub fn simulate_to_dir(
         File::create(&p).map_err(io(&p))
     };
     let (imu, tracking) = (create("imu.csv")?, create("tracking.csv")?);
+    let carrier_columns = !scenario.satellites.signals.is_empty();
     let mut sink = FileSink {
         imu: ImuWriter::new(imu).map_err(io(&dir.join("imu.csv")))?,
         // Carrier columns only for channels on named signals (the default's file is as it was).
-        tracking: if scenario.satellites.signals.is_empty() {
-            TrackingWriter::new(tracking)
-        } else {
+        tracking: if carrier_columns {
             TrackingWriter::with_carriers(tracking, &[])
+        } else {
+            TrackingWriter::new(tracking)
         }
         .map_err(io(&dir.join("tracking.csv")))?,
+        carrier_columns,
     };
     let truth = simulate(scenario, seed, &mut sink, progress)?;
     sink.imu.finish().map_err(io(&dir.join("imu.csv")))?;

@@ -696,7 +696,7 @@ pub fn allan_comparison(
     sample_interval_s: f64,
     samples: usize,
     seed: u64,
-) -> Result<AllanComparison, crate::ConfigError> {
+) -> Result<AllanComparison, crate::error::ConfigError> {
     let dt = sample_interval_s;
     let mut osc = Oscillator::try_new(cfg, dt, crate::rng::seeded(seed))?;
     let mut y = vec![0.0; samples];

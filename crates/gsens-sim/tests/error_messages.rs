@@ -2,6 +2,8 @@
 //! constructors, the IQ generator, the YUMA parser) and the typed fields
 //! behind them: the messages are derived from the fields and must not drift.
 
+use gsens_sim::error::{AlmanacError, ConfigError, UtcError};
+use gsens_sim::iq::IqError;
 use gsens_sim::iq::{IqConfig, IqFormat, generate_iq};
 use gsens_sim::motion::{Axis, Motion, MotionConfig, Segment};
 use gsens_sim::oscillator::{Oscillator, OscillatorConfig};
@@ -9,7 +11,7 @@ use gsens_sim::rng::seeded;
 use gsens_sim::satellites::Constellation;
 use gsens_sim::scenario::{LoopSection, Scenario, ScenarioError, parse_utc_to_gps_s};
 use gsens_sim::session::NullSink;
-use gsens_sim::{AlmanacError, ConfigError, IqError, SimError, UtcError};
+use gsens_sim::session::SimError;
 
 /// (scenario TOML, the error's text).
 const CASES: &[(&str, &str)] = &[

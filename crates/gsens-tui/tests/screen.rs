@@ -150,8 +150,8 @@ fn gentler() -> LiveView {
         batch: Some((
             45.0,
             false,
-            vec![gsens_live::Warning {
-                code: gsens_live::WarningCode::DiscriminatorRange,
+            vec![gsens_calib::Warning {
+                code: gsens_calib::WarningCode::DiscriminatorRange,
                 message: "the predicted g-induced phase error peaks at 0.62 rad, beyond the discriminator's \
                           linear range: shake more gently"
                     .into(),
@@ -372,7 +372,7 @@ fn odd_values_do_not_panic() {
             batch: Some((
                 f64::NAN,
                 false,
-                vec![gsens_live::Warning { code: gsens_live::WarningCode::NotFinite, message: long.clone() }; 6],
+                vec![gsens_calib::Warning { code: gsens_calib::WarningCode::NotFinite, message: long.clone() }; 6],
             )),
             notices: (vec![long.clone(); 5], u64::MAX),
             received: (u64::MAX, u64::MAX),
