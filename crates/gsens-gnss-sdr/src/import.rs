@@ -462,7 +462,6 @@ pub fn import_dump(
     let ext = stage.symbols.max(1);
     // Detector calls (loop updates) a record after bit synchronization stands for.
     let per_record = stage.updates_per_record().unwrap_or(1);
-    let bit_ms = f64::from(BIT_SYMBOLS);
     let channel = dump.channel.unwrap_or(0);
     let settle_s = settings.settle_time_s();
     let mut rows = Vec::new();
@@ -470,23 +469,7 @@ pub fn import_dump(
     let recs = &dump.records;
     let mut i = 0;
     while i < recs.len() {
-        // One track: records i..j, 1 ms apart until bit synchronization (`synced`,
-        // the first record one data bit after its predecessor), one bit apart from there on.
-        let mut j = i + 1;
-        let mut synced = None;
-        while j < recs.len() {
-            let (a, b) = (recs[j - 1].prn_start_sample_count, recs[j].prn_start_sample_count);
-            let step_ms = b.checked_sub(a).map_or(f64::NAN, |dn| dn as f64 / samples_per_ms);
-            let (one_ms, one_bit) = ((step_ms - 1.0).abs() < 0.5, (step_ms - bit_ms).abs() < 1.0);
-            let continues = recs[j].prn == recs[i].prn && if synced.is_some() { one_bit } else { one_ms || one_bit };
-            if !continues {
-                break;
-            }
-            if one_bit && synced.is_none() {
-                synced = Some(j);
-            }
-            j += 1;
-        }
+        let (j, synced) = track_span(recs, i, samples_per_ms);
         let after_sync = |k: usize| synced.is_some_and(|s| k >= s);
         // The integration a record's discriminator output comes from: 1 ms before
         // bit synchronization, N ms after; its middle is the record's time.
@@ -558,48 +541,8 @@ pub fn import_dump(
         }
         let lock_loss_s = lock.loss_of_lock.map(|k| t_mid(i + k));
         let loss = lock_loss_s.map(|t| lock.describe_loss(&settings.tracking, t));
-        let (fate, reason) = if let (Some(loss), true) = (&loss, k0.is_none_or(|k| tracking_end <= k)) {
-            (TrackFate::LostBeforeModelledLoop, format!("{loss}, before it reached the modelled loop"))
-        } else if k0.is_none() {
-            let why = if ext > 1 {
-                format!(
-                    "{ext} ms integrations, pll_bw_narrow_hz = {}): no bit synchronization in its {} records",
-                    settings.tracking.pll_bw_narrow_hz,
-                    j - i
-                )
-            } else {
-                format!(
-                    "1 ms loop after the pull-in): its {} records end within pull_in_time_s = {} s{}",
-                    j - i,
-                    settings.tracking.pull_in_time_s,
-                    if settings.tracking.enable_fll_pull_in { " (the FLL)" } else { "" }
-                )
-            };
-            (TrackFate::NeverModelled, format!("never reached the modelled loop ({why}"))
-        } else if modelled == 0 {
-            (
-                TrackFate::ShorterThanSettling,
-                format!("fewer than {settle_s:.1} s of the modelled loop (its settling time)"),
-            )
-        } else if good == 0 {
-            (
-                TrackFate::LostBeforeSettled,
-                format!("{}, before the modelled loop had settled", loss.unwrap_or_default()),
-            )
-        } else if let Some(loss) = loss {
-            (
-                TrackFate::UsedToLossOfLock,
-                format!(
-                    "used up to the loss of lock: {loss}; the {} records from there on are dropped",
-                    j - tracking_end
-                ),
-            )
-        } else {
-            (
-                TrackFate::Used,
-                format!("used: GNSS-SDR's lock detector keeps it to its end ({})", lock.describe(&settings.tracking)),
-            )
-        };
+        let counts = TrackCounts { records: j - i, modelled, good, dropped_after_loss: j - tracking_end };
+        let (fate, reason) = fate_of(settings, &lock, loss, k0.is_none_or(|k| tracking_end <= k), k0.is_some(), counts);
         let used = good > 0;
         if used {
             rows.extend(track_rows);
@@ -625,6 +568,93 @@ pub fn import_dump(
         i = j;
     }
     (rows, tracks)
+}
+
+/// How many records of a track there were, were modelled, were kept, and
+/// were dropped after a loss of lock.
+#[derive(Debug, Clone, Copy)]
+struct TrackCounts {
+    records: usize,
+    modelled: usize,
+    good: usize,
+    dropped_after_loss: usize,
+}
+
+/// One track's records `i..j` of `recs`, and where bit synchronization came
+/// (`synced`): 1 ms apart until then, the first record one data bit after its
+/// predecessor, one bit apart from there on; the track ends where the PRN
+/// changes or the spacing breaks.
+fn track_span(recs: &[crate::dump::TrackingRecord], i: usize, samples_per_ms: f64) -> (usize, Option<usize>) {
+    let bit_ms = f64::from(BIT_SYMBOLS);
+    let mut j = i + 1;
+    let mut synced = None;
+    while j < recs.len() {
+        let (a, b) = (recs[j - 1].prn_start_sample_count, recs[j].prn_start_sample_count);
+        let step_ms = b.checked_sub(a).map_or(f64::NAN, |dn| dn as f64 / samples_per_ms);
+        let (one_ms, one_bit) = ((step_ms - 1.0).abs() < 0.5, (step_ms - bit_ms).abs() < 1.0);
+        let continues = recs[j].prn == recs[i].prn && if synced.is_some() { one_bit } else { one_ms || one_bit };
+        if !continues {
+            break;
+        }
+        if one_bit && synced.is_none() {
+            synced = Some(j);
+        }
+        j += 1;
+    }
+    (j, synced)
+}
+
+/// What became of a track and why (`lock`: GNSS-SDR's lock detector replayed
+/// on it, `loss`: its loss of lock described): lost before the modelled loop
+/// (`lost_before_model`: the loss of lock came before the first modelled
+/// record, or there was none), never modelled (`reached_model` false), too
+/// short for the settling time, lost before it settled, used up to a loss of
+/// lock, or used to its end.
+fn fate_of(
+    settings: &ImportSettings,
+    lock: &LockReplay,
+    loss: Option<String>,
+    lost_before_model: bool,
+    reached_model: bool,
+    counts: TrackCounts,
+) -> (TrackFate, String) {
+    let (ext, settle_s) = (settings.stage().symbols.max(1), settings.settle_time_s());
+    let TrackCounts { records, modelled, good, dropped_after_loss } = counts;
+    if let (Some(loss), true) = (&loss, lost_before_model) {
+        (TrackFate::LostBeforeModelledLoop, format!("{loss}, before it reached the modelled loop"))
+    } else if !reached_model {
+        let why = if ext > 1 {
+            format!(
+                "{ext} ms integrations, pll_bw_narrow_hz = {}): no bit synchronization in its {} records",
+                settings.tracking.pll_bw_narrow_hz, records
+            )
+        } else {
+            format!(
+                "1 ms loop after the pull-in): its {} records end within pull_in_time_s = {} s{}",
+                records,
+                settings.tracking.pull_in_time_s,
+                if settings.tracking.enable_fll_pull_in { " (the FLL)" } else { "" }
+            )
+        };
+        (TrackFate::NeverModelled, format!("never reached the modelled loop ({why}"))
+    } else if modelled == 0 {
+        (TrackFate::ShorterThanSettling, format!("fewer than {settle_s:.1} s of the modelled loop (its settling time)"))
+    } else if good == 0 {
+        (TrackFate::LostBeforeSettled, format!("{}, before the modelled loop had settled", loss.unwrap_or_default()))
+    } else if let Some(loss) = loss {
+        (
+            TrackFate::UsedToLossOfLock,
+            format!(
+                "used up to the loss of lock: {loss}; the {} records from there on are dropped",
+                dropped_after_loss
+            ),
+        )
+    } else {
+        (
+            TrackFate::Used,
+            format!("used: GNSS-SDR's lock detector keeps it to its end ({})", lock.describe(&settings.tracking)),
+        )
+    }
 }
 
 /// Why no track of a dump directory gave a record: one line per channel and
