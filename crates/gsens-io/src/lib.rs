@@ -67,6 +67,23 @@
 //! receiver that moves a channel to another signal changes its PRN or channel
 //! number, which starts a new track).
 //!
+//! # NCO
+//!
+//! Two more optional columns say where the loop put its replica, so that the
+//! phase the loop was fed is known with no model of the loop
+//! (θ_in = θ_NCO + φ, docs/conventions.md):
+//!
+//! - `nco_phase_cycles`: the replica's accumulated carrier phase at the end of
+//!   the row's latest integration \[cycles\], with the sign of φ = θ_signal −
+//!   θ_replica (θ_replica = 2π·`nco_phase_cycles`);
+//! - `nco_freq_hz`: the frequency the NCO was commanded during that
+//!   integration \[Hz\].
+//!
+//! Either may come alone ([`NCO_COLUMNS`]); where a column is present every row
+//! must hold a finite number in it. Each track keeps them in
+//! [`ChannelTrack::nco_phase_cycles`] and [`ChannelTrack::nco_freq_hz`] (empty
+//! without the column).
+//!
 //! # Signals and carriers
 //!
 //! The GNSS signals gsens knows and their carriers: the one table
@@ -107,7 +124,7 @@ pub use output::{OutputPathError, check_output_dir, check_output_file, check_out
 pub use row::{RowError, parse_imu_row, parse_tracking_row};
 pub use signal::{CARRIER_MATCH_HZ, Carrier, GLONASS_K, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{
-    CARRIER_COLUMNS, ChannelTrack, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file,
+    CARRIER_COLUMNS, ChannelTrack, NCO_COLUMNS, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file,
     read_tracking_file_in_chunks, read_tracking_file_plain,
 };
 pub use vibration::{VIBRATION_COLUMNS, read_vibration_psd, read_vibration_psd_file};

@@ -18,6 +18,10 @@ pub const TRACKING_COLUMNS: [&str; 6] = ["t_s", "channel", "prn", "cn0_dbhz", "e
 /// when some row is not on L1.
 pub const CARRIER_COLUMNS: [&str; 3] = ["signal", "glo_k", "carrier_hz"];
 
+/// The optional NCO columns of `tracking.csv` (see the crate documentation):
+/// where the loop put its replica, for the loop-free measurement θ_in = θ_NCO + φ.
+pub const NCO_COLUMNS: [&str; 2] = ["nco_phase_cycles", "nco_freq_hz"];
+
 /// The rows of one (channel, PRN) pair, stored column-wise, in time order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelTrack {
@@ -35,6 +39,13 @@ pub struct ChannelTrack {
     pub elev_deg: Vec<f64>,
     /// The carrier tracked (one per track; GPS L1 for a log without carrier columns).
     pub carrier: Carrier,
+    /// The replica's accumulated phase at the end of each row's latest
+    /// integration \[cycles\] (φ = θ_signal − θ_replica, θ_replica = 2π·this);
+    /// empty when the log has no `nco_phase_cycles` column.
+    pub nco_phase_cycles: Vec<f64>,
+    /// The frequency the NCO was commanded during each row's latest
+    /// integration \[Hz\]; empty when the log has no `nco_freq_hz` column.
+    pub nco_freq_hz: Vec<f64>,
 }
 
 impl ChannelTrack {
@@ -47,6 +58,8 @@ impl ChannelTrack {
             phase_err_rad: Vec::new(),
             cn0_dbhz: Vec::new(),
             elev_deg: Vec::new(),
+            nco_phase_cycles: Vec::new(),
+            nco_freq_hz: Vec::new(),
         }
     }
 
@@ -179,6 +192,8 @@ struct RowValues {
     elev_deg: f64,
     phase_err_rad: f64,
     carrier: Carrier,
+    /// `nco_phase_cycles` and `nco_freq_hz`, when the log has the columns.
+    nco: [Option<f64>; 2],
 }
 
 /// Assembles a [`TrackingLog`] row by row with the format's checks (time
@@ -294,6 +309,12 @@ impl Builder {
         tr.phase_err_rad.push(r.phase_err_rad);
         tr.cn0_dbhz.push(r.cn0_dbhz);
         tr.elev_deg.push(r.elev_deg);
+        if let Some(v) = r.nco[0] {
+            tr.nco_phase_cycles.push(v);
+        }
+        if let Some(v) = r.nco[1] {
+            tr.nco_freq_hz.push(v);
+        }
         self.rows += 1;
         Ok(())
     }
@@ -389,6 +410,8 @@ impl Builder {
             to.phase_err_rad.extend_from_slice(&tr.phase_err_rad);
             to.cn0_dbhz.extend_from_slice(&tr.cn0_dbhz);
             to.elev_deg.extend_from_slice(&tr.elev_deg);
+            to.nco_phase_cycles.extend_from_slice(&tr.nco_phase_cycles);
+            to.nco_freq_hz.extend_from_slice(&tr.nco_freq_hz);
         };
         let pairs = self.tracks.iter_mut().zip(appended).filter_map(|(to, tr)| Some((to, tr?)));
         if next.rows >= JOIN_PARALLEL_ROWS {
@@ -429,7 +452,7 @@ impl TrackingLog {
         source_name: &str,
         rows: impl IntoIterator<Item = R>,
     ) -> Result<TrackingLog, FormatError> {
-        Self::build(source_name, rows.into_iter().map(|r| (r, Carrier::GPS_L1)), false)
+        Self::build(source_name, rows.into_iter().map(|r| (r, Carrier::GPS_L1, None)), false)
     }
 
     /// [`TrackingLog::from_rows`] with each row's carrier, checked as the reader
@@ -440,19 +463,31 @@ impl TrackingLog {
         source_name: &str,
         rows: impl IntoIterator<Item = (R, Carrier)>,
     ) -> Result<TrackingLog, FormatError> {
-        Self::build(source_name, rows, true)
+        Self::build(source_name, rows.into_iter().map(|(r, c)| (r, c, None)), true)
+    }
+
+    /// [`TrackingLog::from_rows_on`] with each row's NCO record
+    /// `[nco_phase_cycles, nco_freq_hz]` ([`NCO_COLUMNS`]), kept per track as
+    /// the reader keeps those columns; a non-finite value is an error naming
+    /// its column as a writer with carrier columns and the two NCO columns
+    /// writes it (columns 9 and 10).
+    pub fn from_rows_with_nco<R: Borrow<TrackingRow>>(
+        source_name: &str,
+        rows: impl IntoIterator<Item = (R, Carrier, [f64; 2])>,
+    ) -> Result<TrackingLog, FormatError> {
+        Self::build(source_name, rows.into_iter().map(|(r, c, n)| (r, c, Some(n))), true)
     }
 
     fn build<R: Borrow<TrackingRow>>(
         source_name: &str,
-        rows: impl IntoIterator<Item = (R, Carrier)>,
+        rows: impl IntoIterator<Item = (R, Carrier, Option<[f64; 2]>)>,
         carrier_columns: bool,
     ) -> Result<TrackingLog, FormatError> {
         let column = |i: usize| Column { index: i + 1, name: TRACKING_COLUMNS[i].to_owned() };
         let carrier_column = Column { index: TRACKING_COLUMNS.len() + 2, name: "carrier_hz".to_owned() };
         let mut b =
             Builder::new(source_name.to_owned(), column(0), column(1), carrier_columns.then(|| carrier_column.clone()));
-        for (i, (row, carrier)) in rows.into_iter().enumerate() {
+        for (i, (row, carrier, nco)) in rows.into_iter().enumerate() {
             let row = row.borrow();
             let line = i as u64 + 2;
             let finite = |v: f64, col: usize| {
@@ -465,6 +500,15 @@ impl TrackingLog {
                         column: column(col),
                         value: v.to_string(),
                     })
+                }
+            };
+            let nco_finite = |v: f64, k: usize| {
+                if v.is_finite() {
+                    Ok(v)
+                } else {
+                    let index = TRACKING_COLUMNS.len() + 3 + k;
+                    let column = Column { index, name: NCO_COLUMNS[k].to_owned() };
+                    Err(FormatError::NonFinite { file: source_name.to_owned(), line, column, value: v.to_string() })
                 }
             };
             let checked = Carrier::from_hz(carrier.carrier_hz).and_then(|_| match carrier.signal {
@@ -490,6 +534,10 @@ impl TrackingLog {
                 },
                 phase_err_rad: finite(row.phase_err_rad, 5)?,
                 carrier,
+                nco: match nco {
+                    Some([phase, freq]) => [Some(nco_finite(phase, 0)?), Some(nco_finite(freq, 1)?)],
+                    None => [None; 2],
+                },
             };
             b.push(&values, line)?;
         }
@@ -668,6 +716,7 @@ fn read_rows<R: Read>(
 ) -> Result<(), FormatError> {
     let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
     let mut carriers = CarrierCells::find(src)?;
+    let nco = [src.optional_column(NCO_COLUMNS[0])?, src.optional_column(NCO_COLUMNS[1])?];
     let mut stamp = StampCache::default();
     while src.next_record()? {
         src.check_field_count()?;
@@ -680,6 +729,7 @@ fn read_rows<R: Read>(
             elev_deg: src.opt_f64_at(celev)?.unwrap_or(f64::NAN),
             phase_err_rad: src.f64_at(cphase)?,
             carrier: carriers.carrier(src)?,
+            nco: [nco[0].map(|c| src.f64_at(c)).transpose()?, nco[1].map(|c| src.f64_at(c)).transpose()?],
         };
         b.push(&values, src.line())?;
         if let Some(total) = total_bytes.filter(|_| b.rows == ROWS_BEFORE_RESERVE) {
@@ -754,7 +804,9 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<T
     use rayon::prelude::*;
     let crate::plain::PlainFile { mut file, header: src, cols, data_start: start } =
         crate::plain::open_plain(path, name, &TRACKING_COLUMNS, total)?;
-    if CarrierCells::find(&src).ok()?.any() {
+    if CarrierCells::find(&src).ok()?.any()
+        || NCO_COLUMNS.iter().any(|c| src.optional_column(c).ok().flatten().is_some())
+    {
         return None;
     }
     let fields = src.header.len();
@@ -833,6 +885,7 @@ fn plain_rows(
         elev_deg: nan,
         phase_err_rad: nan,
         carrier: Carrier::GPS_L1,
+        nco: [None; 2],
     };
     let mut values = |text: &[u8]| -> Option<RowValues> {
         // In place first; a row it does not take is split and read by the rules.
@@ -869,6 +922,7 @@ fn plain_rows(
             elev_deg: cell_f64(f[celev]).ok()?.unwrap_or(f64::NAN),
             phase_err_rad: cell_f64(f[cphase]).ok()??,
             carrier: Carrier::GPS_L1,
+            nco: [None; 2],
         })
     };
     for_each_plain_line(input, first_line, |line, bytes_before, text| {
@@ -1149,6 +1203,57 @@ mod tests {
         )
         .unwrap();
         assert_eq!(log.tracks()[0].carrier, carrier_of("G1:-2"));
+    }
+
+    /// The NCO columns are kept per track, in row order, beside the rest;
+    /// a log without them has none, and a log with one has only that one.
+    #[test]
+    fn nco_columns_are_kept_per_track() {
+        let h = "nco_freq_hz,t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,nco_phase_cycles";
+        let body =
+            "1200.5,0,1,5,45,30,0.01,100.25\n-800,0,2,6,44,,0.02,-7.5\n1200.75,0.025,1,5,45,30,0.03,130.265625\n";
+        let log = read_tracking(format!("{h}\n{body}").as_bytes(), "tracking.csv").unwrap();
+        let [a, b] = log.tracks() else { panic!("two tracks") };
+        assert_eq!(
+            (a.nco_phase_cycles.as_slice(), a.nco_freq_hz.as_slice()),
+            (&[100.25, 130.265625][..], &[1200.5, 1200.75][..])
+        );
+        assert_eq!((b.nco_phase_cycles.as_slice(), b.nco_freq_hz.as_slice()), (&[-7.5][..], &[-800.0][..]));
+        let only_phase = read_tracking(
+            "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,nco_phase_cycles\n0,1,5,45,30,0.01,2.5\n".as_bytes(),
+            "tracking.csv",
+        )
+        .unwrap();
+        assert_eq!(only_phase.tracks()[0].nco_phase_cycles, [2.5]);
+        assert!(only_phase.tracks()[0].nco_freq_hz.is_empty());
+        let plain = read("0,1,5,45,30,0.01\n").unwrap();
+        assert!(plain.tracks()[0].nco_phase_cycles.is_empty() && plain.tracks()[0].nco_freq_hz.is_empty());
+    }
+
+    #[test]
+    fn empty_or_bad_nco_cells_are_errors_naming_line_and_column() {
+        let h = "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,nco_phase_cycles";
+        let m = err_raw(&format!("{h}\n0,1,5,45,30,0.01,2.5\n0,2,6,45,30,0.01,\n"));
+        assert!(m.contains("line 3, column 7 (`nco_phase_cycles`)"), "{m}");
+        let m = err_raw(&format!("{h}\n0,1,5,45,30,0.01,inf\n"));
+        assert!(m.contains("line 2, column 7 (`nco_phase_cycles`)"), "{m}");
+    }
+
+    /// A file with NCO columns is read by the `csv` path (the fast path
+    /// declines it), with the same result.
+    #[test]
+    fn a_file_with_nco_columns_reads_the_same_from_a_file() {
+        let dir = std::env::temp_dir().join(format!("gsens-io-nco-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("tracking.csv");
+        let text =
+            "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad,nco_phase_cycles,nco_freq_hz\n0,1,5,45,30,0.01,2.5,10\n";
+        std::fs::write(&path, text).unwrap();
+        assert!(read_tracking_file_plain(&path).is_none());
+        let from_file = read_tracking_file(&path).unwrap();
+        assert_eq!(from_file.tracks(), read_tracking(text.as_bytes(), "tracking.csv").unwrap().tracks());
+        assert_eq!(from_file.tracks()[0].nco_freq_hz, [10.0]);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

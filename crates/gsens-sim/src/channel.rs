@@ -202,6 +202,12 @@ pub struct LogSnapshot {
     pub locked: bool,
     /// The receiver's C/N0 estimate \[dB-Hz\].
     pub cn0_est_dbhz: f64,
+    /// The replica's accumulated phase commanded by the NCO at the end of
+    /// the latest integration \[cycles\] (what the receiver knows: without
+    /// the oscillator's bias).
+    pub nco_phase_cycles: f64,
+    /// The NCO frequency commanded during the latest integration \[Hz\].
+    pub nco_freq_hz: f64,
 }
 
 /// Counters of a channel's history.
@@ -224,6 +230,11 @@ pub struct Channel {
     carrier: CarrierLoop,
     disc: Discriminator,
     pi_t: f64,
+    interval_s: f64,
+    /// The NCO's commanded phase at the end of the latest integration \[cycles\].
+    nco_phase_cycles: f64,
+    /// The NCO's commanded frequency during the latest integration \[Hz\].
+    nco_used_hz: f64,
     /// True phase error at the start of the current integration \[rad\], unwrapped.
     err_start_rad: f64,
     noise_sigma: f64,
@@ -378,6 +389,9 @@ impl Channel {
             carrier,
             disc: cfg.discriminator,
             pi_t: PI * cfg.interval_s,
+            interval_s: cfg.interval_s,
+            nco_phase_cycles: 0.0,
+            nco_used_hz: 0.0,
             err_start_rad: start.initial_phase_err_rad,
             noise_sigma: noise_sigma(start.cn0_dbhz, cfg.interval_s),
             cn0_true_dbhz: start.cn0_dbhz,
@@ -475,7 +489,11 @@ impl Channel {
     #[inline]
     pub fn step(&mut self, signal_freq_hz: f64, nco_bias_hz: f64) -> Integration {
         // Half the phase-error ramp over the interval: δ = πT(f_sig − f_nco − Δf).
-        let delta = self.pi_t * (signal_freq_hz - self.carrier.nco_freq_hz() - nco_bias_hz);
+        let nco_hz = self.carrier.nco_freq_hz();
+        let delta = self.pi_t * (signal_freq_hz - nco_hz - nco_bias_hz);
+        // The receiver's own record of its replica: the commanded frequency, without the oscillator's bias.
+        self.nco_phase_cycles += nco_hz * self.interval_s;
+        self.nco_used_hz = nco_hz;
         let phi_mid = self.err_start_rad + delta;
         self.err_start_rad = phi_mid + delta;
         // The noise is drawn in the frame of the mean signal phasor (complex
@@ -589,6 +607,8 @@ impl Channel {
             count: self.log_count,
             locked: self.locked,
             cn0_est_dbhz: self.cn0_est_dbhz,
+            nco_phase_cycles: self.nco_phase_cycles,
+            nco_freq_hz: self.nco_used_hz,
         };
         self.disc_sum = 0.0;
         self.true_sum = 0.0;
@@ -627,6 +647,38 @@ mod tests {
         }
         assert_eq!(ch.stats().cycle_slips, 0);
         assert!(ch.locked());
+    }
+
+    /// The NCO's record and the true phase error give the phase the loop was
+    /// fed, loop or no loop: 2π(c − f·T/2) + φ at an integration's centre is
+    /// the signal's phase minus 2π∫Δf (θ_in = θ_NCO + φ).
+    #[test]
+    fn nco_phase_plus_phase_error_is_the_input_phase() {
+        let cfg = cfg();
+        let t = cfg.interval_s;
+        let start = ChannelStart {
+            cn0_dbhz: f64::INFINITY,
+            preload_freq_hz: 480.0,
+            preload_rate_hz_per_s: 0.0,
+            initial_phase_err_rad: 0.3,
+            bit_offset: 0,
+        };
+        let mut ch = Channel::new(&cfg, &start, crate::rng::substream(3, 1));
+        let f_signal_hz = 500.0;
+        let bias_hz = |k: usize| 0.4 * (k as f64 * 0.0113).sin();
+        let mut bias_sum = 0.0;
+        for k in 0..3000 {
+            let b = bias_hz(k);
+            let out = ch.step(f_signal_hz, b);
+            let snap = ch.take_log();
+            let n = (k + 1) as f64;
+            // The true input phase at this integration's centre.
+            let theta_in = 0.3 + core::f64::consts::TAU * (f_signal_hz * (n - 0.5) * t - (bias_sum + 0.5 * b) * t);
+            bias_sum += b;
+            let from_log =
+                core::f64::consts::TAU * (snap.nco_phase_cycles - snap.nco_freq_hz * t / 2.0) + out.true_phase_err_rad;
+            assert!((from_log - theta_in).abs() < 1e-9 * theta_in.abs().max(1.0), "{k}: {from_log} vs {theta_in}");
+        }
     }
 
     #[test]

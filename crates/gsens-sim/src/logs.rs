@@ -185,6 +185,8 @@ struct FileSink {
     /// signals); without, every row is on the oscillator's carrier, which the
     /// estimate is told (`carrier_hz`), as the file's rows carry no carrier.
     carrier_columns: bool,
+    /// Whether `tracking.csv` has the NCO columns (`log.nco`).
+    nco_columns: bool,
 }
 
 impl SessionSink for FileSink {
@@ -192,10 +194,12 @@ impl SessionSink for FileSink {
         Ok(self.imu.write_sample(t_s, &f_mps2)?)
     }
     fn tracking(&mut self, row: &SimulatedRow) -> Result<(), SinkError> {
+        let nco = [row.nco_phase_cycles, row.nco_freq_hz];
+        let extra: &[f64] = if self.nco_columns { &nco } else { &[] };
         if self.carrier_columns {
-            Ok(self.tracking.write_row_on(&row.tracking_row(), &row.carrier, &[])?)
+            Ok(self.tracking.write_row_on(&row.tracking_row(), &row.carrier, extra)?)
         } else {
-            Ok(self.tracking.write_row(&row.tracking_row())?)
+            Ok(self.tracking.write_row_with(&row.tracking_row(), extra)?)
         }
     }
 }
@@ -219,16 +223,19 @@ pub fn simulate_to_dir(
     };
     let (imu, tracking) = (create("imu.csv")?, create("tracking.csv")?);
     let carrier_columns = !scenario.satellites.signals.is_empty();
+    let nco_columns = scenario.log.nco;
+    let extra: &[&str] = if nco_columns { &gsens_io::NCO_COLUMNS } else { &[] };
     let mut sink = FileSink {
         imu: ImuWriter::new(imu).map_err(io(&dir.join("imu.csv")))?,
         // Carrier columns only for channels on named signals (the default's file is as it was).
         tracking: if carrier_columns {
-            TrackingWriter::with_carriers(tracking, &[])
+            TrackingWriter::with_carriers(tracking, extra)
         } else {
-            TrackingWriter::new(tracking)
+            TrackingWriter::with_extra_columns(tracking, extra)
         }
         .map_err(io(&dir.join("tracking.csv")))?,
         carrier_columns,
+        nco_columns,
     };
     let truth = simulate(scenario, seed, &mut sink, progress)?;
     sink.imu.finish().map_err(io(&dir.join("imu.csv")))?;
@@ -257,7 +264,14 @@ pub fn simulate_logs(scenario: &Scenario, seed: u64) -> Result<SimulatedLogs, Lo
     let mut sink = MemorySink::default();
     let truth = simulate(scenario, seed, &mut sink, |_| {})?;
     let name = format!("simulated tracking (seed {seed})");
-    let tracking = if scenario.satellites.signals.is_empty() {
+    let tracking = if scenario.log.nco {
+        // Without named signals the rows are on the oscillator's carrier, read as L1 (as the file is).
+        let named = !scenario.satellites.signals.is_empty();
+        let carrier = |r: &SimulatedRow| if named { r.carrier } else { gsens_io::Carrier::GPS_L1 };
+        let rows: Vec<_> = sink.tracking.iter().map(|r| (r.tracking_row(), carrier(r))).collect();
+        let nco = sink.tracking.iter().map(|r| [r.nco_phase_cycles, r.nco_freq_hz]);
+        TrackingLog::from_rows_with_nco(&name, rows.iter().zip(nco).map(|((r, c), n)| (r, *c, n)))?
+    } else if scenario.satellites.signals.is_empty() {
         let rows: Vec<gsens_io::TrackingRow> = sink.tracking.iter().map(SimulatedRow::tracking_row).collect();
         TrackingLog::from_rows(&name, &rows)?
     } else {

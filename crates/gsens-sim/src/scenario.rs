@@ -345,11 +345,21 @@ pub struct LogSection {
     /// Leave out rows of channels whose lock indicator reads unlocked (as
     /// receivers do); the rows always carry the lock state for callers.
     pub drop_unlocked: bool,
+    /// Log where each loop put its replica: the columns `nco_phase_cycles`
+    /// (at the end of the latest integration) and `nco_freq_hz` (commanded
+    /// during it) of `tracking.csv`.
+    pub nco: bool,
 }
 
 impl Default for LogSection {
     fn default() -> Self {
-        LogSection { interval_s: 0.025, phase: LoggedPhase::Mean, cn0: Cn0Logged::Estimated, drop_unlocked: true }
+        LogSection {
+            interval_s: 0.025,
+            phase: LoggedPhase::Mean,
+            cn0: Cn0Logged::Estimated,
+            drop_unlocked: true,
+            nco: false,
+        }
     }
 }
 

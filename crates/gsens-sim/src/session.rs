@@ -97,6 +97,14 @@ pub struct SimulatedRow {
     pub true_phase_err_rad: f64,
     /// Truth: the channel's true C/N0 \[dB-Hz\].
     pub true_cn0_dbhz: f64,
+    /// The replica's accumulated phase the NCO was commanded, at the end of
+    /// the latest integration \[cycles\]: `nco_phase_cycles` of
+    /// `tracking.csv` (what the receiver knows of its replica; the
+    /// oscillator's bias is not in it).
+    pub nco_phase_cycles: f64,
+    /// The NCO frequency commanded during the latest integration \[Hz\]:
+    /// `nco_freq_hz` of `tracking.csv`.
+    pub nco_freq_hz: f64,
     /// The carrier the channel tracks (`satellites.signals`; unnamed
     /// `oscillator.carrier_hz` without it).
     #[serde(skip)]
@@ -582,6 +590,8 @@ impl<'a> Receiver<'a> {
                 locked: snap.locked,
                 true_phase_err_rad: truth,
                 true_cn0_dbhz: tr.ch.cn0_true_dbhz(),
+                nco_phase_cycles: snap.nco_phase_cycles,
+                nco_freq_hz: snap.nco_freq_hz,
                 carrier: tr.carrier,
             };
             sink.tracking(&row).map_err(SimError::Sink)?;
