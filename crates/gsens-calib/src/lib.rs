@@ -60,6 +60,7 @@ mod estimate;
 mod fft;
 pub mod gls;
 mod joint;
+mod loop_free;
 pub mod option_values;
 mod options;
 mod pipeline;
@@ -86,6 +87,7 @@ pub use joint::{
     ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,
     joint_fit,
 };
+pub use loop_free::{LoopFreeError, LoopFreeEstimate, LoopFreeSettings, estimate_loop_free};
 pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
 pub use pipeline::{
     DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
