@@ -181,6 +181,11 @@ pub struct Imported {
     /// The kept rows, by time then channel.
     #[serde(skip)]
     pub rows: Vec<TrackingRow>,
+    /// Each row's NCO record `[nco_phase_cycles, nco_freq_hz]`: `adr` and
+    /// `dop` of its line (`adr` at the end of the line's block, `dop` the
+    /// Doppler it was mixed with).
+    #[serde(skip)]
+    pub nco: Vec<[f64; 2]>,
     /// Every GPS L1 C/A track.
     pub tracks: Vec<TrackSummary>,
     /// The log interval (`epoch`) and where it comes from.
@@ -243,7 +248,7 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
     for r in &l1 {
         tracker.take(r, &mut garbled);
     }
-    let (tracks, rows) = tracker.finish();
+    let (tracks, rows, nco) = tracker.finish();
     if rows.is_empty() {
         let why = tracks.iter().map(|s| format!("ch {} PRN {}: {}", s.channel, s.prn, s.reason)).collect::<Vec<_>>();
         return Err(PocketSdrError::NoTracks { file, settle_s, why: why.join("; ") });
@@ -253,6 +258,7 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
         version,
         fs_hz,
         rows,
+        nco,
         tracks,
         epoch,
         stage,
@@ -403,6 +409,17 @@ impl Conversion {
             phase_err_rad: core::f64::consts::TAU * r.err_phas_cyc,
         }
     }
+
+    /// The NCO record of line `r`: `[adr, dop]`. `pocket_trk` advances
+    /// `adr` by `dop`·T as it processes a block, so the line's `adr` is at the
+    /// end of its block and `dop` the Doppler the block was mixed with; the
+    /// replica's phase is 2π(f_IF·t + `adr`), the IF's ramp the same on every
+    /// channel (taken out with each satellite's Doppler). The sign is the
+    /// tracking log's: φ = θ_signal − θ_replica (the module documentation,
+    /// "Phase and sign").
+    fn nco(r: &ChRecord) -> [f64; 2] {
+        [r.adr_cyc, r.dop_hz]
+    }
 }
 
 /// A track being followed: its summary so far and what the next line must continue.
@@ -420,7 +437,7 @@ struct Tracker {
     /// The track each channel is on.
     open: BTreeMap<u32, Open>,
     done: Vec<TrackSummary>,
-    rows: Vec<TrackingRow>,
+    rows: Vec<(TrackingRow, [f64; 2])>,
 }
 
 impl Tracker {
@@ -471,7 +488,7 @@ impl Tracker {
         o.cn0_sum += r.cn0_dbhz;
         if self.conversion.keeps(r.lock_s) {
             o.summary.kept += 1;
-            self.rows.push(self.conversion.row(r, t));
+            self.rows.push((self.conversion.row(r, t), Conversion::nco(r)));
         }
     }
 
@@ -497,14 +514,15 @@ impl Tracker {
     }
 
     /// Ends the tracks still open; every track by its first line, the rows by time then channel.
-    fn finish(mut self) -> (Vec<TrackSummary>, Vec<TrackingRow>) {
+    fn finish(mut self) -> (Vec<TrackSummary>, Vec<TrackingRow>, Vec<[f64; 2]>) {
         for (_, o) in std::mem::take(&mut self.open) {
             self.close(o, "tracked to the end of the log");
         }
         let (mut done, mut rows) = (self.done, self.rows);
         done.sort_by(|a, b| (a.lines[0]).cmp(&b.lines[0]));
-        rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
-        (done, rows)
+        rows.sort_by(|(a, _), (b, _)| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
+        let (rows, nco) = rows.into_iter().unzip();
+        (done, rows, nco)
     }
 }
 

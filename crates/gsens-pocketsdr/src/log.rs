@@ -39,6 +39,9 @@ pub struct ChRecord {
     pub cn0_dbhz: f64,
     /// `dop`: the NCO's Doppler frequency \[Hz\].
     pub dop_hz: f64,
+    /// `adr`: the accumulated Doppler range, ∫`dop` dt \[cycles\]: the
+    /// replica's phase less the IF's.
+    pub adr_cyc: f64,
     /// `err_phas`: the discriminator output of the block \[cycles\].
     pub err_phas_cyc: f64,
     /// `nlol`: the channel's losses of lock so far (`None` in logs without it).
@@ -249,6 +252,7 @@ fn parse_ch(l: &str, line: u64, ch_fields: usize) -> Result<ChRecord, Garbled> {
         lock_s,
         cn0_dbhz: num(8)?,
         dop_hz: num(10)?,
+        adr_cyc: num(11)?,
         err_phas_cyc,
         nlol: if f.len() > 25 { Some(int(25)?) } else { None },
     })

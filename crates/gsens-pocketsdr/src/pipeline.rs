@@ -27,6 +27,15 @@ pub fn pocketsdr_tracking_log(imported: &Imported) -> Result<TrackingLog, Format
     TrackingLog::from_rows(&name, &imported.rows)
 }
 
+/// [`pocketsdr_tracking_log`] with each row's NCO record (`adr` as
+/// `nco_phase_cycles`, `dop` as `nco_freq_hz`), for the loop-free estimate
+/// ([`gsens_calib::estimate_loop_free`]; every row on GPS L1 C/A).
+pub fn pocketsdr_tracking_log_with_nco(imported: &Imported) -> Result<TrackingLog, FormatError> {
+    let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, Decimal(imported.interval_s()));
+    let rows = imported.rows.iter().zip(&imported.nco).map(|(r, n)| (r, gsens_io::Carrier::GPS_L1, *n));
+    TrackingLog::from_rows_with_nco(&name, rows)
+}
+
 impl Imported {
     /// The result document's record of this conversion (receiver
     /// `pocketsdr`): the conversion as [`Imported`] serializes it, its tracks

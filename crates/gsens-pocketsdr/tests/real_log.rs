@@ -262,3 +262,36 @@ fn calibrates_within_its_uncertainty() {
     let check = r.outcome.loop_response.as_ref().unwrap();
     assert!(check.consistent, "{check:?}");
 }
+
+/// The loop-free estimate from the same log: `adr` (the NCO's accumulated
+/// phase) plus `err_phas` is the phase each loop was fed, so Γ follows with
+/// no loop model (only T = 1 ms and single-block rows). Every axis within 3σ
+/// of the truth, and within 3 joint σ of the closed-loop estimate with
+/// PocketSDR's exact loop.
+#[test]
+fn the_loop_free_estimate_agrees_with_the_truth_and_the_closed_loop() {
+    let f = fixtures();
+    let imported = gsens_pocketsdr::import_file(&f.join("trk.log"), &settings()).unwrap();
+    let tracking = gsens_pocketsdr::pocketsdr_tracking_log_with_nco(&imported).unwrap();
+    assert!(tracking.tracks().iter().all(|t| t.nco_phase_cycles.len() == t.len() && t.nco_freq_hz.len() == t.len()));
+    let imu = gsens_io::read_imu_file(f.join("imu.csv")).unwrap();
+    let settings = gsens_calib::LoopFreeSettings::new(1e-3, gsens_core::LoggedPhase::Last);
+    let free = gsens_calib::estimate_loop_free(&tracking, &imu, &settings).unwrap();
+    let closed = gsens_pocketsdr::calibrate_pocketsdr(
+        &f.join("trk.log"),
+        &self::settings(),
+        &f.join("imu.csv"),
+        &gsens_calib::PipelineSettings::default(),
+    )
+    .unwrap();
+    let truth = json("truth.json");
+    let c = &closed.outcome.calibration;
+    for i in 0..3 {
+        let t = truth["gamma_imu_axes_hz_per_mps2"][i].as_f64().unwrap();
+        let (g, s) = (free.gamma_hz_per_mps2[i], free.sigma_hz_per_mps2()[i]);
+        let (gc, sc) = (c.gamma_hz_per_mps2[i].unwrap(), c.sigma_hz_per_mps2[i].unwrap());
+        eprintln!("axis {i}: loop-free {g} ± {s}, closed loop {gc} ± {sc}, truth {t}");
+        assert!((g - t).abs() < 3.0 * s, "axis {i}: {g} ± {s} vs {t}");
+        assert!((g - gc).abs() < 3.0 * s.hypot(sc), "axis {i}: {g} ± {s} vs closed loop {gc} ± {sc}");
+    }
+}
