@@ -237,19 +237,24 @@ fn empty_foreign_and_mismatched_inputs_are_errors_naming_the_file() {
     assert!(e.starts_with("short.log: no GPS L1 C/A track is left"), "{e}");
 }
 
-/// The estimate from the fixture with PocketSDR's exact loop: every axis
-/// within 3σ of the truth, the stated loop passes its test and the measured
-/// response fits the model.
-#[test]
-fn calibrates_within_its_uncertainty() {
+/// The fixture calibrated with PocketSDR's exact loop and default settings.
+fn closed_loop() -> gsens_pocketsdr::PocketSdrOutcome {
     let f = fixtures();
-    let r = gsens_pocketsdr::calibrate_pocketsdr(
+    gsens_pocketsdr::calibrate_pocketsdr(
         &f.join("trk.log"),
         &settings(),
         &f.join("imu.csv"),
         &gsens_calib::PipelineSettings::default(),
     )
-    .unwrap();
+    .unwrap()
+}
+
+/// The estimate from the fixture with PocketSDR's exact loop: every axis
+/// within 3σ of the truth, the stated loop passes its test and the measured
+/// response fits the model.
+#[test]
+fn calibrates_within_its_uncertainty() {
+    let r = closed_loop();
     let truth = json("truth.json");
     let c = &r.outcome.calibration;
     for i in 0..3 {
@@ -277,13 +282,7 @@ fn the_loop_free_estimate_agrees_with_the_truth_and_the_closed_loop() {
     let imu = gsens_io::read_imu_file(f.join("imu.csv")).unwrap();
     let settings = gsens_calib::LoopFreeSettings::new(1e-3, gsens_core::LoggedPhase::Last);
     let free = gsens_calib::estimate_loop_free(&tracking, &imu, &settings).unwrap();
-    let closed = gsens_pocketsdr::calibrate_pocketsdr(
-        &f.join("trk.log"),
-        &self::settings(),
-        &f.join("imu.csv"),
-        &gsens_calib::PipelineSettings::default(),
-    )
-    .unwrap();
+    let closed = closed_loop();
     let truth = json("truth.json");
     let c = &closed.outcome.calibration;
     for i in 0..3 {
