@@ -46,6 +46,7 @@
 use crate::gls::{GlsSettings, gls};
 use gsens_core::LoggedPhase;
 use gsens_io::{ImuSeries, TrackingLog};
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::ops::Range;
 
@@ -57,8 +58,10 @@ pub struct LoopFreeSettings {
     pub loop_interval_s: f64,
     /// What a row holds when the loop runs faster than the log.
     pub logged_phase: LoggedPhase,
-    /// IMU time stamp minus true time τ \[s\] (docs/conventions.md, "Signs").
-    pub imu_time_offset_s: f64,
+    /// The IMU time offset τ (IMU time stamp minus true time, docs/conventions.md,
+    /// "Signs"): given, or searched within ±`max_abs_s` for the least squares
+    /// fit (with no loop to confound it with, the only nuisance fitted).
+    pub time_offset: crate::TimeOffset,
     /// Length of the segments over which each satellite's phase is
     /// detrended by a cubic \[s\] (a log shorter than this is one segment).
     pub segment_s: f64,
@@ -81,14 +84,14 @@ impl LoopFreeSettings {
     pub const DEFAULT_SEGMENT_S: f64 = 30.0;
 
     /// Settings for a loop updated every `loop_interval_s` with rows holding
-    /// `logged_phase`, no IMU time offset, the default segments, the
+    /// `logged_phase`, an IMU time offset of 0, the default segments, the
     /// calibration's default warm-up (2 s), a limit of π/4 on |φ| and its
     /// default channels (the 4 of highest mean C/N0).
     pub fn new(loop_interval_s: f64, logged_phase: LoggedPhase) -> Self {
         LoopFreeSettings {
             loop_interval_s,
             logged_phase,
-            imu_time_offset_s: 0.0,
+            time_offset: crate::TimeOffset::Fixed { imu_time_offset_s: 0.0 },
             segment_s: Self::DEFAULT_SEGMENT_S,
             warmup_s: crate::defaults::DEFAULT_WARMUP_S,
             max_abs_phase_rad: core::f64::consts::FRAC_PI_4,
@@ -114,6 +117,10 @@ pub struct LoopFreeEstimate {
     pub tracks: usize,
     /// Segments that entered the fit.
     pub segments: usize,
+    /// The IMU time offset used \[s\]: the given one, or the search's.
+    pub imu_time_offset_s: f64,
+    /// Whether the offset was searched.
+    pub time_offset_searched: bool,
 }
 
 impl LoopFreeEstimate {
@@ -184,70 +191,32 @@ pub fn estimate_loop_free(
         tracks.sort_by(|a, b| b.mean_cn0_dbhz().total_cmp(&a.mean_cn0_dbhz()));
         tracks.truncate(settings.channels);
     }
-    let integral = ForceIntegral::new(imu);
-    let window = |k: usize| -> Vec<f64> {
-        let last = epochs[k] + settings.imu_time_offset_s;
-        let n = if settings.logged_phase == LoggedPhase::Mean { substeps } else { 1 };
-        (0..n).map(|j| last - j as f64 * settings.loop_interval_s).collect()
+    let n_window = if settings.logged_phase == LoggedPhase::Mean { substeps } else { 1 };
+    let regressor =
+        Regressor { integral: ForceIntegral::new(imu), epochs, n_window, loop_interval_s: settings.loop_interval_s };
+    let (offsets, searched) = match settings.time_offset {
+        crate::TimeOffset::Fixed { imu_time_offset_s } => ([imu_time_offset_s; 2], false),
+        crate::TimeOffset::Auto { max_abs_s } => ([-max_abs_s, max_abs_s], true),
     };
-    // An epoch is usable when the IMU covers every instant its regressor reads.
+    // An epoch is usable when the IMU covers every instant its regressor reads at every offset tried.
     let usable: Vec<bool> = (0..epochs.len())
-        .map(|k| epochs[k] >= epochs[0] + settings.warmup_s && window(k).iter().all(|&t| integral.covers(t)))
+        .map(|k| epochs[k] >= epochs[0] + settings.warmup_s && offsets.iter().all(|&tau| regressor.covers(k, tau)))
         .collect();
     let inputs: Vec<(Vec<Option<f64>>, f64)> = tracks
         .iter()
         .map(|tr| (input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings), tr.carrier.scale_to_l1()))
         .collect();
-
-    let mut phase = Vec::new();
-    let mut regressor: Vec<[f64; 3]> = Vec::new();
-    let mut ranges: Vec<Range<usize>> = Vec::new();
-    let mut tracks_used = vec![false; tracks.len()];
-    let first = usable.iter().position(|&u| u).unwrap_or(epochs.len());
-    for seg in segments(&epochs[first..], settings.segment_s) {
-        let seg = seg.start + first..seg.end + first;
-        let at: Vec<usize> = seg.filter(|&k| usable[k]).collect();
-        if at.len() < 10 {
-            continue;
-        }
-        let basis = Cubic::on(&at.iter().map(|&k| epochs[k]).collect::<Vec<_>>());
-        let mut sum = vec![0.0; at.len()];
-        let mut count = 0usize;
-        for (i, (theta, scale)) in inputs.iter().enumerate() {
-            let Some(values) = at.iter().map(|&k| theta[k].map(|v| v * scale)).collect::<Option<Vec<f64>>>() else {
-                continue;
-            };
-            for (s, v) in sum.iter_mut().zip(basis.residual(&values)) {
-                *s += v;
-            }
-            count += 1;
-            tracks_used[i] = true;
-        }
-        if count == 0 {
-            continue;
-        }
-        let columns: [Vec<f64>; 3] = [0, 1, 2].map(|axis| {
-            let rho: Vec<f64> = at
-                .iter()
-                .map(|&k| {
-                    let w = window(k);
-                    -TAU * w.iter().map(|&t| integral.at(t)[axis]).sum::<f64>() / w.len() as f64
-                })
-                .collect();
-            basis.residual(&rho)
-        });
-        let start = phase.len();
-        phase.extend(sum.iter().map(|s| s / count as f64));
-        regressor.extend((0..at.len()).map(|j| [columns[0][j], columns[1][j], columns[2][j]]));
-        ranges.push(start..phase.len());
+    let m = Measurement::assemble(epochs, &usable, &inputs, settings.segment_s);
+    let too_few = || LoopFreeError::TooFewEpochs { epochs: m.phase.len(), segment_s: settings.segment_s };
+    if m.phase.len() < 10 {
+        return Err(too_few());
     }
-    let too_few = LoopFreeError::TooFewEpochs { epochs: phase.len(), segment_s: settings.segment_s };
-    if phase.len() < 10 {
-        return Err(too_few);
-    }
+    let tau = if searched { m.search_offset(&regressor, offsets, log_interval_s) } else { offsets[0] };
+    let x = m.regressors(&regressor, tau);
+    let ranges = m.ranges();
     let lag = (2.5 / log_interval_s).ceil() as usize;
-    let fit = gls(&phase, &regressor, &ranges, &GlsSettings { hac_max_lag: Some(lag), ..GlsSettings::default() })
-        .ok_or(too_few)?;
+    let fit = gls(&m.phase, &x, &ranges, &GlsSettings { hac_max_lag: Some(lag), ..GlsSettings::default() })
+        .ok_or_else(too_few)?;
     let crlb = fit.estimate.covariance;
     let covariance = match fit.robust_covariance {
         Some(robust) if (0..3).map(|i| robust[i][i]).sum::<f64>() > (0..3).map(|i| crlb[i][i]).sum::<f64>() => robust,
@@ -257,10 +226,141 @@ pub fn estimate_loop_free(
         gamma_hz_per_mps2: fit.estimate.gamma_hz_per_mps2,
         covariance,
         crlb_hz_per_mps2: fit.crlb_hz_per_mps2(),
-        epochs: phase.len(),
-        tracks: tracks_used.iter().filter(|&&u| u).count(),
+        epochs: m.phase.len(),
+        tracks: m.tracks_used.iter().filter(|&&u| u).count(),
         segments: ranges.len(),
+        imu_time_offset_s: tau,
+        time_offset_searched: searched,
     })
+}
+
+/// The regressor ρ = −2π∫a dt read at an epoch's integration centres (one,
+/// or the n of a `mean` row) on the IMU's clock, offset by τ.
+struct Regressor<'a> {
+    integral: ForceIntegral<'a>,
+    epochs: &'a [f64],
+    n_window: usize,
+    loop_interval_s: f64,
+}
+
+impl Regressor<'_> {
+    fn instants(&self, k: usize, tau: f64) -> impl Iterator<Item = f64> + '_ {
+        let last = self.epochs[k] + tau;
+        (0..self.n_window).map(move |j| last - j as f64 * self.loop_interval_s)
+    }
+
+    fn covers(&self, k: usize, tau: f64) -> bool {
+        self.instants(k, tau).all(|t| self.integral.covers(t))
+    }
+
+    fn at(&self, k: usize, tau: f64) -> [f64; 3] {
+        let mut sum = [0.0; 3];
+        for t in self.instants(k, tau) {
+            let v = self.integral.at(t);
+            (0..3).for_each(|i| sum[i] += v[i]);
+        }
+        sum.map(|v| -TAU * v / self.n_window as f64)
+    }
+}
+
+/// The channel-averaged, detrended input phase and the segments it is on.
+struct Measurement {
+    phase: Vec<f64>,
+    /// Each segment's epochs and its cubics.
+    segments: Vec<(Vec<usize>, Cubic)>,
+    tracks_used: Vec<bool>,
+}
+
+impl Measurement {
+    /// Each track's θ_in (`inputs`: per track the values on the epochs and
+    /// the scale to L1) detrended per segment and averaged over the tracks
+    /// that cover the segment's usable epochs.
+    fn assemble(epochs: &[f64], usable: &[bool], inputs: &[(Vec<Option<f64>>, f64)], segment_s: f64) -> Self {
+        let mut m = Measurement { phase: Vec::new(), segments: Vec::new(), tracks_used: vec![false; inputs.len()] };
+        let first = usable.iter().position(|&u| u).unwrap_or(epochs.len());
+        for seg in segments(&epochs[first..], segment_s) {
+            let at: Vec<usize> = (seg.start + first..seg.end + first).filter(|&k| usable[k]).collect();
+            if at.len() < 10 {
+                continue;
+            }
+            let basis = Cubic::on(&at.iter().map(|&k| epochs[k]).collect::<Vec<_>>());
+            let mut sum = vec![0.0; at.len()];
+            let mut count = 0usize;
+            for (i, (theta, scale)) in inputs.iter().enumerate() {
+                let Some(values) = at.iter().map(|&k| theta[k].map(|v| v * scale)).collect::<Option<Vec<f64>>>() else {
+                    continue;
+                };
+                sum.iter_mut().zip(basis.residual(&values)).for_each(|(s, v)| *s += v);
+                count += 1;
+                m.tracks_used[i] = true;
+            }
+            if count > 0 {
+                m.phase.extend(sum.iter().map(|s| s / count as f64));
+                m.segments.push((at, basis));
+            }
+        }
+        m
+    }
+
+    fn ranges(&self) -> Vec<Range<usize>> {
+        let mut start = 0;
+        self.segments
+            .iter()
+            .map(|(at, _)| {
+                start += at.len();
+                start - at.len()..start
+            })
+            .collect()
+    }
+
+    /// The regressors at offset `tau`, detrended on the same segments.
+    fn regressors(&self, regressor: &Regressor, tau: f64) -> Vec<[f64; 3]> {
+        let mut out = Vec::with_capacity(self.phase.len());
+        for (at, basis) in &self.segments {
+            let raw: Vec<[f64; 3]> = at.iter().map(|&k| regressor.at(k, tau)).collect();
+            let columns: [Vec<f64>; 3] =
+                [0, 1, 2].map(|i| basis.residual(&raw.iter().map(|r| r[i]).collect::<Vec<_>>()));
+            out.extend((0..at.len()).map(|j| [columns[0][j], columns[1][j], columns[2][j]]));
+        }
+        out
+    }
+
+    /// The least-squares residual variance at offset `tau`.
+    fn residual_variance(&self, regressor: &Regressor, tau: f64) -> f64 {
+        let mut ne = gsens_core::NormalEquations::default();
+        for (row, y) in self.regressors(regressor, tau).iter().zip(&self.phase) {
+            ne.add(*y, row);
+        }
+        ne.solve().residual_variance_rad2
+    }
+
+    /// The offset within `range` of least residual: a grid half the log
+    /// interval apart, then golden-section refinement between the best
+    /// point's neighbours to a thousandth of the log interval (the residual
+    /// is smooth in τ: a shaking period spans tens of grid steps).
+    fn search_offset(&self, regressor: &Regressor, range: [f64; 2], log_interval_s: f64) -> f64 {
+        let n = ((range[1] - range[0]) / (log_interval_s / 2.0)).ceil().max(1.0) as usize;
+        let grid: Vec<f64> = (0..=n).map(|j| range[0] + (range[1] - range[0]) * j as f64 / n as f64).collect();
+        let cost = |tau: f64| self.residual_variance(regressor, tau);
+        let values: Vec<f64> = grid.par_iter().map(|&tau| cost(tau)).collect();
+        let best = (0..grid.len()).min_by(|&a, &b| values[a].total_cmp(&values[b])).unwrap_or(0);
+        let (mut lo, mut hi) = (grid[best.saturating_sub(1)], grid[(best + 1).min(n)]);
+        let golden = (5f64.sqrt() - 1.0) / 2.0;
+        let (mut a, mut b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
+        let (mut fa, mut fb) = (cost(a), cost(b));
+        while hi - lo > 1e-3 * log_interval_s {
+            if fa < fb {
+                (hi, b, fb) = (b, a, fa);
+                a = hi - golden * (hi - lo);
+                fa = cost(a);
+            } else {
+                (lo, a, fa) = (a, b, fb);
+                b = lo + golden * (hi - lo);
+                fb = cost(b);
+            }
+        }
+        (lo + hi) / 2.0
+    }
 }
 
 fn check_settings(s: &LoopFreeSettings) -> Result<(), LoopFreeError> {
@@ -277,12 +377,22 @@ fn check_settings(s: &LoopFreeSettings) -> Result<(), LoopFreeError> {
     if !(s.warmup_s >= 0.0 && s.warmup_s.is_finite()) {
         return Err(LoopFreeError::Setting { name: "warmup_s", value: s.warmup_s, expected: "finite and ≥ 0" });
     }
-    if !s.imu_time_offset_s.is_finite() {
-        return Err(LoopFreeError::Setting {
-            name: "imu_time_offset_s",
-            value: s.imu_time_offset_s,
-            expected: "finite",
-        });
+    match s.time_offset {
+        crate::TimeOffset::Fixed { imu_time_offset_s } if !imu_time_offset_s.is_finite() => {
+            return Err(LoopFreeError::Setting {
+                name: "imu_time_offset_s",
+                value: imu_time_offset_s,
+                expected: "finite",
+            });
+        }
+        crate::TimeOffset::Auto { max_abs_s } if !(max_abs_s >= 0.0 && max_abs_s.is_finite()) => {
+            return Err(LoopFreeError::Setting {
+                name: "time_offset.max_abs_s",
+                value: max_abs_s,
+                expected: "finite and ≥ 0",
+            });
+        }
+        _ => {}
     }
     Ok(())
 }
