@@ -27,7 +27,8 @@
 //! over each segment. Over 30 s the cubic leaves ~10⁻⁴ rad of a satellite's
 //! Doppler, and takes 0.2 % of the energy of a 1 Hz shaking signal (0.8 % at
 //! 0.5 Hz): information lost, not a bias, as both sides lose it. A channel
-//! enters a segment only where it has a row at every epoch of it, so that the
+//! enters a segment where it has a row at nearly every epoch of it, and the
+//! segment keeps the epochs where every channel in it has one, so that the
 //! channels averaged are the same throughout the segment and the average of
 //! the projections is the projection of the average.
 //!
@@ -35,6 +36,11 @@
 //! are left out, and so is a channel's segment where a row's |φ| exceeds
 //! [`LoopFreeSettings::max_abs_phase_rad`]: near the discriminator's wrap
 //! θ_in may be off by a half cycle, a step no detrending removes.
+//!
+//! A cycle slip leaves the NCO's phase a half cycle off for good: a channel
+//! whose detrended θ_in, less the others' mean, steps by half a slip or more
+//! between the means of a second of rows before and after any row is left
+//! out of that segment (counted in [`LoopFreeEstimate::slipped_segments`]).
 //!
 //! The channel average (equal weights, each channel scaled to L1 by
 //! f_L1/f_c) is then regressed on the projected regressors by generalized
@@ -121,6 +127,10 @@ pub struct LoopFreeEstimate {
     pub imu_time_offset_s: f64,
     /// Whether the offset was searched.
     pub time_offset_searched: bool,
+    /// A channel's segments left out because its input phase stepped by
+    /// half a slip or more (a cycle slip: the NCO's phase is off by a half
+    /// cycle from then on).
+    pub slipped_segments: usize,
 }
 
 impl LoopFreeEstimate {
@@ -206,7 +216,9 @@ pub fn estimate_loop_free(
         .iter()
         .map(|tr| (input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings), tr.carrier.scale_to_l1()))
         .collect();
-    let m = Measurement::assemble(epochs, &usable, &inputs, settings.segment_s);
+    // A step of half the smallest slip flags one: the smallest is a half cycle of the discriminator,
+    // 4·max|φ| (π for atan Costas at max|φ| = π/4).
+    let m = Measurement::assemble(epochs, &usable, &inputs, settings.segment_s, 2.0 * settings.max_abs_phase_rad);
     let too_few = || LoopFreeError::TooFewEpochs { epochs: m.phase.len(), segment_s: settings.segment_s };
     if m.phase.len() < 10 {
         return Err(too_few());
@@ -231,6 +243,7 @@ pub fn estimate_loop_free(
         segments: ranges.len(),
         imu_time_offset_s: tau,
         time_offset_searched: searched,
+        slipped_segments: m.slipped,
     })
 }
 
@@ -269,35 +282,103 @@ struct Measurement {
     /// Each segment's epochs and its cubics.
     segments: Vec<(Vec<usize>, Cubic)>,
     tracks_used: Vec<bool>,
+    /// Track segments left out for a step (a cycle slip).
+    slipped: usize,
+}
+
+/// The share of a segment's epochs a track must have a row at to enter it;
+/// the segment then keeps only the epochs where every track it holds has one
+/// (the same epochs for every channel and the regressors, so that the
+/// average of the projections stays the projection of the average). A lock
+/// indicator's few dropped rows then cost those epochs, not the channel.
+const MIN_PRESENCE: f64 = 0.9;
+
+/// Whether track `j` of a segment's detrended input phases steps by at least
+/// `step_rad` (a half-cycle slip of a Costas loop is π on its own carrier,
+/// which leaves the NCO's phase off by as much for good): the largest
+/// difference between the means of `window` rows before and after any row,
+/// of the track less the mean of the others (the common signal out; the
+/// track alone when it is the only one). The means of a second of rows keep
+/// the thermal noise far below a half cycle.
+fn slipped(residuals: &[(usize, Vec<f64>)], j: usize, window: usize, step_rad: f64) -> bool {
+    let own = &residuals[j].1;
+    let others = residuals.len() - 1;
+    let d: Vec<f64> = (0..own.len())
+        .map(|k| {
+            let rest = residuals.iter().enumerate().filter(|(o, _)| *o != j).map(|(_, (_, r))| r[k]).sum::<f64>();
+            if others > 0 { own[k] - rest / others as f64 } else { own[k] }
+        })
+        .collect();
+    if d.len() < 2 * window {
+        return false;
+    }
+    let mut prefix = Vec::with_capacity(d.len() + 1);
+    prefix.push(0.0);
+    for v in &d {
+        prefix.push(prefix.last().copied().unwrap_or(0.0) + v);
+    }
+    let mean = |a: usize, b: usize| (prefix[b] - prefix[a]) / (b - a) as f64;
+    (window..=d.len() - window).any(|k| (mean(k, k + window) - mean(k - window, k)).abs() >= step_rad)
 }
 
 impl Measurement {
     /// Each track's θ_in (`inputs`: per track the values on the epochs and
     /// the scale to L1) detrended per segment and averaged over the tracks
-    /// that cover the segment's usable epochs.
-    fn assemble(epochs: &[f64], usable: &[bool], inputs: &[(Vec<Option<f64>>, f64)], segment_s: f64) -> Self {
-        let mut m = Measurement { phase: Vec::new(), segments: Vec::new(), tracks_used: vec![false; inputs.len()] };
+    /// that cover the segment's usable epochs and did not slip in it
+    /// ([`slipped`], steps of at least `step_rad`).
+    fn assemble(
+        epochs: &[f64],
+        usable: &[bool],
+        inputs: &[(Vec<Option<f64>>, f64)],
+        segment_s: f64,
+        step_rad: f64,
+    ) -> Self {
+        let mut m =
+            Measurement { phase: Vec::new(), segments: Vec::new(), tracks_used: vec![false; inputs.len()], slipped: 0 };
         let first = usable.iter().position(|&u| u).unwrap_or(epochs.len());
+        let log_interval_s = median_step(epochs);
+        let window = ((1.0 / log_interval_s).round() as usize).max(3);
         for seg in segments(&epochs[first..], segment_s) {
-            let at: Vec<usize> = (seg.start + first..seg.end + first).filter(|&k| usable[k]).collect();
-            if at.len() < 10 {
+            let usable_at: Vec<usize> = (seg.start + first..seg.end + first).filter(|&k| usable[k]).collect();
+            // The tracks with a value at nearly every epoch, and the epochs where all of them have one.
+            let present = |theta: &[Option<f64>]| usable_at.iter().filter(|&&k| theta[k].is_some()).count();
+            let members: Vec<usize> = (0..inputs.len())
+                .filter(|&i| present(&inputs[i].0) as f64 >= MIN_PRESENCE * usable_at.len() as f64)
+                .collect();
+            let at: Vec<usize> =
+                usable_at.into_iter().filter(|&k| members.iter().all(|&i| inputs[i].0[k].is_some())).collect();
+            if at.len() < 10 || members.is_empty() {
                 continue;
             }
             let basis = Cubic::on(&at.iter().map(|&k| epochs[k]).collect::<Vec<_>>());
+            let residuals: Vec<(usize, Vec<f64>)> = members
+                .iter()
+                .map(|&i| {
+                    let (theta, scale) = &inputs[i];
+                    let values: Vec<f64> = at.iter().map(|&k| theta[k].map_or(0.0, |v| v * scale)).collect();
+                    (i, basis.residual(&values))
+                })
+                .collect();
+            let kept: Vec<&(usize, Vec<f64>)> = residuals
+                .iter()
+                .enumerate()
+                .filter(|(j, (i, _))| {
+                    let slip = slipped(&residuals, *j, window, step_rad * inputs[*i].1);
+                    m.slipped += usize::from(slip);
+                    !slip
+                })
+                .map(|(_, r)| r)
+                .collect();
+            if kept.is_empty() {
+                continue;
+            }
             let mut sum = vec![0.0; at.len()];
-            let mut count = 0usize;
-            for (i, (theta, scale)) in inputs.iter().enumerate() {
-                let Some(values) = at.iter().map(|&k| theta[k].map(|v| v * scale)).collect::<Option<Vec<f64>>>() else {
-                    continue;
-                };
-                sum.iter_mut().zip(basis.residual(&values)).for_each(|(s, v)| *s += v);
-                count += 1;
-                m.tracks_used[i] = true;
+            for (i, r) in &kept {
+                sum.iter_mut().zip(r).for_each(|(s, v)| *s += v);
+                m.tracks_used[*i] = true;
             }
-            if count > 0 {
-                m.phase.extend(sum.iter().map(|s| s / count as f64));
-                m.segments.push((at, basis));
-            }
+            m.phase.extend(sum.iter().map(|s| s / kept.len() as f64));
+            m.segments.push((at, basis));
         }
         m
     }

@@ -73,6 +73,18 @@ impl ChannelTrack {
         self.t_s.is_empty()
     }
 
+    /// Row `k` as a [`TrackingRow`] (an elevation of NaN, unknown, as `None`).
+    pub fn row(&self, k: usize) -> TrackingRow {
+        TrackingRow {
+            t_s: self.t_s[k],
+            channel: self.channel,
+            prn: self.prn,
+            cn0_dbhz: self.cn0_dbhz[k],
+            elev_deg: Some(self.elev_deg[k]).filter(|e| e.is_finite()),
+            phase_err_rad: self.phase_err_rad[k],
+        }
+    }
+
     /// Mean C/N0 over all rows [dB-Hz] (NaN for an empty track).
     pub fn mean_cn0_dbhz(&self) -> f64 {
         self.cn0_dbhz.iter().sum::<f64>() / self.cn0_dbhz.len() as f64

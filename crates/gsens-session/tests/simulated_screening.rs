@@ -13,20 +13,7 @@ use gsens_sim::scenario::Scenario;
 
 /// The rows of a log, by time then channel (as the simulator writes them).
 fn rows_of(log: &TrackingLog) -> Vec<TrackingRow> {
-    let mut rows: Vec<TrackingRow> = log
-        .tracks()
-        .iter()
-        .flat_map(|tr| {
-            (0..tr.len()).map(move |j| TrackingRow {
-                t_s: tr.t_s[j],
-                channel: tr.channel,
-                prn: tr.prn,
-                cn0_dbhz: tr.cn0_dbhz[j],
-                elev_deg: Some(tr.elev_deg[j]).filter(|e| e.is_finite()),
-                phase_err_rad: tr.phase_err_rad[j],
-            })
-        })
-        .collect();
+    let mut rows: Vec<TrackingRow> = log.tracks().iter().flat_map(|tr| (0..tr.len()).map(move |j| tr.row(j))).collect();
     rows.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.channel.cmp(&b.channel)));
     rows
 }
