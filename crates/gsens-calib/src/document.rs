@@ -204,6 +204,10 @@ pub struct ResultDocument {
     /// Report metadata (`report.json`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub report: Option<ReportInfo>,
+    /// The loop-free estimate from the NCO's phase beside this one, for logs
+    /// that hold it (`nco_phase_cycles`; PocketSDR's `adr`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loop_free: Option<crate::LoopFreeCheck>,
 }
 
 /// This library's name and version.
@@ -229,6 +233,11 @@ impl ResultDocument {
         doc.source = outcome.source.clone();
         doc.signals = outcome.session.signals.clone();
         doc.channel_ranking = Some(outcome.session.channel_ranking);
+        if let Some(loop_free) = &outcome.loop_free {
+            let check = crate::LoopFreeCheck::new(&doc.calibration, loop_free);
+            doc.warnings.extend(check.warning());
+            doc.loop_free = Some(check);
+        }
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
         if let Some(first) = outcome.imu_spikes_t_s.first() {
@@ -376,6 +385,7 @@ impl ResultDocument {
             truth_gamma_hz_per_mps2,
             source: None,
             report: None,
+            loop_free: None,
         };
         doc.judge();
         doc

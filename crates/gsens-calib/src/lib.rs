@@ -87,7 +87,9 @@ pub use joint::{
     ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,
     joint_fit,
 };
-pub use loop_free::{LoopFreeError, LoopFreeEstimate, LoopFreeSettings, estimate_loop_free};
+pub use loop_free::{
+    CROSS_CHECK_FALSE_ALARM, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, estimate_loop_free,
+};
 pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
 pub use pipeline::{
     DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,

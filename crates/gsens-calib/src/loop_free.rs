@@ -53,6 +53,7 @@ use crate::gls::{GlsSettings, gls};
 use gsens_core::LoggedPhase;
 use gsens_io::{ImuSeries, TrackingLog};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 use std::ops::Range;
 
@@ -107,7 +108,7 @@ impl LoopFreeSettings {
 }
 
 /// The loop-free estimate of Γ.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct LoopFreeEstimate {
     /// Γ̂ \[Hz/(m/s²)\] at L1.
@@ -791,5 +792,85 @@ mod tests {
     fn the_loop_interval_must_divide_the_log_interval() {
         assert_eq!(substeps(0.025, 0.001), Ok(25));
         assert!(substeps(0.025, 0.003).is_err());
+    }
+}
+
+/// The loop-free estimate beside the estimate through the loop model, as the
+/// result document holds it (`loop_free`): the measurement, the estimate or
+/// why there is none, and the two estimates' difference per axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub struct LoopFreeCheck {
+    /// What the estimate regresses: `input_phase`, the phase the loop was fed
+    /// (θ_NCO + φ), where the document's own estimate regresses the tracking
+    /// error through the loop model.
+    pub measurement: String,
+    /// The estimate, when one could be made.
+    pub estimate: Option<LoopFreeEstimate>,
+    /// Why none could be made.
+    pub error: Option<String>,
+    /// (Γ̂ − Γ̂_loop-free)/√(σ² + σ_loop-free²) per axis, Γ̂ and σ the
+    /// document's (`null` where either has no estimate). The two estimates
+    /// come from the same data, so their difference varies less than the
+    /// sum of their variances says: the test errs towards agreeing.
+    pub z_difference: [Option<f64>; 3],
+}
+
+/// Two-sided false-alarm probability of the cross-check over the three
+/// axes together (Bonferroni: 10⁻³/3 per axis), as the loop's own test.
+pub const CROSS_CHECK_FALSE_ALARM: f64 = 1e-3;
+
+impl LoopFreeCheck {
+    /// The check of `calibration` (the estimate through the loop model)
+    /// against `loop_free`.
+    pub fn new(calibration: &crate::Calibration, loop_free: &Result<LoopFreeEstimate, LoopFreeError>) -> Self {
+        let (estimate, error) = match loop_free {
+            Ok(e) => (Some(e.clone()), None),
+            Err(e) => (None, Some(e.to_string())),
+        };
+        let z_difference = [0, 1, 2].map(|i| {
+            let free = estimate.as_ref()?;
+            let (g, s) = (calibration.gamma_hz_per_mps2[i]?, calibration.sigma_hz_per_mps2[i]?);
+            let joint = s.hypot(free.sigma_hz_per_mps2()[i]);
+            (joint > 0.0 && joint.is_finite()).then(|| (g - free.gamma_hz_per_mps2[i]) / joint)
+        });
+        LoopFreeCheck { measurement: "input_phase".into(), estimate, error, z_difference }
+    }
+
+    /// |z| beyond which the estimates disagree: Φ⁻¹(1 − α/6) = 3.59 for
+    /// α = [`CROSS_CHECK_FALSE_ALARM`].
+    pub fn z_critical() -> f64 {
+        use statrs::distribution::{ContinuousCDF, Normal};
+        Normal::standard().inverse_cdf(1.0 - CROSS_CHECK_FALSE_ALARM / 6.0)
+    }
+
+    /// The warning `loop_free_disagrees` when an axis's difference passes
+    /// [`LoopFreeCheck::z_critical`]: the loop model (stated or from the
+    /// receiver's configuration) does not describe the receiver, and the
+    /// loop-free estimate, which assumes no loop, is the one to believe.
+    pub fn warning(&self) -> Option<crate::Warning> {
+        let z_crit = Self::z_critical();
+        let free = self.estimate.as_ref()?;
+        let axes: Vec<String> = (0..3)
+            .filter_map(|i| {
+                let z = self.z_difference[i].filter(|z| z.abs() > z_crit)?;
+                Some(format!(
+                    "{} by {:+.1}σ (loop-free {:.5} ± {:.5} Hz/(m/s²))",
+                    ["x", "y", "z"][i],
+                    z,
+                    free.gamma_hz_per_mps2[i],
+                    free.sigma_hz_per_mps2()[i]
+                ))
+            })
+            .collect();
+        (!axes.is_empty()).then(|| crate::Warning {
+            code: crate::WarningCode::LoopFreeDisagrees,
+            message: format!(
+                "the estimate through the loop model and the loop-free estimate from the NCO's phase disagree on \
+                 {}: the loop model does not describe the receiver (its order, bandwidth, update interval or what \
+                 its log holds); believe the loop-free estimate, which assumes no loop",
+                axes.join(", ")
+            ),
+        })
     }
 }

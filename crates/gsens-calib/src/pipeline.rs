@@ -224,6 +224,9 @@ pub struct Outcome {
     /// The inputs as role → path (`imu`, `tracking`, a receiver's files);
     /// empty for logs given in memory. Callers may add their own (`truth`).
     pub inputs: Vec<(String, String)>,
+    /// The loop-free estimate from the NCO's phase ([`crate::estimate_loop_free`]),
+    /// for a tracking log that holds it; `None` for one that does not.
+    pub loop_free: Option<Result<crate::LoopFreeEstimate, crate::LoopFreeError>>,
 }
 
 impl Outcome {
@@ -319,6 +322,9 @@ fn calibrate_prepared(
     check_carrier(settings, &tracking)?;
     let PreparedImu { despiked, spikes_t_s, flat_runs } = imu;
     let imu = &despiked;
+    // A log with the NCO's phase is kept for the loop-free estimate, which reads every track's rows.
+    let nco_log =
+        tracking.tracks().iter().any(|t| !t.nco_phase_cycles.is_empty()).then(|| tracking.clone().into_owned());
     // The session holds what the estimate needs of the log; a log given to
     // the pipeline is freed as soon as its rows are taken.
     crate::progress::stage("preparing the session", None);
@@ -352,7 +358,12 @@ fn calibrate_prepared(
         estimate.receiver_loop = fit.fitted(&estimate.loop_at(session.log_interval_s));
         joint = Some(fit);
     }
-    let (calibration, loop_response) = estimate_and_check_response(&session, &estimate, joint)?;
+    let loop_free_settings = loop_free_settings(settings, &estimate, session.log_interval_s);
+    let (closed_loop, loop_free) = rayon::join(
+        || estimate_and_check_response(&session, &estimate, joint),
+        || nco_log.map(|log| crate::estimate_loop_free(&log, imu, &loop_free_settings)),
+    );
+    let (calibration, loop_response) = closed_loop?;
     Ok(Outcome {
         session,
         calibration,
@@ -364,7 +375,28 @@ fn calibrate_prepared(
         imu_flat_runs: flat_runs,
         imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
+        loop_free,
     })
+}
+
+/// The loop-free estimate's settings from the calibration's: the loop's
+/// update interval and what a row holds (stated, configured or chosen), the
+/// same offset option, warm-up and channel count, and the screening's phase
+/// limit (by default half the discriminator's unambiguous range).
+fn loop_free_settings(
+    settings: &PipelineSettings,
+    estimate: &EstimateSettings,
+    log_interval_s: f64,
+) -> crate::LoopFreeSettings {
+    let loop_interval_s = estimate.loop_at(log_interval_s).interval_s().unwrap_or(log_interval_s);
+    let limit = settings.selection.screening.max_abs_phase_rad;
+    crate::LoopFreeSettings {
+        time_offset: settings.time_offset,
+        warmup_s: estimate.warmup_s,
+        channels: settings.selection.max_channels.unwrap_or(0),
+        max_abs_phase_rad: limit.filter(|v| *v > 0.0).unwrap_or(estimate.discriminator.unambiguous_range_rad() / 2.0),
+        ..crate::LoopFreeSettings::new(loop_interval_s, estimate.logged_phase)
+    }
 }
 
 /// The IMU time offset the session is prepared with, and the range it is

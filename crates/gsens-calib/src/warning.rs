@@ -50,6 +50,9 @@ pub enum WarningCode {
     LoopOffsetUnresolved,
     /// The loop's response could not be measured from the session.
     ResponseUnchecked,
+    /// The loop-free estimate from the NCO's phase disagrees with the
+    /// estimate through the loop model.
+    LoopFreeDisagrees,
     /// No axis is observable.
     NothingObservable,
     /// An estimate came out not finite.
@@ -64,7 +67,7 @@ pub enum WarningCode {
 
 impl WarningCode {
     /// Every code, in the order of the enum.
-    pub const ALL: [WarningCode; 20] = [
+    pub const ALL: [WarningCode; 21] = [
         WarningCode::ImuUnits,
         WarningCode::TimeUnits,
         WarningCode::PhaseUnits,
@@ -80,6 +83,7 @@ impl WarningCode {
         WarningCode::LoopResponse,
         WarningCode::LoopOffsetUnresolved,
         WarningCode::ResponseUnchecked,
+        WarningCode::LoopFreeDisagrees,
         WarningCode::NothingObservable,
         WarningCode::NotFinite,
         WarningCode::ImuSpikes,
@@ -105,6 +109,7 @@ impl WarningCode {
             WarningCode::LoopResponse => "loop_response",
             WarningCode::LoopOffsetUnresolved => "loop_offset_unresolved",
             WarningCode::ResponseUnchecked => "response_unchecked",
+            WarningCode::LoopFreeDisagrees => "loop_free_disagrees",
             WarningCode::NothingObservable => "nothing_observable",
             WarningCode::NotFinite => "not_finite",
             WarningCode::ImuSpikes => "imu_spikes",
@@ -144,7 +149,8 @@ impl WarningCode {
             TimeUnits | ImuUnits | PhaseUnits | PhaseSign | CarrierGain => 0,
             DiscriminatorRange if units_flagged => 1,
             LogRate | ImuRate | Highpass | TimeOffsetAtLimit => 2,
-            ResponseUnchecked | LoopNotStated | LoopRejected | LoopResponse | LoopOffsetUnresolved => 3,
+            ResponseUnchecked | LoopNotStated | LoopRejected | LoopResponse | LoopOffsetUnresolved
+            | LoopFreeDisagrees => 3,
             c if !c.affects_trust() => 5,
             _ => 4,
         }

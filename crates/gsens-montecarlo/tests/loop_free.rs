@@ -163,3 +163,40 @@ fn measure_against_the_closed_loop_estimate() {
     );
     assert_calibrated(&z);
 }
+
+/// Through the pipeline (`CalibrationOptions` → `calibrate_logs` →
+/// `ResultDocument`): a log with the NCO's phase gets the loop-free estimate
+/// beside the one through the loop model. With the right loop they agree;
+/// with a loop stated wrong and taken as exact (bandwidth 2× and the loop
+/// check off) the estimate through the model is off, `loop_free_disagrees`
+/// says so and makes it untrustworthy, and the loop-free estimate is the same
+/// to the last bit: it assumes no loop.
+#[test]
+fn the_pipeline_cross_checks_the_loop_against_the_loop_free_estimate() {
+    let logs = session_of("[log]\nnco = true", 5);
+    let right = common::estimate(&logs.tracking, &logs.imu, &common::right_loop());
+    let check = right.loop_free.as_ref().expect("a loop-free block");
+    assert_eq!(check.measurement, "input_phase");
+    let free = check.estimate.as_ref().expect("a loop-free estimate");
+    let want = truth(&logs);
+    for i in 0..3 {
+        assert!((free.gamma_hz_per_mps2[i] - want[i]).abs() < 3.0 * free.sigma_hz_per_mps2()[i]);
+    }
+    assert!(!common::codes(&right).contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", right.warnings);
+
+    let wrong_options = gsens_calib::CalibrationOptions {
+        bn_hz: Some(6.0),
+        loop_check: false,
+        loop_tolerance: Some(0.0),
+        ..common::right_loop()
+    };
+    let wrong = common::estimate(&logs.tracking, &logs.imu, &wrong_options);
+    assert!(common::codes(&wrong).contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", wrong.warnings);
+    assert!(!wrong.trustworthy);
+    let message = common::message(&wrong, gsens_calib::WarningCode::LoopFreeDisagrees);
+    assert!(message.contains("believe the loop-free estimate"), "{message}");
+    assert_eq!(wrong.loop_free.as_ref().unwrap().estimate.as_ref(), Some(free));
+
+    let without = common::estimate(&common::session(5).tracking, &logs.imu, &common::right_loop());
+    assert!(without.loop_free.is_none());
+}

@@ -23,6 +23,7 @@ pub fn render_text(doc: &ResultDocument) -> String {
         let _ = writeln!(s, "{}", r.summary());
     }
     estimate_table(&mut s, doc);
+    loop_free(&mut s, doc);
     shaking(&mut s, doc);
     compensation(&mut s, doc);
     let _ = writeln!(s, "\n{}", verdict_line(doc));
@@ -276,6 +277,36 @@ fn estimate_table(s: &mut String, doc: &ResultDocument) {
         if !axes.is_empty() && norm > 0.0 {
             let _ = writeln!(s, "  |Γ̂ − Γ|{over} = {err:.5} Hz/(m/s²) = {:.2} % of |Γ|{over}", 100.0 * err / norm);
         }
+    }
+}
+
+/// The loop-free estimate from the NCO's phase, for logs that hold it: Γ̂
+/// with its σ per axis and its difference from the estimate above.
+fn loop_free(s: &mut String, doc: &ResultDocument) {
+    let Some(check) = &doc.loop_free else { return };
+    let Some(free) = &check.estimate else {
+        let _ =
+            writeln!(s, "\nloop-free estimate (from the NCO's phase): none: {}", check.error.as_deref().unwrap_or("?"));
+        return;
+    };
+    let offset = if free.time_offset_searched { "searched" } else { "given" };
+    let _ = writeln!(
+        s,
+        "\nloop-free estimate (θ_NCO + φ, no loop model; {} channel(s), {} segment(s), {} left out for a slip; IMU \
+         offset {:+.4} s, {offset}):",
+        free.tracks, free.segments, free.slipped_segments, free.imu_time_offset_s
+    );
+    let sigma = free.sigma_hz_per_mps2();
+    for i in 0..3 {
+        let (g, sg) = (free.gamma_hz_per_mps2[i], sigma[i]);
+        let _ = write!(s, "  {}  {g:+.5}  ±{sg:.5}", AXES[i]);
+        if let Some(z) = check.z_difference[i] {
+            let _ = write!(s, "     above − loop-free: {z:+.2}σ");
+        }
+        if let Some(t) = doc.truth_gamma_hz_per_mps2 {
+            let _ = write!(s, "     error {:+.5} ({:+.2}σ)", g - t[i], (g - t[i]) / sg);
+        }
+        let _ = writeln!(s);
     }
 }
 
