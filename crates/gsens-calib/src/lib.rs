@@ -86,7 +86,10 @@ pub use joint::{
     ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,
     joint_fit,
 };
-pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
+pub use options::{
+    CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,
+    TimeOffsetOption,
+};
 pub use pipeline::{
     DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
     RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_logs, calibrate_owned_logs, series_of,

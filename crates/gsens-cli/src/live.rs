@@ -3,7 +3,7 @@
 //! here are its options, turned into a `gsens_live::RuntimeConfig`, the
 //! choice of screen (gsens-tui's, or plain lines) and the report at the end.
 
-use crate::estimate::CalibrationArgs;
+use crate::args::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
@@ -91,7 +91,7 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
     }
     let imu = args.follow_imu.clone().expect("checked: --follow-imu");
     if let (Some(addr), Some(conf)) = (&args.gnss_sdr_monitor, &args.gnss_sdr_conf) {
-        if args.calibration.loop_args.stated() {
+        if args.calibration.receiver_loop.stated() {
             anyhow::bail!(crate::estimate::LOOP_STATED_TWICE);
         }
         let setup = gsens_live::monitor_setup(Some(conf), None, None)?;
@@ -102,9 +102,9 @@ fn inputs(args: &LiveArgs) -> Result<Inputs> {
     Ok(Inputs::Files { imu, tracking })
 }
 
-pub(crate) fn run(args: &LiveArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     check_inputs(args)?;
-    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, given, args.truth.as_deref())?;
     crate::check_dir("--out", &args.out)?;
     let inputs = inputs(args)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
