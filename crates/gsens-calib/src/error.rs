@@ -27,6 +27,10 @@ pub enum CalibError {
         /// The range it must be in.
         expected: &'static str,
     },
+    /// An option stated that the loop or the method does not use (the
+    /// message names the options as the caller does).
+    #[error("{0}")]
+    Ignored(String),
     /// A combination of settings gsens does not support.
     #[error("{0}")]
     Unsupported(&'static str),

@@ -90,7 +90,10 @@ pub use joint::{
 pub use loop_free::{
     CROSS_CHECK_FALSE_ALARM, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, estimate_loop_free,
 };
-pub use options::{CalibrationOptions, MethodName, TimeOffsetOption};
+pub use options::{
+    CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,
+    TimeOffsetOption,
+};
 pub use pipeline::{
     DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
     RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_logs, calibrate_owned_logs, series_of,

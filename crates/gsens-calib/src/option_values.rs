@@ -3,7 +3,7 @@
 //! option), and the IMU time offset within what an IMU's latency can be.
 //! Surrounding white space is ignored.
 
-use crate::TimeOffset;
+use crate::{TimeOffset, TimeOffsetOption};
 
 /// The largest IMU time offset that can be stated \[s\]: an IMU's latency
 /// is milliseconds to a few hundred; more is a clock on another time base.
@@ -61,6 +61,14 @@ pub fn stated_time_offset(text: &str) -> Result<TimeOffset, String> {
     }
 }
 
+/// [`stated_time_offset`] as the options name it: `auto`, or seconds (`none`: 0).
+pub fn stated_time_offset_option(text: &str) -> Result<TimeOffsetOption, String> {
+    Ok(match stated_time_offset(text)? {
+        TimeOffset::Auto { .. } => TimeOffsetOption::Auto,
+        TimeOffset::Fixed { imu_time_offset_s } => TimeOffsetOption::Seconds(imu_time_offset_s),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -91,5 +99,9 @@ mod tests {
         assert!(matches!(stated_time_offset("auto"), Ok(TimeOffset::Auto { .. })));
         assert!(stated_time_offset("3").unwrap_err().starts_with("3 s is beyond ±1 s"));
         assert!(stated_time_offset("later").unwrap_err().contains("auto, none or a number of seconds"));
+        assert_eq!(stated_time_offset_option("auto"), Ok(TimeOffsetOption::Auto));
+        assert_eq!(stated_time_offset_option("none"), Ok(TimeOffsetOption::Seconds(0.0)));
+        assert_eq!(stated_time_offset_option(" 0.01"), Ok(TimeOffsetOption::Seconds(0.01)));
+        assert!(stated_time_offset_option("-2").unwrap_err().starts_with("-2 s is beyond ±1 s"));
     }
 }

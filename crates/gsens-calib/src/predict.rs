@@ -38,7 +38,7 @@ use gsens_core::{LoopModel, LoopSpec};
 mod setup;
 mod sweep;
 mod table;
-pub use setup::{FeedForward, ToneError, diagonal_covariance, parse_tone};
+pub use setup::{FeedForward, StatedGammaError, ToneError, diagonal_covariance, parse_tone, stated_gamma};
 use statrs::distribution::{ContinuousCDF, Normal};
 pub use sweep::{BN_GRID_HZ, Sweep, SweepError, SweepRow, SweepSettings};
 pub use table::{SweepContext, render_sweep_text};

@@ -43,12 +43,14 @@ impl core::fmt::Display for Method {
 /// Robust estimation against outlying epochs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Robust {
     /// Plain least squares.
     #[default]
     None,
-    /// Huber's M-estimate by iteratively reweighted least squares (batch method
-    /// only; see [`crate::huber_irls`]).
+    /// Huber's M-estimate (iteratively reweighted least squares).
+    ///
+    /// Batch method only; see [`crate::huber_irls`].
     Huber,
 }
 

@@ -1,44 +1,36 @@
 //! The command-line options shared by the commands, and the one place where
-//! they become library objects: a calibration's options become
-//! `gsens_calib::CalibrationOptions` (the names the Python module takes too,
-//! which build `gsens_calib::PipelineSettings`); the converters' become
-//! `gsens_gnss_sdr::ImportSettings` and `gsens_pocketsdr::ImportSettings`;
-//! the input options become `gsens_inputs::Inputs`.
+//! they become library objects: a calibration's options are
+//! `gsens_calib::CalibrationOptions`' groups (the names the Python module
+//! takes too, which build `gsens_calib::PipelineSettings`); the converters'
+//! become `gsens_gnss_sdr::ImportSettings` and
+//! `gsens_pocketsdr::ImportSettings`; the input options become
+//! `gsens_inputs::Inputs`.
 
-use anyhow::{Result, bail};
-use clap::{Args, ValueEnum};
-use gsens_calib::option_values::{
-    elevation_deg, finite, finite_non_negative, forgetting_factor, non_negative_or_inf, positive, stated_time_offset,
+use anyhow::{Result, anyhow, bail};
+use clap::Args;
+use gsens_calib::option_values::positive;
+use gsens_calib::{
+    CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, PipelineSettings, SelectionOptions,
+    SystematicOptions,
 };
-use gsens_calib::{CalibrationOptions, MethodName, Robust, TimeOffset, TimeOffsetOption, defaults};
-use gsens_core::LoopModel;
-use gsens_gnss_sdr::{DumpLayout, ImportSettings};
+use gsens_gnss_sdr::{ImportOverrides, ImportSettings};
 use gsens_inputs::{Inputs, Log};
-use gsens_session::Weighting;
 use std::path::{Path, PathBuf};
 
-/// Estimator choice.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub(crate) enum MethodArg {
-    /// The paper's gradient observer (constant gain).
-    Gradient,
-    /// Recursive least squares (Kalman-type gain).
-    Rls,
-    /// Batch least squares over the whole log.
-    Batch,
-    /// Generalized least squares: batch prewhitened by an AR model of the residual noise.
-    Gls,
+/// The flag of the option `name` (`bn_hz` is `--bn-hz`).
+pub(crate) fn flag(name: &str) -> String {
+    format!("--{}", name.replace('_', "-"))
 }
 
-impl MethodArg {
-    /// The library's name of the method.
-    pub(crate) fn name(self) -> MethodName {
-        match self {
-            MethodArg::Gradient => MethodName::Gradient,
-            MethodArg::Rls => MethodName::Rls,
-            MethodArg::Batch => MethodName::Batch,
-            MethodArg::Gls => MethodName::Gls,
-        }
+/// A library's error about the setting `setting` (its message begins with
+/// the setting's name) with the setting given as its flag, `--{prefix}{name}`.
+pub(crate) fn flagged<E>(prefix: &str, setting: Option<&str>, e: E) -> anyhow::Error
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    match setting {
+        Some(name) => anyhow!("--{prefix}{}{}", name.replace('_', "-"), &e.to_string()[name.len()..]),
+        None => e.into(),
     }
 }
 
@@ -60,299 +52,62 @@ impl ScenarioArgs {
     }
 }
 
-/// The receiver's carrier loop.
-#[derive(Args, Debug, Clone)]
-#[command(next_help_heading = "Receiver loop")]
-pub(crate) struct LoopArgs {
-    /// Loop order of the receiver's carrier PLL.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(2..=3))]
-    pub order: Option<u8>,
-    /// One-sided noise bandwidth Bn of the receiver's PLL [Hz] (default 3).
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-    pub bn_hz: Option<f64>,
-    /// Damping ratio ζ of a 2nd-order loop [default: 1/√2 = 0.707].
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-    pub zeta: Option<f64>,
-    /// a3 of a 3rd-order loop (with --order 3) [default: Kaplan's 1.1].
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-    pub a3: Option<f64>,
-    /// b3 of a 3rd-order loop (with --order 3) [default: Kaplan's 2.4].
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-    pub b3: Option<f64>,
-    /// The receiver's loop update interval [s] (default: the log interval).
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-    pub loop_interval_s: Option<f64>,
-    /// What a log row holds when the loop runs faster than the log (default: last).
-    #[arg(long, value_enum)]
-    pub logged_phase: Option<gsens_core::LoggedPhase>,
-    /// The receiver's carrier-phase discriminator, whose linear range bounds the g-induced phase error (GNSS-SDR and PocketSDR sessions: theirs, atan-costas for GPS L1 C/A).
-    #[arg(long, value_enum, default_value_t = DiscriminatorArg::AtanCostas)]
-    pub discriminator: DiscriminatorArg,
-}
-
-/// The carrier-phase discriminator.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub(crate) enum DiscriminatorArg {
-    /// atan(Q/I), the two-quadrant Costas discriminator of GPS L1 C/A receivers: linear within ±π/2.
-    AtanCostas,
-    /// atan2(Q, I), a four-quadrant PLL discriminator (pilot signals): linear within ±π.
-    Atan2,
-}
-
-impl LoopArgs {
-    /// Refuses a shape parameter of the other order's loop: ζ shapes a
-    /// 2nd-order loop only, a3 and b3 a 3rd-order one.
-    pub(crate) fn check(&self) -> Result<()> {
-        let third = self.order == Some(3);
-        if third && self.zeta.is_some() {
-            bail!("--zeta is the damping of a 2nd-order loop: a 3rd-order loop (--order 3) takes --a3 and --b3");
-        }
-        if !third && (self.a3.is_some() || self.b3.is_some()) {
-            bail!("--a3 and --b3 shape a 3rd-order loop: they need --order 3 (a 2nd-order loop takes --zeta)");
-        }
-        Ok(())
-    }
-
-    /// Sets the loop's options.
-    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
-        o.order = self.order;
-        o.bn_hz = self.bn_hz;
-        // Unset shape parameters keep the options' defaults.
-        o.zeta = self.zeta.unwrap_or(o.zeta);
-        o.a3 = self.a3.unwrap_or(o.a3);
-        o.b3 = self.b3.unwrap_or(o.b3);
-        o.loop_interval_s = self.loop_interval_s;
-        o.logged_phase = self.logged_phase;
-        o.discriminator = match self.discriminator {
-            DiscriminatorArg::AtanCostas => gsens_core::Discriminator::AtanCostas,
-            DiscriminatorArg::Atan2 => gsens_core::Discriminator::Atan2,
-        };
-    }
-
-    fn options(&self) -> CalibrationOptions {
-        let mut o = CalibrationOptions::default();
-        self.apply(&mut o);
-        o
-    }
-
-    /// The loop as the library models it.
-    pub(crate) fn loop_model(&self) -> LoopModel {
-        self.options().loop_model()
-    }
-
-    /// Whether any of the loop's order, bandwidth, update interval or
-    /// logged phase was given (otherwise the data choose the loop).
-    pub(crate) fn stated(&self) -> bool {
-        self.options().loop_stated()
-    }
-}
-
-/// The estimator of a single calibration (`estimate`, `report`, `demo`).
-#[derive(Args, Debug, Clone)]
-#[command(next_help_heading = "Estimator")]
-pub(crate) struct MethodChoice {
-    /// Estimator.
-    #[arg(long, value_enum, default_value_t = MethodArg::Batch)]
-    pub method: MethodArg,
-}
-
-/// The estimators' parameters and the error model.
-#[derive(Args, Debug, Clone)]
-#[command(next_help_heading = "Estimator")]
-pub(crate) struct EstimatorArgs {
-    /// Gain k of the gradient observer (--method gradient only) [default: 0.5].
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-    pub gain_k: Option<f64>,
-    /// Forgetting factor λ of the RLS estimator, in (0, 1] (--method rls only) [default: 1, none].
-    #[arg(long, allow_negative_numbers = true, value_parser = forgetting_factor)]
-    pub lambda: Option<f64>,
-    /// Seconds at the start that only drive the loop models (their start-up transient).
-    #[arg(long, default_value_t = defaults::DEFAULT_WARMUP_S, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub warmup_s: f64,
-    /// 1σ scale-factor error of the IMU [ppm] (from its datasheet), added to Γ̂'s uncertainty.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub imu_scale_sigma_ppm: f64,
-    /// 1σ axis misalignment of the IMU [mrad], added to Γ̂'s uncertainty.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub imu_misalignment_sigma_mrad: f64,
-    /// Corner of the identical high-pass on φ and φ_a [Hz] (0 = off).
-    #[arg(long, default_value_t = defaults::DEFAULT_HIGHPASS_HZ, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub highpass_hz: f64,
-    /// Robust estimation against outlying epochs: `huber` (IRLS; batch method only) or `none`.
-    #[arg(long, value_enum, default_value_t = RobustArg::None)]
-    pub robust: RobustArg,
-}
-
-/// Robust estimation.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub(crate) enum RobustArg {
-    /// Plain least squares.
-    None,
-    /// Huber's M-estimate (iteratively reweighted least squares).
-    Huber,
-}
-
-impl EstimatorArgs {
-    /// Refuses a method's parameter given for methods that do not use it
-    /// (`methods`: every method the options will run).
-    pub(crate) fn check_methods(&self, methods: &[MethodArg]) -> Result<()> {
-        let names = || methods.iter().map(|m| format!("{m:?}").to_lowercase()).collect::<Vec<_>>().join(", ");
-        if self.lambda.is_some() && !methods.contains(&MethodArg::Rls) {
-            bail!(
-                "--lambda is the RLS estimator's forgetting factor: it needs --method rls (the method is {})",
-                names()
-            );
-        }
-        if self.gain_k.is_some() && !methods.contains(&MethodArg::Gradient) {
-            bail!("--gain-k is the gradient observer's gain: it needs --method gradient (the method is {})", names());
-        }
-        Ok(())
-    }
-
-    /// Sets the estimator's options (the method's parameters, the error model).
-    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
-        if let Some(k) = self.gain_k {
-            o.gain_k = k;
-        }
-        if let Some(l) = self.lambda {
-            o.lambda = l;
-        }
-        o.warmup_s = self.warmup_s;
-        o.imu_scale_sigma_ppm = self.imu_scale_sigma_ppm;
-        o.imu_misalignment_sigma_mrad = self.imu_misalignment_sigma_mrad;
-        o.highpass_hz = self.highpass_hz;
-        o.robust = match self.robust {
-            RobustArg::None => Robust::None,
-            RobustArg::Huber => Robust::Huber,
-        };
-    }
-}
-
-/// Which channels enter the average.
-#[derive(Args, Debug, Clone)]
-#[command(next_help_heading = "Channels")]
-pub(crate) struct SelectionArgs {
-    /// Average the N channels with the highest mean C/N0, or the least noisy when C/N0 does not vary between them (0 = all that pass the masks).
-    #[arg(long, default_value_t = defaults::DEFAULT_CHANNELS)]
-    pub channels: usize,
-    /// Drop rows below this C/N0 [dB-Hz].
-    #[arg(long, allow_negative_numbers = true, value_parser = finite)]
-    pub min_cn0_dbhz: Option<f64>,
-    /// Drop rows below this elevation [deg] (rows without elevation pass).
-    #[arg(long, allow_negative_numbers = true, value_parser = elevation_deg)]
-    pub elevation_mask_deg: Option<f64>,
-    /// Weights of the per-epoch channel average.
-    #[arg(long, value_enum, default_value_t = WeightsArg::Equal)]
-    pub weights: WeightsArg,
-    /// Per-channel screening before averaging: cycle slips, losses of lock, C/N0 drops, |φ| beyond the linear range.
-    #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
-    pub screening: bool,
-    /// Screening: exclude rows whose C/N0 is more than this below the channel's median [dB] (0 = no test).
-    #[arg(long, default_value_t = defaults::DEFAULT_CN0_DROP_DB, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub cn0_drop_db: f64,
-    /// Screening: exclude rows whose |phase error| exceeds this [rad] (0 = no limit; default: half the discriminator's unambiguous range, π/4 for atan-costas, π/2 for atan2).
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub max_abs_phase_rad: Option<f64>,
-}
-
-/// Channel weighting.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
-pub(crate) enum WeightsArg {
-    /// Equal weights (the paper).
-    Equal,
-    /// Weights proportional to C/N0 (inverse thermal phase variance).
-    Cn0,
-}
-
-impl SelectionArgs {
-    /// Sets the channel selection's options.
-    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
-        o.channels = self.channels;
-        o.min_cn0_dbhz = self.min_cn0_dbhz;
-        o.elevation_mask_deg = self.elevation_mask_deg;
-        o.weights = match self.weights {
-            WeightsArg::Equal => Weighting::Equal,
-            WeightsArg::Cn0 => Weighting::Cn0,
-        };
-        o.screening = self.screening;
-        o.cn0_drop_db = self.cn0_drop_db;
-        o.max_abs_phase_rad = self.max_abs_phase_rad;
-    }
-}
-
-/// Systematic errors estimated jointly with Γ.
-#[derive(Args, Debug, Clone)]
-#[command(next_help_heading = "Systematic errors")]
-pub(crate) struct SystematicArgs {
-    /// IMU time stamp minus true time: `auto` (estimated jointly with Γ), `none` (0) or SECONDS.
-    #[arg(long, default_value = "auto", allow_hyphen_values = true, value_parser = stated_time_offset)]
-    pub time_offset: TimeOffset,
-    /// Search range ± of `--time-offset auto` [s].
-    #[arg(long, default_value_t = defaults::DEFAULT_TIME_OFFSET_MAX_S, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub time_offset_max_s: f64,
-    /// Test the stated loop against the data: its natural frequency is estimated jointly with Γ and the time offset, a
-    /// stated loop the data reject is flagged, and Γ̂ is given under the fitted loop with the loop's uncertainty in its
-    /// σ. `off` takes the stated loop as exact.
-    #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
-    pub loop_check: bool,
-    /// With the loop check: fit a 2nd-order loop's damping ζ too (weakly determined by near-sinusoidal shaking).
-    #[arg(long)]
-    pub identify_damping: bool,
-    /// How well the stated loop is known: the relative 1σ uncertainty of its natural frequency. The data's fit of the
-    /// loop and the stated loop within this tolerance are combined, and what remains uncertain is in σ. `0`: the
-    /// receiver implements exactly the stated loop (Γ̂ reaches the known-loop bound, but a loop error below the
-    /// test's reach, about 2 % on the paper's session, then biases Γ̂ unseen); `inf`: only the loop's shape is
-    /// known. Default: 0 for a loop modelled from the receiver's configuration (--gnss-sdr, --pocketsdr), 0.02
-    /// for a loop stated by --order/--bn-hz.
-    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, value_parser = non_negative_or_inf)]
-    pub loop_tolerance: Option<f64>,
-    /// Replace isolated IMU spikes (single samples no hand motion can produce) by their neighbours' mean.
-    #[arg(long, default_value = "on", value_name = "on|off", hide_possible_values = true, value_parser = clap::builder::BoolishValueParser::new(), action = clap::ArgAction::Set)]
-    pub imu_despike: bool,
-}
-
 /// The options of a single calibration besides its receiver loop (`estimate`,
-/// `report`, `demo`).
+/// `report`, `live`, `demo`).
 #[derive(Args, Debug, Clone)]
 pub(crate) struct AnalysisArgs {
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t, help_heading = "Estimator")]
+    pub method: MethodName,
     #[command(flatten)]
-    pub method: MethodChoice,
+    pub estimator: EstimatorOptions,
     #[command(flatten)]
-    pub estimator: EstimatorArgs,
+    pub selection: SelectionOptions,
     #[command(flatten)]
-    pub selection: SelectionArgs,
-    #[command(flatten)]
-    pub systematic: SystematicArgs,
-}
-
-impl SystematicArgs {
-    /// Sets the options of the systematic errors.
-    pub(crate) fn apply(&self, o: &mut CalibrationOptions) {
-        o.time_offset = match self.time_offset {
-            TimeOffset::Auto { .. } => TimeOffsetOption::Auto,
-            TimeOffset::Fixed { imu_time_offset_s } => TimeOffsetOption::Seconds(imu_time_offset_s),
-        };
-        o.time_offset_max_s = self.time_offset_max_s;
-        o.loop_check = self.loop_check;
-        o.identify_damping = self.identify_damping;
-        o.loop_tolerance = self.loop_tolerance;
-        o.imu_despike = self.imu_despike;
-    }
+    pub systematic: SystematicOptions,
 }
 
 impl AnalysisArgs {
-    /// Refuses options the chosen method ignores.
-    pub(crate) fn check(&self) -> Result<()> {
-        self.estimator.check_methods(&[self.method.method])
-    }
-
     /// The options of a calibration with the loop at its default.
     pub(crate) fn options(&self) -> CalibrationOptions {
-        let mut o = CalibrationOptions { method: self.method.method.name(), ..CalibrationOptions::default() };
-        self.estimator.apply(&mut o);
-        self.selection.apply(&mut o);
-        self.systematic.apply(&mut o);
-        o
+        CalibrationOptions {
+            method: self.method,
+            estimator: self.estimator.clone(),
+            selection: self.selection.clone(),
+            systematic: self.systematic.clone(),
+            ..CalibrationOptions::default()
+        }
+    }
+}
+
+/// The options that decide a calibration from logs (`estimate`, `report`, `live`).
+#[derive(Args, Debug, Clone)]
+pub(crate) struct CalibrationArgs {
+    /// Carrier frequency [Hz] for ppb/g (default GPS L1).
+    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
+    pub carrier_hz: f64,
+    #[command(flatten)]
+    pub receiver_loop: LoopOptions,
+    #[command(flatten)]
+    pub analysis: AnalysisArgs,
+}
+
+impl CalibrationArgs {
+    /// The options by name.
+    pub(crate) fn options(&self) -> CalibrationOptions {
+        CalibrationOptions {
+            carrier_hz: self.carrier_hz,
+            receiver_loop: self.receiver_loop.clone(),
+            ..self.analysis.options()
+        }
+    }
+
+    /// The pipeline settings (every value checked; options `given` that the
+    /// loop or the method ignores refused).
+    pub(crate) fn settings(&self, given: &[&str]) -> Result<PipelineSettings> {
+        let options = self.options();
+        options.refuse_ignored(given, flag)?;
+        Ok(options.pipeline_settings()?)
     }
 }
 
@@ -397,35 +152,18 @@ impl ConversionArgs {
     /// override the configuration's lock detector.
     pub(crate) fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
         let mut s = ImportSettings::from_conf(conf, self.gnss_sdr_fs_hz).map_err(|e| match e {
-            gsens_gnss_sdr::GnssSdrError::UnknownSamplingRate => anyhow::anyhow!("{e}; give --gnss-sdr-fs-hz"),
+            gsens_gnss_sdr::GnssSdrError::UnknownSamplingRate => anyhow!("{e}; give --gnss-sdr-fs-hz"),
             e => e.into(),
         })?;
-        if let Some(v) = self.gnss_sdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
-            bail!("--gnss-sdr-settle-s must be ≥ 0, got {v}");
-        }
-        let lock = &mut s.tracking.lock;
-        if let Some(v) = self.gnss_sdr_min_cn0_dbhz {
-            if !v.is_finite() {
-                bail!("--gnss-sdr-min-cn0-dbhz must be finite, got {v}");
-            }
-            lock.cn0_min_dbhz.set_option(v);
-        }
-        if let Some(v) = self.gnss_sdr_min_lock_test {
-            if !(-1.0..=1.0).contains(&v) {
-                bail!("--gnss-sdr-min-lock-test must lie in [-1, 1] (the lock test is cos 2φ), got {v}");
-            }
-            lock.carrier_lock_th.set_option(v);
-        }
-        if let Some(v) = self.gnss_sdr_max_carrier_lock_fail {
-            lock.max_carrier_lock_fail.set_option(v);
-        }
-        if let Some(v) = self.gnss_sdr_max_lock_fail {
-            lock.max_lock_fail.set_option(v);
-        }
-        s.settle_s = self.gnss_sdr_settle_s;
-        if let Some(spec) = &self.gnss_sdr_layout {
-            s.layout = Some(DumpLayout::parse_spec(spec).map_err(|e| anyhow::anyhow!("--gnss-sdr-layout: {e}"))?);
-        }
+        let overrides = ImportOverrides {
+            min_cn0_dbhz: self.gnss_sdr_min_cn0_dbhz,
+            min_lock_test: self.gnss_sdr_min_lock_test,
+            max_carrier_lock_fail: self.gnss_sdr_max_carrier_lock_fail,
+            max_lock_fail: self.gnss_sdr_max_lock_fail,
+            settle_s: self.gnss_sdr_settle_s,
+            layout: self.gnss_sdr_layout.clone(),
+        };
+        s.override_with(&overrides).map_err(|e| flagged("gnss-sdr-", e.setting(), e))?;
         Ok(s)
     }
 }
@@ -467,14 +205,9 @@ impl PocketSdrConversionArgs {
     /// The conversion settings.
     pub(crate) fn import_settings(&self) -> Result<gsens_pocketsdr::ImportSettings> {
         let mut s = gsens_pocketsdr::ImportSettings::from_options_file(self.pocketsdr_conf.as_deref())?;
-        if let Some(v) = self.pocketsdr_settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
-            bail!("--pocketsdr-settle-s must be ≥ 0, got {v}");
-        }
-        if !(self.pocketsdr_toff_s >= 0.0 && self.pocketsdr_toff_s.is_finite()) {
-            bail!("--pocketsdr-toff-s must be ≥ 0, got {}", self.pocketsdr_toff_s);
-        }
         s.settle_s = self.pocketsdr_settle_s;
         s.toff_s = self.pocketsdr_toff_s;
+        s.check().map_err(|e| flagged("pocketsdr-", e.setting(), e))?;
         Ok(s)
     }
 

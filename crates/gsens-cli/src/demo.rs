@@ -29,8 +29,8 @@ pub(crate) struct DemoArgs {
     pub analysis: AnalysisArgs,
 }
 
-pub(crate) fn run(args: &DemoArgs) -> Result<crate::Status> {
-    args.analysis.check()?;
+pub(crate) fn run(args: &DemoArgs, given: &[&str]) -> Result<crate::Status> {
+    args.analysis.options().refuse_ignored(given, crate::args::flag)?;
     // Without --out the logs go to a folder of this run's own, removed when `scratch` drops.
     let scratch = match &args.out {
         Some(_) => None,

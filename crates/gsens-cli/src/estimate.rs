@@ -1,10 +1,9 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{AnalysisArgs, InputArgs, LoopArgs};
+use crate::args::{CalibrationArgs, InputArgs};
 use anyhow::{Context, Result, anyhow};
 use clap::Args;
 use gsens_calib::PipelineSettings;
-use gsens_calib::option_values::positive;
 use gsens_inputs::{Calibrated, Inputs, InputsError};
 use gsens_tui::progress::observed;
 use std::path::PathBuf;
@@ -23,36 +22,6 @@ pub(crate) struct EstimateArgs {
     pub epochs_out: Option<PathBuf>,
     #[command(flatten)]
     pub calibration: CalibrationArgs,
-}
-
-/// The options that decide a calibration from logs (`estimate` and `report`).
-#[derive(Args, Debug, Clone)]
-pub(crate) struct CalibrationArgs {
-    /// Carrier frequency [Hz] for ppb/g (default GPS L1).
-    #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
-    pub carrier_hz: f64,
-    #[command(flatten)]
-    pub loop_args: LoopArgs,
-    #[command(flatten)]
-    pub analysis: AnalysisArgs,
-}
-
-impl CalibrationArgs {
-    /// The options by name.
-    pub(crate) fn options(&self) -> gsens_calib::CalibrationOptions {
-        let mut o = self.analysis.options();
-        self.loop_args.apply(&mut o);
-        o.carrier_hz = self.carrier_hz;
-        o
-    }
-
-    /// The pipeline settings (every value checked; options the method
-    /// ignores refused).
-    pub(crate) fn settings(&self) -> Result<PipelineSettings> {
-        self.loop_args.check()?;
-        self.analysis.check()?;
-        Ok(self.options().pipeline_settings()?)
-    }
 }
 
 /// Runs the calibration of `inputs` (keeping the tracking log the estimate
@@ -78,8 +47,8 @@ pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracki
 pub(crate) const LOOP_STATED_TWICE: &str =
     "--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like";
 
-pub(crate) fn run(args: &EstimateArgs) -> Result<crate::Status> {
-    let settings = args.calibration.settings()?;
+pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> {
+    let settings = args.calibration.settings(given)?;
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--epochs-out", args.epochs_out.as_deref(), None)?;
     let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
@@ -99,7 +68,7 @@ pub(crate) fn run(args: &EstimateArgs) -> Result<crate::Status> {
 
 #[cfg(test)]
 mod tests {
-    use super::CalibrationArgs;
+    use crate::args::CalibrationArgs;
     use clap::Parser;
     use gsens_calib::{CalibrationOptions, TimeOffsetOption};
 
@@ -120,10 +89,10 @@ mod tests {
     fn flags_map_to_the_options_of_the_same_name() {
         let args = ["gsens", "--bn-hz", "2.5", "--order", "3", "--time-offset", "-0.01", "--weights", "cn0"];
         let o = Cli::try_parse_from(args).unwrap().calibration.options();
-        assert_eq!(o.bn_hz, Some(2.5));
-        assert_eq!(o.order, Some(3));
-        assert_eq!(o.time_offset, TimeOffsetOption::Seconds(-0.01));
-        assert_eq!(o.weights, gsens_session::Weighting::Cn0);
+        assert_eq!(o.receiver_loop.bn_hz, Some(2.5));
+        assert_eq!(o.receiver_loop.order, Some(3));
+        assert_eq!(o.systematic.time_offset, TimeOffsetOption::Seconds(-0.01));
+        assert_eq!(o.selection.weights, gsens_session::Weighting::Cn0);
         assert!(o.loop_stated());
     }
 }

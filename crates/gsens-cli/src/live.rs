@@ -3,11 +3,11 @@
 //! here are its options, turned into a `gsens_live::RuntimeConfig`, the
 //! choice of screen (gsens-tui's, or plain lines) and the report at the end.
 
-use crate::estimate::CalibrationArgs;
+use crate::args::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
-use gsens_live::{Display, Inputs, Runtime, RuntimeConfig, SystemClock};
+use gsens_live::{Display, InputChoice, InputChoiceError, LOOP_NOT_STATED, Runtime, RuntimeConfig, SystemClock};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -63,50 +63,36 @@ pub(crate) struct LiveArgs {
     pub calibration: CalibrationArgs,
 }
 
-/// Checks that the options name one input and that the files followed exist.
-fn check_inputs(args: &LiveArgs) -> Result<()> {
-    let given = args.stdin
-        || (args.follow_imu.is_some() && (args.follow_tracking.is_some() || args.gnss_sdr_monitor.is_some()));
-    if !given {
-        anyhow::bail!(
+/// The input the options name.
+fn choice(args: &LiveArgs) -> InputChoice {
+    InputChoice {
+        stdin: args.stdin,
+        follow_imu: args.follow_imu.clone(),
+        follow_tracking: args.follow_tracking.clone(),
+        gnss_sdr_monitor: args.gnss_sdr_monitor.clone().zip(args.gnss_sdr_conf.clone()),
+    }
+}
+
+/// An input's error with the options named by their flags.
+fn flagged(e: InputChoiceError) -> anyhow::Error {
+    match e {
+        InputChoiceError::NoInput => anyhow::anyhow!(
             "no input: give --stdin (the merged stream `gsens replay` writes), --follow-imu IMU.CSV with \
              --follow-tracking TRACKING.CSV (growing files), or --follow-imu IMU.CSV with --gnss-sdr-monitor ADDR \
              and --gnss-sdr-conf CONF (GNSS-SDR's tracking monitor)"
-        );
+        ),
+        InputChoiceError::NotAFile { option, .. } => crate::args::flagged("", Some(option), e),
+        InputChoiceError::LoopStatedTwice { .. } => anyhow::anyhow!(crate::estimate::LOOP_STATED_TWICE),
+        e => e.into(),
     }
-    for (flag, path) in [("--follow-imu", &args.follow_imu), ("--follow-tracking", &args.follow_tracking)] {
-        if let Some(p) = path.as_ref().filter(|p| !p.is_file()) {
-            let what = if p.exists() { "not a file" } else { "no such file (start the logger first)" };
-            anyhow::bail!("{flag} {}: {what}", p.display());
-        }
-    }
-    Ok(())
 }
 
-/// The inputs the options name (checked by [`check_inputs`]).
-fn inputs(args: &LiveArgs) -> Result<Inputs> {
-    if args.stdin {
-        let reader = Box::new(std::io::BufReader::new(std::io::stdin()));
-        return Ok(Inputs::Merged { name: "stdin".into(), reader });
-    }
-    let imu = args.follow_imu.clone().expect("checked: --follow-imu");
-    if let (Some(addr), Some(conf)) = (&args.gnss_sdr_monitor, &args.gnss_sdr_conf) {
-        if args.calibration.loop_args.stated() {
-            anyhow::bail!(crate::estimate::LOOP_STATED_TWICE);
-        }
-        let setup = gsens_live::monitor_setup(Some(conf), None, None)?;
-        crate::err(setup.note.as_deref().unwrap_or_default());
-        return Ok(Inputs::Monitor { imu, monitor: Box::new(setup.input(addr)) });
-    }
-    let tracking = args.follow_tracking.clone().expect("checked: --follow-tracking");
-    Ok(Inputs::Files { imu, tracking })
-}
-
-pub(crate) fn run(args: &LiveArgs) -> Result<crate::Status> {
-    check_inputs(args)?;
-    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, args.truth.as_deref())?;
+pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
+    choice(args).check().map_err(flagged)?;
+    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, given, args.truth.as_deref())?;
     crate::check_dir("--out", &args.out)?;
-    let inputs = inputs(args)?;
+    let (inputs, note) = choice(args).inputs(args.calibration.receiver_loop.stated()).map_err(flagged)?;
+    crate::err(note.as_deref().unwrap_or_default());
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     let config = RuntimeConfig {
         inputs,
@@ -122,11 +108,7 @@ pub(crate) fn run(args: &LiveArgs) -> Result<crate::Status> {
     }
     crate::out(&format!("gsens live: {}\n", runtime.shaking_advice()))?;
     if !runtime.session().config().settings.loop_stated {
-        crate::out(
-            "warning [loop_not_stated]: no receiver loop was stated: the estimates will use the typical loop the \
-             data fit best and cannot be trustworthy; state the receiver's loop (--order, --bn-hz, \
-             --loop-interval-s, --logged-phase) from its settings\n",
-        )?;
+        crate::out(LOOP_NOT_STATED)?;
     }
     let ending = if args.plain || !std::io::stdout().is_terminal() {
         runtime.run(Display::Plain(&mut Stdout))?

@@ -19,7 +19,8 @@ mod simulate;
 mod validate;
 
 use anyhow::{Context, Result, anyhow};
-use clap::{Parser, Subcommand};
+use clap::parser::ValueSource;
+use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
@@ -144,18 +145,32 @@ fn one_malloc_arena() {
 #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
 fn one_malloc_arena() {}
 
+/// The options given on the subcommand's command line (not defaulted), by
+/// name: the calibration options of these names are refused where the loop
+/// or the method ignores them.
+fn given(matches: &ArgMatches) -> Vec<String> {
+    let Some((_, m)) = matches.subcommand() else { return Vec::new() };
+    m.ids()
+        .filter(|id| m.value_source(id.as_str()) == Some(ValueSource::CommandLine))
+        .map(|id| id.to_string())
+        .collect()
+}
+
 fn main() -> ExitCode {
     one_malloc_arena();
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut Cli::command()).exit());
+    let given = given(&matches);
+    let given: Vec<&str> = given.iter().map(String::as_str).collect();
     let result = match cli.command {
-        Command::Demo(args) => demo::run(&args),
-        Command::Estimate(args) => estimate::run(&args),
+        Command::Demo(args) => demo::run(&args, &given),
+        Command::Estimate(args) => estimate::run(&args, &given),
         Command::Simulate(args) => simulate::run(&args).map(|()| Status::Done),
-        Command::Response(args) => response::run(&args).map(|()| Status::Done),
-        Command::Montecarlo(args) => montecarlo::run(&args),
-        Command::Report(args) => report::run(&args),
+        Command::Response(args) => response::run(&args, &given).map(|()| Status::Done),
+        Command::Montecarlo(args) => montecarlo::run(&args, &given),
+        Command::Report(args) => report::run(&args, &given),
         Command::Import(args) => import::run(&args).map(|()| Status::Done),
-        Command::Live(args) => live::run(&args),
+        Command::Live(args) => live::run(&args, &given),
         Command::Replay(args) => replay::run(&args).map(|()| Status::Done),
         Command::Validate(args) => validate::run(&args),
         Command::Predict(args) => predict::run(&args),

@@ -40,12 +40,6 @@ pub(crate) struct ImportMonitorArgs {
 }
 
 pub(crate) fn run(a: &ImportMonitorArgs) -> Result<()> {
-    if !(a.idle_timeout_s.is_finite() && a.idle_timeout_s > 0.0) {
-        bail!("--idle-timeout-s must be positive, got {}", a.idle_timeout_s);
-    }
-    if let Some(fs) = a.fs_hz.filter(|f| !(f.is_finite() && *f > 0.0)) {
-        bail!("--fs-hz must be positive, got {fs}");
-    }
     crate::check_file("--out", Some(&a.out), None)?;
     crate::check_file("--raw", a.raw.as_deref(), None)?;
     let setup = monitor_setup(a.gnss_sdr_conf.as_deref(), a.fs_hz, a.settle_s)?;

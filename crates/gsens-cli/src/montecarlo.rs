@@ -2,10 +2,10 @@
 //! compare each method's spread with the Cramér–Rao bound
 //! (`gsens_montecarlo`).
 
-use crate::args::{EstimatorArgs, MethodArg, SelectionArgs, SystematicArgs};
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::positive;
+use gsens_calib::{CalibrationOptions, EstimatorOptions, MethodName, SelectionOptions, SystematicOptions};
 use gsens_montecarlo::{method_settings, monte_carlo};
 use gsens_tui::progress::count_bar;
 use std::path::PathBuf;
@@ -19,7 +19,7 @@ pub(crate) struct MonteCarloArgs {
     pub runs: u64,
     /// Methods to compare (comma separated).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "batch,rls,gradient,gls")]
-    pub methods: Vec<MethodArg>,
+    pub methods: Vec<MethodName>,
     /// Write the statistics (and every run's estimates) as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -28,23 +28,24 @@ pub(crate) struct MonteCarloArgs {
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = positive)]
     pub stated_bn_scale: f64,
     #[command(flatten)]
-    pub estimator: EstimatorArgs,
+    pub estimator: EstimatorOptions,
     #[command(flatten)]
-    pub selection: SelectionArgs,
+    pub selection: SelectionOptions,
     #[command(flatten)]
-    pub systematic: SystematicArgs,
+    pub systematic: SystematicOptions,
 }
 
-pub(crate) fn run(args: &MonteCarloArgs) -> Result<crate::Status> {
-    args.estimator.check_methods(&args.methods)?;
+pub(crate) fn run(args: &MonteCarloArgs, given: &[&str]) -> Result<crate::Status> {
+    args.estimator.refuse_unused(given, &args.methods, crate::args::flag)?;
     crate::check_file("--json", args.json.as_deref(), None)?;
     let scenario = args.scenario.load()?;
-    let mut options = gsens_calib::CalibrationOptions::default();
-    args.estimator.apply(&mut options);
-    args.selection.apply(&mut options);
-    args.systematic.apply(&mut options);
-    let names: Vec<_> = args.methods.iter().map(|m| m.name()).collect();
-    let methods = method_settings(&scenario, &options, &names, args.stated_bn_scale)?;
+    let options = CalibrationOptions {
+        estimator: args.estimator.clone(),
+        selection: args.selection.clone(),
+        systematic: args.systematic.clone(),
+        ..CalibrationOptions::default()
+    };
+    let methods = method_settings(&scenario, &options, &args.methods, args.stated_bn_scale)?;
     let bar = count_bar("monte carlo", args.runs, "runs");
     let name = args.scenario.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
     let mc = monte_carlo(&scenario, &name, args.runs, args.scenario.seed, &methods, || bar.inc(1))?;

@@ -5,41 +5,18 @@
 //! (`gsens_calib::predict`).
 
 use anyhow::{Context, Result, anyhow, bail};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use gsens_calib::ResultDocument;
 use gsens_calib::option_values::{finite_non_negative, positive};
 use gsens_calib::predict::{
-    FeedForward, PredictionInput, SweepContext, SweepError, SweepSettings, Vibration, diagonal_covariance, parse_tone,
-    render_sweep_text,
+    FeedForward, PredictionInput, SweepContext, SweepError, SweepSettings, Vibration, parse_tone, render_sweep_text,
+    stated_gamma,
 };
 use gsens_montecarlo::frequency_noise;
 use gsens_report::figures::Format;
 use gsens_report::studies::fig_lock_margin_at;
-use gsens_sim::oscillator::OscillatorConfig;
+use gsens_sim::oscillator::NoisePreset;
 use std::path::PathBuf;
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub(crate) enum OscillatorArg {
-    /// The simulator's OCXO preset (the paper's class).
-    Ocxo,
-    /// The simulator's TCXO preset.
-    Tcxo,
-    /// The simulator's low-quality TCXO preset.
-    TcxoLowQuality,
-    /// No oscillator noise (the vibration and thermal parts alone).
-    None,
-}
-
-impl std::fmt::Display for OscillatorArg {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            OscillatorArg::Ocxo => "OCXO",
-            OscillatorArg::Tcxo => "TCXO",
-            OscillatorArg::TcxoLowQuality => "low-quality TCXO",
-            OscillatorArg::None => "noise-free",
-        })
-    }
-}
 
 #[derive(Args, Debug)]
 pub(crate) struct PredictArgs {
@@ -63,7 +40,7 @@ pub(crate) struct PredictArgs {
     pub levels: Vec<f64>,
     /// The oscillator's noise.
     #[arg(long, value_enum, default_value = "ocxo")]
-    pub oscillator: OscillatorArg,
+    pub oscillator: NoisePreset,
     /// Carrier [Hz] (GPS L1 by default).
     #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
     pub carrier_hz: f64,
@@ -106,15 +83,7 @@ pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
     crate::check_file("--figure", args.figure.as_deref(), None)?;
     let (gamma, covariance) = match (&args.from, &args.gamma, &args.sigma) {
         (Some(path), _, _) => ResultDocument::read_gamma_file(path)?,
-        (None, Some(g), Some(s)) => {
-            let (Ok(g), Ok(s)) = (<[f64; 3]>::try_from(&g[..]), <[f64; 3]>::try_from(&s[..])) else {
-                bail!("--gamma and --sigma take three values each, as x,y,z")
-            };
-            if g.iter().chain(&s).any(|x| !x.is_finite()) || s.iter().any(|x| *x < 0.0) {
-                bail!("--gamma and --sigma must be finite, --sigma ≥ 0");
-            }
-            (g, diagonal_covariance(s))
-        }
+        (None, Some(g), Some(s)) => stated_gamma(g, s)?,
         _ => bail!("give --from report.json, or --gamma with --sigma"),
     };
     let vibration = match &args.psd {
@@ -123,12 +92,7 @@ pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
             args.tone.iter().map(|t| parse_tone(t).map_err(|e| anyhow!("--tone {t}: {e}"))).collect::<Result<_>>()?,
         ),
     };
-    let oscillator = match args.oscillator {
-        OscillatorArg::Ocxo => Some(OscillatorConfig::ocxo()),
-        OscillatorArg::Tcxo => Some(OscillatorConfig::tcxo()),
-        OscillatorArg::TcxoLowQuality => Some(OscillatorConfig::tcxo_low_quality()),
-        OscillatorArg::None => None,
-    };
+    let oscillator = args.oscillator.config();
     let feed_forward = FeedForward { imu_rate_hz: args.imu_rate_hz, latency_s: args.latency_s };
     let settings = SweepSettings {
         base: PredictionInput {

@@ -2,8 +2,8 @@
 //! result document as JSON, the compensation parameters as a C header, and the
 //! figures as PNG and SVG.
 
-use crate::args::InputArgs;
-use crate::estimate::{CalibrationArgs, calibrate};
+use crate::args::{CalibrationArgs, InputArgs};
+use crate::estimate::calibrate;
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_calib::Outcome;
@@ -47,19 +47,20 @@ pub(crate) struct HeaderArgs {
 /// with a note saying which loop is modelled and why.
 pub(crate) fn settings_and_loop_note(
     calibration: &CalibrationArgs,
+    given: &[&str],
     truth: Option<&Path>,
 ) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
-    let mut settings = calibration.settings()?;
+    let mut settings = calibration.settings(given)?;
     let Some(path) = truth else { return Ok((settings, None)) };
     let note = gsens_live::take_truth_loop(&mut settings, path)?.note(path);
     Ok((settings, Some(note)))
 }
 
-pub(crate) fn run(args: &ReportArgs) -> Result<crate::Status> {
+pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
     let inputs = args.inputs.inputs()?;
     // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
     let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
-    let (settings, loop_note) = settings_and_loop_note(&args.calibration, truth_loop)?;
+    let (settings, loop_note) = settings_and_loop_note(&args.calibration, given, truth_loop)?;
     crate::check_dir("--out", &args.out)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {

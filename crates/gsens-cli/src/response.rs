@@ -1,7 +1,6 @@
 //! `gsens response`: the loop's response from NCO frequency bias to phase
 //! error, |L(j2πf)| and its phase, with the peak and the shaking period to use.
 
-use crate::args::LoopArgs;
 use anyhow::{Context, Result};
 use clap::Args;
 use gsens_report::figures::Format;
@@ -12,7 +11,7 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 pub(crate) struct ResponseArgs {
     #[command(flatten)]
-    pub loop_args: LoopArgs,
+    pub receiver_loop: gsens_calib::LoopOptions,
     /// Lowest frequency of the table [Hz].
     #[arg(long, default_value_t = 0.05)]
     pub f_min_hz: f64,
@@ -30,15 +29,15 @@ pub(crate) struct ResponseArgs {
     pub plot: Option<PathBuf>,
 }
 
-pub(crate) fn run(args: &ResponseArgs) -> Result<()> {
+pub(crate) fn run(args: &ResponseArgs, given: &[&str]) -> Result<()> {
     anyhow::ensure!(
         args.f_min_hz > 0.0 && args.f_max_hz > args.f_min_hz && args.points >= 2,
         "need 0 < --f-min-hz < --f-max-hz and --points ≥ 2"
     );
-    args.loop_args.check()?;
+    args.receiver_loop.refuse_other_shape(given, crate::args::flag)?;
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--plot", args.plot.as_deref(), None)?;
-    let model = args.loop_args.loop_model();
+    let model = args.receiver_loop.loop_model();
     let table = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, args.points, model.to_string())
         .with_context(|| format!("the loop ({model})"))?;
     crate::out(&gsens_report::render_response_text(&table))?;

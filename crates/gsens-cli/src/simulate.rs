@@ -25,8 +25,8 @@ pub(crate) struct SimulateArgs {
     #[arg(long)]
     pub iq: Option<PathBuf>,
     /// Sample format of --iq (GNSS-SDR's item_type).
-    #[arg(long, value_enum, default_value_t = IqFormatArg::Ibyte, requires = "iq")]
-    pub iq_format: IqFormatArg,
+    #[arg(long, value_enum, default_value_t = IqFormat::Ibyte, requires = "iq")]
+    pub iq_format: IqFormat,
     /// Sampling rate of --iq [Hz].
     #[arg(long, default_value_t = 4.0e6, requires = "iq", allow_negative_numbers = true, value_parser = positive)]
     pub fs_hz: f64,
@@ -42,17 +42,6 @@ pub(crate) struct SimulateArgs {
     pub iq_no_data: bool,
 }
 
-/// IF sample formats on the command line.
-#[derive(Clone, Copy, Debug, clap::ValueEnum, PartialEq)]
-pub(crate) enum IqFormatArg {
-    /// Interleaved signed 8-bit I/Q.
-    Ibyte,
-    /// Interleaved signed 16-bit I/Q.
-    Ishort,
-    /// Interleaved 32-bit float I/Q.
-    GrComplex,
-}
-
 pub(crate) fn run(args: &SimulateArgs) -> Result<()> {
     let scenario = args.scenario.load()?;
     crate::check_dir("--out", &args.out)?;
@@ -65,11 +54,7 @@ pub(crate) fn run(args: &SimulateArgs) -> Result<()> {
         bar.finish_and_clear();
         return crate::out(&format!("{truth}\nlogs: imu.csv, tracking.csv, truth.json in {}\n", out.display()));
     };
-    let format = match args.iq_format {
-        IqFormatArg::Ibyte => IqFormat::Ibyte,
-        IqFormatArg::Ishort => IqFormat::Ishort,
-        IqFormatArg::GrComplex => IqFormat::GrComplex,
-    };
+    let format = args.iq_format;
     let mut cfg = IqConfig::new(args.fs_hz, format, &scenario);
     cfg.navigation_data = !args.iq_no_data;
     let session = gsens_sim::simulate_iq_to_dir(&scenario, seed, &cfg, iq, out, args.iq_carrier_truth, progress)?;

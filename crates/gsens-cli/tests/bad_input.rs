@@ -225,7 +225,7 @@ fn options_are_checked_before_any_file_is_read() {
         .output()
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.code() == Some(2) && e.contains("--pocketsdr-toff-s must be ≥ 0, got -1"), "{e}");
+    assert!(o.status.code() == Some(2) && e.contains("--pocketsdr-toff-s must be ≥ 0 and finite, got -1"), "{e}");
     // Every on/off option's help says on|off, never clap's true/false beside a default of `on`.
     let help = Command::new(env!("CARGO_BIN_EXE_gsens")).args(["estimate", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);

@@ -185,7 +185,7 @@ fn estimate_from_shaken_dumps_with_low_lock_tests() {
         "--gnss-sdr-min-lock-test",
         "1.5",
     ]);
-    assert!(e.contains("--gnss-sdr-min-lock-test must lie in [-1, 1]"), "{e}");
+    assert!(e.contains("--gnss-sdr-min-lock-test must be in [-1, 1]"), "{e}");
 }
 
 #[test]

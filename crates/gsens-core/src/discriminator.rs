@@ -18,13 +18,18 @@ pub const RANGE_MARGIN_SIGMAS: f64 = 3.090_232_306_167_813_5;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Discriminator {
+    /// atan(Q/I), the two-quadrant Costas discriminator of GPS L1 C/A receivers: linear within ±π/2.
+    ///
     /// The Costas (two-quadrant) arctangent atan(Q/I), insensitive to the
     /// navigation data's 180° transitions: what GPS L1 C/A receivers use
     /// (GNSS-SDR's `pll_cloop_two_quadrant_atan`, PocketSDR's `err_phas`).
     /// Its output follows the phase error within ±π/2.
     #[default]
     AtanCostas,
+    /// atan2(Q, I), a four-quadrant PLL discriminator (pilot signals): linear within ±π.
+    ///
     /// The four-quadrant arctangent atan2(Q, I) of a pure PLL (a pilot
     /// signal without data, GNSS-SDR's `pll_four_quadrant_atan`): ±π.
     Atan2,

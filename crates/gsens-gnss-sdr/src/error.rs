@@ -40,6 +40,9 @@ pub enum GnssSdrError {
         /// Its range.
         expected: &'static str,
     },
+    /// A record layout given as text does not parse.
+    #[error("layout: {0}")]
+    Layout(LayoutSpecError),
     /// A configuration file is malformed or asks for something not modelled.
     #[error("{file}: line {line}: {reason}")]
     Conf {
@@ -199,6 +202,19 @@ pub enum GnssSdrError {
     /// The calibration failed.
     #[error(transparent)]
     Pipeline(#[from] gsens_calib::PipelineError),
+}
+
+impl GnssSdrError {
+    /// The conversion setting the error is about, when its message begins
+    /// with that setting's name ([`crate::ImportSettings::override_with`]'s
+    /// errors), so that a caller can name it its own way.
+    pub fn setting(&self) -> Option<&'static str> {
+        match self {
+            GnssSdrError::Setting { name, .. } => Some(name),
+            GnssSdrError::Layout(_) => Some("layout"),
+            _ => None,
+        }
+    }
 }
 
 /// A record layout spec (`name:type,name:type,…`, see

@@ -14,6 +14,29 @@ use crate::conf::TrackingConf;
 use crate::dump::{DumpLayout, TrackingDump, find_dumps, read_dump};
 use crate::error::GnssSdrError;
 
+/// What a caller sets instead of a configuration's lock detector and of
+/// the derived conversion settings ([`ImportSettings::override_with`]);
+/// `None` keeps the configuration's or the derived value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImportOverrides {
+    /// The lock detector's C/N0 threshold (`Tracking_1C.cn0_min`) \[dB-Hz\]; finite.
+    pub min_cn0_dbhz: Option<f64>,
+    /// The lock detector's carrier lock test threshold
+    /// (`Tracking_1C.carrier_lock_th`), in \[−1, 1\]: the test is cos 2φ.
+    pub min_lock_test: Option<f64>,
+    /// Carrier-lock failures (net of passes) that declare a loss of lock
+    /// (`Tracking_1C.max_carrier_lock_fail`).
+    pub max_carrier_lock_fail: Option<u32>,
+    /// Code-lock (C/N0) failures (net of passes) that declare a loss of lock
+    /// (`Tracking_1C.max_lock_fail`).
+    pub max_lock_fail: Option<u32>,
+    /// Seconds dropped after the switch to the narrow loop
+    /// ([`ImportSettings::settle_s`]); ≥ 0 and finite.
+    pub settle_s: Option<f64>,
+    /// The dumps' record layout as text ([`DumpLayout::parse_spec`]).
+    pub layout: Option<String>,
+}
+
 /// How dumps are converted.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ImportSettings {
@@ -51,6 +74,46 @@ impl ImportSettings {
             return Err(GnssSdrError::Setting { name: "the sampling rate", value: fs_hz, expected: "positive" });
         }
         Ok(ImportSettings::new(fs_hz, tracking))
+    }
+
+    /// Overrides the configuration's lock detector, the settling time and
+    /// the record layout with the values `overrides` gives, each checked
+    /// first. Every error names the override: a
+    /// [`GnssSdrError::Setting`] or [`GnssSdrError::Layout`] whose message
+    /// begins with the name of the [`ImportOverrides`] field
+    /// ([`GnssSdrError::setting`]).
+    pub fn override_with(&mut self, overrides: &ImportOverrides) -> Result<(), GnssSdrError> {
+        let o = overrides;
+        let setting = |name, value, expected| GnssSdrError::Setting { name, value, expected };
+        if let Some(v) = o.settle_s.filter(|v| !(*v >= 0.0 && v.is_finite())) {
+            return Err(setting("settle_s", v, "≥ 0 and finite"));
+        }
+        if let Some(v) = o.min_cn0_dbhz.filter(|v| !v.is_finite()) {
+            return Err(setting("min_cn0_dbhz", v, "finite"));
+        }
+        // The lock test is cos 2φ: a threshold outside [-1, 1] passes or fails every record.
+        if let Some(v) = o.min_lock_test.filter(|v| !(-1.0..=1.0).contains(v)) {
+            return Err(setting("min_lock_test", v, "in [-1, 1] (the lock test is cos 2φ)"));
+        }
+        let layout = o.layout.as_deref().map(DumpLayout::parse_spec).transpose().map_err(GnssSdrError::Layout)?;
+        let lock = &mut self.tracking.lock;
+        if let Some(v) = o.min_cn0_dbhz {
+            lock.cn0_min_dbhz.set_option(v);
+        }
+        if let Some(v) = o.min_lock_test {
+            lock.carrier_lock_th.set_option(v);
+        }
+        if let Some(v) = o.max_carrier_lock_fail {
+            lock.max_carrier_lock_fail.set_option(v);
+        }
+        if let Some(v) = o.max_lock_fail {
+            lock.max_lock_fail.set_option(v);
+        }
+        self.settle_s = o.settle_s;
+        if layout.is_some() {
+            self.layout = layout;
+        }
+        Ok(())
     }
 
     /// The integration time of the modelled stage, its loop's update interval \[s\].
@@ -933,6 +996,40 @@ mod tests {
             v.push(rec(n, 0.02 * (k as f64 * 0.1).sin(), 44.0, lock, prn));
         }
         v
+    }
+
+    #[test]
+    fn overrides_are_checked_and_named() {
+        let mut s = ImportSettings::from_conf(None, Some(4e6)).unwrap();
+        let bad = |o: ImportOverrides| s.clone().override_with(&o).unwrap_err();
+        let e = bad(ImportOverrides { settle_s: Some(-1.0), ..ImportOverrides::default() });
+        assert_eq!(
+            (e.to_string().as_str(), e.setting()),
+            ("settle_s must be ≥ 0 and finite, got -1", Some("settle_s"))
+        );
+        let e = bad(ImportOverrides { min_lock_test: Some(1.5), ..ImportOverrides::default() });
+        assert!(e.to_string().starts_with("min_lock_test must be in [-1, 1]"), "{e}");
+        let e = bad(ImportOverrides { min_cn0_dbhz: Some(f64::INFINITY), ..ImportOverrides::default() });
+        assert_eq!(e.to_string(), "min_cn0_dbhz must be finite, got inf");
+        let e = bad(ImportOverrides { layout: Some("x:f33".into()), ..ImportOverrides::default() });
+        assert_eq!(
+            (e.to_string().as_str(), e.setting()),
+            ("layout: `x:f33`: unknown type `f33` (f32, f64, u32, u64, i32)", Some("layout"))
+        );
+        let o = ImportOverrides {
+            min_cn0_dbhz: Some(30.0),
+            min_lock_test: Some(-0.5),
+            max_carrier_lock_fail: Some(7),
+            max_lock_fail: Some(9),
+            settle_s: Some(0.0),
+            layout: Some("gnss-sdr-0.0.21".into()),
+        };
+        s.override_with(&o).unwrap();
+        let lock = &s.tracking.lock;
+        assert_eq!((lock.cn0_min_dbhz.value, lock.carrier_lock_th.value), (30.0, -0.5));
+        assert_eq!((lock.max_carrier_lock_fail.value, lock.max_lock_fail.value), (7, 9));
+        assert_eq!(s.settle_s, Some(0.0));
+        assert!(s.layout.is_some());
     }
 
     #[test]

@@ -28,6 +28,7 @@
 //! batch estimate of the logs that `gsens live` keeps.
 #![warn(missing_docs)]
 
+mod choice;
 mod clock;
 mod follow;
 mod guidance;
@@ -46,6 +47,7 @@ mod sources;
 mod stream;
 mod truth;
 
+pub use choice::{InputChoice, InputChoiceError, LOOP_NOT_STATED};
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
 pub use guidance::{GENTLER_FRACTION, Instruction, LoopBand, Protocol, Situation, instruct};

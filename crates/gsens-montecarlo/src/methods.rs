@@ -35,7 +35,8 @@ mod tests {
     #[test]
     fn one_setting_per_method_around_the_scenarios_loop_scaled() {
         let scenario = Scenario::default();
-        let options = CalibrationOptions { lambda: 0.999, ..CalibrationOptions::default() };
+        let mut options = CalibrationOptions::default();
+        options.estimator.lambda = 0.999;
         let s = method_settings(&scenario, &options, &[MethodName::Batch, MethodName::Rls], 1.5).unwrap();
         assert_eq!(s.len(), 2);
         assert_eq!(s[0].estimate.method, Method::Batch);
@@ -43,7 +44,8 @@ mod tests {
         let bn = |p: &PipelineSettings| p.estimate.receiver_loop.bn_hz().unwrap();
         assert!((bn(&s[0]) - 1.5 * scenario.tracking_loop.bn_hz).abs() < 1e-12);
         assert_eq!(s[0].estimate.logged_phase, scenario.log.phase);
-        let bad = CalibrationOptions { warmup_s: -1.0, ..CalibrationOptions::default() };
+        let mut bad = CalibrationOptions::default();
+        bad.estimator.warmup_s = -1.0;
         assert!(matches!(
             method_settings(&scenario, &bad, &[MethodName::Batch], 1.0),
             Err(MonteCarloError::Settings(_))

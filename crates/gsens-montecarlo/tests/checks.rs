@@ -14,7 +14,9 @@ use std::f64::consts::TAU;
 
 /// The loop of [`other_clean_session`]: the default loop, the latest output logged.
 fn last_loop() -> CalibrationOptions {
-    CalibrationOptions { logged_phase: Some(LoggedPhase::Last), ..right_loop() }
+    let mut o = right_loop();
+    o.receiver_loop.logged_phase = Some(LoggedPhase::Last);
+    o
 }
 
 /// Gives samples `first..first + n` of `axes` the value of sample `first − 1`,
@@ -144,7 +146,8 @@ fn time_stamps_in_milliseconds_are_named() {
     assert!(!doc.trustworthy);
     assert!(message(&doc, WarningCode::TimeUnits).contains("IMU's sample interval is 25 s"), "{:?}", doc.warnings);
     // Both in milliseconds: the time-offset search would end at its limit, so the offset is stated.
-    let none = CalibrationOptions { time_offset: TimeOffsetOption::None, ..right_loop() };
+    let mut none = right_loop();
+    none.systematic.time_offset = TimeOffsetOption::None;
     let doc = estimate(&tracking_ms, &imu_ms, &none);
     assert_eq!(codes(&doc).iter().filter(|c| **c == WarningCode::TimeUnits).count(), 2, "{:?}", doc.warnings);
     assert!(!doc.trustworthy);

@@ -184,12 +184,10 @@ fn the_pipeline_cross_checks_the_loop_against_the_loop_free_estimate() {
     }
     assert!(!common::codes(&right).contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", right.warnings);
 
-    let wrong_options = gsens_calib::CalibrationOptions {
-        bn_hz: Some(6.0),
-        loop_check: false,
-        loop_tolerance: Some(0.0),
-        ..common::right_loop()
-    };
+    let mut wrong_options = common::right_loop();
+    wrong_options.receiver_loop.bn_hz = Some(6.0);
+    wrong_options.systematic.loop_check = false;
+    wrong_options.systematic.loop_tolerance = Some(0.0);
     let wrong = common::estimate(&logs.tracking, &logs.imu, &wrong_options);
     assert!(common::codes(&wrong).contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", wrong.warnings);
     assert!(!wrong.trustworthy);

@@ -7,7 +7,7 @@
 mod common;
 
 use common::{codes, error_and_z, estimate, map_imu, map_tracking, message, right_loop, session, truth};
-use gsens_calib::{CalibrationOptions, MethodName, TimeOffsetOption, WarningCode};
+use gsens_calib::{CalibrationOptions, LoopOptions, MethodName, TimeOffsetOption, WarningCode};
 use gsens_session::ChannelRanking;
 use std::f64::consts::TAU;
 
@@ -43,7 +43,7 @@ fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
     assert!(clean.trustworthy, "the correctly described session is trustworthy: [{clean_codes}]");
     assert!(err < 0.02 && z < 3.0, "clean: {err} {z}");
 
-    let bn = |bn_hz: f64| right_but(|o| o.bn_hz = Some(bn_hz));
+    let bn = |bn_hz: f64| right_but(|o| o.receiver_loop.bn_hz = Some(bn_hz));
     let traps = [
         ("loop 10 % too wide", tracking, imu, bn(3.3)),
         ("loop 10 % too narrow", tracking, imu, bn(2.7)),
@@ -53,10 +53,13 @@ fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
             "loop interval left at the log's",
             tracking,
             imu,
-            CalibrationOptions { bn_hz: Some(3.0), ..CalibrationOptions::default() },
+            CalibrationOptions {
+                receiver_loop: LoopOptions { bn_hz: Some(3.0), ..LoopOptions::default() },
+                ..CalibrationOptions::default()
+            },
         ),
-        ("3rd order stated for a 2nd", tracking, imu, right_but(|o| o.order = Some(3))),
-        ("logged last, not mean", tracking, imu, right_but(|o| o.logged_phase = None)),
+        ("3rd order stated for a 2nd", tracking, imu, right_but(|o| o.receiver_loop.order = Some(3))),
+        ("logged last, not mean", tracking, imu, right_but(|o| o.receiver_loop.logged_phase = None)),
         ("IMU in g", tracking, &imu_g, right_loop()),
         ("phase in cycles", &phase_cycles, imu, right_loop()),
         ("phase in degrees", &phase_deg, imu, right_loop()),
@@ -70,7 +73,7 @@ fn every_mistake_is_accurate_or_flagged_and_the_clean_session_is_trusted() {
             imu,
             right_but(|o| {
                 o.method = MethodName::Gradient;
-                o.gain_k = 50.0;
+                o.estimator.gain_k = 50.0;
             }),
         ),
     ];
@@ -127,8 +130,8 @@ fn an_offset_the_data_do_not_resolve_is_flagged() {
         tracking,
         imu,
         &right_but(|o| {
-            o.time_offset = TimeOffsetOption::Seconds(0.0);
-            o.loop_tolerance = Some(f64::INFINITY);
+            o.systematic.time_offset = TimeOffsetOption::Seconds(0.0);
+            o.systematic.loop_tolerance = Some(f64::INFINITY);
         }),
     );
     let (_, z) = error_and_z(&stated, truth);
@@ -139,8 +142,8 @@ fn an_offset_the_data_do_not_resolve_is_flagged() {
         tracking,
         imu,
         &right_but(|o| {
-            o.logged_phase = None;
-            o.time_offset = TimeOffsetOption::Seconds(0.0);
+            o.receiver_loop.logged_phase = None;
+            o.systematic.time_offset = TimeOffsetOption::Seconds(0.0);
         }),
     );
     assert_eq!((last.trustworthy, codes(&last)), (false, vec![WarningCode::PhaseUnits]));

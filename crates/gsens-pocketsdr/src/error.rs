@@ -100,3 +100,15 @@ pub enum PocketSdrError {
     #[error(transparent)]
     Pipeline(#[from] gsens_calib::PipelineError),
 }
+
+impl PocketSdrError {
+    /// The conversion setting the error is about, when its message begins
+    /// with that setting's name ([`crate::ImportSettings::check`]), so that
+    /// a caller can name it its own way.
+    pub fn setting(&self) -> Option<&'static str> {
+        match self {
+            PocketSdrError::Setting { name, .. } => Some(name),
+            _ => None,
+        }
+    }
+}

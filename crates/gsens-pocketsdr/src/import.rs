@@ -39,6 +39,19 @@ impl ImportSettings {
         Ok(ImportSettings { options, settle_s: None, toff_s: 0.0 })
     }
 
+    /// The settings' own checks: `toff_s` and `settle_s` finite and ≥ 0.
+    /// Every error is a [`PocketSdrError::Setting`] whose message begins
+    /// with the field's name ([`PocketSdrError::setting`]).
+    pub fn check(&self) -> Result<(), PocketSdrError> {
+        if !(self.toff_s.is_finite() && self.toff_s >= 0.0) {
+            return Err(PocketSdrError::Setting { name: "toff_s", value: self.toff_s, expected: "≥ 0 and finite" });
+        }
+        if let Some(v) = self.settle_s.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+            return Err(PocketSdrError::Setting { name: "settle_s", value: v, expected: "≥ 0 and finite" });
+        }
+        Ok(())
+    }
+
     /// The modelled loop: GPS L1 C/A at `b_pll`.
     pub fn stage(&self) -> PocketSdrStage {
         PocketSdrStage::l1ca(self.options.b_pll_hz.value)
@@ -226,7 +239,7 @@ fn ms(t_s: f64) -> i64 {
 /// interval and the epoch grid they are on, each channel's lines split into
 /// tracks, and the rows of the tracks' settled lines.
 pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Imported, PocketSdrError> {
-    check_settings(settings)?;
+    settings.check()?;
     let stage = settings.stage();
     let PocketSdrLog { file, records, messages, garbled, garbled_count, fs_hz, version, .. } = log;
     let mut garbled = GarbledLines { kept: garbled, count: garbled_count };
@@ -269,17 +282,6 @@ pub fn import_log(log: PocketSdrLog, settings: &ImportSettings) -> Result<Import
         garbled_count: garbled.count,
         settings: settings.clone(),
     })
-}
-
-/// The settings' own checks: `toff_s` and `settle_s` finite and ≥ 0.
-fn check_settings(settings: &ImportSettings) -> Result<(), PocketSdrError> {
-    if !(settings.toff_s.is_finite() && settings.toff_s >= 0.0) {
-        return Err(PocketSdrError::Setting { name: "toff_s", value: settings.toff_s, expected: "≥ 0 and finite" });
-    }
-    if let Some(v) = settings.settle_s.filter(|v| !(v.is_finite() && *v >= 0.0)) {
-        return Err(PocketSdrError::Setting { name: "settle_s", value: v, expected: "≥ 0 and finite" });
-    }
-    Ok(())
 }
 
 /// The log's garbled lines: the first [`crate::log::GARBLED_KEPT`], and how many.
@@ -615,4 +617,24 @@ pub fn render_summary(imported: &Imported) -> String {
         let _ = writeln!(s, "  {file}:{line}: {what}");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A settling time or `-toff` below 0 (or not finite) is refused, the
+    /// message beginning with the field's name.
+    #[test]
+    fn settings_out_of_range_are_refused_by_name() {
+        let ok = ImportSettings::from_options_file(None).unwrap();
+        assert!(ok.check().is_ok());
+        let e = ImportSettings { settle_s: Some(-2.0), ..ok.clone() }.check().unwrap_err();
+        assert_eq!(
+            (e.to_string().as_str(), e.setting()),
+            ("settle_s must be ≥ 0 and finite, got -2", Some("settle_s"))
+        );
+        let e = ImportSettings { toff_s: f64::NAN, ..ok }.check().unwrap_err();
+        assert_eq!((e.to_string().as_str(), e.setting()), ("toff_s must be ≥ 0 and finite, got NaN", Some("toff_s")));
+    }
 }

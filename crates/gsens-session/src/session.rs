@@ -36,11 +36,16 @@ pub const GRID_TOLERANCE: f64 = 0.1;
 /// changes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Weighting {
-    /// Equal weights on one carrier (the paper): `w = 1/s²`, channels assumed
-    /// to have equal raw noise.
+    /// Equal weights (the paper).
+    ///
+    /// Equal weights on one carrier: `w = 1/s²`, channels assumed to have
+    /// equal raw noise.
     #[default]
     Equal,
+    /// Weights proportional to C/N0 (inverse thermal phase variance).
+    ///
     /// Weights ∝ C/N0 as a ratio over s², `10^(cn0_dbhz/10)/s²`: the inverse of
     /// the scaled thermal phase variance `s²·Bn/(C/N0)` (squaring loss
     /// neglected), per row.

@@ -129,12 +129,17 @@ pub enum IqError {
 /// Sample format of the output file, as GNSS-SDR's `File_Signal_Source` names it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum IqFormat {
-    /// Interleaved signed 8-bit I, Q.
+    /// Interleaved signed 8-bit I/Q.
     Ibyte,
-    /// Interleaved signed 16-bit little-endian I, Q.
+    /// Interleaved signed 16-bit I/Q.
+    ///
+    /// Little-endian.
     Ishort,
-    /// Interleaved 32-bit little-endian floats I, Q (GNU Radio's `gr_complex`).
+    /// Interleaved 32-bit float I/Q.
+    ///
+    /// Little-endian (GNU Radio's `gr_complex`).
     GrComplex,
 }
 

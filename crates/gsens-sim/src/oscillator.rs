@@ -555,9 +555,63 @@ impl Oscillator {
     }
 }
 
+/// An oscillator's noise by preset, or none (a prediction of the vibration
+/// and thermal parts alone).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum NoisePreset {
+    /// The simulator's OCXO preset (the paper's class).
+    Ocxo,
+    /// The simulator's TCXO preset.
+    Tcxo,
+    /// The simulator's low-quality TCXO preset.
+    TcxoLowQuality,
+    /// No oscillator noise (the vibration and thermal parts alone).
+    None,
+}
+
+impl NoisePreset {
+    /// The preset's configuration ([`OscillatorConfig::ocxo`] …); `None` for no noise.
+    pub fn config(self) -> Option<OscillatorConfig> {
+        match self {
+            NoisePreset::Ocxo => Some(OscillatorConfig::ocxo()),
+            NoisePreset::Tcxo => Some(OscillatorConfig::tcxo()),
+            NoisePreset::TcxoLowQuality => Some(OscillatorConfig::tcxo_low_quality()),
+            NoisePreset::None => None,
+        }
+    }
+}
+
+impl std::fmt::Display for NoisePreset {
+    /// The oscillator as a prediction's text names it: `OCXO`, `TCXO`,
+    /// `low-quality TCXO`, `noise-free`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            NoisePreset::Ocxo => "OCXO",
+            NoisePreset::Tcxo => "TCXO",
+            NoisePreset::TcxoLowQuality => "low-quality TCXO",
+            NoisePreset::None => "noise-free",
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each preset is its configuration, none is no noise, and each names
+    /// itself as a prediction's text does.
+    #[test]
+    fn noise_presets_are_the_configurations_and_name_themselves() {
+        assert_eq!(NoisePreset::Ocxo.config(), Some(OscillatorConfig::ocxo()));
+        assert_eq!(NoisePreset::TcxoLowQuality.config(), Some(OscillatorConfig::tcxo_low_quality()));
+        assert_eq!(NoisePreset::None.config(), None);
+        let names: Vec<String> = [NoisePreset::Ocxo, NoisePreset::Tcxo, NoisePreset::TcxoLowQuality, NoisePreset::None]
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        assert_eq!(names, ["OCXO", "TCXO", "low-quality TCXO", "noise-free"]);
+    }
     use crate::rng::seeded;
 
     fn simulate(cfg: &OscillatorConfig, dt: f64, n: usize, seed: u64) -> Vec<f64> {

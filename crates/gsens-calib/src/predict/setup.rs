@@ -29,6 +29,31 @@ pub fn diagonal_covariance(sigma: [f64; 3]) -> [[f64; 3]; 3] {
     c
 }
 
+/// Γ̂ and its 1σ stated per axis that are not three finite values each
+/// with σ ≥ 0 ([`stated_gamma`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StatedGammaError {
+    /// Not three values each.
+    #[error("gamma and sigma take three values each, as x,y,z")]
+    Count,
+    /// A value not finite, or a σ below 0.
+    #[error("gamma and sigma must be finite, sigma ≥ 0")]
+    Value,
+}
+
+/// Γ̂ \[Hz/(m/s²)\] and its covariance from Γ̂ and its 1σ stated per axis as
+/// x, y, z, the axes uncorrelated ([`diagonal_covariance`]).
+pub fn stated_gamma(gamma: &[f64], sigma: &[f64]) -> Result<([f64; 3], [[f64; 3]; 3]), StatedGammaError> {
+    let (Ok(g), Ok(s)) = (<[f64; 3]>::try_from(gamma), <[f64; 3]>::try_from(sigma)) else {
+        return Err(StatedGammaError::Count);
+    };
+    if g.iter().chain(&s).any(|x| !x.is_finite()) || s.iter().any(|x| *x < 0.0) {
+        return Err(StatedGammaError::Value);
+    }
+    Ok((g, diagonal_covariance(s)))
+}
+
 /// A tone that is not written `F_HZ:AX,AY,AZ` with F > 0 and finite amplitudes.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("expected F_HZ:AX,AY,AZ (e.g. 0.91:3,0,0)")]
@@ -50,6 +75,16 @@ pub fn parse_tone(text: &str) -> Result<(f64, [f64; 3]), ToneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_stated_gamma_needs_three_finite_values_and_sigmas_of_at_least_0() {
+        let (g, c) = stated_gamma(&[1e-3, -2e-3, 0.0], &[0.5, 0.0, 2.0]).unwrap();
+        assert_eq!(g, [1e-3, -2e-3, 0.0]);
+        assert_eq!(c, [[0.25, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 4.0]]);
+        assert_eq!(stated_gamma(&[1.0, 2.0], &[1.0, 2.0, 3.0]), Err(StatedGammaError::Count));
+        assert_eq!(stated_gamma(&[1.0, 2.0, 3.0], &[1.0, -2.0, 3.0]), Err(StatedGammaError::Value));
+        assert_eq!(stated_gamma(&[1.0, f64::NAN, 3.0], &[1.0, 2.0, 3.0]), Err(StatedGammaError::Value));
+    }
 
     #[test]
     fn tones_read_as_written_and_anything_else_is_refused() {

@@ -5,7 +5,7 @@
 
 #![allow(dead_code)]
 
-use gsens_calib::{CalibrationOptions, ResultDocument, WarningCode, calibrate_logs};
+use gsens_calib::{CalibrationOptions, LoopOptions, ResultDocument, WarningCode, calibrate_logs};
 use gsens_core::LoggedPhase;
 use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 use gsens_sim::scenario::Scenario;
@@ -37,13 +37,14 @@ pub(crate) fn truth(logs: &SimulatedLogs) -> [f64; 3] {
 /// The receiver's loop as the default scenario runs it: 2nd order, 3 Hz,
 /// updated every 1 ms, each row the mean of its 25 updates.
 pub(crate) fn right_loop() -> CalibrationOptions {
-    CalibrationOptions {
+    let receiver_loop = LoopOptions {
         order: Some(2),
         bn_hz: Some(3.0),
         loop_interval_s: Some(0.001),
         logged_phase: Some(LoggedPhase::Mean),
-        ..CalibrationOptions::default()
-    }
+        ..LoopOptions::default()
+    };
+    CalibrationOptions { receiver_loop, ..CalibrationOptions::default() }
 }
 
 /// The tracking log with every row changed by `f`, in the order the

@@ -1,0 +1,150 @@
+//! A live session's input as a front end names it: a merged stream on
+//! standard input, growing files followed, or GNSS-SDR's tracking monitor
+//! with a growing IMU log; checked, and turned into the runtime's
+//! [`Inputs`].
+
+use std::path::PathBuf;
+
+use gsens_gnss_sdr::GnssSdrError;
+
+use crate::monitor_setup::monitor_setup;
+use crate::runtime::Inputs;
+
+/// The inputs a caller names (every field unset: none).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct InputChoice {
+    /// One merged stream on standard input (what `replay` writes).
+    pub stdin: bool,
+    /// A growing IMU log, followed.
+    pub follow_imu: Option<PathBuf>,
+    /// A growing tracking log, followed (with [`InputChoice::follow_imu`]).
+    pub follow_tracking: Option<PathBuf>,
+    /// GNSS-SDR's tracking monitor: the address it sends to and the
+    /// configuration of its run (with [`InputChoice::follow_imu`]).
+    pub gnss_sdr_monitor: Option<(String, PathBuf)>,
+}
+
+/// Why the inputs named cannot start a session.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum InputChoiceError {
+    /// No complete input is named.
+    #[error(
+        "no input: a merged stream on standard input, a growing IMU log with a growing tracking log, or a growing \
+         IMU log with GNSS-SDR's tracking monitor"
+    )]
+    NoInput,
+    /// A file to follow is missing or not a file.
+    #[error("{option} {}: {}", path.display(), if *exists { "not a file" } else { "no such file (start the logger first)" })]
+    NotAFile {
+        /// The [`InputChoice`] field that names it (`follow_imu`, `follow_tracking`).
+        option: &'static str,
+        /// The path.
+        path: PathBuf,
+        /// Whether something else is there.
+        exists: bool,
+    },
+    /// The settings state a receiver loop, and the monitor's configuration states its own.
+    #[error("{}: the GNSS-SDR configuration states the receiver loop; the settings must leave it unstated", conf.display())]
+    LoopStatedTwice {
+        /// The configuration.
+        conf: PathBuf,
+    },
+    /// The monitor's configuration cannot be read.
+    #[error(transparent)]
+    Monitor(#[from] GnssSdrError),
+}
+
+impl InputChoice {
+    /// Checks that one input is named completely and that the files to
+    /// follow exist.
+    pub fn check(&self) -> Result<(), InputChoiceError> {
+        let follows = self.follow_imu.is_some() && (self.follow_tracking.is_some() || self.gnss_sdr_monitor.is_some());
+        if !(self.stdin || follows) {
+            return Err(InputChoiceError::NoInput);
+        }
+        for (option, path) in [("follow_imu", &self.follow_imu), ("follow_tracking", &self.follow_tracking)] {
+            if let Some(p) = path.as_ref().filter(|p| !p.is_file()) {
+                return Err(InputChoiceError::NotAFile { option, path: p.clone(), exists: p.exists() });
+            }
+        }
+        Ok(())
+    }
+
+    /// The runtime's inputs ([`InputChoice::check`]ed), with the note on the
+    /// monitor's configuration ([`crate::MonitorSetup::note`]). A monitor's
+    /// loop is its configuration's: `loop_stated` settings are refused.
+    pub fn inputs(self, loop_stated: bool) -> Result<(Inputs, Option<String>), InputChoiceError> {
+        self.check()?;
+        if self.stdin {
+            let reader = Box::new(std::io::BufReader::new(std::io::stdin()));
+            return Ok((Inputs::Merged { name: "stdin".into(), reader }, None));
+        }
+        let (Some(imu), tracking, monitor) = (self.follow_imu, self.follow_tracking, self.gnss_sdr_monitor) else {
+            return Err(InputChoiceError::NoInput);
+        };
+        match (tracking, monitor) {
+            (_, Some((addr, conf))) => {
+                if loop_stated {
+                    return Err(InputChoiceError::LoopStatedTwice { conf });
+                }
+                let setup = monitor_setup(Some(&conf), None, None)?;
+                let note = setup.note.clone();
+                Ok((Inputs::Monitor { imu, monitor: Box::new(setup.input(&addr)) }, note))
+            }
+            (Some(tracking), None) => Ok((Inputs::Files { imu, tracking }, None)),
+            (None, None) => Err(InputChoiceError::NoInput),
+        }
+    }
+}
+
+/// The warning of a session whose settings state no receiver loop, naming
+/// the options that state one.
+pub const LOOP_NOT_STATED: &str = "warning [loop_not_stated]: no receiver loop was stated: the estimates will use the \
+     typical loop the data fit best and cannot be trustworthy; state the receiver's loop (order, bn_hz, \
+     loop_interval_s, logged_phase) from its settings\n";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Nothing, or a followed IMU log alone, is no input; a missing file is
+    /// named by its field; files that exist become followed files.
+    #[test]
+    fn the_choice_needs_a_whole_input_and_existing_files() {
+        assert!(matches!(InputChoice::default().check(), Err(InputChoiceError::NoInput)));
+        let dir = tempfile::tempdir().unwrap();
+        let imu = dir.path().join("imu.csv");
+        let only_imu = InputChoice { follow_imu: Some(imu.clone()), ..InputChoice::default() };
+        assert!(matches!(only_imu.check(), Err(InputChoiceError::NoInput)));
+        let files = InputChoice { follow_tracking: Some(dir.path().to_path_buf()), ..only_imu };
+        let e = files.check().unwrap_err();
+        assert!(matches!(&e, InputChoiceError::NotAFile { option: "follow_imu", exists: false, .. }), "{e}");
+        std::fs::write(&imu, "").unwrap();
+        let e = files.check().unwrap_err();
+        assert!(matches!(&e, InputChoiceError::NotAFile { option: "follow_tracking", exists: true, .. }), "{e}");
+        assert!(e.to_string().ends_with(": not a file"), "{e}");
+        let tracking = dir.path().join("tracking.csv");
+        std::fs::write(&tracking, "").unwrap();
+        let files = InputChoice { follow_tracking: Some(tracking.clone()), ..files };
+        let (inputs, note) = files.inputs(true).unwrap();
+        assert!(matches!(inputs, Inputs::Files { imu: i, tracking: t } if i == imu && t == tracking));
+        assert_eq!(note, None);
+    }
+
+    /// A monitor brings its configuration's loop: settings that state one are refused.
+    #[test]
+    fn a_monitor_refuses_a_stated_loop() {
+        let dir = tempfile::tempdir().unwrap();
+        let imu = dir.path().join("imu.csv");
+        std::fs::write(&imu, "").unwrap();
+        let conf = dir.path().join("gnss-sdr.conf");
+        let choice = InputChoice {
+            follow_imu: Some(imu),
+            gnss_sdr_monitor: Some(("127.0.0.1:0".into(), conf.clone())),
+            ..InputChoice::default()
+        };
+        let Err(e) = choice.inputs(true) else { panic!("a stated loop with a monitor was accepted") };
+        assert!(matches!(&e, InputChoiceError::LoopStatedTwice { conf: c } if *c == conf), "{e}");
+    }
+}
