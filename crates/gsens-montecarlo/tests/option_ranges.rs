@@ -68,7 +68,7 @@ fn a_warm_up_as_long_as_the_log_is_named_once() {
     let options =
         CalibrationOptions { order: Some(2), bn_hz: Some(3.0), warmup_s: 500.0, ..CalibrationOptions::default() };
     let e = error_of(&options);
-    let cause = "the warm-up of 500 s (warmup_s, --warmup-s) is not shorter than the log (";
+    let cause = "the warm-up of 500 s (warmup_s) is not shorter than the log (";
     assert!(e.contains(cause), "{e}");
     assert_eq!(e.matches(cause).count(), 1, "{e}");
 }
