@@ -240,7 +240,7 @@ fn highpass(outcome: &Outcome, c: &Calibration, loop_summary: &LoopSummary) -> O
         message: format!(
             "the high-pass at {highpass_hz} Hz is at or above {limit}: it removes the g-induced phase error \
              along with the drift it is meant for; use a corner well below the loop's band (the default is \
-             0.05 Hz, --highpass-hz)"
+             0.05 Hz, highpass_hz)"
         ),
     })
 }
@@ -410,7 +410,7 @@ fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
             // a description error that looks like a unit.
             factor = format!(
                 "{factor}. Or the log holds the mean of the {n} loop updates of each epoch, not the last: that \
-                 scatters 1/√{n} = {:.3} times as much; then state the logged phase as the mean (--logged-phase mean)",
+                 scatters 1/√{n} = {:.3} times as much; then state the logged phase as the mean (logged_phase = mean)",
                 1.0 / f64::from(n).sqrt()
             );
         }

@@ -271,22 +271,22 @@ impl ResultDocument {
         }
         if let Some(ch) = &outcome.chosen_loop {
             let logged = ch.logged_phase.name();
-            let mut flags = format!("--order {}", ch.model.order());
+            let mut found = format!("order = {}", ch.model.order());
             if let Some(bn) = ch.model.bn_hz() {
-                flags += &format!(" --bn-hz {}", Decimal((bn * 100.0).round() / 100.0));
+                found += &format!(", bn_hz = {}", Decimal((bn * 100.0).round() / 100.0));
             }
             if let Some(t) = ch.model.interval_s() {
-                flags += &format!(" --loop-interval-s {}", Decimal(t));
+                found += &format!(", loop_interval_s = {}", Decimal(t));
             }
-            flags += &format!(" --logged-phase {logged}");
+            found += &format!(", logged_phase = {logged}");
             doc.warnings.push(Warning {
                 code: WarningCode::LoopNotStated,
                 message: format!(
                     "no receiver loop was stated: of {} typical receiver loops the data fit best {} with the log \
                      holding the {} discriminator output (the runner-up, {}, fits with {:.2} times the residual). \
                      Γ̂ is given under it, but a chosen loop is not a checked one: state the receiver's loop (order, \
-                     bandwidth, update interval, what its log holds; the loop found would be {flags}) from the \
-                     receiver's settings to get a trustworthy estimate",
+                     bn_hz, loop_interval_s, logged_phase; the loop found would be {found}) from the receiver's \
+                     settings to get a trustworthy estimate",
                     ch.candidates,
                     ch.model,
                     match ch.logged_phase {
@@ -445,7 +445,7 @@ pub enum DocumentError {
         error: std::io::Error,
     },
     /// The file is not a result document's JSON.
-    #[error("{file}:{line}:{column}: not a gsens result document (write one with gsens estimate --json): {message}")]
+    #[error("{file}:{line}:{column}: not a gsens result document (the JSON an estimate writes): {message}")]
     Json {
         /// The file.
         file: String,
@@ -543,7 +543,7 @@ fn warnings(c: &Calibration) -> Vec<Warning> {
             code: WarningCode::TimeOffsetAtLimit,
             message: format!(
                 "the IMU time offset search ended at its limit ({found:+.3} s, the search spans ±{max} s): the IMU and tracking clocks \
-                 may differ by more; widen the search (--time-offset-max-s) or state the offset (--time-offset)"
+                 may differ by more; widen the search (time_offset_max_s) or state the offset (time_offset)"
             ),
         });
     }

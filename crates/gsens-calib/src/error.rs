@@ -56,7 +56,7 @@ pub enum CalibError {
     },
     /// The warm-up leaves no epoch of the log to estimate from.
     #[error(
-        "the warm-up of {warmup_s} s (warmup_s, --warmup-s) is not shorter than the log ({log_s:.1} s): no epoch is \
+        "the warm-up of {warmup_s} s (warmup_s) is not shorter than the log ({log_s:.1} s): no epoch is \
          left to estimate from; give a warm-up of a few seconds (the default is 2 s)"
     )]
     WarmupBeyondLog {

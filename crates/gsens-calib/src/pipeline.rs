@@ -426,7 +426,7 @@ fn check_carrier(settings: &PipelineSettings, tracking: &TrackingLog) -> Result<
             name: "carrier_hz",
             value: settings.estimate.carrier_hz,
             expected: "GPS L1, 1575420000 Hz, for a tracking log with carrier columns: every channel's phase \
-                       error is scaled to L1 and Γ̂ is at L1 (leave --carrier-hz out)",
+                       error is scaled to L1 and Γ̂ is at L1 (leave carrier_hz out)",
         });
     }
     Ok(())

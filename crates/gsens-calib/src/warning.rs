@@ -177,10 +177,10 @@ impl PartialEq<WarningCode> for &str {
 
 /// The advice of `discriminator_range` (its message ends with it).
 pub(crate) const DISCRIMINATOR_ADVICE: &str = "shake more gently or the phase error wraps and biases Γ̂ low (or state \
-                                               the receiver's discriminator, --discriminator)";
+                                               the receiver's discriminator, discriminator)";
 
 /// The start of the advice that ends `loop_offset_unresolved`'s message.
-pub(crate) const LOOP_OFFSET_ADVICE: &str = " State the IMU's latency (--time-offset)";
+pub(crate) const LOOP_OFFSET_ADVICE: &str = " State the IMU's latency (time_offset)";
 
 /// Sorts `warnings` by cause ([`WarningCode::cause_rank`]), keeping the
 /// order in which they were raised within a cause.

@@ -1,5 +1,9 @@
-//! Every malformed input gets a clear message naming the file, line and
-//! column, and a non-zero exit status; never a panic.
+//! Bad input as the command line meets it: options checked as they are
+//! parsed (each error naming its flag), before any file is read; a missing
+//! file named once; a configuration too large to be one refused; an error
+//! is exit status 2, never a panic. What each malformed log or out-of-range
+//! setting is told is tested where it is made: `gsens-inputs`' tests
+//! (`csv_errors.rs`) and `gsens-montecarlo`'s (`option_ranges.rs`).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -46,141 +50,14 @@ fn estimate(imu: &Path, tracking: &Path, extra: &[&str]) -> (i32, String) {
     (out.status.code().unwrap_or(-1), stderr)
 }
 
-/// Runs `estimate` on the case and checks a non-zero exit and every fragment in stderr.
-fn expect_error(name: &str, imu: &str, tracking: &str, fragments: &[&str]) {
-    let case = Case::new(name, imu, tracking);
-    let (code, stderr) = estimate(&case.path("imu.csv"), &case.path("tracking.csv"), &[]);
-    assert_ne!(code, 0, "{name}: exit status 0");
-    assert_eq!(code, 2, "{name}: {stderr}");
-    for f in fragments {
-        assert!(stderr.contains(f), "{name}: `{f}` not in: {stderr}");
-    }
-}
-
 #[test]
-fn missing_column() {
-    expect_error(
-        "missing-col",
-        "t_s,fx_mps2,fz_mps2\n0,0,9.8\n",
-        TRK_OK,
-        &["imu.csv", "line 1", "missing column `fy_mps2`"],
-    );
-}
-
-#[test]
-fn non_numeric_cell() {
-    let trk = TRK_OK.replace("0.025,1,5,45,30,0.02", "0.025,1,5,45,30,abc");
-    expect_error("non-numeric", IMU_OK, &trk, &["tracking.csv", "line 3", "column 6 (`phase_err_rad`)", "`abc`"]);
-}
-
-#[test]
-fn nan_and_inf() {
-    let imu = IMU_OK.replace("0.05,0.2,0,9.8", "0.05,NaN,0,9.8");
-    expect_error("nan", &imu, TRK_OK, &["imu.csv", "line 4", "column 2 (`fx_mps2`)", "not a finite number"]);
-    let trk = TRK_OK.replace("0.05,1,5,45,30,0.01", "0.05,1,5,inf,30,0.01");
-    expect_error("inf", IMU_OK, &trk, &["tracking.csv", "line 4", "column 4 (`cn0_dbhz`)", "not a finite number"]);
-}
-
-#[test]
-fn time_going_backwards_or_repeated() {
-    let imu = IMU_OK.replace("0.05,0.2,0,9.8", "0.01,0.2,0,9.8");
-    expect_error("backwards", &imu, TRK_OK, &["imu.csv", "line 4", "column 1 (`t_s`)", "goes backwards"]);
-    let imu = IMU_OK.replace("0.05,0.2,0,9.8", "0.025,0.2,0,9.8");
-    expect_error("repeated", &imu, TRK_OK, &["imu.csv", "line 4", "repeated time stamp"]);
-    let trk = TRK_OK.replace("0.05,1,5,45,30,0.01", "0.025,1,5,45,30,0.01");
-    expect_error("repeated-channel", IMU_OK, &trk, &["tracking.csv", "line 4", "channel 1 appears twice"]);
-}
-
-#[test]
-fn empty_file_and_header_only() {
-    expect_error("empty", "", TRK_OK, &["imu.csv", "empty file"]);
-    expect_error(
-        "header-only",
-        IMU_OK,
-        "t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad\n",
-        &["tracking.csv", "header only"],
-    );
-}
-
-#[test]
-fn streams_not_overlapping_in_time() {
-    let imu = "t_s,fx_mps2,fy_mps2,fz_mps2\n100,0,0,9.8\n100.025,0,0,9.8\n";
-    expect_error("no-overlap", imu, TRK_OK, &["imu.csv", "tracking.csv", "overlap"]);
-}
-
-#[test]
-fn no_channel_passing_the_selection() {
-    let case = Case::new("no-channel", IMU_OK, TRK_OK);
-    let (code, stderr) = estimate(&case.path("imu.csv"), &case.path("tracking.csv"), &["--min-cn0-dbhz", "50"]);
-    assert_eq!(code, 2);
-    assert!(stderr.contains("no channel") || stderr.contains("No channel"), "{stderr}");
-    assert!(stderr.contains("C/N0"), "{stderr}");
-}
-
-#[test]
-fn missing_file() {
+fn a_missing_file_is_named_with_the_reason_once() {
     let case = Case::new("missing-file", IMU_OK, TRK_OK);
     let (code, stderr) = estimate(&case.path("nope.csv"), &case.path("tracking.csv"), &[]);
     assert_eq!(code, 2);
     assert!(stderr.contains("nope.csv"), "{stderr}");
     // The OS's reason is said once, not once per level of the error chain.
     assert_eq!(stderr.matches("os error").count(), 1, "{stderr}");
-}
-
-/// Cases found by hand: an absurd offset bound hung (its search grid
-/// grew without limit), a NaN C/N0 drop switched the test off, a negative
-/// warm-up was taken. Each is now an error naming the setting and its range.
-/// (A high-pass above the log's Nyquist frequency is not refused here: it is
-/// what time stamps in milliseconds make of the default, which the
-/// `time_units` check names; the estimate is then not trustworthy.)
-#[test]
-fn out_of_range_options_are_errors_not_hangs_or_silent_changes() {
-    let dir_scratch = tempfile::Builder::new().prefix("gsens-bad-options-").tempdir().unwrap();
-    let dir = dir_scratch.path().to_path_buf();
-    let sim = Command::new(env!("CARGO_BIN_EXE_gsens")).args(["simulate", "--out"]).arg(&dir).output().unwrap();
-    assert!(sim.status.success());
-    let (imu, trk) = (dir.join("imu.csv"), dir.join("tracking.csv"));
-    for (args, said) in [
-        (&["--time-offset-max-s", "1e18"][..], "time_offset.max_abs_s"),
-        (&["--cn0-drop-db", "nan"][..], "--cn0-drop-db"),
-        (&["--warmup-s=-1"][..], "--warmup-s"),
-        // Found by fuzzing: a loop updated every nanosecond ran for minutes; the
-        // others were accepted.
-        (&["--loop-interval-s", "1e-9"][..], "loop_interval_s = 1e-9 is out of range: expected at least 0.001 s"),
-        (&["--carrier-hz", "1e300"][..], "carrier_hz = 1e300 is out of range"),
-        (&["--imu-scale-sigma-ppm", "1e300"][..], "imu_scale_sigma = 1e294 is out of range"),
-    ] {
-        let started = std::time::Instant::now();
-        let (code, stderr) = estimate(&imu, &trk, args);
-        assert_eq!(code, 2, "{args:?}: {stderr}");
-        assert!(stderr.contains(said), "{args:?}: {stderr}");
-        assert!(started.elapsed().as_secs() < 60, "{args:?} took {:?}", started.elapsed());
-    }
-    // A high-pass above the loop's band leaves nothing to estimate: the verdict names it (it was
-    // "unobservable: shake harder" with exit 0, found by fuzzing).
-    let out = Command::new(env!("CARGO_BIN_EXE_gsens"))
-        .args(["estimate", "--order", "2", "--bn-hz", "3", "--loop-interval-s", "0.001", "--highpass-hz", "25"])
-        .arg("--imu")
-        .arg(&imu)
-        .arg("--tracking")
-        .arg(&trk)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(3), "{stdout}");
-    assert!(
-        stdout.contains(
-            "warning [highpass]: the high-pass at 25 Hz is at or above the top of the loop's half-power band"
-        ),
-        "{stdout}"
-    );
-    // A warm-up as long as the log is named with the option and the log's length, once.
-    let (code, stderr) = estimate(&imu, &trk, &["--order", "2", "--bn-hz", "3", "--warmup-s", "500"]);
-    assert_eq!(code, 2, "{stderr}");
-    let cause = "the warm-up of 500 s (warmup_s, --warmup-s) is not shorter than the log (";
-    assert!(stderr.contains(cause), "{stderr}");
-    assert_eq!(stderr.matches(cause).count(), 1, "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Options are checked as they are parsed, before any file is read (the
@@ -213,6 +90,8 @@ fn options_are_checked_before_any_file_is_read() {
         (&["--a3", "1.2"][..], "--a3 and --b3 shape a 3rd-order loop: they need --order 3"),
         (&["--json", "/nonexistent-gsens-dir/r.json"][..], "--json /nonexistent-gsens-dir/r.json: the directory"),
         (&["--epochs-out", &under_file][..], "--epochs-out"),
+        (&["--cn0-drop-db", "nan"][..], "--cn0-drop-db"),
+        (&["--warmup-s=-1"][..], "--warmup-s"),
     ] {
         let (code, stderr) = estimate(&imu, &trk, args);
         assert_eq!(code, 2, "{args:?}: {stderr}");

@@ -1,20 +1,21 @@
-//! `gsens simulate` on the default scenario, then `gsens estimate` on its
-//! files, as a user would: the truth within the estimate's own 3σ and within
-//! 2 % of |Γ|; the same seed gives the same bytes.
+//! The simulator's commands as a user meets them: `gsens simulate` then
+//! `gsens estimate` on its files, `gsens demo` printing its estimate next to
+//! the truth and the command line that gives it, `gsens scenario` printing a
+//! default that `gsens simulate` reads, `gsens response`. What the estimate
+//! recovers and what the simulator writes are tested where they are made:
+//! `gsens-montecarlo`'s tests (`simulated_sessions.rs`) and `gsens-sim`'s.
 
 mod common;
 
 use common::{fails, gsens, json, vec3};
 
 #[test]
-fn simulate_then_estimate_recovers_the_truth() {
+fn simulate_then_estimate_write_their_files() {
     let dir_scratch = tempfile::Builder::new().prefix("gsens-e2e-").tempdir().unwrap();
-    let dir = dir_scratch.path().to_path_buf();
+    let dir = dir_scratch.path();
     let d = dir.to_str().unwrap();
     gsens(&["simulate", "--out", d, "--seed", "7"]);
     let out = dir.join("estimate.json");
-    // The receiver's settings as the simulator wrote them (truth.json) and the
-    // industrial IMU's datasheet accuracy (1000 ppm, 1 mrad).
     let text = gsens(&[
         "estimate",
         "--imu",
@@ -25,51 +26,12 @@ fn simulate_then_estimate_recovers_the_truth() {
         "0.001",
         "--logged-phase",
         "mean",
-        "--imu-scale-sigma-ppm",
-        "1000",
-        "--imu-misalignment-sigma-mrad",
-        "1",
         "--json",
         out.to_str().unwrap(),
     ]);
     assert!(text.contains("Γ̂ [Hz/(m/s²)]"), "{text}");
-    let est = json(&out);
-    let truth = json(&dir.join("truth.json"));
-    let g = vec3(&est["gamma_hz_per_mps2"]);
-    let s = vec3(&est["sigma_hz_per_mps2"]);
-    let t = vec3(&truth["gamma_hz_per_mps2"]);
-    assert_eq!(t, [0.09, 0.08, -0.08]);
-    assert_eq!(est["observable"], serde_json::json!([true, true, true]));
-    let norm = t.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let err = (0..3).map(|i| (g[i] - t[i]).powi(2)).sum::<f64>().sqrt();
-    assert!(err < 0.02 * norm, "|Γ̂ − Γ| = {err} ({:.2} %)", 100.0 * err / norm);
-    for i in 0..3 {
-        assert!((g[i] - t[i]).abs() < 3.0 * s[i], "axis {i}: {} ± {} vs {}", g[i], s[i], t[i]);
-    }
-    // Compensation brings the shaking phase error back to its rest level.
-    let before = est["rms_before_rad"].as_f64().unwrap();
-    let after = est["rms_after_rad"].as_f64().unwrap();
-    assert!(after < 0.3 * before, "{before} → {after}");
-    for key in ["gamma_ppb_per_g", "imu_time_offset_s", "settings"] {
-        assert!(!est[key].is_null(), "{key} missing");
-    }
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
-fn same_seed_same_bytes() {
-    let base_scratch = tempfile::Builder::new().prefix("gsens-seed-").tempdir().unwrap();
-    let base = base_scratch.path().to_path_buf();
-    let (a, b, c) = (base.join("a"), base.join("b"), base.join("c"));
-    gsens(&["simulate", "--out", a.to_str().unwrap(), "--seed", "3"]);
-    gsens(&["simulate", "--out", b.to_str().unwrap(), "--seed", "3"]);
-    gsens(&["simulate", "--out", c.to_str().unwrap(), "--seed", "4"]);
-    for f in ["imu.csv", "tracking.csv", "truth.json"] {
-        let (x, y) = (std::fs::read(a.join(f)).unwrap(), std::fs::read(b.join(f)).unwrap());
-        assert!(x == y, "{f} differs between two runs with the same seed");
-    }
-    assert!(std::fs::read(a.join("tracking.csv")).unwrap() != std::fs::read(c.join("tracking.csv")).unwrap());
-    let _ = std::fs::remove_dir_all(&base);
+    assert_eq!(json(&out)["observable"], serde_json::json!([true, true, true]));
+    assert_eq!(vec3(&json(&dir.join("truth.json"))["gamma_hz_per_mps2"]), [0.09, 0.08, -0.08]);
 }
 
 #[test]
@@ -130,21 +92,15 @@ fn demo_shows_estimate_next_to_truth() {
 }
 
 #[test]
-fn scenario_command_prints_a_parsable_default() {
+fn scenario_command_prints_a_default_that_simulate_reads() {
     let text = gsens(&["scenario"]);
     assert!(text.contains("gamma_hz_per_mps2 = [0.09, 0.08, -0.08]"));
     let dir_scratch = tempfile::Builder::new().prefix("gsens-scn-").tempdir().unwrap();
-    let dir = dir_scratch.path().to_path_buf();
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = dir_scratch.path();
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = -3.0")).unwrap();
-    let simulate = ["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()];
-    let err = fails(&simulate);
+    let err = fails(&["simulate", "--scenario", bad.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(err.contains("bad.toml") && err.contains("bn_hz"), "{err}");
-    std::fs::write(&bad, text.replace("bn_hz = 3.0", "bn_hz = 3.0\nbandwidth = 2")).unwrap();
-    let err = fails(&simulate);
-    assert!(err.contains("bandwidth"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -160,35 +116,5 @@ fn response_reports_the_paper_loop_peak() {
     let wn = 2.0 * 3.0 / (std::f64::consts::FRAC_1_SQRT_2 + 1.0 / (4.0 * std::f64::consts::FRAC_1_SQRT_2));
     let expected = std::f64::consts::PI / (std::f64::consts::FRAC_1_SQRT_2 * wn);
     assert!((r["peak_rad_per_hz"].as_f64().unwrap() - expected).abs() < 1e-3);
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
-fn session_shaken_only_along_x_and_y_reports_z_unobservable() {
-    let dir_scratch = tempfile::Builder::new().prefix("gsens-xy-").tempdir().unwrap();
-    let dir = dir_scratch.path().to_path_buf();
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = gsens(&["scenario"]);
-    // The z segment shaken with 1 mm/s²: nothing the loop can see.
-    let (head, tail) = text.split_once("axis = \"z\"").unwrap();
-    let scenario = format!("{head}axis = \"z\"{}", tail.replacen("amplitude_mps2 = 3.0", "amplitude_mps2 = 0.001", 1));
-    let path = dir.join("xy.toml");
-    std::fs::write(&path, scenario).unwrap();
-    let out = dir.join("e.json");
-    let text = gsens(&[
-        "demo",
-        "--scenario",
-        path.to_str().unwrap(),
-        "--out",
-        dir.to_str().unwrap(),
-        "--json",
-        out.to_str().unwrap(),
-    ]);
-    assert!(text.contains("z: too little excitation"), "{text}");
-    assert!(text.contains("unobservable"), "{text}");
-    let est = json(&out);
-    assert_eq!(est["observable"], serde_json::json!([true, true, false]));
-    assert!(est["gamma_hz_per_mps2"][2].is_null());
-    assert!(est["sigma_hz_per_mps2"][2].is_null());
     let _ = std::fs::remove_dir_all(&dir);
 }

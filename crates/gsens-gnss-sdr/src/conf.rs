@@ -319,90 +319,25 @@ impl GnssSdrConf {
     /// supported tracking implementation, order 2 or 3, positive bandwidths,
     /// 1…20 symbols dividing 20, no steady-state FLL.
     pub fn tracking(&self) -> Result<TrackingConf, GnssSdrError> {
-        let d = TrackingConf::defaults();
-        let fail = |key: &str, reason: String| {
-            let line = self.entry(key).map_or(0, |e| e.line);
-            Err(GnssSdrError::Conf { file: self.source_name.clone(), line, reason })
-        };
-        let implementation = self.get("Tracking_1C.implementation").unwrap_or(SUPPORTED_TRACKING).to_owned();
-        if implementation != SUPPORTED_TRACKING {
-            return fail(
-                "Tracking_1C.implementation",
-                format!(
-                    "Tracking_1C.implementation = {implementation}: only {SUPPORTED_TRACKING} (GNSS-SDR's DLL/PLL) is modelled"
-                ),
-            );
-        }
-        let order = self.get_f64("Tracking_1C.pll_filter_order")?.unwrap_or(f64::from(d.pll_filter_order));
-        if order != 2.0 && order != 3.0 {
-            return fail("Tracking_1C.pll_filter_order", format!("pll_filter_order = {order}: must be 2 or 3"));
-        }
-        let pll_bw_hz = self.get_f64("Tracking_1C.pll_bw_hz")?.unwrap_or(d.pll_bw_hz);
-        let pll_bw_narrow_hz = self.get_f64("Tracking_1C.pll_bw_narrow_hz")?.unwrap_or(d.pll_bw_narrow_hz);
-        for (key, v) in [("Tracking_1C.pll_bw_hz", pll_bw_hz), ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz)] {
-            if !(v.is_finite() && v > 0.0) {
-                return fail(key, format!("{key} = {v}: must be > 0"));
-            }
-        }
-        let symbols = self.get_f64("Tracking_1C.extend_correlation_symbols")?.unwrap_or(1.0);
-        // GNSS-SDR clamps to [1, 20] with a warning; so do we.
-        let extend_correlation_symbols = if symbols.is_finite() { symbols.round().clamp(1.0, 20.0) as u32 } else { 1 };
-        // After bit synchronization GNSS-SDR writes the record of the millisecond
-        // that closes a 20 ms data bit; only when N divides 20 does that
-        // millisecond close an integration, so that the record holds its update.
-        let stage = gsens_core::gnss_sdr::GnssSdrStage { order: 2, bw_hz: 1.0, symbols: extend_correlation_symbols };
-        if stage.updates_per_record().is_none() {
-            return fail(
-                "Tracking_1C.extend_correlation_symbols",
-                format!(
-                    "extend_correlation_symbols = {extend_correlation_symbols}: GNSS-SDR writes one record per 20 ms \
-                     data bit, which then falls inside an integration and holds an older loop update; gsens models \
-                     1, 2, 4, 5, 10 and 20 (the divisors of 20)"
-                ),
-            );
-        }
-        // A loop updated every T cannot have a noise bandwidth beyond 1/(2T)
-        // (the discrete loop is unstable long before): 500 Hz at the C/A
-        // code's 1 ms, less once the integration is extended.
-        let stages = [
-            ("Tracking_1C.pll_bw_hz", pll_bw_hz, 1.0),
-            ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz, f64::from(extend_correlation_symbols)),
-        ];
-        for (key, v, symbols) in stages {
-            let t_s = gsens_core::units::L1CA_CODE_PERIOD_S * symbols;
-            if v * t_s > 0.5 {
-                return fail(
-                    key,
-                    format!(
-                        "{key} = {v}: above 1/(2T) = {} Hz for a loop updated every T = {} ms (no carrier loop is \
-                         that wide)",
-                        Decimal(0.5 / t_s),
-                        Decimal(t_s * 1e3)
-                    ),
-                );
-            }
-        }
+        let implementation = self.tracking_implementation()?;
+        let (pll_filter_order, pll_bw_hz, pll_bw_narrow_hz) = self.pll_order_and_bandwidths()?;
+        let extend_correlation_symbols = self.extend_correlation_symbols()?;
+        self.check_bandwidths_below_update_rate(pll_bw_hz, pll_bw_narrow_hz, extend_correlation_symbols)?;
         let enable_fll_pull_in = self.get_bool("Tracking_1C.enable_fll_pull_in")?.unwrap_or(false);
         let enable_fll_steady_state = self.get_bool("Tracking_1C.enable_fll_steady_state")?.unwrap_or(false);
         if enable_fll_steady_state {
-            return fail(
+            return Err(self.conf_error(
                 "Tracking_1C.enable_fll_steady_state",
                 "enable_fll_steady_state = true: an FLL-assisted PLL is not modelled".into(),
-            );
+            ));
         }
         // GNSS-SDR holds it as an unsigned integer.
         let pull_in_time_s = self.get_count("Tracking_1C.pull_in_time_s")?.map_or(DEFAULT_PULL_IN_TIME_S, f64::from);
         let lock = self.lock_detector()?;
-        let fs_hz = match self.get_f64("GNSS-SDR.internal_fs_sps")? {
-            Some(v) => Some(v),
-            None => self.get_f64("SignalSource.sampling_frequency")?,
-        };
-        if let Some(fs) = fs_hz.filter(|v| !(v.is_finite() && *v > 0.0)) {
-            return fail("GNSS-SDR.internal_fs_sps", format!("sampling rate {fs}: must be > 0"));
-        }
+        let fs_hz = self.sampling_rate_hz()?;
         Ok(TrackingConf {
             implementation,
-            pll_filter_order: order as u8,
+            pll_filter_order,
             pll_bw_hz,
             pll_bw_narrow_hz,
             extend_correlation_symbols,
@@ -413,6 +348,113 @@ impl GnssSdrConf {
             fs_hz,
             dump_filename: self.get("Tracking_1C.dump_filename").map(str::to_owned),
         })
+    }
+
+    /// An error at `key`'s line (0 when absent) saying `reason`.
+    fn conf_error(&self, key: &str, reason: String) -> GnssSdrError {
+        let line = self.entry(key).map_or(0, |e| e.line);
+        GnssSdrError::Conf { file: self.source_name.clone(), line, reason }
+    }
+
+    /// `Tracking_1C.implementation`: GNSS-SDR's DLL/PLL (the default), the
+    /// one tracking loop modelled.
+    fn tracking_implementation(&self) -> Result<String, GnssSdrError> {
+        let implementation = self.get("Tracking_1C.implementation").unwrap_or(SUPPORTED_TRACKING).to_owned();
+        if implementation != SUPPORTED_TRACKING {
+            return Err(self.conf_error(
+                "Tracking_1C.implementation",
+                format!(
+                    "Tracking_1C.implementation = {implementation}: only {SUPPORTED_TRACKING} (GNSS-SDR's DLL/PLL) is modelled"
+                ),
+            ));
+        }
+        Ok(implementation)
+    }
+
+    /// The PLL's order (2 or 3) and its wide and narrow noise bandwidths
+    /// \[Hz\] (> 0), GNSS-SDR's defaults for absent keys.
+    fn pll_order_and_bandwidths(&self) -> Result<(u8, f64, f64), GnssSdrError> {
+        let d = TrackingConf::defaults();
+        let order = self.get_f64("Tracking_1C.pll_filter_order")?.unwrap_or(f64::from(d.pll_filter_order));
+        if order != 2.0 && order != 3.0 {
+            let reason = format!("pll_filter_order = {order}: must be 2 or 3");
+            return Err(self.conf_error("Tracking_1C.pll_filter_order", reason));
+        }
+        let pll_bw_hz = self.get_f64("Tracking_1C.pll_bw_hz")?.unwrap_or(d.pll_bw_hz);
+        let pll_bw_narrow_hz = self.get_f64("Tracking_1C.pll_bw_narrow_hz")?.unwrap_or(d.pll_bw_narrow_hz);
+        for (key, v) in [("Tracking_1C.pll_bw_hz", pll_bw_hz), ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(self.conf_error(key, format!("{key} = {v}: must be > 0")));
+            }
+        }
+        Ok((order as u8, pll_bw_hz, pll_bw_narrow_hz))
+    }
+
+    /// `Tracking_1C.extend_correlation_symbols` N, clamped to [1, 20] as
+    /// GNSS-SDR clamps it (1 when absent); an error unless N divides 20.
+    fn extend_correlation_symbols(&self) -> Result<u32, GnssSdrError> {
+        let symbols = self.get_f64("Tracking_1C.extend_correlation_symbols")?.unwrap_or(1.0);
+        let n = if symbols.is_finite() { symbols.round().clamp(1.0, 20.0) as u32 } else { 1 };
+        // After bit synchronization GNSS-SDR writes the record of the millisecond
+        // that closes a 20 ms data bit; only when N divides 20 does that
+        // millisecond close an integration, so that the record holds its update.
+        let stage = gsens_core::gnss_sdr::GnssSdrStage { order: 2, bw_hz: 1.0, symbols: n };
+        if stage.updates_per_record().is_none() {
+            return Err(self.conf_error(
+                "Tracking_1C.extend_correlation_symbols",
+                format!(
+                    "extend_correlation_symbols = {n}: GNSS-SDR writes one record per 20 ms \
+                     data bit, which then falls inside an integration and holds an older loop update; gsens models \
+                     1, 2, 4, 5, 10 and 20 (the divisors of 20)"
+                ),
+            ));
+        }
+        Ok(n)
+    }
+
+    /// An error when a stage's bandwidth exceeds 1/(2T) for its update
+    /// interval T (1 ms wide, N ms narrow): a loop updated every T cannot have
+    /// a noise bandwidth beyond it (the discrete loop is unstable long before),
+    /// 500 Hz at the C/A code's 1 ms, less once the integration is extended.
+    fn check_bandwidths_below_update_rate(
+        &self,
+        pll_bw_hz: f64,
+        pll_bw_narrow_hz: f64,
+        extend_correlation_symbols: u32,
+    ) -> Result<(), GnssSdrError> {
+        let stages = [
+            ("Tracking_1C.pll_bw_hz", pll_bw_hz, 1.0),
+            ("Tracking_1C.pll_bw_narrow_hz", pll_bw_narrow_hz, f64::from(extend_correlation_symbols)),
+        ];
+        for (key, v, symbols) in stages {
+            let t_s = gsens_core::units::L1CA_CODE_PERIOD_S * symbols;
+            if v * t_s > 0.5 {
+                return Err(self.conf_error(
+                    key,
+                    format!(
+                        "{key} = {v}: above 1/(2T) = {} Hz for a loop updated every T = {} ms (no carrier loop is \
+                         that wide)",
+                        Decimal(0.5 / t_s),
+                        Decimal(t_s * 1e3)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The sampling rate \[Hz\]: `GNSS-SDR.internal_fs_sps`, else the
+    /// source's `SignalSource.sampling_frequency`; `None` when neither is
+    /// given, an error when not > 0.
+    fn sampling_rate_hz(&self) -> Result<Option<f64>, GnssSdrError> {
+        let fs_hz = match self.get_f64("GNSS-SDR.internal_fs_sps")? {
+            Some(v) => Some(v),
+            None => self.get_f64("SignalSource.sampling_frequency")?,
+        };
+        if let Some(fs) = fs_hz.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(self.conf_error("GNSS-SDR.internal_fs_sps", format!("sampling rate {fs}: must be > 0")));
+        }
+        Ok(fs_hz)
     }
 }
 
@@ -511,12 +553,13 @@ impl IqConfOptions {
 /// narrow PLL after bit synchronization, dumps on (`dump_mat=false`: the raw `.dat` only),
 /// telemetry decoding, observables and a PVT that writes no files.
 pub(crate) fn iq_file_conf(o: &IqConfOptions) -> String {
-    let adapter = match o.item_type.as_str() {
-        "ibyte" => "Ibyte_To_Complex",
-        "ishort" => "Ishort_To_Complex",
-        _ => "Pass_Through",
-    };
-    let fs = o.fs_hz;
+    [source_section(o), conditioner_section(&o.item_type), acquisition_section(o), tracking_section(o)].concat()
+        + NAVIGATION_SECTION
+}
+
+/// The header (what the file tracks, how to run it) and the file source:
+/// the whole file, once, at `fs_hz`, without throttling.
+fn source_section(o: &IqConfOptions) -> String {
     format!(
         "; GNSS-SDR 0.0.17 configuration written by gsens: tracks {file}
 ; Run: gnss-sdr --config_file=<this file>   (the tracking dumps go to {dump}<channel>.dat)
@@ -532,9 +575,26 @@ SignalSource.samples=0
 SignalSource.repeat=false
 SignalSource.enable_throttle_control=false
 
-SignalConditioner.implementation=Signal_Conditioner
+",
+        file = o.filename,
+        dump = o.dump_filename,
+        fs = o.fs_hz,
+        item = o.item_type,
+    )
+}
+
+/// The signal conditioner: the data-type adapter that turns `item_type`'s
+/// interleaved integers into complex samples, no filter, no resampler.
+fn conditioner_section(item_type: &str) -> String {
+    let adapter = match item_type {
+        "ibyte" => "Ibyte_To_Complex",
+        "ishort" => "Ishort_To_Complex",
+        _ => "Pass_Through",
+    };
+    format!(
+        "SignalConditioner.implementation=Signal_Conditioner
 DataTypeAdapter.implementation={adapter}
-DataTypeAdapter.item_type={item}
+DataTypeAdapter.item_type={item_type}
 InputFilter.implementation=Pass_Through
 InputFilter.input_item_type=gr_complex
 InputFilter.output_item_type=gr_complex
@@ -542,7 +602,16 @@ InputFilter.item_type=gr_complex
 Resampler.implementation=Pass_Through
 Resampler.item_type=gr_complex
 
-Channels_1C.count={channels}
+"
+    )
+}
+
+/// The channels and GPS L1 C/A PCPS acquisition over ±`doppler_max_hz` on a
+/// 250 Hz grid, non-blocking (blocking acquisition in file mode corrupts the
+/// pull-in of narrow loops).
+fn acquisition_section(o: &IqConfOptions) -> String {
+    format!(
+        "Channels_1C.count={channels}
 Channels.in_acquisition=1
 Channel.signal=1C
 
@@ -555,7 +624,18 @@ Acquisition_1C.doppler_step=250
 Acquisition_1C.blocking=false
 Acquisition_1C.dump=false
 
-Tracking_1C.implementation=GPS_L1_CA_DLL_PLL_Tracking
+",
+        channels = o.channels,
+        dmax = o.doppler_max_hz,
+    )
+}
+
+/// DLL/PLL tracking: a 10 Hz FLL pull-in for 2 s, the wide PLL at 1 ms, the
+/// narrow PLL over `extend_correlation_symbols` ms after bit
+/// synchronization; its dumps on (the raw `.dat` only).
+fn tracking_section(o: &IqConfOptions) -> String {
+    format!(
+        "Tracking_1C.implementation=GPS_L1_CA_DLL_PLL_Tracking
 Tracking_1C.item_type=gr_complex
 Tracking_1C.pll_filter_order={order}
 Tracking_1C.pll_bw_hz={bw}
@@ -574,7 +654,18 @@ Tracking_1C.dump=true
 Tracking_1C.dump_filename={dump}
 Tracking_1C.dump_mat=false
 
-TelemetryDecoder_1C.implementation=GPS_L1_CA_Telemetry_Decoder
+",
+        order = o.pll_filter_order,
+        bw = o.pll_bw_hz,
+        bwn = o.pll_bw_narrow_hz,
+        ext = o.extend_correlation_symbols,
+        dump = o.dump_filename,
+    )
+}
+
+/// Telemetry decoding, observables and a single-point PVT that writes no
+/// files: GNSS-SDR needs the chain to run, gsens only its tracking dumps.
+const NAVIGATION_SECTION: &str = "TelemetryDecoder_1C.implementation=GPS_L1_CA_Telemetry_Decoder
 TelemetryDecoder_1C.dump=false
 
 Observables.implementation=Hybrid_Observables
@@ -597,18 +688,7 @@ PVT.flag_rtcm_server=false
 PVT.flag_rtcm_tty_port=false
 PVT.flag_nmea_tty_port=false
 PVT.dump=false
-",
-        file = o.filename,
-        item = o.item_type,
-        channels = o.channels,
-        dmax = o.doppler_max_hz,
-        order = o.pll_filter_order,
-        bw = o.pll_bw_hz,
-        bwn = o.pll_bw_narrow_hz,
-        ext = o.extend_correlation_symbols,
-        dump = o.dump_filename,
-    )
-}
+";
 
 /// Writes `gnss-sdr.conf` into `dir` for the IF file `options.filename`
 /// (made absolute, so the configuration runs from anywhere), with the
@@ -698,6 +778,39 @@ mod tests {
     }
 
     #[test]
+    fn the_stages_of_the_tracking_settings() {
+        let conf = |text: &str| GnssSdrConf::parse(text, "s.conf").unwrap();
+        assert_eq!(conf("").tracking_implementation().unwrap(), SUPPORTED_TRACKING);
+        assert_eq!(conf("").pll_order_and_bandwidths().unwrap(), (3, 35.0, 5.0));
+        let c = conf("Tracking_1C.pll_filter_order=2.0\nTracking_1C.pll_bw_hz=20\nTracking_1C.pll_bw_narrow_hz=2\n");
+        assert_eq!(c.pll_order_and_bandwidths().unwrap(), (2, 20.0, 2.0));
+        let e = conf("x=1\nTracking_1C.pll_bw_narrow_hz=-2\n").pll_order_and_bandwidths().unwrap_err().to_string();
+        assert!(e.contains("s.conf: line 2") && e.contains("pll_bw_narrow_hz = -2: must be > 0"), "{e}");
+        // Clamped to [1, 20] as GNSS-SDR clamps it; rounded; 1 when absent.
+        for (text, n) in [
+            ("", 1),
+            ("Tracking_1C.extend_correlation_symbols=40\n", 20),
+            ("Tracking_1C.extend_correlation_symbols=0\n", 1),
+            ("Tracking_1C.extend_correlation_symbols=4.6\n", 5),
+        ] {
+            assert_eq!(conf(text).extend_correlation_symbols().unwrap(), n, "{text}");
+        }
+        // 1/(2T): 500 Hz at 1 ms, 50 Hz at 10 ms.
+        let c = conf("");
+        assert!(c.check_bandwidths_below_update_rate(500.0, 50.0, 10).is_ok());
+        let e = c.check_bandwidths_below_update_rate(35.0, 50.1, 10).unwrap_err().to_string();
+        assert!(e.contains("pll_bw_narrow_hz = 50.1: above 1/(2T) = 50 Hz for a loop updated every T = 10 ms"), "{e}");
+        // The internal rate first, else the source's.
+        assert_eq!(conf("").sampling_rate_hz().unwrap(), None);
+        assert_eq!(conf("SignalSource.sampling_frequency=4e6\n").sampling_rate_hz().unwrap(), Some(4e6));
+        let c = conf("SignalSource.sampling_frequency=4e6\nGNSS-SDR.internal_fs_sps=2e6\n");
+        assert_eq!(c.sampling_rate_hz().unwrap(), Some(2e6));
+        assert!(
+            conf("GNSS-SDR.internal_fs_sps=0\n").sampling_rate_hz().unwrap_err().to_string().contains("must be > 0")
+        );
+    }
+
+    #[test]
     fn lock_detector_keys_defaults_and_sources() {
         let l = GnssSdrConf::parse("", "e.conf").unwrap().lock_detector().unwrap();
         assert_eq!(l, LockDetectorConf::defaults());
@@ -754,5 +867,59 @@ mod tests {
         assert_eq!(c.get("Acquisition_1C.blocking"), Some("false"));
         assert_eq!(c.get("Tracking_1C.enable_fll_pull_in"), Some("true"));
         assert!(!t.enable_fll_steady_state);
+    }
+
+    #[test]
+    fn each_section_of_the_written_conf_holds_its_blocks() {
+        let o = IqConfOptions::for_iq_file("/tmp/x.bin", "ishort", 2.048e6, 3, 3, 5.0);
+        let sections = [
+            source_section(&o),
+            conditioner_section(&o.item_type),
+            acquisition_section(&o),
+            tracking_section(&o),
+            NAVIGATION_SECTION.to_string(),
+        ];
+        assert_eq!(iq_file_conf(&o), sections.concat());
+        let blocks: [&[&str]; 5] = [
+            &["GNSS-SDR.", "SignalSource."],
+            &["SignalConditioner.", "DataTypeAdapter.", "InputFilter.", "Resampler."],
+            &["Channels_1C.", "Channels.", "Channel.", "Acquisition_1C."],
+            &["Tracking_1C."],
+            &["TelemetryDecoder_1C.", "Observables.", "PVT."],
+        ];
+        for (i, (section, prefixes)) in sections.iter().zip(blocks).enumerate() {
+            // Blocks are separated by a blank line; the last one ends the file.
+            assert_eq!(section.ends_with("\n\n"), i < 4, "{section}");
+            for e in &GnssSdrConf::parse(section, "s.conf").unwrap().entries {
+                assert!(prefixes.iter().any(|p| e.key.starts_with(p)), "{} in {prefixes:?}", e.key);
+            }
+        }
+        let source = GnssSdrConf::parse(&sections[0], "s.conf").unwrap();
+        assert_eq!(source.get("GNSS-SDR.internal_fs_sps"), Some("2048000"));
+        assert_eq!(source.get("SignalSource.sampling_frequency"), Some("2048000"));
+        assert_eq!(source.get("SignalSource.item_type"), Some("ishort"));
+        assert!(sections[0].starts_with("; GNSS-SDR 0.0.17 configuration written by gsens: tracks /tmp/x.bin\n"));
+        assert!(sections[0].contains("(the tracking dumps go to ./trk_ch_<channel>.dat)"));
+        for (item, adapter) in
+            [("ibyte", "Ibyte_To_Complex"), ("ishort", "Ishort_To_Complex"), ("gr_complex", "Pass_Through")]
+        {
+            let c = GnssSdrConf::parse(&conditioner_section(item), "c.conf").unwrap();
+            assert_eq!(
+                (c.get("DataTypeAdapter.implementation"), c.get("DataTypeAdapter.item_type")),
+                (Some(adapter), Some(item))
+            );
+        }
+        let acquisition = GnssSdrConf::parse(&sections[2], "a.conf").unwrap();
+        assert_eq!(
+            (acquisition.get("Channels_1C.count"), acquisition.get("Acquisition_1C.doppler_max")),
+            (Some("3"), Some("6000"))
+        );
+        let tracking = GnssSdrConf::parse(&sections[3], "t.conf").unwrap();
+        let t = tracking.tracking().unwrap();
+        assert_eq!(
+            (t.pll_filter_order, t.pll_bw_hz, t.pll_bw_narrow_hz, t.extend_correlation_symbols, t.pull_in_time_s),
+            (3, 35.0, 5.0, 20, 2.0)
+        );
+        assert_eq!(tracking.get("Tracking_1C.dump_filename"), Some("./trk_ch_"));
     }
 }

@@ -112,7 +112,7 @@ pub enum GnssSdrError {
     /// The dump's length fits several layouts and the records do not decide.
     #[error(
         "{file}: {len} bytes fits several tracking-dump layouts ({candidates}) and every record is plausible in \
-         each; give the layout (--gnss-sdr-layout NAME)"
+         each; give the layout by name (the conversion's layout setting)"
     )]
     AmbiguousLayout {
         /// The dump.

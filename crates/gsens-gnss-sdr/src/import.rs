@@ -11,7 +11,7 @@ use gsens_io::{ImuSeries, TrackingRow};
 use std::fmt::Write as _;
 
 use crate::conf::TrackingConf;
-use crate::dump::{DumpLayout, TrackingDump, find_dumps, read_dump};
+use crate::dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, read_dump};
 use crate::error::GnssSdrError;
 
 /// What a caller sets instead of a configuration's lock detector and of
@@ -519,118 +519,180 @@ pub fn import_dump(
     settings: &ImportSettings,
     track_base: usize,
 ) -> (Vec<ImportedRow>, Vec<TrackSummary>) {
-    let fs = settings.fs_hz;
-    let samples_per_ms = fs * 1e-3;
-    let stage = settings.stage();
-    let ext = stage.symbols.max(1);
-    // Detector calls (loop updates) a record after bit synchronization stands for.
-    let per_record = stage.updates_per_record().unwrap_or(1);
-    let channel = dump.channel.unwrap_or(0);
-    let settle_s = settings.settle_time_s();
+    let samples_per_ms = settings.fs_hz * 1e-3;
     let mut rows = Vec::new();
     let mut tracks = Vec::new();
-    let recs = &dump.records;
     let mut i = 0;
-    while i < recs.len() {
-        let (j, synced) = track_span(recs, i, samples_per_ms);
-        let after_sync = |k: usize| synced.is_some_and(|s| k >= s);
-        // The integration a record's discriminator output comes from: 1 ms before
-        // bit synchronization, N ms after; its middle is the record's time.
-        let symbols = |k: usize| if after_sync(k) { ext } else { 1 };
-        let t_mid =
-            |k: usize| (recs[k].prn_start_sample_count as f64 - 0.5 * f64::from(symbols(k)) * samples_per_ms) / fs;
-        let track = track_base + tracks.len();
-        // The lock detector, over the whole track (its counters run through the stages):
-        // called once per loop update, so a record after bit synchronization stands for
-        // 20/N calls (the smoothed lock test and C/N0 it holds barely move within them).
-        let first_start = recs[i].prn_start_sample_count as f64 - samples_per_ms;
-        let call_sample: Vec<f64> =
-            (i..j).map(|k| (recs[k].prn_start_sample_count as f64 - samples_per_ms).max(first_start)).collect();
-        let calls: Vec<u32> = (i..j).map(|k| if after_sync(k) { per_record } else { 1 }).collect();
-        let lock_test: Vec<f64> = recs[i..j].iter().map(|r| r.carrier_lock_test).collect();
-        let cn0: Vec<f64> = recs[i..j].iter().map(|r| r.cn0_dbhz).collect();
-        let lock = replay_lock_detector(&call_sample, &calls, &lock_test, &cn0, fs, &settings.tracking);
-        let tracking_end = lock.loss_of_lock.map_or(j, |k| i + k);
-        // The first record of the modelled loop. Extended integration: the first after
-        // bit synchronization (the narrow loop starts there). Without it the 1 ms loop
-        // runs throughout, PLL only once GNSS-SDR's pull-in transitory (its FLL, if
-        // enabled) is over: at the latest floor(Δn/fs) > pull_in_time_s after the
-        // track's first record (acquisition came a little earlier), and before bit
-        // synchronization, which GNSS-SDR seeks only after the transitory.
-        let k0 = if ext > 1 {
-            synced
-        } else {
-            let end_sample = first_start + (settings.tracking.pull_in_time_s + 1.0) * fs.floor();
-            let after_pull_in =
-                (i..j).find(|&k| recs[k].prn_start_sample_count as f64 - samples_per_ms >= end_sample - 0.5);
-            match (after_pull_in, synced) {
-                (Some(a), Some(s)) => Some(a.min(s)),
-                (a, s) => a.or(s),
-            }
-        };
-        // Without extended integration, the 1 ms records before bit synchronization
-        // are thinned to one per data bit, on the lattice of the records after it (the
-        // first of which comes one bit after the last 1 ms record; without
-        // synchronization, the track's last record's): every record then holds the
-        // last of 20 updates, as the stage states.
-        let anchor = synced.map_or(j - 1, |s| s - 1);
-        let on_lattice = |k: usize| after_sync(k) || (anchor - k).is_multiple_of(BIT_SYMBOLS as usize);
-        let switch_s = k0.map(t_mid);
-        let (mut modelled, mut good, mut cn0_sum) = (0usize, 0usize, 0.0);
-        let mut track_rows = Vec::new();
-        if let (Some(k0), Some(t0)) = (k0, switch_s) {
-            for k in (k0..j).filter(|&k| on_lattice(k)) {
-                let t = t_mid(k);
-                if t < t0 + settle_s - 1e-9 {
-                    continue;
-                }
-                let r = &recs[k];
-                modelled += 1;
-                cn0_sum += r.cn0_dbhz;
-                if k < tracking_end {
-                    good += 1;
-                    track_rows.push(ImportedRow {
-                        t_s: t,
-                        channel,
-                        prn: r.prn,
-                        cn0_dbhz: r.cn0_dbhz,
-                        phase_err_rad: core::f64::consts::TAU * r.carr_error_cycles,
-                        lock_test: r.carrier_lock_test,
-                        symbols: symbols(k),
-                        track,
-                    });
-                }
-            }
-        }
-        let lock_loss_s = lock.loss_of_lock.map(|k| t_mid(i + k));
-        let loss = lock_loss_s.map(|t| lock.describe_loss(&settings.tracking, t));
-        let counts = TrackCounts { records: j - i, modelled, good, dropped_after_loss: j - tracking_end };
-        let (fate, reason) = fate_of(settings, &lock, loss, k0.is_none_or(|k| tracking_end <= k), k0.is_some(), counts);
-        let used = good > 0;
-        if used {
+    while i < dump.records.len() {
+        let (j, synced) = track_span(&dump.records, i, samples_per_ms);
+        let track = DumpTrack { records: &dump.records[i..j], synced: synced.map(|s| s - i), settings };
+        let (track_rows, summary) = track.import(dump, track_base + tracks.len());
+        if summary.used {
             rows.extend(track_rows);
         }
-        tracks.push(TrackSummary {
+        tracks.push(summary);
+        i = j;
+    }
+    (rows, tracks)
+}
+
+/// One track of a dump (`track_span`): its records, the index among them of
+/// the first after bit synchronization, and how the dumps are converted.
+struct DumpTrack<'a> {
+    records: &'a [TrackingRecord],
+    synced: Option<usize>,
+    settings: &'a ImportSettings,
+}
+
+impl DumpTrack<'_> {
+    /// Whether record `k` comes after bit synchronization.
+    fn after_sync(&self, k: usize) -> bool {
+        self.synced.is_some_and(|s| k >= s)
+    }
+
+    /// The integration record `k`'s discriminator output comes from \[ms\]:
+    /// 1 before bit synchronization, N after.
+    fn symbols(&self, k: usize) -> u32 {
+        if self.after_sync(k) { self.settings.stage().symbols.max(1) } else { 1 }
+    }
+
+    /// The middle of record `k`'s integration, its time \[s\].
+    fn t_mid(&self, k: usize) -> f64 {
+        let (fs, samples_per_ms) = (self.settings.fs_hz, self.settings.fs_hz * 1e-3);
+        (self.records[k].prn_start_sample_count as f64 - 0.5 * f64::from(self.symbols(k)) * samples_per_ms) / fs
+    }
+
+    /// The sample count at which record `k`'s lock-detector call runs: the
+    /// start of its last millisecond, not before the track's first record's.
+    fn call_sample(&self, k: usize) -> f64 {
+        let samples_per_ms = self.settings.fs_hz * 1e-3;
+        let first_start = self.records[0].prn_start_sample_count as f64 - samples_per_ms;
+        (self.records[k].prn_start_sample_count as f64 - samples_per_ms).max(first_start)
+    }
+
+    /// GNSS-SDR's lock detector over the whole track (its counters run
+    /// through the stages): called once per loop update, so a record after
+    /// bit synchronization stands for 20/N calls (the smoothed lock test and
+    /// C/N0 it holds barely move within them).
+    fn replay_lock(&self) -> LockReplay {
+        let per_record = self.settings.stage().updates_per_record().unwrap_or(1);
+        let n = self.records.len();
+        let call_sample: Vec<f64> = (0..n).map(|k| self.call_sample(k)).collect();
+        let calls: Vec<u32> = (0..n).map(|k| if self.after_sync(k) { per_record } else { 1 }).collect();
+        let lock_test: Vec<f64> = self.records.iter().map(|r| r.carrier_lock_test).collect();
+        let cn0: Vec<f64> = self.records.iter().map(|r| r.cn0_dbhz).collect();
+        let tracking = &self.settings.tracking;
+        replay_lock_detector(&call_sample, &calls, &lock_test, &cn0, self.settings.fs_hz, tracking)
+    }
+
+    /// The first record of the modelled loop. Extended integration: the
+    /// first after bit synchronization (the narrow loop starts there).
+    /// Without it the 1 ms loop runs throughout, PLL only once GNSS-SDR's
+    /// pull-in transitory (its FLL, if enabled) is over: at the latest
+    /// floor(Δn/fs) > pull_in_time_s after the track's first record
+    /// (acquisition came a little earlier), and before bit synchronization,
+    /// which GNSS-SDR seeks only after the transitory.
+    fn first_modelled(&self) -> Option<usize> {
+        if self.settings.stage().symbols.max(1) > 1 {
+            return self.synced;
+        }
+        let (fs, samples_per_ms) = (self.settings.fs_hz, self.settings.fs_hz * 1e-3);
+        let end_sample = self.call_sample(0) + (self.settings.tracking.pull_in_time_s + 1.0) * fs.floor();
+        let after_pull_in = (0..self.records.len())
+            .find(|&k| self.records[k].prn_start_sample_count as f64 - samples_per_ms >= end_sample - 0.5);
+        match (after_pull_in, self.synced) {
+            (Some(a), Some(s)) => Some(a.min(s)),
+            (a, s) => a.or(s),
+        }
+    }
+
+    /// Whether record `k` is on the lattice of one record per data bit.
+    /// Without extended integration the 1 ms records before bit
+    /// synchronization are thinned to one per data bit, on the lattice of
+    /// the records after it (the first of which comes one bit after the last
+    /// 1 ms record; without synchronization, the track's last record's):
+    /// every record then holds the last of 20 updates, as the stage states.
+    fn on_lattice(&self, k: usize) -> bool {
+        let anchor = self.synced.map_or(self.records.len() - 1, |s| s - 1);
+        self.after_sync(k) || (anchor - k).is_multiple_of(BIT_SYMBOLS as usize)
+    }
+
+    /// The rows of the modelled loop from record `k0` on, one per data bit,
+    /// once it has settled: the records before `tracking_end` (the loss of
+    /// lock) as rows of track `track`; with the count of modelled records
+    /// and the sum of their C/N0 \[dB-Hz\].
+    fn modelled_rows(
+        &self,
+        channel: u32,
+        k0: usize,
+        tracking_end: usize,
+        track: usize,
+    ) -> (Vec<ImportedRow>, usize, f64) {
+        let t0 = self.t_mid(k0);
+        let settle_s = self.settings.settle_time_s();
+        let (mut modelled, mut cn0_sum) = (0usize, 0.0);
+        let mut rows = Vec::new();
+        for k in (k0..self.records.len()).filter(|&k| self.on_lattice(k)) {
+            let t = self.t_mid(k);
+            if t < t0 + settle_s - 1e-9 {
+                continue;
+            }
+            let r = &self.records[k];
+            modelled += 1;
+            cn0_sum += r.cn0_dbhz;
+            if k < tracking_end {
+                rows.push(ImportedRow {
+                    t_s: t,
+                    channel,
+                    prn: r.prn,
+                    cn0_dbhz: r.cn0_dbhz,
+                    phase_err_rad: core::f64::consts::TAU * r.carr_error_cycles,
+                    lock_test: r.carrier_lock_test,
+                    symbols: self.symbols(k),
+                    track,
+                });
+            }
+        }
+        (rows, modelled, cn0_sum)
+    }
+
+    /// The track converted: its rows (kept only when some are good) and its
+    /// summary, as track `track` of `dump`.
+    fn import(&self, dump: &TrackingDump, track: usize) -> (Vec<ImportedRow>, TrackSummary) {
+        let (settings, recs) = (self.settings, self.records);
+        let channel = dump.channel.unwrap_or(0);
+        let lock = self.replay_lock();
+        let tracking_end = lock.loss_of_lock.unwrap_or(recs.len());
+        let k0 = self.first_modelled();
+        let (rows, modelled, cn0_sum) = match k0 {
+            Some(k0) => self.modelled_rows(channel, k0, tracking_end, track),
+            None => (Vec::new(), 0, 0.0),
+        };
+        let good = rows.len();
+        let lock_loss_s = lock.loss_of_lock.map(|k| self.t_mid(k));
+        let loss = lock_loss_s.map(|t| lock.describe_loss(&settings.tracking, t));
+        let counts = TrackCounts { records: recs.len(), modelled, good, dropped_after_loss: recs.len() - tracking_end };
+        let (fate, reason) = fate_of(settings, &lock, loss, k0.is_none_or(|k| tracking_end <= k), k0.is_some(), counts);
+        let summary = TrackSummary {
             file: dump.file.clone(),
             layout: format!("{} ({})", dump.layout, dump.layout_description),
             channel,
-            prn: recs[i].prn,
-            start_s: t_mid(i),
-            switch_s,
-            end_s: t_mid(j - 1),
-            records: j - i,
+            prn: recs[0].prn,
+            start_s: self.t_mid(0),
+            switch_s: k0.map(|k| self.t_mid(k)),
+            end_s: self.t_mid(recs.len() - 1),
+            records: recs.len(),
             modelled_records: modelled,
             good_records: good,
             lock,
             lock_loss_s,
             mean_cn0_dbhz: if modelled > 0 { cn0_sum / modelled as f64 } else { f64::NAN },
-            used,
+            used: good > 0,
             fate,
             reason,
-        });
-        i = j;
+        };
+        (rows, summary)
     }
-    (rows, tracks)
 }
 
 /// How many records of a track there were, were modelled, were kept, and
@@ -647,7 +709,7 @@ struct TrackCounts {
 /// (`synced`): 1 ms apart until then, the first record one data bit after its
 /// predecessor, one bit apart from there on; the track ends where the PRN
 /// changes or the spacing breaks.
-fn track_span(recs: &[crate::dump::TrackingRecord], i: usize, samples_per_ms: f64) -> (usize, Option<usize>) {
+fn track_span(recs: &[TrackingRecord], i: usize, samples_per_ms: f64) -> (usize, Option<usize>) {
     let bit_ms = f64::from(BIT_SYMBOLS);
     let mut j = i + 1;
     let mut synced = None;
@@ -1030,6 +1092,36 @@ mod tests {
         assert_eq!((lock.max_carrier_lock_fail.value, lock.max_lock_fail.value), (7, 9));
         assert_eq!(s.settle_s, Some(0.0));
         assert!(s.layout.is_some());
+    }
+
+    #[test]
+    fn a_tracks_times_lattice_and_modelled_rows() {
+        // 100 records of 1 ms, then 50 of 20 ms (at fs = 1 MHz, 1000 samples per ms).
+        let s = settings();
+        let recs = records(0, 100, 50, 5, 0.95);
+        assert_eq!(track_span(&recs, 0, 1000.0), (150, Some(100)));
+        let track = DumpTrack { records: &recs, synced: Some(100), settings: &s };
+        // The middle of each integration: 1 ms before bit synchronization, 20 ms after.
+        assert_eq!((track.symbols(99), track.symbols(100)), (1, 20));
+        assert!((track.t_mid(0) - 0.0005).abs() < 1e-12 && (track.t_mid(100) - 0.11).abs() < 1e-12);
+        assert_eq!((track.call_sample(0), track.call_sample(100)), (0.0, 119_000.0));
+        assert_eq!(track.first_modelled(), Some(100));
+        // The records before synchronization on the bit lattice end at the last 1 ms one.
+        assert!(track.on_lattice(99) && track.on_lattice(79) && !track.on_lattice(98) && track.on_lattice(120));
+        // Settled 0.1 s after the switch (record 105 on); lock lost at record 140.
+        let (rows, modelled, cn0_sum) = track.modelled_rows(3, 100, 140, 7);
+        assert_eq!((rows.len(), modelled, cn0_sum), (35, 45, 45.0 * 44.0));
+        assert!((rows[0].t_s - 0.21).abs() < 1e-12 && rows.iter().all(|r| r.channel == 3 && r.track == 7));
+        assert!(rows.iter().all(|r| r.symbols == 20 && r.prn == 5));
+
+        // 1 ms updates throughout: the PLL starts at the end of the pull-in,
+        // floor(Δn/fs) > 0 s, 1 s after the first record (sample 1 001 000).
+        let mut s1 = settings();
+        s1.tracking.extend_correlation_symbols = 1;
+        let recs = records(0, 2500, 0, 5, 0.95);
+        let track = DumpTrack { records: &recs, synced: None, settings: &s1 };
+        assert_eq!(track.first_modelled(), Some(1000));
+        assert!(!track.on_lattice(1000) && track.on_lattice(1019) && track.on_lattice(2499));
     }
 
     #[test]

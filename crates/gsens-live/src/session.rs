@@ -11,6 +11,11 @@ use crate::input::{Input, Notice};
 use crate::motion::{MotionWindow, Shaking};
 use crate::stream::{Epoch, EpochAverager, StreamEstimate};
 
+/// The IMU's index in a session's per-stream counts.
+const IMU_STREAM: usize = 0;
+/// The tracking's index in a session's per-stream counts.
+const TRACKING_STREAM: usize = 1;
+
 /// How a live session runs.
 #[derive(Debug, Clone)]
 pub struct LiveConfig {
@@ -225,7 +230,8 @@ pub struct LiveSession {
     batch_summary: BatchSummary,
     notices: VecDeque<String>,
     notices_total: u64,
-    /// Records refused in a row per stream (IMU, tracking): one notice per burst.
+    /// Records refused in a row per stream (`IMU_STREAM`,
+    /// `TRACKING_STREAM`): one notice per burst.
     refused: [u64; 2],
     averager: EpochAverager,
     /// The channel average of every completed tracking epoch.
@@ -305,100 +311,123 @@ impl LiveSession {
     }
 
     fn take(&mut self, source: &str, line: u64, input: Input) -> Option<Notice> {
-        let refuse = |s: &mut Self, k: usize, message: String| {
-            s.refused[k] += 1;
-            (s.refused[k] == 1).then(|| Notice { source: source.to_string(), line, message })
-        };
-        let end_burst = |s: &mut Self, k: usize| {
-            let n = std::mem::take(&mut s.refused[k]);
-            (n > 1).then(|| Notice {
-                source: source.to_string(),
-                line,
-                message: format!("{} more records refused before this one", n - 1),
-            })
-        };
         let t = input.t_s();
-        match input {
-            Input::Imu { t_s, accel_mps2 } => {
-                if let Some(last) = self.last_imu_t_s.filter(|&l| t_s <= l) {
-                    let msg = format!(
-                        "IMU time {t_s} s not after the previous sample's {last} s: not used (kept in the raw \
-                         log; a restarted logger needs a new `gsens live`)"
-                    );
-                    let n = refuse(self, 0, msg);
-                    return self.maybe_notice(n);
-                }
-                let dt = self.last_imu_t_s.map_or(0.0, |l| t_s - l);
-                self.last_imu_t_s = Some(t_s);
-                self.imu.t_s.push(t_s);
-                self.imu.accel_mps2.push(accel_mps2);
-                self.motion.push(t_s, accel_mps2);
-                self.stream.advance(&self.epochs, &self.imu);
-                // Shaken time and rest, from the window's judgement at this sample.
-                let shaking = self.motion.shaking();
-                match shaking.axis {
-                    Some(i) if dt < 1.0 => {
-                        self.shaken_s[i] += dt;
-                        if let Some(f_hz) = shaking.frequency_hz {
-                            self.shaken_by_rate_s[i][self.band.rate_of(f_hz)] += dt;
-                        }
-                        self.rest_done = true;
-                    }
-                    None if !shaking.several_axes && dt < 1.0 => self.rest_s += dt,
-                    _ => {}
-                }
+        let (stream, result) = match input {
+            Input::Imu { t_s, accel_mps2 } => (IMU_STREAM, self.take_imu(t_s, accel_mps2)),
+            Input::Tracking(row) => (TRACKING_STREAM, self.take_tracking(row)),
+        };
+        let notice = match result {
+            Err(message) => self.refuse(stream, source, line, message),
+            Ok(()) => {
                 self.first_t_s.get_or_insert(t);
-                let notice = end_burst(self, 0);
-                self.maybe_notice(notice)
+                self.end_burst(stream, source, line)
             }
-            Input::Tracking(row) => {
-                let last_t = self.rows.last().map(|r| r.t_s);
-                if let Some(last) = last_t.filter(|&l| row.t_s < l) {
-                    let msg = format!(
-                        "tracking time {} s before the previous row's {last} s: not used (kept in the raw log)",
-                        row.t_s
-                    );
-                    let n = refuse(self, 1, msg);
-                    return self.maybe_notice(n);
-                }
-                if last_t != Some(row.t_s) {
-                    self.epoch_channels.clear();
-                    self.close_phase_epoch(row.t_s);
-                }
-                if self.epoch_channels.contains(&row.channel) {
-                    let msg = format!("channel {} twice at {} s: the second row is not used", row.channel, row.t_s);
-                    let n = refuse(self, 1, msg);
-                    return self.maybe_notice(n);
-                }
-                self.epoch_channels.push(row.channel);
-                if let Some(back) = self.phase_window.back_mut() {
-                    back.1 += row.phase_err_rad;
-                    back.2 += 1;
-                }
-                let c = self.channels.entry(row.channel).or_insert(ChannelStatus {
-                    channel: row.channel,
-                    prn: row.prn,
-                    cn0_dbhz: row.cn0_dbhz,
-                    phase_err_rad: row.phase_err_rad,
-                    last_t_s: row.t_s,
-                    rows: 0,
-                    tracking: true,
-                });
-                c.prn = row.prn;
-                c.cn0_dbhz = row.cn0_dbhz;
-                c.phase_err_rad = row.phase_err_rad;
-                c.last_t_s = row.t_s;
-                c.rows += 1;
-                if let Some(epoch) = self.averager.row(&row) {
-                    self.epochs.push(epoch);
-                    self.stream.advance(&self.epochs, &self.imu);
-                }
-                self.rows.push(row);
-                self.first_t_s.get_or_insert(t);
-                let notice = end_burst(self, 1);
-                self.maybe_notice(notice)
-            }
+        };
+        self.maybe_notice(notice)
+    }
+
+    /// A refused record of `stream`: the notice, for the first of a burst only.
+    fn refuse(&mut self, stream: usize, source: &str, line: u64, message: String) -> Option<Notice> {
+        self.refused[stream] += 1;
+        (self.refused[stream] == 1).then(|| Notice { source: source.to_string(), line, message })
+    }
+
+    /// A used record of `stream`: the notice of the burst of refused records
+    /// it ends, when there were more than the one already named.
+    fn end_burst(&mut self, stream: usize, source: &str, line: u64) -> Option<Notice> {
+        let n = std::mem::take(&mut self.refused[stream]);
+        (n > 1).then(|| Notice {
+            source: source.to_string(),
+            line,
+            message: format!("{} more records refused before this one", n - 1),
+        })
+    }
+
+    /// Takes an IMU sample, or says why not (its time not after the previous
+    /// sample's).
+    fn take_imu(&mut self, t_s: f64, accel_mps2: [f64; 3]) -> Result<(), String> {
+        if let Some(last) = self.last_imu_t_s.filter(|&l| t_s <= l) {
+            return Err(format!(
+                "IMU time {t_s} s not after the previous sample's {last} s: not used (kept in the raw \
+                 log; a restarted logger needs a new `gsens live`)"
+            ));
         }
+        let dt = self.last_imu_t_s.map_or(0.0, |l| t_s - l);
+        self.last_imu_t_s = Some(t_s);
+        self.imu.t_s.push(t_s);
+        self.imu.accel_mps2.push(accel_mps2);
+        self.motion.push(t_s, accel_mps2);
+        self.stream.advance(&self.epochs, &self.imu);
+        self.count_motion(dt);
+        Ok(())
+    }
+
+    /// Adds the `dt` since the previous IMU sample to the shaken time of the
+    /// axis (and rate) shaken now, or to the rest, from the motion window's
+    /// judgement at this sample; a gap of a second or more counts nowhere.
+    fn count_motion(&mut self, dt: f64) {
+        let shaking = self.motion.shaking();
+        match shaking.axis {
+            Some(i) if dt < 1.0 => {
+                self.shaken_s[i] += dt;
+                if let Some(f_hz) = shaking.frequency_hz {
+                    self.shaken_by_rate_s[i][self.band.rate_of(f_hz)] += dt;
+                }
+                self.rest_done = true;
+            }
+            None if !shaking.several_axes && dt < 1.0 => self.rest_s += dt,
+            _ => {}
+        }
+    }
+
+    /// Takes a tracking row, or says why not (its time before the previous
+    /// row's, or its channel already seen at its time stamp).
+    fn take_tracking(&mut self, row: TrackingRow) -> Result<(), String> {
+        let last_t = self.rows.last().map(|r| r.t_s);
+        if let Some(last) = last_t.filter(|&l| row.t_s < l) {
+            return Err(format!(
+                "tracking time {} s before the previous row's {last} s: not used (kept in the raw log)",
+                row.t_s
+            ));
+        }
+        if last_t != Some(row.t_s) {
+            self.epoch_channels.clear();
+            self.close_phase_epoch(row.t_s);
+        }
+        if self.epoch_channels.contains(&row.channel) {
+            return Err(format!("channel {} twice at {} s: the second row is not used", row.channel, row.t_s));
+        }
+        self.epoch_channels.push(row.channel);
+        if let Some(back) = self.phase_window.back_mut() {
+            back.1 += row.phase_err_rad;
+            back.2 += 1;
+        }
+        self.update_channel(&row);
+        if let Some(epoch) = self.averager.row(&row) {
+            self.epochs.push(epoch);
+            self.stream.advance(&self.epochs, &self.imu);
+        }
+        self.rows.push(row);
+        Ok(())
+    }
+
+    /// The channel's status with `row`: its PRN, C/N0 and phase error now,
+    /// one row more.
+    fn update_channel(&mut self, row: &TrackingRow) {
+        let c = self.channels.entry(row.channel).or_insert(ChannelStatus {
+            channel: row.channel,
+            prn: row.prn,
+            cn0_dbhz: row.cn0_dbhz,
+            phase_err_rad: row.phase_err_rad,
+            last_t_s: row.t_s,
+            rows: 0,
+            tracking: true,
+        });
+        c.prn = row.prn;
+        c.cn0_dbhz = row.cn0_dbhz;
+        c.phase_err_rad = row.phase_err_rad;
+        c.last_t_s = row.t_s;
+        c.rows += 1;
     }
 
     fn maybe_notice(&mut self, n: Option<Notice>) -> Option<Notice> {
@@ -576,5 +605,55 @@ impl LiveSession {
             notices: (self.notices.iter().cloned().collect(), self.notices_total),
             received: (self.imu.len() as u64, self.rows.len() as u64),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn session() -> LiveSession {
+        LiveSession::new(LiveConfig::new(PipelineSettings::default(), 1e-3)).unwrap()
+    }
+
+    fn row(t_s: f64, channel: u32, cn0_dbhz: f64) -> TrackingRow {
+        TrackingRow { t_s, channel, prn: channel + 1, cn0_dbhz, elev_deg: None, phase_err_rad: 0.01 }
+    }
+
+    #[test]
+    fn a_burst_is_named_by_its_first_record_and_counted_by_the_next_used_one() {
+        let mut s = session();
+        let first = s.refuse(TRACKING_STREAM, "trk", 7, "why".into()).unwrap();
+        assert_eq!((first.source.as_str(), first.line, first.message.as_str()), ("trk", 7, "why"));
+        assert!(s.refuse(TRACKING_STREAM, "trk", 8, "why".into()).is_none());
+        assert!(s.refuse(TRACKING_STREAM, "trk", 9, "why".into()).is_none());
+        // The other stream's burst is its own.
+        assert!(s.end_burst(IMU_STREAM, "imu", 10).is_none());
+        let count = s.end_burst(TRACKING_STREAM, "trk", 11).unwrap();
+        assert_eq!((count.line, count.message.as_str()), (11, "2 more records refused before this one"));
+        assert!(s.end_burst(TRACKING_STREAM, "trk", 12).is_none());
+        // A burst of one needs no count.
+        assert!(s.refuse(IMU_STREAM, "imu", 13, "why".into()).is_some());
+        assert!(s.end_burst(IMU_STREAM, "imu", 14).is_none());
+    }
+
+    #[test]
+    fn taking_records_refuses_what_cannot_be_used_and_keeps_each_channels_latest() {
+        let mut s = session();
+        assert!(s.take_imu(1.0, [0.0, 0.0, 9.81]).is_ok());
+        let e = s.take_imu(1.0, [0.0, 0.0, 9.81]).unwrap_err();
+        assert!(e.starts_with("IMU time 1 s not after the previous sample's 1 s"), "{e}");
+        assert!(s.take_tracking(row(1.0, 0, 40.0)).is_ok() && s.take_tracking(row(1.0, 1, 41.0)).is_ok());
+        assert_eq!(
+            s.take_tracking(row(1.0, 1, 42.0)).unwrap_err(),
+            "channel 1 twice at 1 s: the second row is not used"
+        );
+        assert!(s.take_tracking(row(1.025, 0, 43.0)).is_ok());
+        let e = s.take_tracking(row(0.5, 0, 44.0)).unwrap_err();
+        assert!(e.starts_with("tracking time 0.5 s before the previous row's 1.025 s"), "{e}");
+        assert_eq!((s.imu.len(), s.rows.len()), (1, 3));
+        let c = &s.channels[&0];
+        assert_eq!((c.rows, c.cn0_dbhz, c.last_t_s, c.prn), (2, 43.0, 1.025, 1));
+        assert_eq!((s.channels[&1].rows, s.channels[&1].cn0_dbhz), (1, 41.0));
     }
 }

@@ -45,7 +45,7 @@ impl TruthLoopUse {
                 format!("receiver loop: from the options, {relation} the one {path} states ({})", stated(truth))
             }
             TruthLoopUse::Taken { truth } => format!(
-                "receiver loop: {} (from {path}, the loop that made the log; loop options such as --bn-hz override it)",
+                "receiver loop: {} (from {path}, the loop that made the log; loop options such as bn_hz override it)",
                 stated(truth)
             ),
         }

@@ -121,7 +121,7 @@ pub enum IqError {
     /// the IF generator makes GPS L1 C/A only.
     #[error(
         "the IF generator makes GPS L1 C/A samples only: remove satellites.signals ({0}) to generate IQ, or \
-         simulate the mixed-signal session's logs without --iq"
+         simulate the mixed-signal session's logs without IF samples"
     )]
     SignalsNotSupported(String),
 }
