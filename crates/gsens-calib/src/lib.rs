@@ -88,7 +88,8 @@ pub use joint::{
     joint_fit,
 };
 pub use loop_free::{
-    CROSS_CHECK_FALSE_ALARM, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, estimate_loop_free,
+    CROSS_CHECK_FALSE_ALARM, InputPhases, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings,
+    TrackInputPhase, estimate_loop_free, estimate_loop_free_from,
 };
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,

@@ -194,15 +194,77 @@ pub fn estimate_loop_free(
     let epochs = tracking.epoch_t_s();
     let log_interval_s = median_step(epochs);
     let substeps = substeps(log_interval_s, settings.loop_interval_s)?;
-    let mut tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_phase_cycles.is_empty()).collect();
+    let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_phase_cycles.is_empty()).collect();
     if tracks.is_empty() {
         return Err(LoopFreeError::NoNcoPhase { source_name: tracking.source_name().to_owned() });
     }
+    let phases = InputPhases {
+        epoch_t_s: epochs.to_vec(),
+        tracks: tracks
+            .iter()
+            .map(|tr| TrackInputPhase {
+                input_phase_rad: input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings),
+                scale_to_l1: tr.carrier.scale_to_l1(),
+                mean_cn0_dbhz: tr.mean_cn0_dbhz(),
+            })
+            .collect(),
+    };
+    let n_window = if settings.logged_phase == LoggedPhase::Mean { substeps } else { 1 };
+    fit(&phases, imu, settings, n_window)
+}
+
+/// Each track's input phase θ_in on common epochs: what a receiver's adapter
+/// hands [`estimate_loop_free_from`] when its bookkeeping of the NCO is its
+/// own (GNSS-SDR's records, each at its own instant, brought to a grid).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputPhases {
+    /// The epochs \[s\], strictly increasing on a uniform grid (missing
+    /// grid points allowed).
+    pub epoch_t_s: Vec<f64>,
+    /// Every track.
+    pub tracks: Vec<TrackInputPhase>,
+}
+
+/// One track's input phase on [`InputPhases::epoch_t_s`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackInputPhase {
+    /// θ_in = θ_NCO + φ at each epoch's instant \[rad\] (its own carrier's;
+    /// `None` where the track has none or it is not to be used: pull-in,
+    /// |φ| near the discriminator's wrap).
+    pub input_phase_rad: Vec<Option<f64>>,
+    /// f_L1/f_c of its carrier.
+    pub scale_to_l1: f64,
+    /// Its mean C/N0 \[dB-Hz\], for the choice of channels.
+    pub mean_cn0_dbhz: f64,
+}
+
+/// [`estimate_loop_free`] from input phases a receiver's adapter made: each
+/// a point value at its epoch's instant (the regressor is read there), the
+/// settings' loop interval and logged phase unused.
+pub fn estimate_loop_free_from(
+    phases: &InputPhases,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
+    check_settings(settings)?;
+    fit(phases, imu, settings, 1)
+}
+
+/// The estimate from input phases whose regressor is the mean of `n_window`
+/// instants a loop interval apart, ending at each epoch.
+fn fit(
+    phases: &InputPhases,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    n_window: usize,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
+    let epochs = phases.epoch_t_s.as_slice();
+    let log_interval_s = median_step(epochs);
+    let mut tracks: Vec<&TrackInputPhase> = phases.tracks.iter().collect();
     if settings.channels > 0 {
-        tracks.sort_by(|a, b| b.mean_cn0_dbhz().total_cmp(&a.mean_cn0_dbhz()));
+        tracks.sort_by(|a, b| b.mean_cn0_dbhz.total_cmp(&a.mean_cn0_dbhz));
         tracks.truncate(settings.channels);
     }
-    let n_window = if settings.logged_phase == LoggedPhase::Mean { substeps } else { 1 };
     let regressor =
         Regressor { integral: ForceIntegral::new(imu), epochs, n_window, loop_interval_s: settings.loop_interval_s };
     let (offsets, searched) = match settings.time_offset {
@@ -213,10 +275,8 @@ pub fn estimate_loop_free(
     let usable: Vec<bool> = (0..epochs.len())
         .map(|k| epochs[k] >= epochs[0] + settings.warmup_s && offsets.iter().all(|&tau| regressor.covers(k, tau)))
         .collect();
-    let inputs: Vec<(Vec<Option<f64>>, f64)> = tracks
-        .iter()
-        .map(|tr| (input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings), tr.carrier.scale_to_l1()))
-        .collect();
+    let inputs: Vec<(&[Option<f64>], f64)> =
+        tracks.iter().map(|t| (t.input_phase_rad.as_slice(), t.scale_to_l1)).collect();
     // A step of half the smallest slip flags one: the smallest is a half cycle of the discriminator,
     // 4·max|φ| (π for atan Costas at max|φ| = π/4).
     let m = Measurement::assemble(epochs, &usable, &inputs, settings.segment_s, 2.0 * settings.max_abs_phase_rad);
@@ -330,7 +390,7 @@ impl Measurement {
     fn assemble(
         epochs: &[f64],
         usable: &[bool],
-        inputs: &[(Vec<Option<f64>>, f64)],
+        inputs: &[(&[Option<f64>], f64)],
         segment_s: f64,
         step_rad: f64,
     ) -> Self {
@@ -344,7 +404,7 @@ impl Measurement {
             // The tracks with a value at nearly every epoch, and the epochs where all of them have one.
             let present = |theta: &[Option<f64>]| usable_at.iter().filter(|&&k| theta[k].is_some()).count();
             let members: Vec<usize> = (0..inputs.len())
-                .filter(|&i| present(&inputs[i].0) as f64 >= MIN_PRESENCE * usable_at.len() as f64)
+                .filter(|&i| present(inputs[i].0) as f64 >= MIN_PRESENCE * usable_at.len() as f64)
                 .collect();
             let at: Vec<usize> =
                 usable_at.into_iter().filter(|&k| members.iter().all(|&i| inputs[i].0[k].is_some())).collect();

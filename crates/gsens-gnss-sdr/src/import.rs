@@ -273,6 +273,11 @@ pub struct ImportedRow {
     pub symbols: u32,
     /// Index of the track in [`Imported::tracks`].
     pub track: usize,
+    /// The phase the loop was fed at the middle of the integration,
+    /// θ_in = θ_NCO + φ \[rad\] (the replica's phase rebuilt in double from
+    /// the records' NCO frequencies; `None` for rows not from dumps).
+    #[serde(skip)]
+    pub input_phase_rad: Option<f64>,
 }
 
 impl ImportedRow {
@@ -621,6 +626,27 @@ impl DumpTrack<'_> {
     /// once it has settled: the records before `tracking_end` (the loss of
     /// lock) as rows of track `track`; with the count of modelled records
     /// and the sum of their C/N0 \[dB-Hz\].
+    /// The replica's phase at the middle of each record's integration
+    /// \[cycles\], from the track's first record on: the NCO runs over each
+    /// integration at the frequency the previous record commanded
+    /// (`carrier_doppler_hz` is the frequency for the next integration), the
+    /// integrations follow each other without gaps, and the sum is kept in
+    /// double (the dump's own `acc_carrier_phase_rad` is float32: 10⁻³ rad
+    /// steps after a few minutes of Doppler).
+    fn replica_phase_cycles(&self) -> Vec<f64> {
+        let end = |k: usize| self.t_mid(k) + 0.5e-3 * f64::from(self.symbols(k));
+        let mut at_end = 0.0;
+        (0..self.records.len())
+            .map(|k| {
+                let f_hz = self.records[k.saturating_sub(1)].carrier_doppler_hz;
+                if k > 0 {
+                    at_end += f_hz * (end(k) - end(k - 1));
+                }
+                at_end - f_hz * 0.5e-3 * f64::from(self.symbols(k))
+            })
+            .collect()
+    }
+
     fn modelled_rows(
         &self,
         channel: u32,
@@ -628,6 +654,7 @@ impl DumpTrack<'_> {
         tracking_end: usize,
         track: usize,
     ) -> (Vec<ImportedRow>, usize, f64) {
+        let replica_cycles = self.replica_phase_cycles();
         let t0 = self.t_mid(k0);
         let settle_s = self.settings.settle_time_s();
         let (mut modelled, mut cn0_sum) = (0usize, 0.0);
@@ -650,6 +677,7 @@ impl DumpTrack<'_> {
                     lock_test: r.carrier_lock_test,
                     symbols: self.symbols(k),
                     track,
+                    input_phase_rad: Some(core::f64::consts::TAU * (replica_cycles[k] + r.carr_error_cycles)),
                 });
             }
         }
@@ -1305,6 +1333,7 @@ mod tests {
                     lock_test: 1.0,
                     symbols: 20,
                     track: 0,
+                    input_phase_rad: None,
                 }
             })
             .collect();
@@ -1335,6 +1364,7 @@ mod tests {
             lock_test,
             symbols: 20,
             track: 0,
+            input_phase_rad: None,
         };
         let rows = [row(7.39735791015625, 0.9902583956718445), row(7.41735791015625, 1.0)];
         let text = String::from_utf8(write_imported_csv(Vec::new(), &rows).unwrap()).unwrap();

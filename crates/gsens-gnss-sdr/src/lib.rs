@@ -255,6 +255,7 @@ mod dump;
 mod error;
 mod export;
 mod import;
+mod input_phase;
 pub mod mat;
 pub mod monitor;
 
@@ -265,3 +266,4 @@ pub use error::{GnssSdrError, LayoutSpecError};
 pub use import::{
     ImportOverrides, ImportSettings, Imported, TrackFate, import_dir, import_dump, render_tracks, resample,
 };
+pub use input_phase::gnss_sdr_input_phases;

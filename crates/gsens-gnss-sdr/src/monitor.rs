@@ -733,6 +733,7 @@ impl Recorder {
                 lock_test: f64::NAN,
                 symbols: BIT_MS as u32,
                 track,
+                input_phase_rad: None,
             });
         }
         out
