@@ -82,44 +82,54 @@ impl Options {
         let d = CalibrationOptions::default();
         CalibrationOptions {
             carrier_hz: self.carrier_hz.or(d.carrier_hz),
-            order: self.order,
-            bn_hz: self.bn_hz.opt(d.bn_hz),
-            zeta: self.zeta.or(d.zeta),
-            a3: self.a3.or(d.a3),
-            b3: self.b3.or(d.b3),
-            loop_interval_s: self.loop_interval_s.opt(d.loop_interval_s),
-            logged_phase: self.logged_phase.map(|l| if l { LoggedPhase::Last } else { LoggedPhase::Mean }),
             method: [MethodName::Batch, MethodName::Gls, MethodName::Rls, MethodName::Gradient]
                 [self.method as usize % 4],
-            gain_k: self.gain_k.or(d.gain_k),
-            lambda: self.lambda.or(d.lambda),
-            warmup_s: self.warmup_s.or(d.warmup_s),
-            imu_scale_sigma_ppm: self.imu_scale_sigma_ppm.or(d.imu_scale_sigma_ppm),
-            imu_misalignment_sigma_mrad: self.imu_misalignment_sigma_mrad.or(d.imu_misalignment_sigma_mrad),
-            highpass_hz: self.highpass_hz.or(d.highpass_hz),
-            robust: if self.huber { gsens_calib::Robust::Huber } else { gsens_calib::Robust::None },
-            channels: usize::from(self.channels % 16),
-            min_cn0_dbhz: self.min_cn0_dbhz.opt(d.min_cn0_dbhz),
-            elevation_mask_deg: self.elevation_mask_deg.opt(d.elevation_mask_deg),
-            weights: if self.cn0_weights { gsens_session::Weighting::Cn0 } else { gsens_session::Weighting::Equal },
-            screening: self.screening,
-            cn0_drop_db: self.cn0_drop_db.or(d.cn0_drop_db),
-            max_abs_phase_rad: self.max_abs_phase_rad.opt(d.max_abs_phase_rad),
-            discriminator: if self.atan2_discriminator {
-                gsens_core::Discriminator::Atan2
-            } else {
-                gsens_core::Discriminator::AtanCostas
+            receiver_loop: gsens_calib::LoopOptions {
+                order: self.order,
+                bn_hz: self.bn_hz.opt(d.receiver_loop.bn_hz),
+                zeta: self.zeta.or(d.receiver_loop.zeta),
+                a3: self.a3.or(d.receiver_loop.a3),
+                b3: self.b3.or(d.receiver_loop.b3),
+                loop_interval_s: self.loop_interval_s.opt(d.receiver_loop.loop_interval_s),
+                logged_phase: self.logged_phase.map(|l| if l { LoggedPhase::Last } else { LoggedPhase::Mean }),
+                discriminator: if self.atan2_discriminator {
+                    gsens_core::Discriminator::Atan2
+                } else {
+                    gsens_core::Discriminator::AtanCostas
+                },
             },
-            loop_tolerance: self.loop_tolerance.opt(d.loop_tolerance),
-            time_offset: match self.time_offset {
-                None => d.time_offset,
-                Some(Value::Default) => TimeOffsetOption::None,
-                Some(v) => TimeOffsetOption::Seconds(v.or(0.0)),
+            estimator: gsens_calib::EstimatorOptions {
+                gain_k: self.gain_k.or(d.estimator.gain_k),
+                lambda: self.lambda.or(d.estimator.lambda),
+                warmup_s: self.warmup_s.or(d.estimator.warmup_s),
+                imu_scale_sigma_ppm: self.imu_scale_sigma_ppm.or(d.estimator.imu_scale_sigma_ppm),
+                imu_misalignment_sigma_mrad: self
+                    .imu_misalignment_sigma_mrad
+                    .or(d.estimator.imu_misalignment_sigma_mrad),
+                highpass_hz: self.highpass_hz.or(d.estimator.highpass_hz),
+                robust: if self.huber { gsens_calib::Robust::Huber } else { gsens_calib::Robust::None },
             },
-            time_offset_max_s: self.time_offset_max_s.or(d.time_offset_max_s),
-            loop_check: self.loop_check,
-            identify_damping: self.identify_damping,
-            imu_despike: self.imu_despike,
+            selection: gsens_calib::SelectionOptions {
+                channels: usize::from(self.channels % 16),
+                min_cn0_dbhz: self.min_cn0_dbhz.opt(d.selection.min_cn0_dbhz),
+                elevation_mask_deg: self.elevation_mask_deg.opt(d.selection.elevation_mask_deg),
+                weights: if self.cn0_weights { gsens_session::Weighting::Cn0 } else { gsens_session::Weighting::Equal },
+                screening: self.screening,
+                cn0_drop_db: self.cn0_drop_db.or(d.selection.cn0_drop_db),
+                max_abs_phase_rad: self.max_abs_phase_rad.opt(d.selection.max_abs_phase_rad),
+            },
+            systematic: gsens_calib::SystematicOptions {
+                loop_tolerance: self.loop_tolerance.opt(d.systematic.loop_tolerance),
+                time_offset: match self.time_offset {
+                    None => d.systematic.time_offset,
+                    Some(Value::Default) => TimeOffsetOption::None,
+                    Some(v) => TimeOffsetOption::Seconds(v.or(0.0)),
+                },
+                time_offset_max_s: self.time_offset_max_s.or(d.systematic.time_offset_max_s),
+                loop_check: self.loop_check,
+                identify_damping: self.identify_damping,
+                imu_despike: self.imu_despike,
+            },
         }
     }
 }

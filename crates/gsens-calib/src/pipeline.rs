@@ -379,6 +379,15 @@ fn calibrate_prepared(
     })
 }
 
+impl PipelineSettings {
+    /// The loop-free estimate's settings that go with these (see
+    /// [`crate::estimate_loop_free`]), for a log of interval `log_interval_s`:
+    /// what the pipeline itself runs it with.
+    pub fn loop_free(&self, log_interval_s: f64) -> crate::LoopFreeSettings {
+        loop_free_settings(self, &self.estimate, log_interval_s)
+    }
+}
+
 /// The loop-free estimate's settings from the calibration's: the loop's
 /// update interval and what a row holds (stated, configured or chosen), the
 /// same offset option, warm-up and channel count, and the screening's phase

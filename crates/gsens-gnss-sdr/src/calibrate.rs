@@ -1,6 +1,6 @@
 //! The crate documentation's section "The estimate with GNSS-SDR's own loop" describes this module.
 
-use gsens_calib::{Outcome, PipelineSettings, SourceConversion, calibrate_logs};
+use gsens_calib::{Outcome, PipelineSettings, SourceConversion, calibrate_logs, estimate_loop_free_from};
 use gsens_core::units::Decimal;
 use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, TrackingLog};
@@ -9,6 +9,7 @@ use std::path::Path;
 
 use crate::error::GnssSdrError;
 use crate::import::{ImportSettings, Imported, TrackSummary, import_dir, resample};
+use crate::input_phase::gnss_sdr_input_phases;
 
 /// What a conversion of GNSS-SDR dumps did: its settings and every track's
 /// fate (what `gsens import gnss-sdr --tracks-json` writes, and the result
@@ -68,7 +69,9 @@ pub struct GnssSdrOutcome {
 }
 
 /// Calibrates from GNSS-SDR tracking dumps (`Tracking_1C.dump=true`) and an
-/// IMU log, with GNSS-SDR's own carrier loop modelled exactly: the loop and
+/// IMU log, with GNSS-SDR's own carrier loop modelled exactly, and the
+/// loop-free estimate from the records' NCO beside it
+/// ([`crate::gnss_sdr_input_phases`], the outcome's `loop_free`): the loop and
 /// logged-phase settings of `settings` are replaced by the ones the dumps
 /// were made with ([`with_gnss_sdr_loop`]), and the warm-up is at least
 /// [`ImportSettings::models_warmup_s`] (the regressor models' start-up error).
@@ -90,6 +93,10 @@ pub fn calibrate_gnss_sdr(
         settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
     }
     let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &settings)?;
+    // The records' NCO gives the loop-free estimate beside the one through GNSS-SDR's loop.
+    let free = settings.loop_free(imported.interval_s);
+    let phases = gnss_sdr_input_phases(&imported, imported.interval_s, free.max_abs_phase_rad);
+    outcome.loop_free = Some(estimate_loop_free_from(&phases, &imu_series, &free));
     let conversion = Conversion { conversion: import.clone(), tracks: imported.tracks };
     outcome.source = Some(conversion.source());
     outcome.inputs =

@@ -64,7 +64,8 @@ pub fn calibrate_pocketsdr(
     settings: &PipelineSettings,
 ) -> Result<PocketSdrOutcome, PocketSdrError> {
     let imported = import_file(log, import)?;
-    let tracking = pocketsdr_tracking_log(&imported)?;
+    // With the NCO's phase (adr) the pipeline makes the loop-free estimate beside this one.
+    let tracking = pocketsdr_tracking_log_with_nco(&imported)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
     // PocketSDR's loop is known exactly from its options: tested, not fitted.
     // pocket_trk's err_phas on L1CA: atan(Q/I), the two-quadrant Costas discriminator.
