@@ -89,7 +89,7 @@ pub use joint::{
 };
 pub use loop_free::{
     CROSS_CHECK_FALSE_ALARM, InputPhases, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings,
-    TrackInputPhase, estimate_loop_free, estimate_loop_free_from,
+    Measurement, TrackInputPhase, estimate_loop_free, estimate_loop_free_from,
 };
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,

@@ -51,6 +51,7 @@
 
 use crate::gls::{GlsSettings, gls};
 use gsens_core::LoggedPhase;
+use gsens_core::interpolate::lagrange;
 use gsens_io::{ImuSeries, TrackingLog};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -171,6 +172,18 @@ pub enum LoopFreeError {
         /// The range.
         expected: &'static str,
     },
+    /// The log holds fewer records than the loop made updates: the NCO's
+    /// phase between records is not known.
+    #[error(
+        "the loop updates every {loop_interval_s} s but its records are {record_interval_s} s apart: the NCO's \
+         phase over the updates between them is not logged, so the loop-free estimate cannot be made"
+    )]
+    UpdatesNotLogged {
+        /// The loop's update interval \[s\].
+        loop_interval_s: f64,
+        /// The records' spacing \[s\].
+        record_interval_s: f64,
+    },
     /// Too little data survived: no channel covers a whole segment inside
     /// the IMU's span, or the fit had too few epochs.
     #[error(
@@ -279,7 +292,16 @@ fn fit(
         tracks.iter().map(|t| (t.input_phase_rad.as_slice(), t.scale_to_l1)).collect();
     // A step of half the smallest slip flags one: the smallest is a half cycle of the discriminator,
     // 4·max|φ| (π for atan Costas at max|φ| = π/4).
-    let m = Measurement::assemble(epochs, &usable, &inputs, settings.segment_s, 2.0 * settings.max_abs_phase_rad);
+    // The slip test compares means of a second of rows (at least 3).
+    let slip_window = ((1.0 / log_interval_s).round() as usize).max(3);
+    let m = CommonPhase::assemble(
+        epochs,
+        &usable,
+        &inputs,
+        settings.segment_s,
+        2.0 * settings.max_abs_phase_rad,
+        slip_window,
+    );
     let too_few = || LoopFreeError::TooFewEpochs { epochs: m.phase.len(), segment_s: settings.segment_s };
     if m.phase.len() < 10 {
         return Err(too_few());
@@ -338,7 +360,7 @@ impl Regressor<'_> {
 }
 
 /// The channel-averaged, detrended input phase and the segments it is on.
-struct Measurement {
+struct CommonPhase {
     phase: Vec<f64>,
     /// Each segment's epochs and its cubics.
     segments: Vec<(Vec<usize>, Cubic)>,
@@ -382,23 +404,23 @@ fn slipped(residuals: &[(usize, Vec<f64>)], j: usize, window: usize, step_rad: f
     (window..=d.len() - window).any(|k| (mean(k, k + window) - mean(k - window, k)).abs() >= step_rad)
 }
 
-impl Measurement {
+impl CommonPhase {
     /// Each track's θ_in (`inputs`: per track the values on the epochs and
     /// the scale to L1) detrended per segment and averaged over the tracks
     /// that cover the segment's usable epochs and did not slip in it
-    /// ([`slipped`], steps of at least `step_rad`).
+    /// ([`slipped`], steps of at least `step_rad` between the means of
+    /// `slip_window` rows).
     fn assemble(
         epochs: &[f64],
         usable: &[bool],
         inputs: &[(&[Option<f64>], f64)],
         segment_s: f64,
         step_rad: f64,
+        slip_window: usize,
     ) -> Self {
         let mut m =
-            Measurement { phase: Vec::new(), segments: Vec::new(), tracks_used: vec![false; inputs.len()], slipped: 0 };
+            CommonPhase { phase: Vec::new(), segments: Vec::new(), tracks_used: vec![false; inputs.len()], slipped: 0 };
         let first = usable.iter().position(|&u| u).unwrap_or(epochs.len());
-        let log_interval_s = median_step(epochs);
-        let window = ((1.0 / log_interval_s).round() as usize).max(3);
         for seg in segments(&epochs[first..], segment_s) {
             let usable_at: Vec<usize> = (seg.start + first..seg.end + first).filter(|&k| usable[k]).collect();
             // The tracks with a value at nearly every epoch, and the epochs where all of them have one.
@@ -424,7 +446,7 @@ impl Measurement {
                 .iter()
                 .enumerate()
                 .filter(|(j, (i, _))| {
-                    let slip = slipped(&residuals, *j, window, step_rad * inputs[*i].1);
+                    let slip = slipped(&residuals, *j, slip_window, step_rad * inputs[*i].1);
                     m.slipped += usize::from(slip);
                     !slip
                 })
@@ -539,24 +561,18 @@ fn check_settings(s: &LoopFreeSettings) -> Result<(), LoopFreeError> {
     Ok(())
 }
 
-/// The median spacing of the stamps (0 for fewer than two).
+/// The median spacing of the stamps (the high median: one of the spacings;
+/// NaN for fewer than two stamps).
 fn median_step(t_s: &[f64]) -> f64 {
     let mut steps: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
-    if steps.is_empty() {
-        return 0.0;
-    }
-    let mid = steps.len() / 2;
-    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+    gsens_core::stats::median_high_in_place(&mut steps)
 }
 
-/// Loop updates per log interval: a whole number within 1e-6.
+/// Loop updates per log interval ([`gsens_core::loop_substeps`]).
 fn substeps(log_interval_s: f64, loop_interval_s: f64) -> Result<usize, LoopFreeError> {
-    let n = (log_interval_s / loop_interval_s).round();
-    if n >= 1.0 && ((log_interval_s / loop_interval_s) - n).abs() <= 1e-6 * n {
-        Ok(n as usize)
-    } else {
-        Err(LoopFreeError::Intervals { log_interval_s, loop_interval_s })
-    }
+    gsens_core::loop_substeps(loop_interval_s, log_interval_s)
+        .map(|n| n as usize)
+        .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })
 }
 
 /// A track's input phase θ_in \[rad\] on the log's epochs (`None` where it
@@ -615,20 +631,13 @@ fn input_phase_on_epochs(
                 window.map(|s| {
                     let ends: [f64; 4] = [0, 1, 2, 3].map(|m| tr.t_s[s + m] + t_loop / 2.0 - tr.t_s[k]);
                     let centres = (0..substeps).map(|i| -(i as f64) * t_loop);
-                    let mean_cycles =
-                        centres.map(|y| (0..4).map(|m| c[s + m] * lagrange(&ends, m, y)).sum::<f64>()).sum::<f64>()
-                            / substeps as f64;
+                    let mean_cycles = centres.map(|y| lagrange(&ends, &c[s..s + 4], y)).sum::<f64>() / substeps as f64;
                     TAU * mean_cycles + tr.phase_err_rad[k]
                 })
             }
         };
     }
     out
-}
-
-/// The Lagrange basis polynomial of node `m` of `nodes`, at `y`.
-fn lagrange(nodes: &[f64; 4], m: usize, y: f64) -> f64 {
-    (0..4).filter(|&l| l != m).map(|l| (y - nodes[l]) / (nodes[m] - nodes[l])).product()
 }
 
 /// The epochs of each segment: the log's span cut into equal segments of
@@ -855,16 +864,28 @@ mod tests {
     }
 }
 
+/// What an estimate regresses on the integrated specific force, as the
+/// result document names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Measurement {
+    /// The tracking error φ, through the loop model L.
+    TrackingError,
+    /// The phase the loop was fed, θ_NCO + φ: no loop model.
+    InputPhase,
+}
+
 /// The loop-free estimate beside the estimate through the loop model, as the
 /// result document holds it (`loop_free`): the measurement, the estimate or
 /// why there is none, and the two estimates' difference per axis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct LoopFreeCheck {
-    /// What the estimate regresses: `input_phase`, the phase the loop was fed
-    /// (θ_NCO + φ), where the document's own estimate regresses the tracking
-    /// error through the loop model.
-    pub measurement: String,
+    /// What the estimate regresses: the phase the loop was fed (θ_NCO + φ),
+    /// where the document's own estimate regresses the tracking error
+    /// through the loop model.
+    pub measurement: Measurement,
     /// The estimate, when one could be made.
     pub estimate: Option<LoopFreeEstimate>,
     /// Why none could be made.
@@ -894,7 +915,7 @@ impl LoopFreeCheck {
             let joint = s.hypot(free.sigma_hz_per_mps2()[i]);
             (joint > 0.0 && joint.is_finite()).then(|| (g - free.gamma_hz_per_mps2[i]) / joint)
         });
-        LoopFreeCheck { measurement: "input_phase".into(), estimate, error, z_difference }
+        LoopFreeCheck { measurement: Measurement::InputPhase, estimate, error, z_difference }
     }
 
     /// |z| beyond which the estimates disagree: Φ⁻¹(1 − α/6) = 3.59 for

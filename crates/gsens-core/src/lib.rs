@@ -24,6 +24,7 @@ pub mod defaults;
 mod discriminator;
 mod estimator;
 mod filter;
+pub mod interpolate;
 mod loop_model;
 mod math;
 mod observability;
@@ -51,5 +52,5 @@ pub use pll::{
     LoopFilterCoeffs, LoopOrderError, LoopSpec, LoopState, ModelLoop, loop_state_space, second_order_bn_from_wn,
     second_order_wn_from_bn, third_order_bn_over_wn,
 };
-pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation};
+pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation, loop_substeps};
 pub use robust::{HuberWeights, sandwich_covariance};

@@ -198,6 +198,21 @@ fn interval_updates<L: LinearLoop>(l: &mut L, a_prev: f64, a_cur: f64, substeps:
     }
 }
 
+/// The loop updates per log interval, n = `log_interval_s`/`loop_interval_s`:
+/// an integer within 1e-6 relative (both intervals finite and positive).
+pub fn loop_substeps(loop_interval_s: f64, log_interval_s: f64) -> Result<u32, RegressorError> {
+    let ok = |x: f64| x.is_finite() && x > 0.0;
+    if !ok(loop_interval_s) || !ok(log_interval_s) {
+        return Err(RegressorError::BadInterval);
+    }
+    let ratio = log_interval_s / loop_interval_s;
+    let n = libm::round(ratio);
+    if n < 1.0 || libm::fabs(ratio - n) > 1e-6 * ratio {
+        return Err(RegressorError::NotAMultiple { log_interval_s, loop_interval_s });
+    }
+    Ok(n as u32)
+}
+
 impl RegressorModel<ModelLoop> {
     /// A triad at rest for a loop with `coeffs` updated every
     /// `loop_interval_s`, sampled every `log_interval_s` (an integer multiple
@@ -222,18 +237,9 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         log_interval_s: f64,
         logged: LoggedPhase,
     ) -> Result<Self, RegressorError> {
-        let ok = |x: f64| x.is_finite() && x > 0.0;
-        if !ok(loop_interval_s) || !ok(log_interval_s) {
-            return Err(RegressorError::BadInterval);
-        }
-        let ratio = log_interval_s / loop_interval_s;
-        let n = libm::round(ratio);
-        if n < 1.0 || libm::fabs(ratio - n) > 1e-6 * ratio {
-            return Err(RegressorError::NotAMultiple { log_interval_s, loop_interval_s });
-        }
+        let substeps = loop_substeps(loop_interval_s, log_interval_s)?;
         let mut l = model_loop;
         l.reset();
-        let substeps = n as u32;
         let lifted = (substeps > 1).then(|| LiftedInterval::of_loop(&l, substeps, logged));
         Ok(RegressorModel {
             triad: [l.clone(), l.clone(), l],

@@ -4,6 +4,7 @@
 //! grid t = j·T the tracking rows are resampled to.
 
 use gsens_calib::{InputPhases, TrackInputPhase};
+use gsens_core::interpolate::lagrange;
 
 use crate::import::{Imported, ImportedRow};
 
@@ -38,12 +39,16 @@ pub fn gnss_sdr_input_phases(imported: &Imported, interval_s: f64, max_abs_phase
                 }
                 let prev = (k > 0 && consecutive(rows[k - 1], a)).then(|| rows[k - 1]);
                 let next = (k + 2 < rows.len() && consecutive(b, rows[k + 2])).then(|| rows[k + 2]);
-                let nodes: Vec<&ImportedRow> = [prev, Some(a), Some(b), next].into_iter().flatten().collect();
+                let (mut buf, mut n) = ([a; 4], 0);
+                for r in [prev, Some(a), Some(b), next].into_iter().flatten() {
+                    (buf[n], n) = (r, n + 1);
+                }
+                let nodes = &buf[..n];
                 if nodes.iter().any(|r| r.phase_err_rad.abs() > max_abs_phase_rad) {
                     continue;
                 }
                 for j in (a.t_s / interval_s).ceil() as i64..(b.t_s / interval_s).ceil() as i64 {
-                    out.push((j, interpolate(&nodes, j as f64 * interval_s)));
+                    out.push((j, interpolate(nodes, j as f64 * interval_s)));
                 }
             }
             out
@@ -71,21 +76,14 @@ pub fn gnss_sdr_input_phases(imported: &Imported, interval_s: f64, max_abs_phase
 }
 
 /// The polynomial through the rows' θ_in at their instants, at `t_s`
-/// (Lagrange; the first row's value taken out first, as θ_in holds the
-/// Doppler's ramp, ~10⁶ rad after minutes).
+/// ([`lagrange`]: θ_in holds the Doppler's ramp, ~10⁶ rad after minutes).
 fn interpolate(nodes: &[&ImportedRow], t_s: f64) -> f64 {
-    let value = |r: &ImportedRow| r.input_phase_rad.unwrap_or(0.0);
-    let base = value(nodes[0]);
-    let sum: f64 = (0..nodes.len())
-        .map(|m| {
-            let weight: f64 = (0..nodes.len())
-                .filter(|&l| l != m)
-                .map(|l| (t_s - nodes[l].t_s) / (nodes[m].t_s - nodes[l].t_s))
-                .product();
-            weight * (value(nodes[m]) - base)
-        })
-        .sum();
-    base + sum
+    // At most four nodes: on the stack, as this runs for every grid point.
+    let (mut instants, mut values) = ([0.0; 4], [0.0; 4]);
+    for (k, r) in nodes.iter().enumerate() {
+        (instants[k], values[k]) = (r.t_s, r.input_phase_rad.unwrap_or(0.0));
+    }
+    lagrange(&instants[..nodes.len()], &values[..nodes.len()], t_s)
 }
 
 #[cfg(test)]

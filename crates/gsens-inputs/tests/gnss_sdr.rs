@@ -4,29 +4,17 @@
 //! 1 ms setting, a shaken board with low lock tests, and rows imported from
 //! the dumps estimated with the run's loop or with a Kaplan loop stated.
 
+mod common;
+
+use common::{defaults, document, json_file};
 use gsens_calib::{CalibrationOptions, PipelineSettings};
 use gsens_gnss_sdr::{ImportSettings, import_dir, render_tracks};
-use gsens_inputs::{Calibrated, Inputs, InputsError, Log};
+use gsens_inputs::{Inputs, InputsError, Log};
 use gsens_io::TrackingLog;
 use std::path::{Path, PathBuf};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../gsens-gnss-sdr/tests/fixtures")
-}
-
-/// The JSON file at `path`.
-fn json_file(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-/// The result document of a calibration, as its JSON.
-fn document(c: &Calibrated) -> serde_json::Value {
-    serde_json::from_str(&c.outcome.document(None).to_json_string().unwrap()).unwrap()
-}
-
-/// The settings of the default options.
-fn defaults() -> PipelineSettings {
-    CalibrationOptions::default().pipeline_settings().unwrap()
 }
 
 /// The dumps of `dir` imported with `import` and read back from the

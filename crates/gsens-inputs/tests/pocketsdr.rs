@@ -4,26 +4,17 @@
 //! loop stated, the log with its loop modelled exactly, and errors on bad
 //! logs and options files.
 
-use gsens_calib::{CalibrationOptions, PipelineSettings};
+mod common;
+
+use common::{defaults, document, json_file};
+use gsens_calib::CalibrationOptions;
 use gsens_core::LoggedPhase;
-use gsens_inputs::{Calibrated, Inputs, Log};
+use gsens_inputs::{Inputs, Log};
 use gsens_pocketsdr::ImportSettings;
 use std::path::{Path, PathBuf};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../gsens-pocketsdr/tests/fixtures")
-}
-
-fn json_file(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn document(c: &Calibrated) -> serde_json::Value {
-    serde_json::from_str(&c.outcome.document(None).to_json_string().unwrap()).unwrap()
-}
-
-fn defaults() -> PipelineSettings {
-    CalibrationOptions::default().pipeline_settings().unwrap()
 }
 
 /// The log `log` with the options file `conf`.

@@ -5,18 +5,16 @@
 use gsens_calib::{CalibrationOptions, calibrate_files};
 use gsens_core::LoggedPhase;
 use gsens_live::take_truth_loop;
+use gsens_sim::motion::Segment;
+use gsens_sim::scenario::Scenario;
 use std::path::Path;
 
-/// A scenario TOML: `extra` sections, then rest 2 s, each axis shaken for
+/// The scenario of the TOML `extra`, then rest 2 s, each axis shaken for
 /// `shake_s` at a 1.1 s period and 3 m/s², rest 2 s.
-fn scenario(extra: &str, shake_s: f64) -> String {
-    let mut t = format!("{extra}\n[[motion.segments]]\nkind = \"rest\"\nduration_s = 2.0\n");
-    for axis in ["x", "y", "z"] {
-        t += &format!(
-            "[[motion.segments]]\nkind = \"shake\"\naxis = \"{axis}\"\nduration_s = {shake_s}\nperiod_s = 1.1\namplitude_mps2 = 3.0\n"
-        );
-    }
-    t + "[[motion.segments]]\nkind = \"rest\"\nduration_s = 2.0\n"
+fn scenario(extra: &str, shake_s: f64) -> Scenario {
+    let mut sc = Scenario::from_toml_str(extra).unwrap();
+    sc.motion.segments = Segment::each_axis(2.0, shake_s, 1.1, 3.0);
+    sc
 }
 
 fn vec3(v: &serde_json::Value) -> [f64; 3] {
@@ -38,7 +36,7 @@ fn the_loop_truth_json_states_is_modelled() {
     let d = tempfile::Builder::new().prefix("gsens-live-truth-loop-").tempdir().unwrap();
     // A 5 Hz loop (the options' default is 3 Hz), updated every 1 ms (the
     // default: the 25 ms log interval), logging the mean (default: last).
-    let sc = gsens_sim::scenario::Scenario::from_toml_str(&scenario("[loop]\nbn_hz = 5.0", 10.0)).unwrap();
+    let sc = scenario("[loop]\nbn_hz = 5.0", 10.0);
     gsens_sim::simulate_to_dir(&sc, 5, d.path(), |_| {}).unwrap();
     let truth = d.path().join("truth.json").display().to_string();
     let (text, v) = estimate(d.path(), CalibrationOptions::default());

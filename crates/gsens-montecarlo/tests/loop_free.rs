@@ -176,7 +176,8 @@ fn the_pipeline_cross_checks_the_loop_against_the_loop_free_estimate() {
     let logs = session_of("[log]\nnco = true", 5);
     let right = common::estimate(&logs.tracking, &logs.imu, &common::right_loop());
     let check = right.loop_free.as_ref().expect("a loop-free block");
-    assert_eq!(check.measurement, "input_phase");
+    assert_eq!(check.measurement, gsens_calib::Measurement::InputPhase);
+    assert_eq!(serde_json::to_value(check.measurement).unwrap(), "input_phase");
     let free = check.estimate.as_ref().expect("a loop-free estimate");
     let want = truth(&logs);
     for i in 0..3 {

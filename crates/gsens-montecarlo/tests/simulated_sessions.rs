@@ -140,21 +140,17 @@ fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
     assert!(err_h < 0.02 && z_h.iter().all(|z| z.abs() < 3.0), "Huber: {err_h}, {z_h:?}");
 }
 
-/// A scenario: `extra` sections, then rest 2 s, each axis shaken for
-/// `shake_s` at a 1.1 s period and 3 m/s², rest 2 s.
-fn scenario(extra: &str, shake_s: f64) -> String {
-    let mut t = format!("{extra}\n[[motion.segments]]\nkind = \"rest\"\nduration_s = 2.0\n");
-    for axis in ["x", "y", "z"] {
-        t += &format!(
-            "[[motion.segments]]\nkind = \"shake\"\naxis = \"{axis}\"\nduration_s = {shake_s}\nperiod_s = 1.1\namplitude_mps2 = 3.0\n"
-        );
-    }
-    t + "[[motion.segments]]\nkind = \"rest\"\nduration_s = 2.0\n"
+/// The session of the scenario TOML `extra`, then rest 2 s, each axis
+/// shaken for `shake_s` at a 1.1 s period and 3 m/s², rest 2 s.
+fn shaken_session(extra: &str, shake_s: f64, seed: u64) -> gsens_sim::SimulatedLogs {
+    let mut sc = gsens_sim::scenario::Scenario::from_toml_str(extra).unwrap();
+    sc.motion.segments = gsens_sim::motion::Segment::each_axis(2.0, shake_s, 1.1, 3.0);
+    gsens_sim::simulate_logs(&sc, seed).unwrap()
 }
 
 #[test]
 fn a_ten_second_session_is_estimated_with_the_screening_on() {
-    let logs = session_of(&scenario("[session]\nduration_s = 10.0", 2.0), 3);
+    let logs = shaken_session("[session]\nduration_s = 10.0", 2.0, 3);
     let doc = estimate(&logs.tracking, &logs.imu, &stated());
     let v = json(&doc);
     assert!(v["epochs_used"].as_u64().unwrap() >= 200, "{}", v["epochs_used"]);
@@ -171,7 +167,7 @@ fn a_ten_second_session_is_estimated_with_the_screening_on() {
 
 #[test]
 fn clocks_on_different_bases_are_named_with_the_fix() {
-    let logs = session_of(&scenario("", 2.0), 2);
+    let logs = shaken_session("", 2.0, 2);
     let settings = CalibrationOptions::default().pipeline_settings().unwrap();
     // The IMU in Unix time (the session's start, 2024-02-08 12:00:00 UTC), the tracking since power-on.
     let imu_unix = map_imu(&logs.imu, |t| t + 1_707_393_600.0, |a| a);

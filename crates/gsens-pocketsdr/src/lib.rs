@@ -126,4 +126,4 @@ pub use error::PocketSdrError;
 pub use import::{ImportSettings, Imported, TrackSummary, import_file, import_log, render_summary};
 pub use log::{ChRecord, Garbled, PocketSdrLog, parse_log, read_log};
 pub use options::{PocketSdrOptions, Setting, SettingSource};
-pub use pipeline::{PocketSdrOutcome, calibrate_pocketsdr, pocketsdr_tracking_log, pocketsdr_tracking_log_with_nco};
+pub use pipeline::{PocketSdrOutcome, calibrate_pocketsdr, pocketsdr_tracking_log};

@@ -21,16 +21,10 @@ pub struct PocketSdrOutcome {
 }
 
 /// The tracking log of a converted PocketSDR log (every channel already on
-/// the log's common epochs).
+/// the log's common epochs, every row on GPS L1 C/A), with each row's NCO
+/// record (`adr` as `nco_phase_cycles`, `dop` as `nco_freq_hz`) for the
+/// loop-free estimate ([`gsens_calib::estimate_loop_free`]).
 pub fn pocketsdr_tracking_log(imported: &Imported) -> Result<TrackingLog, FormatError> {
-    let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, Decimal(imported.interval_s()));
-    TrackingLog::from_rows(&name, &imported.rows)
-}
-
-/// [`pocketsdr_tracking_log`] with each row's NCO record (`adr` as
-/// `nco_phase_cycles`, `dop` as `nco_freq_hz`), for the loop-free estimate
-/// ([`gsens_calib::estimate_loop_free`]; every row on GPS L1 C/A).
-pub fn pocketsdr_tracking_log_with_nco(imported: &Imported) -> Result<TrackingLog, FormatError> {
     let name = format!("{} (PocketSDR $CH lines, every {} s)", imported.file, Decimal(imported.interval_s()));
     let rows = imported.rows.iter().zip(&imported.nco).map(|(r, n)| (r, gsens_io::Carrier::GPS_L1, *n));
     TrackingLog::from_rows_with_nco(&name, rows)
@@ -65,7 +59,7 @@ pub fn calibrate_pocketsdr(
 ) -> Result<PocketSdrOutcome, PocketSdrError> {
     let imported = import_file(log, import)?;
     // With the NCO's phase (adr) the pipeline makes the loop-free estimate beside this one.
-    let tracking = pocketsdr_tracking_log_with_nco(&imported)?;
+    let tracking = pocketsdr_tracking_log(&imported)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
     // PocketSDR's loop is known exactly from its options: tested, not fitted.
     // pocket_trk's err_phas on L1CA: atan(Q/I), the two-quadrant Costas discriminator.

@@ -277,7 +277,7 @@ fn calibrates_within_its_uncertainty() {
 fn the_loop_free_estimate_agrees_with_the_truth_and_the_closed_loop() {
     let f = fixtures();
     let imported = gsens_pocketsdr::import_file(&f.join("trk.log"), &settings()).unwrap();
-    let tracking = gsens_pocketsdr::pocketsdr_tracking_log_with_nco(&imported).unwrap();
+    let tracking = gsens_pocketsdr::pocketsdr_tracking_log(&imported).unwrap();
     assert!(tracking.tracks().iter().all(|t| t.nco_phase_cycles.len() == t.len() && t.nco_freq_hz.len() == t.len()));
     let imu = gsens_io::read_imu_file(f.join("imu.csv")).unwrap();
     let settings = gsens_calib::LoopFreeSettings::new(1e-3, gsens_core::LoggedPhase::Last);

@@ -233,6 +233,14 @@ impl Segment {
         })
     }
 
+    /// The one-rate protocol in its shortest form: a rest of `rest_s`, each
+    /// axis in turn (x, y, z) shaken for `shake_s` at `period_s` and
+    /// `amplitude_mps2` ([`Segment::shake`]), and a rest of `rest_s`.
+    pub fn each_axis(rest_s: f64, shake_s: f64, period_s: f64, amplitude_mps2: f64) -> Vec<Segment> {
+        let shakes = [Axis::X, Axis::Y, Axis::Z].map(|axis| Segment::shake(axis, shake_s, period_s, amplitude_mps2));
+        std::iter::once(Segment::rest(rest_s)).chain(shakes).chain([Segment::rest(rest_s)]).collect()
+    }
+
     /// A smooth rotation by `angle_deg` about `axis` in `duration_s`.
     pub fn rotate(axis: Axis, angle_deg: f64, duration_s: f64) -> Self {
         Segment::Rotate(RotateSegment { axis, angle_deg, duration_s })
@@ -668,6 +676,21 @@ mod tests {
 
     fn norm(v: [f64; 3]) -> f64 {
         (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    }
+
+    #[test]
+    fn each_axis_is_rest_x_y_z_rest() {
+        let s = Segment::each_axis(2.0, 5.0, 1.1, 3.0);
+        let axes: Vec<Option<Axis>> = s
+            .iter()
+            .map(|seg| match seg {
+                Segment::Shake(k) => Some(k.axis),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(axes, [None, Some(Axis::X), Some(Axis::Y), Some(Axis::Z), None]);
+        assert_eq!(s[0], Segment::rest(2.0));
+        assert_eq!(s[2], Segment::shake(Axis::Y, 5.0, 1.1, 3.0));
     }
 
     #[test]
