@@ -180,7 +180,7 @@ def montecarlo(
     runs: int = 20,
     seed: int = 1,
     methods=("batch",),
-    stated_bn_scale: float = 1.0,
+    stated_bn_scale: Optional[float] = 1.0,
     overrides: Optional[Mapping[str, Any]] = None,
     **settings: Any,
 ) -> Dict[str, Any]:
@@ -190,10 +190,11 @@ def montecarlo(
 
     ``overrides`` changes the scenario as :func:`simulate`'s keywords do; the
     other keywords are :func:`estimate`'s settings (not the loop's).
-    ``stated_bn_scale`` states the loop's Bn that many times the true one.
-    Returns the JSON document of ``gsens montecarlo --json`` as a dict:
-    ``methods`` (per method: bias, RMSE, CRLB, z RMS, coverage, …) and
-    ``per_run``.
+    ``stated_bn_scale`` states the loop's Bn that many times the true one;
+    ``None`` states no loop (the data choose it). Returns the JSON document of
+    ``gsens montecarlo --json`` as a dict: ``methods`` (per method: bias, RMSE,
+    CRLB, z RMS, coverage, …; ``loop-free`` for the estimate from the NCO's
+    phase where the scenario logs it) and ``per_run``.
     """
     return _gsens.montecarlo(
         None if scenario is None else os.fspath(scenario),

@@ -2,12 +2,12 @@
 //! text report and the bindings all serialize (keys in
 //! `docs/conventions.md#result-document`).
 
-use crate::Calibration;
 use crate::pipeline::{LoopIdentificationMode, Outcome, TimeOffset};
 use crate::warning::{
     DISCRIMINATOR_ADVICE, LOOP_OFFSET_ADVICE, Warning, WarningCode, defer_shaking_advice, sort_by_cause,
     untrusted_codes,
 };
+use crate::{Calibration, Measurement};
 use gsens_core::LoopModel;
 use gsens_core::units::Decimal;
 use gsens_session::{ChannelRanking, ChannelSummary, SelectionConfig, SignalSummary};
@@ -163,6 +163,11 @@ pub struct FigureInfo {
 pub struct ResultDocument {
     /// The producing library and version, e.g. `gsens 0.1.0`.
     pub tool: String,
+    /// What the estimate is made from: `input_phase` (the loop-free
+    /// estimate, wherever the log holds the NCO's phase) or
+    /// `tracking_error` (through the loop model).
+    #[serde(default = "tracking_error")]
+    pub measurement: Measurement,
     /// The estimate (flattened: its keys are the document's).
     #[serde(flatten)]
     pub calibration: Calibration,
@@ -208,6 +213,33 @@ pub struct ResultDocument {
     /// that hold it (`nco_phase_cycles`; PocketSDR's `adr`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loop_free: Option<crate::LoopFreeCheck>,
+    /// The estimate through the loop model, where the document's estimate
+    /// is made from another measurement: the cross-check's other side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tracking_error: Option<CrossEstimate>,
+}
+
+/// Another measurement's estimate beside the document's: Γ̂ and its total
+/// 1σ per axis (`null` where unobservable).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub struct CrossEstimate {
+    /// Γ̂ \[Hz/(m/s²)\].
+    pub gamma_hz_per_mps2: [Option<f64>; 3],
+    /// 1σ \[Hz/(m/s²)\].
+    pub sigma_hz_per_mps2: [Option<f64>; 3],
+}
+
+impl CrossEstimate {
+    fn of(c: &Calibration) -> Self {
+        CrossEstimate { gamma_hz_per_mps2: c.gamma_hz_per_mps2, sigma_hz_per_mps2: c.sigma_hz_per_mps2 }
+    }
+}
+
+/// A document read without `measurement` (written before it existed) was
+/// made from the tracking error.
+fn tracking_error() -> Measurement {
+    Measurement::TrackingError
 }
 
 /// This library's name and version.
@@ -233,8 +265,10 @@ impl ResultDocument {
         doc.source = outcome.source.clone();
         doc.signals = outcome.session.signals.clone();
         doc.channel_ranking = Some(outcome.session.channel_ranking);
+        doc.measurement = outcome.measurement;
+        doc.tracking_error = outcome.tracking_error.as_ref().map(CrossEstimate::of);
         if let Some(loop_free) = &outcome.loop_free {
-            let check = crate::LoopFreeCheck::new(&doc.calibration, loop_free);
+            let check = crate::LoopFreeCheck::new(outcome.closed_loop(), loop_free);
             doc.warnings.extend(check.warning());
             doc.loop_free = Some(check);
         }
@@ -306,7 +340,7 @@ impl ResultDocument {
     /// that [`Warning::affects_trust`]), in the order raised: what every
     /// output names beside its verdict.
     pub fn untrusted_codes(&self) -> Vec<&'static str> {
-        untrusted_codes(&self.warnings)
+        untrusted_codes(&self.warnings, self.measurement)
     }
 
     /// Sets [`ResultDocument::trustworthy`] from the warnings and the axes,
@@ -324,7 +358,7 @@ impl ResultDocument {
             });
         }
         self.order_by_cause();
-        self.trustworthy = !self.warnings.iter().any(Warning::affects_trust);
+        self.trustworthy = self.untrusted_codes().is_empty();
     }
 
     /// Orders the warnings by cause (the logs' units and time base first,
@@ -371,6 +405,7 @@ impl ResultDocument {
     ) -> Self {
         let mut doc = ResultDocument {
             tool: tool_version(),
+            measurement: Measurement::TrackingError,
             trustworthy: true,
             loop_summary: LoopSummary::of(&calibration.loop_used),
             warnings: warnings(&calibration),
@@ -386,6 +421,7 @@ impl ResultDocument {
             source: None,
             report: None,
             loop_free: None,
+            tracking_error: None,
         };
         doc.judge();
         doc

@@ -295,6 +295,38 @@ impl Residuals {
     }
 }
 
+/// What compensating with a Γ̂ made elsewhere does to the session's phase
+/// error: the RMS figures of [`Residuals`] and the predicted peak
+/// |φ_aᵀΓ̂| \[rad\].
+pub(crate) struct ResidualFigures {
+    pub(crate) rms_before_rad: f64,
+    pub(crate) rms_after_rad: f64,
+    pub(crate) rms_g_induced_rad: f64,
+    pub(crate) peak_phase_err_rad: f64,
+}
+
+/// [`ResidualFigures`] of `gamma` over the epochs the estimator uses, through
+/// the loop model of `settings` (one batch pass of the regressors).
+pub(crate) fn residual_figures(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    gamma: &[f64; 3],
+) -> Result<ResidualFigures, CalibError> {
+    let (fed, _) = search::batch_pass(series, settings)?;
+    let r = Residuals::of(&fed, gamma);
+    Ok(ResidualFigures {
+        rms_before_rad: r.rms_before_rad,
+        rms_after_rad: r.rms_after_rad,
+        rms_g_induced_rad: r.rms_g_induced_rad,
+        peak_phase_err_rad: peak_phase_err_rad(&fed, gamma),
+    })
+}
+
+/// The largest predicted g-induced phase error |φ_aᵀΓ̂| over every epoch \[rad\].
+fn peak_phase_err_rad(fed: &[FedEpoch], gamma: &[f64; 3]) -> f64 {
+    fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, gamma).abs()).fold(0.0, f64::max)
+}
+
 /// The fits an estimate's uncertainty draws on.
 struct Fits<'a> {
     /// The estimate given (the method's, GLS's or Huber's).
@@ -410,7 +442,7 @@ fn assemble(
         obs.excitation_rms,
         settings.criteria.min_excitation_rms,
     );
-    let peak_phase = fed.iter().map(|e| compensated_phase_rad(0.0, &e.phi_a, &gamma).abs()).fold(0.0, f64::max);
+    let peak_phase = peak_phase_err_rad(&fed, &gamma);
     let mut calibration = Calibration {
         gamma_hz_per_mps2: u.gamma,
         sigma_hz_per_mps2: u.sigma,

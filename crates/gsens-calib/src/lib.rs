@@ -61,6 +61,7 @@ mod fft;
 pub mod gls;
 mod joint;
 mod loop_free;
+mod measurement;
 pub mod option_values;
 mod options;
 mod pipeline;
@@ -89,8 +90,9 @@ pub use joint::{
 };
 pub use loop_free::{
     CROSS_CHECK_FALSE_ALARM, InputPhases, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings,
-    Measurement, TrackInputPhase, estimate_loop_free, estimate_loop_free_from,
+    TrackInputPhase, estimate_loop_free, estimate_loop_free_choosing, estimate_loop_free_from,
 };
+pub use measurement::{Measurement, MeasurementChoice};
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,
     TimeOffsetOption,

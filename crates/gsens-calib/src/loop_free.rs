@@ -49,6 +49,7 @@
 //! AR filter restarting at each segment ([`crate::gls::gls`]); the 1σ is the
 //! larger of the fit's Cramér–Rao bound and its Newey–West covariance.
 
+use crate::Measurement;
 use crate::gls::{GlsSettings, gls};
 use gsens_core::LoggedPhase;
 use gsens_core::interpolate::lagrange;
@@ -133,6 +134,16 @@ pub struct LoopFreeEstimate {
     /// half a slip or more (a cycle slip: the NCO's phase is off by a half
     /// cycle from then on).
     pub slipped_segments: usize,
+    /// The least-squares residual variance of the channel-averaged,
+    /// detrended input phase at the offset used \[rad²\].
+    pub residual_variance_rad2: f64,
+    /// The rows' bookkeeping used: the loop's update interval \[s\] and what
+    /// a row holds, given or chosen ([`estimate_loop_free_choosing`]).
+    pub loop_interval_s: f64,
+    /// What a row holds (see `loop_interval_s`).
+    pub logged_phase: LoggedPhase,
+    /// Whether the bookkeeping was chosen by the data.
+    pub bookkeeping_chosen: bool,
 }
 
 impl LoopFreeEstimate {
@@ -226,6 +237,52 @@ pub fn estimate_loop_free(
     fit(&phases, imu, settings, n_window)
 }
 
+/// [`estimate_loop_free`] for a log whose bookkeeping is not known: every
+/// update interval of `loop_intervals_s` that divides the log interval (and
+/// the log interval itself), each with `last` and `mean` rows, estimated in
+/// parallel; the least residual variance wins. A row booked at the wrong
+/// instant leaves the loop's own response to the shaking in θ_NCO + φ
+/// (the combination cancels it only where both are taken at the same
+/// instant), which the residual shows; bookkeepings that differ by less
+/// than that give the same Γ̂ within its σ.
+pub fn estimate_loop_free_choosing(
+    tracking: &TrackingLog,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    loop_intervals_s: &[f64],
+) -> Result<LoopFreeEstimate, LoopFreeError> {
+    let log_interval_s = median_step(tracking.epoch_t_s());
+    let mut candidates: Vec<LoopFreeSettings> = Vec::new();
+    for &t in loop_intervals_s.iter().chain([&log_interval_s]) {
+        let Ok(n) = substeps(log_interval_s, t) else { continue };
+        let phases: &[LoggedPhase] = if n > 1 { &[LoggedPhase::Last, LoggedPhase::Mean] } else { &[LoggedPhase::Last] };
+        for &logged_phase in phases {
+            if !candidates.iter().any(|c| c.logged_phase == logged_phase && (c.loop_interval_s - t).abs() < 1e-9) {
+                candidates.push(LoopFreeSettings { loop_interval_s: t, logged_phase, ..*settings });
+            }
+        }
+    }
+    let results: Vec<Result<LoopFreeEstimate, LoopFreeError>> =
+        candidates.par_iter().map(|c| estimate_loop_free(tracking, imu, c)).collect();
+    let best = results
+        .iter()
+        .enumerate()
+        .filter_map(|(k, r)| r.as_ref().ok().map(|e| (k, e.residual_variance_rad2)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k);
+    match best {
+        Some(k) => {
+            let mut chosen = results[k].clone()?;
+            chosen.bookkeeping_chosen = true;
+            Ok(chosen)
+        }
+        None => results
+            .into_iter()
+            .next()
+            .unwrap_or(Err(LoopFreeError::Intervals { log_interval_s, loop_interval_s: settings.loop_interval_s })),
+    }
+}
+
 /// Each track's input phase θ_in on common epochs: what a receiver's adapter
 /// hands [`estimate_loop_free_from`] when its bookkeeping of the NCO is its
 /// own (GNSS-SDR's records, each at its own instant, brought to a grid).
@@ -310,6 +367,7 @@ fn fit(
     let x = m.regressors(&regressor, tau);
     let ranges = m.ranges();
     let lag = (2.5 / log_interval_s).ceil() as usize;
+    let residual_variance_rad2 = m.residual_variance(&regressor, tau);
     let fit = gls(&m.phase, &x, &ranges, &GlsSettings { hac_max_lag: Some(lag), ..GlsSettings::default() })
         .ok_or_else(too_few)?;
     let crlb = fit.estimate.covariance;
@@ -327,6 +385,10 @@ fn fit(
         imu_time_offset_s: tau,
         time_offset_searched: searched,
         slipped_segments: m.slipped,
+        residual_variance_rad2,
+        loop_interval_s: settings.loop_interval_s,
+        logged_phase: if n_window > 1 { LoggedPhase::Mean } else { LoggedPhase::Last },
+        bookkeeping_chosen: false,
     })
 }
 
@@ -864,18 +926,6 @@ mod tests {
     }
 }
 
-/// What an estimate regresses on the integrated specific force, as the
-/// result document names it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-#[non_exhaustive]
-pub enum Measurement {
-    /// The tracking error φ, through the loop model L.
-    TrackingError,
-    /// The phase the loop was fed, θ_NCO + φ: no loop model.
-    InputPhase,
-}
-
 /// The loop-free estimate beside the estimate through the loop model, as the
 /// result document holds it (`loop_free`): the measurement, the estimate or
 /// why there is none, and the two estimates' difference per axis.
@@ -883,15 +933,16 @@ pub enum Measurement {
 #[non_exhaustive]
 pub struct LoopFreeCheck {
     /// What the estimate regresses: the phase the loop was fed (θ_NCO + φ),
-    /// where the document's own estimate regresses the tracking error
-    /// through the loop model.
+    /// where the estimate through the loop model regresses the tracking
+    /// error.
     pub measurement: Measurement,
     /// The estimate, when one could be made.
     pub estimate: Option<LoopFreeEstimate>,
     /// Why none could be made.
     pub error: Option<String>,
     /// (Γ̂ − Γ̂_loop-free)/√(σ² + σ_loop-free²) per axis, Γ̂ and σ the
-    /// document's (`null` where either has no estimate). The two estimates
+    /// estimate through the loop model's (`null` where either has no
+    /// estimate). The two estimates
     /// come from the same data, so their difference varies less than the
     /// sum of their variances says: the test errs towards agreeing.
     pub z_difference: [Option<f64>; 3],
@@ -948,8 +999,10 @@ impl LoopFreeCheck {
             code: crate::WarningCode::LoopFreeDisagrees,
             message: format!(
                 "the estimate through the loop model and the loop-free estimate from the NCO's phase disagree on \
-                 {}: the loop model does not describe the receiver (its order, bandwidth, update interval or what \
-                 its log holds); believe the loop-free estimate, which assumes no loop",
+                 {}: either the loop model does not describe the receiver (its order, bandwidth, update interval or \
+                 what its log holds) and the loop-free estimate, which assumes no loop, is the one to believe, or the \
+                 NCO's phase is not logged as the conventions say (its sign, its instant, its unit); where the \
+                 loop's own checks find the loop at fault, believe the loop-free estimate",
                 axes.join(", ")
             ),
         })

@@ -15,7 +15,10 @@ use crate::option_values::{
     stated_time_offset_option,
 };
 use crate::settings::check_range;
-use crate::{CalibError, EstimateSettings, LoopIdentificationMode, Method, PipelineSettings, Robust, TimeOffset};
+use crate::{
+    CalibError, EstimateSettings, LoopIdentificationMode, MeasurementChoice, Method, PipelineSettings, Robust,
+    TimeOffset,
+};
 use core::f64::consts::FRAC_1_SQRT_2;
 use gsens_core::{Discriminator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopModel, LoopSpec};
 use gsens_session::{SelectionConfig, Weighting};
@@ -119,6 +122,10 @@ pub struct CalibrationOptions {
     pub receiver_loop: LoopOptions,
     /// The estimator.
     pub method: MethodName,
+    /// What the result's estimate is made from: the loop's input phase
+    /// (loop-free) where the log holds the NCO's phase, else the tracking
+    /// error through the loop model.
+    pub measurement: MeasurementChoice,
     /// The estimators' parameters and the error model.
     #[serde(flatten)]
     pub estimator: EstimatorOptions,
@@ -146,6 +153,7 @@ impl<'de> Deserialize<'de> for CalibrationOptions {
             carrier_hz: g.carrier_hz,
             receiver_loop: g.receiver_loop,
             method: g.method,
+            measurement: g.measurement,
             estimator: g.estimator,
             selection: g.selection,
             systematic: g.systematic,
@@ -161,6 +169,7 @@ struct Groups {
     #[serde(flatten)]
     receiver_loop: LoopOptions,
     method: MethodName,
+    measurement: MeasurementChoice,
     #[serde(flatten)]
     estimator: EstimatorOptions,
     #[serde(flatten)]
@@ -176,6 +185,7 @@ impl Default for Groups {
             carrier_hz: o.carrier_hz,
             receiver_loop: o.receiver_loop,
             method: o.method,
+            measurement: o.measurement,
             estimator: o.estimator,
             selection: o.selection,
             systematic: o.systematic,
@@ -426,6 +436,7 @@ impl Default for CalibrationOptions {
             carrier_hz: gsens_core::units::GPS_L1_HZ,
             receiver_loop: LoopOptions::default(),
             method: MethodName::Batch,
+            measurement: MeasurementChoice::Auto,
             estimator: EstimatorOptions::default(),
             selection: SelectionOptions::default(),
             systematic: SystematicOptions::default(),
@@ -624,6 +635,7 @@ impl CalibrationOptions {
             despike_imu: self.systematic.imu_despike,
             loop_identification,
             loop_tolerance: self.systematic.loop_tolerance,
+            measurement: self.measurement,
             ..PipelineSettings::default()
         })
     }

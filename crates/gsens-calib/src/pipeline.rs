@@ -4,8 +4,8 @@
 
 use crate::document::{ResultDocument, SourceConversion};
 use crate::{
-    CalibError, Calibration, EpochSeries, EstimateSettings, JointFit, JointSpec, calibrate, joint_fit,
-    session_linear_range_rad,
+    CalibError, Calibration, EpochSeries, EstimateSettings, JointFit, JointSpec, Measurement, MeasurementChoice,
+    calibrate, joint_fit, session_linear_range_rad,
 };
 use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
@@ -122,6 +122,8 @@ pub struct PipelineSettings {
     /// Replace isolated IMU spikes by the mean of their neighbours before
     /// anything else ([`gsens_session::despike_imu`]; default on).
     pub despike_imu: bool,
+    /// What the result's estimate is made from ([`Outcome::measurement`]).
+    pub measurement: MeasurementChoice,
 }
 
 impl Default for PipelineSettings {
@@ -134,6 +136,7 @@ impl Default for PipelineSettings {
             loop_tolerance: None,
             loop_stated: true,
             despike_imu: true,
+            measurement: MeasurementChoice::Auto,
         }
     }
 }
@@ -190,6 +193,12 @@ pub enum PipelineError {
     /// The estimation failed.
     #[error(transparent)]
     Calib(#[from] CalibError),
+    /// The measurement asked for cannot be made from the log.
+    #[error("measurement input_phase: {why}")]
+    Measurement {
+        /// Why not.
+        why: String,
+    },
 }
 
 /// A calibration from logs: the prepared session it was estimated from and
@@ -199,8 +208,14 @@ pub enum PipelineError {
 pub struct Outcome {
     /// The estimator's inputs on the epoch grid, with every channel's fate.
     pub session: PreparedSession,
-    /// The estimate.
+    /// The estimate, from [`Outcome::measurement`].
     pub calibration: Calibration,
+    /// What `calibration` is made from ([`PipelineSettings::measurement`]
+    /// resolved against the log).
+    pub measurement: Measurement,
+    /// The estimate through the loop model, where `calibration` is made
+    /// from another measurement: the cross-check's other side.
+    pub tracking_error: Option<Calibration>,
     /// The settings it ran with.
     pub settings: PipelineSettings,
     /// What a receiver's adapter did to turn its files into the logs
@@ -233,6 +248,37 @@ impl Outcome {
     /// The estimator's view of the prepared session.
     pub fn series(&self) -> EpochSeries<'_> {
         series_of(&self.session)
+    }
+
+    /// Makes `calibration` the estimate from the measurement `choice`
+    /// resolves to against [`Outcome::loop_free`] (a receiver's adapter that
+    /// sets `loop_free` itself calls it again afterwards): for the input
+    /// phase, the loop-free Γ̂ and its covariance take the place of the
+    /// estimate through the loop model
+    /// ([`Calibration::adopt_loop_free`]), which moves to
+    /// [`Outcome::tracking_error`].
+    pub fn choose_measurement(&mut self, choice: MeasurementChoice) -> Result<(), PipelineError> {
+        self.settings.measurement = choice;
+        if let Some(closed) = self.tracking_error.take() {
+            self.calibration = closed;
+            self.measurement = Measurement::TrackingError;
+        }
+        let chosen = choice.resolve(self.loop_free.as_ref()).map_err(|why| PipelineError::Measurement { why })?;
+        if let (Measurement::InputPhase, Some(Ok(free))) = (chosen, &self.loop_free) {
+            let mut adopted = self.calibration.clone();
+            let series = series_of(&self.session);
+            let figures = crate::estimate::residual_figures(&series, &adopted.settings, &free.gamma_hz_per_mps2)?;
+            adopted.adopt_loop_free(free, figures);
+            self.tracking_error = Some(std::mem::replace(&mut self.calibration, adopted));
+            self.measurement = Measurement::InputPhase;
+        }
+        Ok(())
+    }
+
+    /// The estimate through the loop model: [`Outcome::tracking_error`]
+    /// where the document's estimate is another, else `calibration`.
+    pub fn closed_loop(&self) -> &Calibration {
+        self.tracking_error.as_ref().unwrap_or(&self.calibration)
     }
 
     /// The result document of this calibration (with the true Γ when known).
@@ -361,12 +407,22 @@ fn calibrate_prepared(
     let loop_free_settings = loop_free_settings(settings, &estimate, session.log_interval_s);
     let (closed_loop, loop_free) = rayon::join(
         || estimate_and_check_response(&session, &estimate, joint),
-        || nco_log.map(|log| crate::estimate_loop_free(&log, imu, &loop_free_settings)),
+        || {
+            nco_log.map(|log| match settings.loop_stated {
+                true => crate::estimate_loop_free(&log, imu, &loop_free_settings),
+                // Nothing stated of the loop: the rows' bookkeeping is the data's choice too.
+                false => {
+                    crate::estimate_loop_free_choosing(&log, imu, &loop_free_settings, &crate::TYPICAL_LOOP_INTERVALS_S)
+                }
+            })
+        },
     );
     let (calibration, loop_response) = closed_loop?;
-    Ok(Outcome {
+    let mut outcome = Outcome {
         session,
         calibration,
+        measurement: Measurement::TrackingError,
+        tracking_error: None,
         settings: settings.clone(),
         source: None,
         chosen_loop,
@@ -376,7 +432,9 @@ fn calibrate_prepared(
         imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
         loop_free,
-    })
+    };
+    outcome.choose_measurement(settings.measurement)?;
+    Ok(outcome)
 }
 
 impl PipelineSettings {

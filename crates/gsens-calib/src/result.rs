@@ -120,6 +120,65 @@ impl Calibration {
         Ok((gamma, cov))
     }
 
+    /// Makes the loop-free estimate this calibration's: Γ̂, its statistical
+    /// covariance and bound, and the IMU offset are `free`'s; the IMU's
+    /// systematic σ ([`crate::imu_systematic_sigma`] at the new Γ̂) is added
+    /// on the diagonal as for any estimate; the compensation figures are
+    /// `figures`, computed with the new Γ̂. What describes the data and the
+    /// loop (observability, excitation, the loop check's joint fit, the
+    /// shaking verdicts, the history) stays; the Huber fit and the white σ,
+    /// which belong to the estimate through the loop model, are dropped. An
+    /// axis observable here with no finite loop-free σ becomes unobservable.
+    pub(crate) fn adopt_loop_free(
+        &mut self,
+        free: &crate::LoopFreeEstimate,
+        figures: crate::estimate::ResidualFigures,
+    ) {
+        let gamma = free.gamma_hz_per_mps2;
+        let stat = free.sigma_hz_per_mps2();
+        let sys = crate::imu_systematic_sigma(
+            &gamma,
+            self.settings.imu_scale_sigma,
+            self.settings.imu_misalignment_sigma_rad,
+        );
+        let ppb = |v: f64| gsens_core::units::hz_per_mps2_to_ppb_per_g(v, self.settings.carrier_hz);
+        let usable: [bool; 3] =
+            [0, 1, 2].map(|i| self.observable[i] && gamma[i].is_finite() && stat[i].is_finite() && stat[i] > 0.0);
+        for i in 0..3 {
+            if !usable[i] {
+                continue;
+            }
+            let sigma = stat[i].hypot(sys[i]);
+            self.gamma_hz_per_mps2[i] = Some(gamma[i]);
+            self.sigma_statistical_hz_per_mps2[i] = Some(stat[i]);
+            self.sigma_imu_hz_per_mps2[i] = Some(sys[i]);
+            self.sigma_hz_per_mps2[i] = Some(sigma);
+            self.gamma_ppb_per_g[i] = Some(ppb(gamma[i]));
+            self.sigma_ppb_per_g[i] = Some(ppb(sigma));
+            self.crlb_hz_per_mps2[i] = Some(free.crlb_hz_per_mps2[i]).filter(|c| c.is_finite());
+            for j in 0..3 {
+                let imu = if i == j { sys[i] * sys[i] } else { 0.0 };
+                self.covariance_hz_per_mps2_sq[i][j] = usable[j].then_some(free.covariance[i][j] + imu);
+            }
+        }
+        self.gamma_raw_hz_per_mps2 = gamma;
+        self.sigma_white_hz_per_mps2 = [None; 3];
+        self.huber = None;
+        self.imu_time_offset_s = free.imu_time_offset_s;
+        self.imu_time_offset_estimated = free.time_offset_searched;
+        self.imu_time_offset_sigma_s = None;
+        self.epochs_used = free.epochs as u64;
+        self.rms_before_rad = figures.rms_before_rad;
+        self.rms_after_rad = figures.rms_after_rad;
+        self.rms_g_induced_rad = figures.rms_g_induced_rad;
+        self.predicted_peak_phase_err_rad = figures.peak_phase_err_rad;
+        for i in 0..3 {
+            if self.observable[i] && !usable[i] {
+                self.make_unobservable(i, "the loop-free estimate has no finite σ on it");
+            }
+        }
+    }
+
     /// Makes axis `i` unobservable: Γ̂, σ, the CRLB and its covariance row and
     /// column `null`, its verdict saying `why`. A σ of exactly 0 (or not a
     /// number) is no uncertainty but the absence of information on the axis.

@@ -129,6 +129,22 @@ impl WarningCode {
         )
     }
 
+    /// Whether the code speaks of the loop model alone: the estimate through
+    /// the loop model rests on it, the loop-free estimate
+    /// ([`crate::Measurement::InputPhase`]) does not, so under that
+    /// measurement it does not make the estimate untrustworthy.
+    pub const fn concerns_the_loop_model(self) -> bool {
+        matches!(
+            self,
+            WarningCode::LoopNotStated
+                | WarningCode::LoopRejected
+                | WarningCode::LoopResponse
+                | WarningCode::LoopOffsetUnresolved
+                | WarningCode::ResponseUnchecked
+                | WarningCode::Highpass
+        )
+    }
+
     /// Whether the code is about the logs' units and time base: a wrong unit
     /// or time stamp explains most other findings (a phase in degrees drives
     /// the predicted error past the discriminator's range, an IMU in g or
@@ -229,10 +245,23 @@ impl Warning {
     }
 }
 
-/// The codes of the `warnings` that make an estimate untrustworthy (those
-/// that [`Warning::affects_trust`]), in their order.
-pub fn untrusted_codes(warnings: &[Warning]) -> Vec<&'static str> {
-    warnings.iter().filter(|w| w.affects_trust()).map(|w| w.code.as_str()).collect()
+/// The codes of the `warnings` that make an estimate from `measurement`
+/// untrustworthy, in their order. Through the loop model: every code that
+/// [`WarningCode::affects_trust`]. From the input phase (loop-free): not the
+/// codes that [`WarningCode::concerns_the_loop_model`], and
+/// `loop_free_disagrees` only while nothing else finds the loop model at
+/// fault (`loop_not_stated`, `loop_rejected`, `loop_response`): a
+/// disagreement that the loop's own checks explain is the loop model's, one
+/// they do not explain may as well be the NCO phase's bookkeeping.
+pub fn untrusted_codes(warnings: &[Warning], measurement: crate::Measurement) -> Vec<&'static str> {
+    use WarningCode::*;
+    let loop_at_fault = warnings.iter().any(|w| matches!(w.code, LoopNotStated | LoopRejected | LoopResponse));
+    let counts = |code: WarningCode| match measurement {
+        crate::Measurement::TrackingError => code.affects_trust(),
+        crate::Measurement::InputPhase if code == LoopFreeDisagrees => !loop_at_fault,
+        crate::Measurement::InputPhase => code.affects_trust() && !code.concerns_the_loop_model(),
+    };
+    warnings.iter().filter(|w| counts(w.code)).map(|w| w.code.as_str()).collect()
 }
 
 #[cfg(test)]

@@ -10,8 +10,8 @@ use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use gsens_calib::option_values::positive;
 use gsens_calib::{
-    CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, PipelineSettings, SelectionOptions,
-    SystematicOptions,
+    CalibrationOptions, EstimatorOptions, LoopOptions, MeasurementChoice, MethodName, PipelineSettings,
+    SelectionOptions, SystematicOptions,
 };
 use gsens_gnss_sdr::{ImportOverrides, ImportSettings};
 use gsens_inputs::{Inputs, Log};
@@ -59,6 +59,10 @@ pub(crate) struct AnalysisArgs {
     /// Estimator.
     #[arg(long, value_enum, default_value_t, help_heading = "Estimator")]
     pub method: MethodName,
+    /// What the estimate is made from: the loop's input phase (loop-free, no loop model) where the log
+    /// holds the NCO's phase, else the tracking error through the loop model.
+    #[arg(long, value_enum, default_value_t, help_heading = "Estimator")]
+    pub measurement: MeasurementChoice,
     #[command(flatten)]
     pub estimator: EstimatorOptions,
     #[command(flatten)]
@@ -72,6 +76,7 @@ impl AnalysisArgs {
     pub(crate) fn options(&self) -> CalibrationOptions {
         CalibrationOptions {
             method: self.method,
+            measurement: self.measurement,
             estimator: self.estimator.clone(),
             selection: self.selection.clone(),
             systematic: self.systematic.clone(),

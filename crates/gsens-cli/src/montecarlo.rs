@@ -27,6 +27,10 @@ pub(crate) struct MonteCarloArgs {
     /// wrong would: how often the loop check catches the mistake.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = positive)]
     pub stated_bn_scale: f64,
+    /// State no receiver loop at all: the data choose it, as for a receiver whose loop is not known
+    /// (the loop-free estimate needs none).
+    #[arg(long, conflicts_with = "stated_bn_scale")]
+    pub loop_unstated: bool,
     #[command(flatten)]
     pub estimator: EstimatorOptions,
     #[command(flatten)]
@@ -45,7 +49,8 @@ pub(crate) fn run(args: &MonteCarloArgs, given: &[&str]) -> Result<crate::Status
         systematic: args.systematic.clone(),
         ..CalibrationOptions::default()
     };
-    let methods = method_settings(&scenario, &options, &args.methods, args.stated_bn_scale)?;
+    let stated = (!args.loop_unstated).then_some(args.stated_bn_scale);
+    let methods = method_settings(&scenario, &options, &args.methods, stated)?;
     let bar = count_bar("monte carlo", args.runs, "runs");
     let name = args.scenario.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
     let mc = monte_carlo(&scenario, &name, args.runs, args.scenario.seed, &methods, || bar.inc(1))?;

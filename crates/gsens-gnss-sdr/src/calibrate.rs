@@ -1,7 +1,7 @@
 //! The crate documentation's section "The estimate with GNSS-SDR's own loop" describes this module.
 
 use gsens_calib::{
-    LoopFreeError, LoopFreeEstimate, Outcome, PipelineSettings, SourceConversion, calibrate_logs,
+    LoopFreeError, LoopFreeEstimate, MeasurementChoice, Outcome, PipelineSettings, SourceConversion, calibrate_logs,
     estimate_loop_free_from,
 };
 use gsens_core::units::Decimal;
@@ -95,8 +95,13 @@ pub fn calibrate_gnss_sdr(
         let w = import.models_warmup_s(&imu_series, *start_s, settings.estimate.highpass_hz);
         settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
     }
-    let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &settings)?;
+    // The dumps' input phases come beside the log, not in it: the
+    // measurement is chosen once the loop-free estimate is there.
+    let mut closed_loop = settings.clone();
+    closed_loop.measurement = MeasurementChoice::TrackingError;
+    let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &closed_loop)?;
     outcome.loop_free = Some(loop_free(&imported, import, &imu_series, &settings));
+    outcome.choose_measurement(settings.measurement)?;
     let conversion = Conversion { conversion: import.clone(), tracks: imported.tracks };
     outcome.source = Some(conversion.source());
     outcome.inputs =

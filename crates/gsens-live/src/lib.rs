@@ -60,7 +60,9 @@ pub use motion::{MotionWindow, Shaking};
 pub use pacing::{CreateError, ReplaySink, replay};
 pub use replay::read_session_dir;
 pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
-pub use session::{AxisProgress, BatchJob, BatchResult, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed};
+pub use session::{
+    AxisProgress, BatchJob, BatchResult, BatchVerdict, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed,
+};
 pub use sources::{LineFormat, Source, SourceEvent};
 pub use stream::{Epoch, EpochAverager, StreamEstimate};
 pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop};

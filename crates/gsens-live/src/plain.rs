@@ -38,7 +38,7 @@ impl Plain {
     }
 
     fn warnings(&mut self, v: &LiveView, out: &mut dyn Write) -> std::io::Result<()> {
-        for w in v.batch.iter().flat_map(|b| &b.2) {
+        for w in v.batch.iter().flat_map(|b| &b.warnings) {
             if !self.warned.contains(&w.code) {
                 self.warned.push(w.code);
                 writeln!(out, "warning [{}]: {}", w.code, w.message)?;
@@ -62,8 +62,8 @@ fn batch(v: &LiveView, out: &mut dyn Write) -> std::io::Result<()> {
         })
         .collect();
     let trust = match (&v.batch, &v.batch_error) {
-        (Some((_, true, _)), _) => "trustworthy".to_string(),
-        (Some((_, false, w)), _) => format!("NOT TRUSTWORTHY ({})", gsens_calib::untrusted_codes(w).join(", ")),
+        (Some(b), _) if b.trustworthy => format!("{}: trustworthy", b.measurement),
+        (Some(b), _) => format!("{}: NOT TRUSTWORTHY ({})", b.measurement, b.untrusted_codes.join(", ")),
         (None, Some(e)) => format!("no estimate: {e}"),
         (None, None) => String::new(),
     };

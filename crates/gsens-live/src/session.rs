@@ -3,7 +3,7 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use gsens_calib::{Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
+use gsens_calib::{Measurement, Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
 use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 
 use crate::guidance::{Instruction, LoopBand, Protocol, Situation, instruct};
@@ -190,8 +190,8 @@ pub struct LiveView {
     pub range_rad: f64,
     /// The channels.
     pub channels: Vec<ChannelStatus>,
-    /// The latest batch estimate: data it covers \[s\], trustworthy, its warnings.
-    pub batch: Option<(f64, bool, Vec<Warning>)>,
+    /// The verdict on the latest batch estimate.
+    pub batch: Option<BatchVerdict>,
     /// Why the latest batch estimate failed, if it did.
     pub batch_error: Option<String>,
     /// The latest notices, and how many there were in all.
@@ -201,7 +201,35 @@ pub struct LiveView {
 }
 
 /// What the view shows of the latest batch estimate: (data end, trustworthy, warnings), or its error.
-type BatchSummary = (Option<(f64, bool, Vec<Warning>)>, Option<String>);
+/// What the screen shows of a batch estimate, made once from its result
+/// document (which is not cheap).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct BatchVerdict {
+    /// The data it covers, up to \[s\].
+    pub data_end_s: f64,
+    /// What the estimate is made from.
+    pub measurement: Measurement,
+    /// Whether it is trustworthy.
+    pub trustworthy: bool,
+    /// The codes that make it untrustworthy.
+    pub untrusted_codes: Vec<&'static str>,
+    /// Its warnings.
+    pub warnings: Vec<Warning>,
+}
+
+impl BatchVerdict {
+    /// The verdict on an estimate from `measurement` covering data up to
+    /// `data_end_s` \[s\] that raised `warnings` (in the document's order):
+    /// trustworthy when none of them counts against it
+    /// ([`gsens_calib::untrusted_codes`]).
+    pub fn new(data_end_s: f64, measurement: Measurement, warnings: Vec<Warning>) -> Self {
+        let untrusted_codes = gsens_calib::untrusted_codes(&warnings, measurement);
+        BatchVerdict { data_end_s, measurement, trustworthy: untrusted_codes.is_empty(), untrusted_codes, warnings }
+    }
+}
+
+type BatchSummary = (Option<BatchVerdict>, Option<String>);
 
 /// The data received so far and what is made of it.
 #[derive(Debug, Clone)]
@@ -511,7 +539,7 @@ impl LiveSession {
         self.batch_summary = match &result.outcome {
             Ok(o) => {
                 let doc = o.document(None);
-                (Some((result.data_end_s, doc.trustworthy, doc.warnings)), None)
+                (Some(BatchVerdict::new(result.data_end_s, doc.measurement, doc.warnings)), None)
             }
             Err(e) => (None, Some(e.clone())),
         };

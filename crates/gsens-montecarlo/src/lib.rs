@@ -33,7 +33,9 @@ pub use predict::frequency_noise;
 pub use validate::{ValidateError, calibrate_scenario, default_bandwidths_hz, validate};
 pub use validate_text::{render_gamma_hat, render_trial_row, render_validate_footer, render_validate_header};
 
-use gsens_calib::{Calibration, EstimateSettings, Method, PipelineSettings, calibrate_logs};
+use gsens_calib::{
+    Calibration, EstimateSettings, Measurement, MeasurementChoice, Method, Outcome, PipelineSettings, calibrate_logs,
+};
 use gsens_core::LoopModel;
 use gsens_sim::scenario::Scenario;
 use gsens_sim::{LogsError, simulate_logs};
@@ -215,8 +217,37 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
     }
 }
 
+/// The name of the loop-free estimate's row beside the methods': the input
+/// phase θ_NCO + φ regressed with no loop model
+/// ([`gsens_calib::estimate_loop_free`]), made once per run (it does not
+/// depend on the method) wherever the scenario logs the NCO's phase.
+pub const LOOP_FREE: &str = "loop-free";
+
+/// A method's result in a run from its `outcome` and the run's `truth`
+/// (`true_fn_hz`: the scenario loop's ωn/2π).
+fn method_run(outcome: &Outcome, truth: &gsens_sim::session::Truth, true_fn_hz: Option<f64>) -> MethodRun {
+    let doc = outcome.document(Some(truth.sensitivity.gamma_hz_per_mps2));
+    let c: &Calibration = &outcome.calibration;
+    let joint = c.joint_fit.as_ref().filter(|_| outcome.measurement == Measurement::TrackingError);
+    MethodRun {
+        gamma_hz_per_mps2: c.gamma_hz_per_mps2,
+        sigma_statistical_hz_per_mps2: c.sigma_statistical_hz_per_mps2,
+        crlb_hz_per_mps2: c.crlb_hz_per_mps2,
+        time_offset_error_s: c.imu_time_offset_estimated.then_some(c.imu_time_offset_s - truth.imu_time_offset_s),
+        natural_frequency_error_hz: joint.and_then(|j| j.natural_frequency_hz.zip(true_fn_hz).map(|(f, t)| f - t)),
+        sigma_imu_time_offset_s: joint.and_then(|j| j.sigma_imu_time_offset_s),
+        sigma_natural_frequency_hz: joint.and_then(|j| j.sigma_natural_frequency_hz),
+        correlation_loop_offset: joint.and_then(|j| j.correlation_loop_offset),
+        noise_ar_order: c.noise_ar_order,
+        trustworthy: doc.trustworthy,
+        warnings: doc.warnings.iter().map(|w| w.code).collect(),
+    }
+}
+
 /// Simulates run `seed` into memory and calibrates it with each of `methods`
-/// (pipeline settings, one per method), as `gsens estimate` would the files.
+/// (pipeline settings, one per method), as `gsens estimate` would the files;
+/// where the scenario logs the NCO's phase, the loop-free estimate follows
+/// as one more row ([`LOOP_FREE`]), judged as the document that presents it.
 pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> Result<Run, MonteCarloError> {
     let logs = simulate_logs(scenario, seed).map_err(|source| MonteCarloError::Simulation { seed, source })?;
     let (tracking, imu, truth) = (&logs.tracking, &logs.imu, &logs.truth);
@@ -227,37 +258,30 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
         .ok()
         .and_then(|c| gsens_core::LoopSpec::Coefficients(c).wn_rad_per_s())
         .map(|wn| wn / std::f64::consts::TAU);
-    let results = methods
-        .iter()
-        .map(|settings| {
-            let method = method_name(&settings.estimate.method);
-            let outcome = match calibrate_logs(tracking, imu, &imu_name, settings) {
-                Ok(o) => o,
-                Err(e) => return MethodOutcome { method, result: None, error: Some(e.to_string()) },
-            };
-            let doc = outcome.document(Some(truth.sensitivity.gamma_hz_per_mps2));
-            let c: Calibration = outcome.calibration;
-            let result = MethodRun {
-                gamma_hz_per_mps2: c.gamma_hz_per_mps2,
-                sigma_statistical_hz_per_mps2: c.sigma_statistical_hz_per_mps2,
-                crlb_hz_per_mps2: c.crlb_hz_per_mps2,
-                time_offset_error_s: c
-                    .imu_time_offset_estimated
-                    .then_some(c.imu_time_offset_s - truth.imu_time_offset_s),
-                natural_frequency_error_hz: c
-                    .joint_fit
-                    .as_ref()
-                    .and_then(|j| j.natural_frequency_hz.zip(true_fn_hz).map(|(f, t)| f - t)),
-                sigma_imu_time_offset_s: c.joint_fit.as_ref().and_then(|j| j.sigma_imu_time_offset_s),
-                sigma_natural_frequency_hz: c.joint_fit.as_ref().and_then(|j| j.sigma_natural_frequency_hz),
-                correlation_loop_offset: c.joint_fit.as_ref().and_then(|j| j.correlation_loop_offset),
-                noise_ar_order: c.noise_ar_order,
-                trustworthy: doc.trustworthy,
-                warnings: doc.warnings.iter().map(|w| w.code).collect(),
-            };
-            MethodOutcome { method, result: Some(result), error: None }
-        })
-        .collect();
+    let mut results = Vec::with_capacity(methods.len() + 1);
+    let mut loop_free = None;
+    for settings in methods {
+        let method = method_name(&settings.estimate.method);
+        let mut outcome = match calibrate_logs(tracking, imu, &imu_name, settings) {
+            Ok(o) => o,
+            Err(e) => {
+                results.push(MethodOutcome { method, result: None, error: Some(e.to_string()) });
+                continue;
+            }
+        };
+        results.push(MethodOutcome { method, result: Some(method_run(&outcome, truth, true_fn_hz)), error: None });
+        if loop_free.is_none() && scenario.log.nco {
+            loop_free = Some(match outcome.choose_measurement(MeasurementChoice::InputPhase) {
+                Ok(()) => MethodOutcome {
+                    method: LOOP_FREE,
+                    result: Some(method_run(&outcome, truth, true_fn_hz)),
+                    error: None,
+                },
+                Err(e) => MethodOutcome { method: LOOP_FREE, result: None, error: Some(e.to_string()) },
+            });
+        }
+    }
+    results.extend(loop_free);
     Ok(Run {
         seed,
         gamma_hz_per_mps2: truth.sensitivity.gamma_hz_per_mps2,
@@ -279,13 +303,24 @@ pub struct MonteCarlo {
     pub wall_s: f64,
     /// Worker threads.
     pub threads: usize,
+    /// Whether and how the methods were told the receiver's loop: its
+    /// bandwidth stated this many times the true one, or `null`: not stated.
+    pub stated_bn_scale: Option<f64>,
     /// The method whose largest RMSE/CRLB over the axes is smallest.
     pub best_method: Option<String>,
-    /// Statistics per method, in the order given.
+    /// Statistics per method, in the order given, then the loop-free
+    /// estimate's ([`LOOP_FREE`]) where the scenario logs the NCO's phase.
     #[serde(serialize_with = "ser_stats")]
     pub methods: Vec<(&'static str, MethodStats)>,
     /// Every run's estimates.
     pub per_run: Vec<Run>,
+}
+
+/// The methods' stated bandwidth over the scenario's, `None` when the loop
+/// was not stated (every method is stated alike).
+fn stated_bn_scale(scenario: &Scenario, methods: &[PipelineSettings]) -> Option<f64> {
+    let stated = methods.first().filter(|m| m.loop_stated)?.estimate.receiver_loop.bn_hz()?;
+    Some(stated / scenario.tracking_loop.bn_hz)
 }
 
 fn ser_stats<S: serde::Serializer>(m: &[(&'static str, MethodStats)], s: S) -> Result<S::Ok, S::Error> {
@@ -363,12 +398,15 @@ pub fn monte_carlo(
         })
         .collect::<Result<Vec<_>, _>>()?;
     let wall_s = start.elapsed().as_secs_f64();
-    let stats: Vec<(&'static str, MethodStats)> =
+    let mut stats: Vec<(&'static str, MethodStats)> =
         methods.iter().enumerate().map(|(j, m)| (method_name(&m.estimate.method), method_stats(&per_run, j))).collect();
+    if scenario.log.nco {
+        stats.push((LOOP_FREE, method_stats(&per_run, methods.len())));
+    }
     let worst = |s: &MethodStats| s.rmse_over_crlb.iter().fold(0.0f64, |a, &b| a.max(b));
     // The first method within 1e-6 of the smallest worst axis (RLS with λ = 1
-    // equals the batch to rounding).
-    let valid = || stats.iter().filter(|(_, s)| s.runs > 0 && worst(s).is_finite());
+    // equals the batch to rounding); the loop-free row is a measurement, not a method.
+    let valid = || stats[..methods.len()].iter().filter(|(_, s)| s.runs > 0 && worst(s).is_finite());
     let min_worst = valid().map(|(_, s)| worst(s)).fold(f64::INFINITY, f64::min);
     let best_method = valid().find(|(_, s)| worst(s) <= min_worst * (1.0 + 1e-6)).map(|(n, _)| n.to_string());
     Ok(MonteCarlo {
@@ -377,6 +415,7 @@ pub fn monte_carlo(
         scenario: scenario_name.to_string(),
         wall_s,
         threads: rayon::current_num_threads(),
+        stated_bn_scale: stated_bn_scale(scenario, methods),
         best_method,
         methods: stats,
         per_run,

@@ -43,7 +43,7 @@ fn gls_spread_is_at_the_cramer_rao_bound_and_runs_are_reproducible() {
         o.systematic.loop_check = false;
         o
     };
-    let methods = method_settings(&scenario, &options, &[MethodName::Batch, MethodName::Gls], 1.0).unwrap();
+    let methods = method_settings(&scenario, &options, &[MethodName::Batch, MethodName::Gls], Some(1.0)).unwrap();
     let run = || serde_json::to_value(monte_carlo(&scenario, "short", 30, 1, &methods, || {}).unwrap()).unwrap();
     let v = run();
     for m in ["batch", "gls"] {
@@ -79,7 +79,7 @@ fn in_memory_runs_estimate_what_the_files_give() {
     let demo = simulate_demo(&scenario, 3, dir.path(), &options, |_| {}).unwrap();
     let d: serde_json::Value =
         serde_json::from_str(&demo.document(&demo.calibrate().unwrap()).to_json_string().unwrap()).unwrap();
-    let methods = method_settings(&scenario, &options, &[MethodName::Batch], 1.0).unwrap();
+    let methods = method_settings(&scenario, &options, &[MethodName::Batch], Some(1.0)).unwrap();
     let m = serde_json::to_value(monte_carlo(&scenario, "default", 1, 3, &methods, || {}).unwrap()).unwrap();
     let run = &m["per_run"][0]["methods"][0];
     assert_eq!(run["method"], "batch");

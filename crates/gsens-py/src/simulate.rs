@@ -98,10 +98,12 @@ pub(crate) fn simulate<'py>(
 
 /// Simulates `runs` sessions (seeds `seed`, `seed + 1`, …) in parallel and
 /// estimates each with every method of `methods`, under the scenario's own
-/// loop (as `gsens montecarlo`): returns its JSON document as a dict
-/// (statistics per method and every run's estimates).
+/// loop with its bandwidth stated `stated_bn_scale` times the true one
+/// (`None`: no loop stated), as `gsens montecarlo`; the loop-free estimate is
+/// one more row where the scenario logs the NCO's phase. Returns its JSON
+/// document as a dict (statistics per method and every run's estimates).
 #[pyfunction]
-#[pyo3(signature = (scenario=None, runs=20, seed=1, methods=vec!["batch".to_string()], stated_bn_scale=1.0, overrides=None, **settings))]
+#[pyo3(signature = (scenario=None, runs=20, seed=1, methods=vec!["batch".to_string()], stated_bn_scale=Some(1.0), overrides=None, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn montecarlo<'py>(
     py: Python<'py>,
@@ -109,7 +111,7 @@ pub(crate) fn montecarlo<'py>(
     runs: u64,
     seed: u64,
     methods: Vec<String>,
-    stated_bn_scale: f64,
+    stated_bn_scale: Option<f64>,
     overrides: Option<&Bound<'py, PyDict>>,
     settings: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -121,18 +123,14 @@ pub(crate) fn montecarlo<'py>(
             "montecarlo models the scenario's own loop: leave out order, bn_hz and the like (stated_bn_scale misstates it)",
         ));
     }
-    if !(stated_bn_scale.is_finite() && stated_bn_scale > 0.0) {
-        return Err(GsensError::new_err(format!("stated_bn_scale must be finite and > 0, got {stated_bn_scale}")));
-    }
-    let mut pipelines = Vec::new();
+    let mut names = Vec::new();
     for m in &methods {
-        let method = serde_json::from_value(serde_json::Value::String(m.clone()))
-            .map_err(|e| GsensError::new_err(format!("methods: {e}")))?;
-        let o = gsens_calib::CalibrationOptions { method, ..options.clone() };
-        let mut s = gsens_montecarlo::scenario_settings(&scenario, &o.estimate_settings()).map_err(error)?;
-        s.receiver_loop = s.receiver_loop.with_bn_scaled(stated_bn_scale);
-        pipelines.push(o.pipeline_settings_around(s).map_err(error)?);
+        names.push(
+            serde_json::from_value(serde_json::Value::String(m.clone()))
+                .map_err(|e| GsensError::new_err(format!("methods: {e}")))?,
+        );
     }
+    let pipelines = gsens_montecarlo::method_settings(&scenario, &options, &names, stated_bn_scale).map_err(error)?;
     let mc =
         py.detach(|| gsens_montecarlo::monte_carlo(&scenario, &name, runs, seed, &pipelines, || {})).map_err(error)?;
     py_of_json(py, &serde_json::to_string(&mc).map_err(error)?)

@@ -59,6 +59,7 @@ fn c_comment(s: &str) -> String {
             'π' => out.push_str("pi"),
             'Γ' => out.push_str("Gamma"),
             'φ' => out.push_str("phi"),
+            'θ' => out.push_str("theta"),
             'σ' => out.push_str("sigma"),
             'τ' => out.push_str("tau"),
             '\u{302}' => out.push_str("-hat"),
@@ -117,6 +118,10 @@ fn verdict_comment(h: &mut String, doc: &ResultDocument) {
         let _ = writeln!(h, " * VERDICT: NOT TRUSTWORTHY (GSENS_GAMMA_TRUSTWORTHY 0): {}.", codes.join(", "));
         let _ = writeln!(h, " * The values below may be wrong beyond their 1-sigma values: do not compile them");
         let _ = writeln!(h, " * into firmware before the warnings are resolved and the calibration repeated.");
+    }
+    let measured = format!("Estimated from {}.", doc.measurement.description());
+    for line in wrap(&c_comment(&measured), 86) {
+        let _ = writeln!(h, " * {line}");
     }
     if !doc.warnings.is_empty() {
         let _ = writeln!(h, " *");

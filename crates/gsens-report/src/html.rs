@@ -153,6 +153,7 @@ pub fn render_html(d: &ReportData) -> String {
     // Verdict and estimate: the document's verdict and warnings first, then what the shaking observed.
     let _ = writeln!(h, "<h2 id=\"estimate\">Estimate</h2>");
     verdict_banner(&mut h, d);
+    let _ = writeln!(h, "<p id=\"measurement\">Estimated from {}.</p>", escape(d.document.measurement.description()));
     observability_banner(&mut h, d);
     estimate_table(&mut h, d);
     estimate_notes(&mut h, d);

@@ -20,6 +20,17 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         mc.wall_s,
         mc.threads
     );
+    let stated = match mc.stated_bn_scale {
+        Some(k) if (k - 1.0).abs() < 1e-12 => "the receiver's loop stated right".to_string(),
+        Some(k) => format!("the receiver's loop stated with {k} times its bandwidth"),
+        None => "no receiver loop stated (the data choose it)".to_string(),
+    };
+    let loop_free = if stats.iter().any(|(n, _)| *n == gsens_montecarlo::LOOP_FREE) {
+        format!("; {}: the input phase θ_NCO + φ, no loop model", gsens_montecarlo::LOOP_FREE)
+    } else {
+        String::new()
+    };
+    let _ = writeln!(s_, "methods: the tracking error through the loop model, {stated}{loop_free}");
     let _ = writeln!(
         s_,
         "errors Γ̂ − Γ_imu (Γ through the IMU's scale and misalignment) [Hz/(m/s²)]; CRLB: RMS over runs of each run's bound\n"

@@ -1,7 +1,7 @@
 //! The calibration as text: what the CLI prints, rendered from the result document.
 
 use crate::AXES;
-use gsens_calib::ResultDocument;
+use gsens_calib::{Measurement, ResultDocument};
 use gsens_core::LoggedPhase;
 use gsens_core::units::Decimal;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
@@ -129,6 +129,12 @@ fn channels(s: &mut String, doc: &ResultDocument) {
 /// The estimator, its robust weighting if any, and the IMU time offset.
 fn method(s: &mut String, doc: &ResultDocument) {
     let c = &doc.calibration;
+    if doc.measurement == Measurement::InputPhase {
+        let _ = writeln!(s, "method: generalized least squares, an AR noise model per segment (loop-free)");
+        let how = if c.imu_time_offset_estimated { "searched" } else { "given" };
+        let _ = writeln!(s, "IMU time offset: {:+.4} s, {how}", c.imu_time_offset_s);
+        return;
+    }
     let _ = writeln!(s, "method: {}", c.settings.method);
     if let Some(h) = &c.huber {
         let _ = writeln!(
@@ -190,7 +196,8 @@ fn loop_check(s: &mut String, doc: &ResultDocument) {
     let inflation = j.variance_inflation.map(f64::sqrt);
     let _ = writeln!(
         s,
-        "  {}widens σ by ×{:.2}, ×{:.2}, ×{:.2} (x, y, z){}",
+        "  {}{}widens σ by ×{:.2}, ×{:.2}, ×{:.2} (x, y, z){}",
+        if doc.measurement == Measurement::TrackingError { "" } else { "(the cross-check through the loop model) " },
         loop_used_phrase(j),
         inflation[0],
         inflation[1],
@@ -236,6 +243,9 @@ fn estimate_table(s: &mut String, doc: &ResultDocument) {
     let c = &doc.calibration;
     let truth = doc.truth_gamma_hz_per_mps2;
     let head = if truth.is_some() { "      truth       error" } else { "" };
+    if doc.measurement == Measurement::InputPhase {
+        let _ = write!(s, "\nestimate from {}:", doc.measurement.description());
+    }
     let _ = writeln!(s, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
     for i in 0..3 {
         match (c.gamma_hz_per_mps2[i], c.sigma_hz_per_mps2[i]) {
@@ -280,8 +290,10 @@ fn estimate_table(s: &mut String, doc: &ResultDocument) {
     }
 }
 
-/// The loop-free estimate from the NCO's phase, for logs that hold it: Γ̂
-/// with its σ per axis and its difference from the estimate above.
+/// The loop-free estimate from the NCO's phase, for logs that hold it: what
+/// went into it, and either its Γ̂ with its σ per axis beside the estimate
+/// through the loop model above, or, where it is the estimate above, the
+/// estimate through the loop model as the cross-check.
 fn loop_free(s: &mut String, doc: &ResultDocument) {
     let Some(check) = &doc.loop_free else { return };
     let Some(free) = &check.estimate else {
@@ -290,12 +302,31 @@ fn loop_free(s: &mut String, doc: &ResultDocument) {
         return;
     };
     let offset = if free.time_offset_searched { "searched" } else { "given" };
-    let _ = writeln!(
-        s,
-        "\nloop-free estimate (θ_NCO + φ, no loop model; {} channel(s), {} segment(s), {} left out for a slip; IMU \
-         offset {:+.4} s, {offset}):",
+    let details = format!(
+        "θ_NCO + φ, no loop model; {} channel(s), {} segment(s), {} left out for a slip; IMU offset {:+.4} s, {offset}",
         free.tracks, free.segments, free.slipped_segments, free.imu_time_offset_s
     );
+    let truth = doc.truth_gamma_hz_per_mps2;
+    if let (Measurement::InputPhase, Some(closed)) = (doc.measurement, &doc.tracking_error) {
+        let _ = writeln!(s, "\nthe estimate above is the loop-free one ({details})");
+        let _ = writeln!(s, "cross-check, the estimate through the loop model ({}):", doc.calibration.loop_used);
+        for i in 0..3 {
+            let (Some(g), Some(sg)) = (closed.gamma_hz_per_mps2[i], closed.sigma_hz_per_mps2[i]) else {
+                let _ = writeln!(s, "  {}  unobservable", AXES[i]);
+                continue;
+            };
+            let _ = write!(s, "  {}  {g:+.5}  ±{sg:.5}", AXES[i]);
+            if let Some(z) = check.z_difference[i] {
+                let _ = write!(s, "     through the loop − loop-free: {z:+.2}σ");
+            }
+            if let Some(t) = truth {
+                let _ = write!(s, "     error {:+.5} ({:+.2}σ)", g - t[i], (g - t[i]) / sg);
+            }
+            let _ = writeln!(s);
+        }
+        return;
+    }
+    let _ = writeln!(s, "\nloop-free estimate ({details}):");
     let sigma = free.sigma_hz_per_mps2();
     for i in 0..3 {
         let (g, sg) = (free.gamma_hz_per_mps2[i], sigma[i]);
@@ -303,7 +334,7 @@ fn loop_free(s: &mut String, doc: &ResultDocument) {
         if let Some(z) = check.z_difference[i] {
             let _ = write!(s, "     above − loop-free: {z:+.2}σ");
         }
-        if let Some(t) = doc.truth_gamma_hz_per_mps2 {
+        if let Some(t) = truth {
             let _ = write!(s, "     error {:+.5} ({:+.2}σ)", g - t[i], (g - t[i]) / sg);
         }
         let _ = writeln!(s);
@@ -352,8 +383,14 @@ fn compensation(s: &mut String, doc: &ResultDocument) {
         let b = c.crlb_hz_per_mps2.map(|v| v.map_or("—".to_owned(), |v| format!("{v:.5}")));
         let _ = writeln!(
             s,
-            "Cramér–Rao bound [Hz/(m/s²)]: x {}, y {}, z {} (residual noise: AR({}) model)",
-            b[0], b[1], b[2], c.noise_ar_order
+            "Cramér–Rao bound [Hz/(m/s²)]: x {}, y {}, z {} (residual noise: {})",
+            b[0],
+            b[1],
+            b[2],
+            match doc.measurement {
+                Measurement::InputPhase => "an AR model per segment".to_string(),
+                _ => format!("AR({}) model", c.noise_ar_order),
+            }
         );
     }
 }

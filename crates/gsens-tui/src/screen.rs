@@ -438,14 +438,15 @@ fn draw_batch(buf: &mut Buffer, area: Rect, view: &LiveView) {
         return;
     }
     let title = match &view.batch {
-        Some((data_s, _, _)) => format!(" checked estimate on data to {data_s:.1} s "),
+        Some(b) => format!(" checked estimate ({}) on data to {:.1} s ", b.measurement, b.data_end_s),
         None => " checked estimate ".to_string(),
     };
     let block = Block::bordered().title(title);
     let mut lines = Vec::new();
     match (&view.batch, &view.batch_error) {
-        (Some((_, trustworthy, warnings)), _) => {
-            let verdict = if *trustworthy {
+        (Some(b), _) => {
+            let warnings = &b.warnings;
+            let verdict = if b.trustworthy {
                 Span::styled("TRUSTWORTHY", Style::new().fg(Color::Green).add_modifier(Modifier::BOLD))
             } else {
                 Span::styled("NOT TRUSTWORTHY", Style::new().fg(Color::Red).add_modifier(Modifier::BOLD))

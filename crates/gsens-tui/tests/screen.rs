@@ -12,9 +12,10 @@
 
 use std::path::PathBuf;
 
+use gsens_calib::Measurement;
 use gsens_core::{LoopModel, LoopSpec};
-use gsens_live::ChannelStatus;
 use gsens_live::{AxisProgress, Instruction, LiveView, LoopBand, Notice, Shaking};
+use gsens_live::{BatchVerdict, ChannelStatus};
 use gsens_live::{Situation, instruct};
 use gsens_tui::ratatui::backend::TestBackend;
 use gsens_tui::ratatui::style::Color;
@@ -132,7 +133,7 @@ fn mid_session() -> LiveView {
         },
         peak_phase_rad: 0.21,
         channels: channels(t, Some(22)),
-        batch: Some((45.0, true, Vec::new())),
+        batch: Some(BatchVerdict::new(45.0, Measurement::TrackingError, Vec::new())),
         notices: (vec![notice(17, "garbage line: expected 6 fields, found 2")], 1),
         received: (1920, 11_232),
         ..waiting()
@@ -147,9 +148,9 @@ fn gentler() -> LiveView {
     let mut view = LiveView {
         shaking: Shaking { rms_mps2: [0.11, 4.8, 0.09], ..mid_session().shaking },
         peak_phase_rad: 0.64,
-        batch: Some((
+        batch: Some(BatchVerdict::new(
             45.0,
-            false,
+            Measurement::TrackingError,
             vec![gsens_calib::Warning {
                 code: gsens_calib::WarningCode::DiscriminatorRange,
                 message: "the predicted g-induced phase error peaks at 0.62 rad, beyond the discriminator's \
@@ -178,7 +179,7 @@ fn done() -> LiveView {
         shaking: Shaking { rms_mps2: [0.02, 0.03, 0.02], window_s: 4.0, ..Shaking::default() },
         peak_phase_rad: 0.02,
         channels: channels(t, None),
-        batch: Some((95.0, true, Vec::new())),
+        batch: Some(BatchVerdict::new(95.0, Measurement::TrackingError, Vec::new())),
         notices: (
             vec![
                 notice(17, "garbage line: expected 6 fields, found 2"),
@@ -369,9 +370,9 @@ fn odd_values_do_not_panic() {
             shaking: Shaking { frequency_hz: Some(f64::NAN), rms_mps2: [f64::INFINITY; 3], ..mid_session().shaking },
             peak_phase_rad: f64::NAN,
             channels: many.clone(),
-            batch: Some((
+            batch: Some(BatchVerdict::new(
                 f64::NAN,
-                false,
+                Measurement::TrackingError,
                 vec![gsens_calib::Warning { code: gsens_calib::WarningCode::NotFinite, message: long.clone() }; 6],
             )),
             notices: (vec![long.clone(); 5], u64::MAX),
