@@ -183,18 +183,6 @@ pub enum LoopFreeError {
         /// The range.
         expected: &'static str,
     },
-    /// The log holds fewer records than the loop made updates: the NCO's
-    /// phase between records is not known.
-    #[error(
-        "the loop updates every {loop_interval_s} s but its records are {record_interval_s} s apart: the NCO's \
-         phase over the updates between them is not logged, so the loop-free estimate cannot be made"
-    )]
-    UpdatesNotLogged {
-        /// The loop's update interval \[s\].
-        loop_interval_s: f64,
-        /// The records' spacing \[s\].
-        record_interval_s: f64,
-    },
     /// Too little data survived: no channel covers a whole segment inside
     /// the IMU's span, or the fit had too few epochs.
     #[error(

@@ -100,7 +100,7 @@ pub fn calibrate_gnss_sdr(
     let mut closed_loop = settings.clone();
     closed_loop.measurement = MeasurementChoice::TrackingError;
     let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &closed_loop)?;
-    outcome.loop_free = Some(loop_free(&imported, import, &imu_series, &settings));
+    outcome.loop_free = Some(loop_free(&imported, &imu_series, &settings));
     outcome.choose_measurement(settings.measurement)?;
     let conversion = Conversion { conversion: import.clone(), tracks: imported.tracks };
     outcome.source = Some(conversion.source());
@@ -110,22 +110,13 @@ pub fn calibrate_gnss_sdr(
 }
 
 /// The loop-free estimate beside the one through GNSS-SDR's loop, from the
-/// records' NCO ([`gnss_sdr_input_phases`]): only where every loop update
-/// has its record (`extend_correlation_symbols` = 20, one update per 20 ms
-/// bit). With shorter integrations the dumps keep one record per bit, the
-/// NCO's frequency over the updates between them is not logged, and a
-/// replica rebuilt from the records' frequencies comes out wrong (4–6 % low
-/// on the 1 ms fixture): no estimate, and the reason.
+/// records' NCO ([`gnss_sdr_input_phases`]; the replica's phase as
+/// `crate::nco` books it, for every `extend_correlation_symbols`).
 fn loop_free(
     imported: &Imported,
-    import: &ImportSettings,
     imu: &gsens_io::ImuSeries,
     settings: &PipelineSettings,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
-    let loop_interval_s = import.stage().interval_s();
-    if loop_interval_s < imported.interval_s * (1.0 - 1e-6) {
-        return Err(LoopFreeError::UpdatesNotLogged { loop_interval_s, record_interval_s: imported.interval_s });
-    }
     let free = settings.loop_free(imported.interval_s);
     let phases = gnss_sdr_input_phases(imported, imported.interval_s, free.max_abs_phase_rad);
     estimate_loop_free_from(&phases, imu, &free)

@@ -13,6 +13,7 @@ use std::fmt::Write as _;
 use crate::conf::TrackingConf;
 use crate::dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, read_dump};
 use crate::error::GnssSdrError;
+use crate::nco::{BLOCK_S, NcoBookkeeping, NcoRecord, replica_mid_cycles};
 
 /// What a caller sets instead of a configuration's lock detector and of
 /// the derived conversion settings ([`ImportSettings::override_with`]);
@@ -274,8 +275,9 @@ pub struct ImportedRow {
     /// Index of the track in [`Imported::tracks`].
     pub track: usize,
     /// The phase the loop was fed at the middle of the integration,
-    /// θ_in = θ_NCO + φ \[rad\] (the replica's phase rebuilt in double from
-    /// the records' NCO frequencies; `None` for rows not from dumps).
+    /// θ_in = θ_NCO + φ \[rad\] (the replica's phase booked as GNSS-SDR books
+    /// its NCO: from the commands where every update has its record, from the
+    /// accumulator where not; `None` for rows not from dumps).
     #[serde(skip)]
     pub input_phase_rad: Option<f64>,
 }
@@ -524,13 +526,23 @@ pub fn import_dump(
     settings: &ImportSettings,
     track_base: usize,
 ) -> (Vec<ImportedRow>, Vec<TrackSummary>) {
+    import_dump_booked(dump, settings, track_base, NcoBookkeeping::Right)
+}
+
+/// [`import_dump`] with the NCO booked as `how` says.
+pub(crate) fn import_dump_booked(
+    dump: &TrackingDump,
+    settings: &ImportSettings,
+    track_base: usize,
+    how: NcoBookkeeping,
+) -> (Vec<ImportedRow>, Vec<TrackSummary>) {
     let samples_per_ms = settings.fs_hz * 1e-3;
     let mut rows = Vec::new();
     let mut tracks = Vec::new();
     let mut i = 0;
     while i < dump.records.len() {
         let (j, synced) = track_span(&dump.records, i, samples_per_ms);
-        let track = DumpTrack { records: &dump.records[i..j], synced: synced.map(|s| s - i), settings };
+        let track = DumpTrack { records: &dump.records[i..j], synced: synced.map(|s| s - i), settings, how };
         let (track_rows, summary) = track.import(dump, track_base + tracks.len());
         if summary.used {
             rows.extend(track_rows);
@@ -547,6 +559,7 @@ struct DumpTrack<'a> {
     records: &'a [TrackingRecord],
     synced: Option<usize>,
     settings: &'a ImportSettings,
+    how: NcoBookkeeping,
 }
 
 impl DumpTrack<'_> {
@@ -627,24 +640,32 @@ impl DumpTrack<'_> {
     /// lock) as rows of track `track`; with the count of modelled records
     /// and the sum of their C/N0 \[dB-Hz\].
     /// The replica's phase at the middle of each record's integration
-    /// \[cycles\], from the track's first record on: the NCO runs over each
-    /// integration at the frequency the previous record commanded
-    /// (`carrier_doppler_hz` is the frequency for the next integration), the
-    /// integrations follow each other without gaps, and the sum is kept in
-    /// double (the dump's own `acc_carrier_phase_rad` is float32: 10⁻³ rad
-    /// steps after a few minutes of Doppler).
+    /// \[cycles\] from the track's first record on, booked as GNSS-SDR books
+    /// its NCO ([`crate::nco`]); the accumulator restarts in the interval
+    /// that ends at the first record after bit synchronization.
     fn replica_phase_cycles(&self) -> Vec<f64> {
-        let end = |k: usize| self.t_mid(k) + 0.5e-3 * f64::from(self.symbols(k));
-        let mut at_end = 0.0;
-        (0..self.records.len())
+        let fs = self.settings.fs_hz;
+        let recs: Vec<NcoRecord> = (0..self.records.len())
             .map(|k| {
-                let f_hz = self.records[k.saturating_sub(1)].carrier_doppler_hz;
-                if k > 0 {
-                    at_end += f_hz * (end(k) - end(k - 1));
+                let r = &self.records[k];
+                let end_s = r.prn_start_sample_count as f64 / fs;
+                let symbols = self.symbols(k);
+                let updates = if k == 0 {
+                    1
+                } else {
+                    let dt_s = end_s - self.records[k - 1].prn_start_sample_count as f64 / fs;
+                    (dt_s / (f64::from(symbols) * BLOCK_S)).round().max(1.0) as u32
+                };
+                NcoRecord {
+                    end_s,
+                    symbols,
+                    updates,
+                    acc_rad: r.acc_carrier_phase_rad,
+                    command_hz: r.carrier_doppler_hz,
                 }
-                at_end - f_hz * 0.5e-3 * f64::from(self.symbols(k))
             })
-            .collect()
+            .collect();
+        replica_mid_cycles(&recs, self.synced, self.how)
     }
 
     fn modelled_rows(
@@ -846,6 +867,13 @@ pub(crate) fn nothing_usable_reason(tracks: &[TrackSummary]) -> String {
 /// Reads every dump `<prefix><channel>.dat` in `dir` (the prefix from the
 /// configuration's `dump_filename` when it has one) and converts them.
 pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, GnssSdrError> {
+    import_dir_booked(dir, settings, NcoBookkeeping::Right)
+}
+
+/// [`import_dir`] with the NCO booked as `how` says: the tests' hook for
+/// the deliberately wrong bookkeepings ([`NcoBookkeeping`]).
+#[doc(hidden)]
+pub fn import_dir_booked(dir: &Path, settings: &ImportSettings, how: NcoBookkeeping) -> Result<Imported, GnssSdrError> {
     let prefix = settings
         .tracking
         .dump_filename
@@ -871,7 +899,7 @@ pub fn import_dir(dir: &Path, settings: &ImportSettings) -> Result<Imported, Gns
                 description: dump.layout_description,
             });
         }
-        let (r, t) = import_dump(&dump, settings, tracks.len());
+        let (r, t) = import_dump_booked(&dump, settings, tracks.len(), how);
         rows.extend(r);
         tracks.extend(t);
     }
@@ -1128,7 +1156,7 @@ mod tests {
         let s = settings();
         let recs = records(0, 100, 50, 5, 0.95);
         assert_eq!(track_span(&recs, 0, 1000.0), (150, Some(100)));
-        let track = DumpTrack { records: &recs, synced: Some(100), settings: &s };
+        let track = DumpTrack { records: &recs, synced: Some(100), settings: &s, how: NcoBookkeeping::Right };
         // The middle of each integration: 1 ms before bit synchronization, 20 ms after.
         assert_eq!((track.symbols(99), track.symbols(100)), (1, 20));
         assert!((track.t_mid(0) - 0.0005).abs() < 1e-12 && (track.t_mid(100) - 0.11).abs() < 1e-12);
@@ -1147,7 +1175,7 @@ mod tests {
         let mut s1 = settings();
         s1.tracking.extend_correlation_symbols = 1;
         let recs = records(0, 2500, 0, 5, 0.95);
-        let track = DumpTrack { records: &recs, synced: None, settings: &s1 };
+        let track = DumpTrack { records: &recs, synced: None, settings: &s1, how: NcoBookkeeping::Right };
         assert_eq!(track.first_modelled(), Some(1000));
         assert!(!track.on_lattice(1000) && track.on_lattice(1019) && track.on_lattice(2499));
     }

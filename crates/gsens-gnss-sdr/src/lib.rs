@@ -258,6 +258,7 @@ mod import;
 mod input_phase;
 pub mod mat;
 pub mod monitor;
+pub(crate) mod nco;
 
 pub use calibrate::{Conversion, GnssSdrOutcome, calibrate_gnss_sdr, gnss_sdr_tracking_log, with_gnss_sdr_loop};
 pub use conf::{GnssSdrConf, IqConfOptions, TrackingConf, write_iq_conf};
@@ -267,3 +268,5 @@ pub use import::{
     ImportOverrides, ImportSettings, Imported, TrackFate, import_dir, import_dump, render_tracks, resample,
 };
 pub use input_phase::gnss_sdr_input_phases;
+#[doc(hidden)]
+pub use {import::import_dir_booked, nco::NcoBookkeeping};
