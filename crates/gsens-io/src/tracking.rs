@@ -758,9 +758,12 @@ const JOIN_PARALLEL_ROWS: usize = 1 << 16;
 
 /// The bytes of rows in one chunk of a file read on the fast path: chunks
 /// are parsed at once and joined in file order, so the log does not depend
-/// on how many threads parse them. Large enough that a chunk's own columns
-/// and its join cost little beside its parsing.
-const CHUNK_BYTES: u64 = 8 << 20;
+/// on how many threads parse them. Large enough that a chunk's join costs
+/// little beside its parsing; small enough that a chunk's columns (tens of
+/// kB each for a dozen channels) are memory the allocator hands out again,
+/// not fresh pages mapped and unmapped per chunk (8 MiB chunks cost the
+/// 1-hour log 11 000 more page faults; BENCHMARKS.md).
+const CHUNK_BYTES: u64 = 2 << 20;
 
 /// Chunks parsed at once before they are joined: enough to keep a few
 /// threads busy, few enough that their columns beside the joined log's stay
@@ -1372,6 +1375,27 @@ mod tests {
         assert!(text.len() as u64 >= 2 * CHUNK_BYTES);
         let f = TempFile::new("chunks-large.csv", &text);
         assert_eq!(read_tracking_file(&f.0).unwrap(), read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
+    }
+
+    /// The file's log is the same bit for bit on a pool of one thread and
+    /// on a pool of four: the chunks are cut by the bytes alone.
+    #[test]
+    fn the_log_does_not_depend_on_the_threads() {
+        let text = log_text(HEADER, 120_000, 3, 60_000, 90_000);
+        assert!(text.len() as u64 >= 3 * CHUNK_BYTES, "several chunks per wave");
+        let f = TempFile::new("chunks-threads.csv", &text);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| read_tracking_file(&f.0).unwrap())
+        };
+        let (one, four) = (on(1), on(4));
+        let bits = |log: &TrackingLog| -> Vec<u64> {
+            let columns = log.tracks().iter().flat_map(|t| [&t.t_s, &t.phase_err_rad, &t.cn0_dbhz, &t.elev_deg]);
+            columns.flatten().map(|v| v.to_bits()).collect()
+        };
+        assert_eq!(bits(&one), bits(&four));
+        assert_eq!(one, four);
+        assert_eq!(one, read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
     }
 
     /// What the chunks cannot decide alone is read again by the `csv`
