@@ -1,11 +1,11 @@
 //! `gsens import`: another receiver's logs as gsens's `tracking.csv`.
 
 use crate::args::{ConversionArgs, PocketSdrConversionArgs};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, Subcommand};
 use gsens_gnss_sdr::import_dir;
 use gsens_tui::progress::with_spinner;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub(crate) struct ImportArgs {
@@ -45,26 +45,9 @@ fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
     crate::check_file("--out", Some(&a.out), None)?;
     crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
     let imported = with_spinner("reading the PocketSDR log", || gsens_pocketsdr::import_file(&a.log, &settings))?;
-    crate::out(&gsens_pocketsdr::render_summary(&imported))?;
-    gsens_io::write_tracking_csv(create(&a.out)?, &imported.rows)?;
-    crate::out(&format!(
-        "wrote {} rows → {}; estimate with PocketSDR's loop model: gsens estimate --imu <imu.csv> --pocketsdr {}{} \
-         (b_pll {} Hz, rows = the single 1 ms discriminator output at each epoch)\n",
-        imported.rows.len(),
-        a.out.display(),
-        a.log.display(),
-        a.conversion.pocketsdr_conf.as_ref().map_or(String::new(), |c| format!(" --pocketsdr-conf {}", c.display())),
-        imported.stage.bw_hz
-    ))?;
-    match &a.tracks_json {
-        Some(p) => crate::write(p, serde_json::to_string_pretty(&imported)? + "\n"),
-        None => Ok(()),
-    }
-}
-
-/// A new file at `path`.
-pub(crate) fn create(path: &Path) -> Result<std::fs::File> {
-    std::fs::File::create(path).with_context(|| format!("{}: cannot create", path.display()))
+    let conf = a.conversion.pocketsdr_conf.as_deref();
+    let export = gsens_pocketsdr::Export { log: &a.log, conf, csv: &a.out, tracks_json: a.tracks_json.as_deref() };
+    Ok(export.write(&imported, &mut crate::say, crate::args::flag)?)
 }
 
 /// `gsens import gnss-sdr`.
@@ -104,30 +87,12 @@ pub(crate) fn run(args: &ImportArgs) -> Result<()> {
     crate::check_file("--out", Some(&a.out), None)?;
     crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
     let imported = with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
-    crate::out(&gsens_gnss_sdr::render_tracks(&imported.tracks, imported.interval_s))?;
-    let rows = imported.write_csv(create(&a.out)?, !a.record_times)?;
-    let stage = settings.stage();
-    crate::out(&format!(
-        "wrote {} rows → {}{}; estimate with the GNSS-SDR loop model: gsens estimate --imu <imu.csv> --gnss-sdr {} \
-         --gnss-sdr-conf {} (order {}, Bn {} Hz, {} ms)\n",
-        rows,
-        a.out.display(),
-        if a.record_times {
-            " (times at the middle of each integration; not for gsens estimate --tracking)"
-        } else {
-            " (common grid, for gsens estimate --tracking)"
-        },
-        a.dump_dir.display(),
-        a.conf.as_ref().map_or("<conf>".to_string(), |c| c.display().to_string()),
-        stage.order,
-        stage.bw_hz,
-        stage.symbols
-    ))?;
-    match &a.tracks_json {
-        Some(p) => {
-            let conversion = gsens_gnss_sdr::Conversion { conversion: settings, tracks: imported.tracks };
-            crate::write(p, serde_json::to_string_pretty(&conversion)? + "\n")
-        }
-        None => Ok(()),
-    }
+    let export = gsens_gnss_sdr::Export {
+        dump_dir: &a.dump_dir,
+        conf: a.conf.as_deref(),
+        csv: &a.out,
+        on_common_grid: !a.record_times,
+        tracks_json: a.tracks_json.as_deref(),
+    };
+    Ok(export.write(imported, settings, &mut crate::say, crate::args::flag)?)
 }

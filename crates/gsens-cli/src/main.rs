@@ -97,6 +97,11 @@ pub fn out(text: &str) -> Result<()> {
     Ok(out_bytes(text.as_bytes())?)
 }
 
+/// [`out`] for a library that tells as it goes.
+pub fn say(text: &str) -> std::io::Result<()> {
+    out_bytes(text.as_bytes())
+}
+
 /// [`out`] of bytes.
 pub fn out_bytes(bytes: &[u8]) -> std::io::Result<()> {
     match std::io::stdout().lock().write_all(bytes) {
@@ -125,6 +130,16 @@ pub fn check_dir(flag: &str, path: &Path) -> Result<()> {
 /// Writes `bytes` to the file `path`.
 pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> Result<()> {
     std::fs::write(path, bytes).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// Writes `value` as pretty JSON followed by `end` to the file `path`, when one is given.
+pub fn write_json(path: Option<&Path>, value: &impl serde::Serialize, end: &str) -> Result<()> {
+    path.map_or(Ok(()), |p| write(p, serde_json::to_string_pretty(value)? + end))
+}
+
+/// Writes the figure `image` to the file `path`.
+pub fn write_image(path: &Path, image: gsens_report::figures::Image) -> Result<()> {
+    image.write_to(path).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// glibc's malloc gives each thread that allocates an arena of its own and

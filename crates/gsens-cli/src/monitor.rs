@@ -1,16 +1,11 @@
 //! `gsens import gnss-sdr-monitor`: GNSS-SDR's tracking monitor (UDP,
 //! protobuf), received live, recorded as `tracking.csv`.
 
-use crate::import::create;
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
-use gsens_core::units::Decimal;
-use gsens_gnss_sdr::monitor::{MonitorReceiver, MonitorStream, Notice, Recorder};
-use gsens_live::{NoticeLimit, SystemClock, monitor_setup, render_recorded_tracks};
-use std::io::{BufWriter, Write};
+use gsens_live::{MonitorRecording, SystemClock, monitor_setup};
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// `gsens import gnss-sdr-monitor`.
 #[derive(Args, Debug)]
@@ -43,44 +38,12 @@ pub(crate) fn run(a: &ImportMonitorArgs) -> Result<()> {
     crate::check_file("--out", Some(&a.out), None)?;
     crate::check_file("--raw", a.raw.as_deref(), None)?;
     let setup = monitor_setup(a.gnss_sdr_conf.as_deref(), a.fs_hz, a.settle_s)?;
-    crate::err(setup.note.as_deref().unwrap_or_default());
-    let (settle_s, stage) = (setup.import.settle_time_s(), setup.import.stage());
-    let idle = Duration::from_secs_f64(a.idle_timeout_s);
-    let poll = idle.min(Duration::from_millis(200));
-    let mut rx = MonitorReceiver::bind(a.listen.as_str(), MonitorStream::new(setup.fs_hz, setup.decimation), poll)
-        .with_context(|| format!("{}: cannot listen", a.listen))?;
-    let mut raw = a.raw.as_deref().map(create).transpose()?.map(BufWriter::new);
-    crate::err(&format!("listening on {} (stops after {} s without a datagram)\n", rx.local_addr()?, a.idle_timeout_s));
-    let mut recorder = Recorder::new(setup.decimation);
-    let mut limit = NoticeLimit::default();
-    let mut say = |n: &Notice| crate::err(&limit.line(n).unwrap_or_default());
-    let raw_out = raw.as_mut().map(|w| w as &mut dyn Write);
-    gsens_live::record_monitor(&mut rx, &mut recorder, raw_out, a.idle_timeout_s, &SystemClock::new(), &mut say)?;
-    let counts = &rx.stream.counts;
-    crate::out(&format!("received {}\n", counts.summary()))?;
-    if counts.rows == 0 {
-        bail!(
-            "no tracking row received on {} in the run ({}): is GNSS-SDR's TrackingMonitor.enable_monitor=true with \
-             client_addresses and udp_port pointing here?",
-            a.listen,
-            counts.summary()
-        );
-    }
-    let (grid, tracks) = (recorder.finish(settle_s), recorder.tracks());
-    crate::out(&render_recorded_tracks(&tracks))?;
-    gsens_io::write_tracking_csv(BufWriter::new(create(&a.out)?), &grid)?.flush()?;
-    crate::out(&format!(
-        "wrote {} rows of {} tracks → {} (common {} s grid, the first {:.2} s of each track dropped){}; estimate \
-         with the receiver's loop: gsens estimate --tracking {} --order {} --bn-hz {} --loop-interval-s {}\n",
-        grid.len(),
-        tracks.len(),
-        a.out.display(),
-        Decimal(recorder.interval_s()),
-        settle_s,
-        a.raw.as_ref().map_or(String::new(), |p| format!(", datagrams → {}", p.display())),
-        a.out.display(),
-        stage.order,
-        stage.bw_hz,
-        Decimal(f64::from(stage.symbols) * 1e-3),
-    ))
+    let recording = MonitorRecording {
+        listen: &a.listen,
+        setup,
+        idle_timeout_s: a.idle_timeout_s,
+        out: &a.out,
+        raw: a.raw.as_deref(),
+    };
+    Ok(recording.run(&SystemClock::new(), &mut crate::err, &mut crate::say, crate::args::flag)?)
 }

@@ -4,7 +4,7 @@
 //! the 3σ rule, and the narrowest loop that keeps lock in each case
 //! (`gsens_calib::predict`).
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use gsens_calib::ResultDocument;
 use gsens_calib::option_values::{finite_non_negative, positive};
@@ -118,11 +118,11 @@ pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
     let context = SweepContext { oscillator: &oscillator, feed_forward };
     crate::out(&render_sweep_text(&settings, &sweep, &context))?;
     if let (Some(path), Some(&level)) = (&args.figure, args.levels.last()) {
-        let image = fig_lock_margin_at(&settings, &context, level, Format::of_path(path).unwrap_or(Format::Png))?;
-        image.write_to(path).with_context(|| format!("{}: cannot write", path.display()))?;
+        crate::write_image(
+            path,
+            fig_lock_margin_at(&settings, &context, level, Format::of_path(path).unwrap_or(Format::Png))?,
+        )?;
     }
-    if let Some(path) = &args.json {
-        crate::write(path, serde_json::to_string_pretty(&sweep)?)?;
-    }
+    crate::write_json(args.json.as_deref(), &sweep, "")?;
     Ok(crate::Status::Done)
 }

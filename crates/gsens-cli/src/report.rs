@@ -93,13 +93,8 @@ pub(crate) fn write_report(
         bar.set_message(format!("drawing {id}"))
     })?;
     bar.finish_and_clear();
-    crate::out(&format!("{}\n{}\n", gsens_report::render_text(&doc), files.summary()))?;
-    if files.header.is_none() {
-        crate::err(&format!(
-            "gsens_gamma.h not written: the estimate is not trustworthy ({}); --write-untrusted-header writes it \
-             anyway, marked GSENS_GAMMA_TRUSTWORTHY 0\n",
-            doc.untrusted_codes().join(", ")
-        ));
-    }
+    let (text, no_header) = files.render(&doc, crate::args::flag);
+    crate::out(&text)?;
+    crate::err(no_header.as_deref().unwrap_or_default());
     Ok(crate::Status::of(&doc))
 }

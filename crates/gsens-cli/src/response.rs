@@ -49,9 +49,7 @@ pub(crate) fn run(args: &ResponseArgs, given: &[&str]) -> Result<()> {
             anyhow::bail!("{}: the figure's name must end in .png or .svg", path.display())
         };
         let plot = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, 300, model.to_string())?;
-        fig_response(&plot, format, DEFAULT_SIZE)?
-            .write_to(path)
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        crate::write_image(path, fig_response(&plot, format, DEFAULT_SIZE)?)?;
         crate::out(&format!("figure: {}\n", path.display()))?;
     }
     Ok(())

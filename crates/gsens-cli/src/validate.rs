@@ -3,17 +3,12 @@
 //! carrier NCO at each loop bandwidth asked for, and reports what the
 //! feed-forward does to the g-induced phase error, the slips and the lock.
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use clap::Args;
-use gsens_calib::ResultDocument;
 use gsens_calib::option_values::finite_non_negative;
-use gsens_montecarlo::{
-    ValidateError, calibrate_scenario, default_bandwidths_hz, render_gamma_hat, render_trial_row,
-    render_validate_footer, render_validate_header, validate,
-};
+use gsens_montecarlo::{GammaSource, ValidateError, run_validation};
 use gsens_report::figures::Format;
 use gsens_report::studies::fig_in_the_loop;
-use gsens_sim::compensation::CompensationSection;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -47,45 +42,25 @@ pub(crate) fn run(args: &ValidateArgs) -> Result<crate::Status> {
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--figure", args.figure.as_deref(), None)?;
     let scenario = args.scenario.load()?;
-    let seed = args.scenario.seed;
-    let gamma_hat = match (&args.gamma, &args.from) {
-        (Some(g), _) => <[f64; 3]>::try_from(&g[..])
-            .map_err(|_| anyhow!("--gamma takes three values, as gx,gy,gz (got {})", g.len()))?,
-        (None, Some(path)) => ResultDocument::read_gamma_file(path)?.0,
-        (None, None) => {
-            crate::out(&format!("calibrating on the scenario's session (seed {seed}) …\n"))?;
-            let g = match calibrate_scenario(&scenario, seed) {
-                Err(ValidateError::Untrustworthy(doc)) => bail!(
-                    "the calibration is not trustworthy, so there is no Γ̂ to validate:\n{}",
-                    gsens_report::render_text(&doc)
-                ),
-                g => g?,
-            };
-            crate::out(&render_gamma_hat(g))?;
-            g
-        }
+    let gamma = match (&args.gamma, &args.from) {
+        (Some(g), _) => GammaSource::Stated(g.clone()),
+        (None, Some(path)) => GammaSource::Document(path.clone()),
+        (None, None) => GammaSource::Calibrate,
     };
-    let compensation = CompensationSection { gamma_hz_per_mps2: gamma_hat, latency_s: args.latency_s };
-    let bn_list = args.bn_hz.clone().unwrap_or_else(|| default_bandwidths_hz(&scenario));
-    // A session other than the calibration's: the same Γ̂ on fresh noise.
-    crate::out(&render_validate_header(&scenario, gamma_hat, args.latency_s, seed + 1))?;
     let trials =
-        validate(&scenario, seed + 1, &compensation, &bn_list, |bn, trial| crate::out(&render_trial_row(bn, trial)))
-            .map_err(|e| match e.downcast::<ValidateError>() {
-                Ok(ValidateError::Bandwidth(bn)) => anyhow!("--bn-hz {bn}: must be positive"),
-                Ok(e) => e.into(),
-                Err(e) => e,
+        run_validation(&scenario, args.scenario.seed, &gamma, args.bn_hz.as_deref(), args.latency_s, crate::say)
+            .map_err(|e| match e {
+                ValidateError::Untrustworthy(ref doc) => anyhow!("{e}:\n{}", gsens_report::render_text(doc)),
+                e => crate::args::flagged("", e.setting(), e),
             })?;
-    crate::out(&render_validate_footer())?;
-    if let Some(path) = &args.json {
-        crate::write(path, serde_json::to_string_pretty(&trials)?)?;
-    }
+    crate::write_json(args.json.as_deref(), &trials, "")?;
     if let Some(path) = &args.figure {
         let trace = trials.first().and_then(|t| t.trace.as_ref()).context("no channel to draw")?;
         let format = Format::of_path(path).unwrap_or(Format::Png);
-        fig_in_the_loop(&trace.t_s, &trace.uncompensated_rad, &trace.compensated_rad, format)?
-            .write_to(path)
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        crate::write_image(
+            path,
+            fig_in_the_loop(&trace.t_s, &trace.uncompensated_rad, &trace.compensated_rad, format)?,
+        )?;
     }
     Ok(crate::Status::Done)
 }

@@ -43,6 +43,29 @@ pub enum OutputPathError {
     },
 }
 
+/// A file that could not be made or written.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: cannot {action}", path.display())]
+pub struct FileError {
+    /// The file.
+    pub path: PathBuf,
+    /// What was tried: `create` or `write`.
+    pub action: &'static str,
+    /// Why.
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// The file `path`, made afresh (emptied if it exists).
+pub fn create_file(path: &Path) -> Result<std::fs::File, FileError> {
+    std::fs::File::create(path).map_err(|source| FileError { path: path.to_path_buf(), action: "create", source })
+}
+
+/// Writes `bytes` as the whole file `path`.
+pub fn write_file(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), FileError> {
+    std::fs::write(path, bytes).map_err(|source| FileError { path: path.to_path_buf(), action: "write", source })
+}
+
 /// Whether a new file can be made in `dir` (one is made and removed).
 fn accepts_files(dir: &Path) -> std::io::Result<()> {
     let probe = dir.join(format!(".gsens-write-check-{}", std::process::id()));
@@ -98,6 +121,21 @@ pub fn check_output_file_in(path: &Path, made: Option<&Path>) -> Result<(), Outp
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A file that cannot be made or written is named with what was tried,
+    /// and why follows as the error's source.
+    #[test]
+    fn file_errors_name_the_file_and_what_was_tried() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("no/such/dir/f.csv");
+        let e = create_file(&missing).unwrap_err();
+        assert_eq!(e.to_string(), format!("{}: cannot create", missing.display()));
+        let e = write_file(&missing, "x").unwrap_err();
+        assert_eq!((e.action, e.source.kind()), ("write", std::io::ErrorKind::NotFound));
+        let fine = dir.path().join("f.csv");
+        write_file(&fine, "x").unwrap();
+        assert_eq!(std::fs::read_to_string(&fine).unwrap(), "x");
+    }
 
     #[test]
     fn a_missing_directory_or_a_file_in_the_way_is_named() {

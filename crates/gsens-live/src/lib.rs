@@ -40,6 +40,7 @@ mod monitor_setup;
 mod motion;
 mod pacing;
 mod plain;
+mod recording;
 mod replay;
 mod runtime;
 mod session;
@@ -58,6 +59,7 @@ pub use monitor::{Datagrams, MonitorInput, receive_monitor, record_monitor};
 pub use monitor_setup::{MonitorSetup, NoticeLimit, monitor_setup, render_recorded_tracks};
 pub use motion::{MotionWindow, Shaking};
 pub use pacing::{CreateError, ReplaySink, replay};
+pub use recording::{MonitorRecording, RecordingError};
 pub use replay::read_session_dir;
 pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
 pub use session::{

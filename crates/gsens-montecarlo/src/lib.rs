@@ -30,7 +30,7 @@ mod validate_text;
 pub use demo::{Demo, DemoError, simulate_demo};
 pub use methods::method_settings;
 pub use predict::frequency_noise;
-pub use validate::{ValidateError, calibrate_scenario, default_bandwidths_hz, validate};
+pub use validate::{GammaSource, ValidateError, calibrate_scenario, default_bandwidths_hz, run_validation, validate};
 pub use validate_text::{render_gamma_hat, render_trial_row, render_validate_footer, render_validate_header};
 
 use gsens_calib::{

@@ -117,12 +117,14 @@
 #![deny(missing_docs)]
 
 mod error;
+mod export;
 mod import;
 mod log;
 mod options;
 mod pipeline;
 
 pub use error::PocketSdrError;
+pub use export::{Export, ExportError};
 pub use import::{ImportSettings, Imported, TrackSummary, import_file, import_log, render_summary};
 pub use log::{ChRecord, Garbled, PocketSdrLog, parse_log, read_log};
 pub use options::{PocketSdrOptions, Setting, SettingSource};

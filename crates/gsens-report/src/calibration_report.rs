@@ -46,6 +46,23 @@ impl ReportFiles {
         let beside = if self.header.is_some() { "report.json, gsens_gamma.h" } else { "report.json" };
         format!("report: {} (with {beside} and figures/ beside it)", self.html.display())
     }
+
+    /// What a report of `doc` written as these files tells: its text
+    /// ([`crate::render_text`]) and [`ReportFiles::summary`]; and, when
+    /// the header was not written, why and how to have it anyway (the
+    /// setting `write_untrusted_header` spelled by `option`).
+    pub fn render(&self, doc: &ResultDocument, option: impl Fn(&str) -> String) -> (String, Option<String>) {
+        let text = format!("{}\n{}\n", crate::render_text(doc), self.summary());
+        let no_header = self.header.is_none().then(|| {
+            format!(
+                "gsens_gamma.h not written: the estimate is not trustworthy ({}); {} writes it anyway, marked \
+                 GSENS_GAMMA_TRUSTWORTHY 0\n",
+                doc.untrusted_codes().join(", "),
+                option("write_untrusted_header")
+            )
+        });
+        (text, no_header)
+    }
 }
 
 #[cfg(test)]

@@ -397,3 +397,22 @@ fn text_lists_signals_only_for_mixed_logs() {
     assert!(text.lines().any(|l| l.contains("PRN   5  G1:+1")), "{text}");
     assert!(text.lines().any(|l| l.contains("PRN   4  L1CA")), "{text}");
 }
+
+/// A written report's text is the document's and where the files are;
+/// without a header, a second text says why and names the setting as the
+/// caller spells it.
+#[test]
+fn a_report_without_its_header_says_why() {
+    let doc = document(&session([true, true, false]).calibration, None);
+    let mut files = gsens_report::ReportFiles { html: "out/report.html".into(), header: None };
+    let (text, no_header) = files.render(&doc, |name| format!("<{name}>"));
+    assert_eq!(text, format!("{}\n{}\n", gsens_report::render_text(&doc), files.summary()));
+    let expected = format!(
+        "gsens_gamma.h not written: the estimate is not trustworthy ({}); <write_untrusted_header> writes it \
+         anyway, marked GSENS_GAMMA_TRUSTWORTHY 0\n",
+        doc.untrusted_codes().join(", ")
+    );
+    assert_eq!(no_header.as_deref(), Some(expected.as_str()));
+    files.header = Some("out/gsens_gamma.h".into());
+    assert_eq!(files.render(&doc, |name| name.into()).1, None);
+}
