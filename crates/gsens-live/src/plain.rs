@@ -48,6 +48,12 @@ impl Plain {
     }
 }
 
+/// "loop-free: " before the verdict of an estimate from the input phase (the
+/// line's estimate is otherwise the one through the loop model).
+fn loop_free_label(measurement: gsens_calib::Measurement) -> &'static str {
+    if measurement == gsens_calib::Measurement::InputPhase { "loop-free: " } else { "" }
+}
+
 /// The line of a batch estimate: Γ̂ ± σ per axis, the channels tracking, the verdict.
 fn batch(v: &LiveView, out: &mut dyn Write) -> std::io::Result<()> {
     let axes: Vec<String> = ["x", "y", "z"]
@@ -62,8 +68,8 @@ fn batch(v: &LiveView, out: &mut dyn Write) -> std::io::Result<()> {
         })
         .collect();
     let trust = match (&v.batch, &v.batch_error) {
-        (Some(b), _) if b.trustworthy => format!("{}: trustworthy", b.measurement),
-        (Some(b), _) => format!("{}: NOT TRUSTWORTHY ({})", b.measurement, b.untrusted_codes.join(", ")),
+        (Some(b), _) if b.trustworthy => format!("{}trustworthy", loop_free_label(b.measurement)),
+        (Some(b), _) => format!("{}NOT TRUSTWORTHY ({})", loop_free_label(b.measurement), b.untrusted_codes.join(", ")),
         (None, Some(e)) => format!("no estimate: {e}"),
         (None, None) => String::new(),
     };

@@ -166,11 +166,14 @@ fn measure_against_the_closed_loop_estimate() {
 
 /// Through the pipeline (`CalibrationOptions` → `calibrate_logs` →
 /// `ResultDocument`): a log with the NCO's phase gets the loop-free estimate
-/// beside the one through the loop model. With the right loop they agree;
-/// with a loop stated wrong and taken as exact (bandwidth 2× and the loop
-/// check off) the estimate through the model is off, `loop_free_disagrees`
-/// says so and makes it untrustworthy, and the loop-free estimate is the same
-/// to the last bit: it assumes no loop.
+/// as the document's (measurement `auto`), the one through the loop model
+/// beside it. With the right loop they agree; with a loop stated wrong and
+/// taken as exact (bandwidth 2× and the loop check off) the estimate through
+/// the model is off, `loop_free_disagrees` says so, and the loop-free estimate
+/// is the same to the last bit: it assumes no loop. Asked for the estimate
+/// through the loop model (`tracking_error`), that document is untrustworthy;
+/// the loop-free one is trustworthy where the loop's own response check also
+/// finds the loop at fault, and untrustworthy where nothing else does.
 #[test]
 fn the_pipeline_cross_checks_the_loop_against_the_loop_free_estimate() {
     let logs = session_of("[log]\nnco = true", 5);
@@ -184,17 +187,35 @@ fn the_pipeline_cross_checks_the_loop_against_the_loop_free_estimate() {
         assert!((free.gamma_hz_per_mps2[i] - want[i]).abs() < 3.0 * free.sigma_hz_per_mps2()[i]);
     }
     assert!(!common::codes(&right).contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", right.warnings);
+    assert_eq!(right.measurement, gsens_calib::Measurement::InputPhase);
+    assert_eq!(right.calibration.gamma_hz_per_mps2, free.gamma_hz_per_mps2.map(Some));
+    assert!(right.trustworthy, "{:?}", right.warnings);
 
     let mut wrong_options = common::right_loop();
     wrong_options.receiver_loop.bn_hz = Some(6.0);
     wrong_options.systematic.loop_check = false;
     wrong_options.systematic.loop_tolerance = Some(0.0);
     let wrong = common::estimate(&logs.tracking, &logs.imu, &wrong_options);
-    assert!(common::codes(&wrong).contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", wrong.warnings);
-    assert!(!wrong.trustworthy);
+    let codes = common::codes(&wrong);
+    assert!(codes.contains(&gsens_calib::WarningCode::LoopFreeDisagrees), "{:?}", wrong.warnings);
     let message = common::message(&wrong, gsens_calib::WarningCode::LoopFreeDisagrees);
     assert!(message.contains("believe the loop-free estimate"), "{message}");
     assert_eq!(wrong.loop_free.as_ref().unwrap().estimate.as_ref(), Some(free));
+    assert_eq!(wrong.calibration.gamma_hz_per_mps2, right.calibration.gamma_hz_per_mps2);
+    let loop_flagged = codes.contains(&gsens_calib::WarningCode::LoopResponse);
+    assert_eq!(wrong.trustworthy, loop_flagged, "{:?}", wrong.warnings);
+    wrong_options.measurement = gsens_calib::MeasurementChoice::TrackingError;
+    let wrong_closed = common::estimate(&logs.tracking, &logs.imu, &wrong_options);
+    assert_eq!(wrong_closed.measurement, gsens_calib::Measurement::TrackingError);
+    assert!(!wrong_closed.trustworthy);
+    // Without the loop's own check finding it, the disagreement alone leaves the loop-free
+    // estimate untrustworthy too: the NCO's bookkeeping may as well be at fault.
+    let mut unexplained = wrong.warnings.clone();
+    unexplained.retain(|w| w.code != gsens_calib::WarningCode::LoopResponse);
+    assert!(
+        gsens_calib::untrusted_codes(&unexplained, gsens_calib::Measurement::InputPhase)
+            .contains(&"loop_free_disagrees")
+    );
 
     let without = common::estimate(&common::session(5).tracking, &logs.imu, &common::right_loop());
     assert!(without.loop_free.is_none());

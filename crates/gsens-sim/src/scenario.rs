@@ -358,7 +358,7 @@ impl Default for LogSection {
             phase: LoggedPhase::Mean,
             cn0: Cn0Logged::Estimated,
             drop_unlocked: true,
-            nco: true,
+            nco: false,
         }
     }
 }

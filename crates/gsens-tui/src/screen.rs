@@ -433,12 +433,18 @@ fn draw_channels(buf: &mut Buffer, area: Rect, channels: &[ChannelStatus]) {
     render(buf, area, table);
 }
 
+/// "loop-free " for an estimate from the input phase: the checked estimate
+/// is otherwise the one through the loop model.
+fn loop_free_label(measurement: gsens_calib::Measurement) -> &'static str {
+    if measurement == gsens_calib::Measurement::InputPhase { "loop-free " } else { "" }
+}
+
 fn draw_batch(buf: &mut Buffer, area: Rect, view: &LiveView) {
     if area.is_empty() {
         return;
     }
     let title = match &view.batch {
-        Some(b) => format!(" checked estimate ({}) on data to {:.1} s ", b.measurement, b.data_end_s),
+        Some(b) => format!(" checked {}estimate on data to {:.1} s ", loop_free_label(b.measurement), b.data_end_s),
         None => " checked estimate ".to_string(),
     };
     let block = Block::bordered().title(title);
