@@ -134,8 +134,10 @@ pub struct LoopFreeEstimate {
     /// half a slip or more (a cycle slip: the NCO's phase is off by a half
     /// cycle from then on).
     pub slipped_segments: usize,
-    /// The least-squares residual variance of the channel-averaged,
-    /// detrended input phase at the offset used \[rad²\].
+    /// The residual variance of the prewhitened fit \[rad²\]: the variance of
+    /// what the noise model cannot predict, where a row booked at the wrong
+    /// instant shows (the unwhitened residual is dominated by the
+    /// oscillator's strongly coloured phase noise).
     pub residual_variance_rad2: f64,
     /// The rows' bookkeeping used: the loop's update interval \[s\] and what
     /// a row holds, given or chosen ([`estimate_loop_free_choosing`]).
@@ -228,11 +230,12 @@ pub fn estimate_loop_free(
 /// [`estimate_loop_free`] for a log whose bookkeeping is not known: every
 /// update interval of `loop_intervals_s` that divides the log interval (and
 /// the log interval itself), each with `last` and `mean` rows, estimated in
-/// parallel; the least residual variance wins. A row booked at the wrong
-/// instant leaves the loop's own response to the shaking in θ_NCO + φ
-/// (the combination cancels it only where both are taken at the same
-/// instant), which the residual shows; bookkeepings that differ by less
-/// than that give the same Γ̂ within its σ.
+/// parallel; the least residual variance of the prewhitened fit wins. A
+/// row booked at the wrong instant leaves the loop's own response to the
+/// shaking and to the noise in θ_NCO + φ (the combination cancels it only
+/// where both are taken at the same instant), which the whitened residual
+/// shows; bookkeepings that differ by less than that give the same Γ̂
+/// within its σ.
 pub fn estimate_loop_free_choosing(
     tracking: &TrackingLog,
     imu: &ImuSeries,
@@ -355,7 +358,6 @@ fn fit(
     let x = m.regressors(&regressor, tau);
     let ranges = m.ranges();
     let lag = (2.5 / log_interval_s).ceil() as usize;
-    let residual_variance_rad2 = m.residual_variance(&regressor, tau);
     let fit = gls(&m.phase, &x, &ranges, &GlsSettings { hac_max_lag: Some(lag), ..GlsSettings::default() })
         .ok_or_else(too_few)?;
     let crlb = fit.estimate.covariance;
@@ -373,7 +375,7 @@ fn fit(
         imu_time_offset_s: tau,
         time_offset_searched: searched,
         slipped_segments: m.slipped,
-        residual_variance_rad2,
+        residual_variance_rad2: fit.estimate.residual_variance_rad2,
         loop_interval_s: settings.loop_interval_s,
         logged_phase: if n_window > 1 { LoggedPhase::Mean } else { LoggedPhase::Last },
         bookkeeping_chosen: false,

@@ -253,10 +253,9 @@ impl Outcome {
     /// Makes `calibration` the estimate from the measurement `choice`
     /// resolves to against [`Outcome::loop_free`] (a receiver's adapter that
     /// sets `loop_free` itself calls it again afterwards): for the input
-    /// phase, the loop-free Γ̂ and its covariance take the place of the
-    /// estimate through the loop model
-    /// ([`Calibration::adopt_loop_free`]), which moves to
-    /// [`Outcome::tracking_error`].
+    /// phase, the loop-free Γ̂ and its covariance (statistical, plus the
+    /// IMU's systematic part) take the place of the estimate through the loop
+    /// model, which moves to [`Outcome::tracking_error`].
     pub fn choose_measurement(&mut self, choice: MeasurementChoice) -> Result<(), PipelineError> {
         self.settings.measurement = choice;
         if let Some(closed) = self.tracking_error.take() {

@@ -275,6 +275,25 @@ mod tests {
         w.iter().map(|w| w.code.as_str()).collect()
     }
 
+    /// Through the loop model every trust code counts; from the input phase
+    /// the loop model's own codes do not, and a disagreement between the two
+    /// estimates counts only while nothing else finds the loop at fault.
+    #[test]
+    fn what_counts_against_an_estimate_depends_on_its_measurement() {
+        use crate::Measurement::{InputPhase, TrackingError};
+        let w = |codes: &[WarningCode]| -> Vec<Warning> {
+            codes.iter().map(|&code| Warning { code, message: String::new() }).collect()
+        };
+        let loop_only = w(&[WarningCode::LoopRejected, WarningCode::Highpass, WarningCode::ImuSpikes]);
+        assert_eq!(untrusted_codes(&loop_only, TrackingError), ["loop_rejected", "highpass"]);
+        assert!(untrusted_codes(&loop_only, InputPhase).is_empty());
+        let explained = w(&[WarningCode::LoopResponse, WarningCode::LoopFreeDisagrees]);
+        assert_eq!(untrusted_codes(&explained, TrackingError), ["loop_response", "loop_free_disagrees"]);
+        assert!(untrusted_codes(&explained, InputPhase).is_empty());
+        let unexplained = w(&[WarningCode::LoopFreeDisagrees, WarningCode::PhaseUnits]);
+        assert_eq!(untrusted_codes(&unexplained, InputPhase), ["loop_free_disagrees", "phase_units"]);
+    }
+
     /// The orders the checks raise them in for an IMU stamped in
     /// milliseconds and for both logs so, and a phase in degrees: the unit
     /// first, then the time base and the loop, then the shaking.
