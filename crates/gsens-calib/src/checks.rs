@@ -384,10 +384,19 @@ fn scatter_ratio(
 ///
 /// The loop-predicted g-induced error cannot tell units apart: Γ̂ absorbs the
 /// unit's factor, and nothing else fixes the size of Γ.
+///
+/// The rows' bookkeeping (update interval, last or mean) is the loop
+/// model's, or, for an estimate from the input phase, the loop-free
+/// estimate's (which chooses its own where no loop was stated).
 fn phase_units(outcome: &Outcome, c: &Calibration) -> Option<Warning> {
-    let logged = c.settings.logged_phase;
-    let n = c.model_substeps.max(1);
-    let t_s = c.loop_used.interval_s().unwrap_or(c.log_interval_s / f64::from(n));
+    let mut logged = c.settings.logged_phase;
+    let mut n = c.model_substeps.max(1);
+    let mut t_s = c.loop_used.interval_s().unwrap_or(c.log_interval_s / f64::from(n));
+    if let (crate::Measurement::InputPhase, Some(Ok(free))) = (outcome.measurement, &outcome.loop_free) {
+        logged = free.logged_phase;
+        t_s = free.loop_interval_s;
+        n = ((c.log_interval_s / t_s).round() as u32).max(1);
+    }
     let floor = outcome.session.selection.screening.min_sigma_rad;
     let ratios: Vec<(f64, bool)> =
         outcome.session.channels.iter().filter_map(|ch| scatter_ratio(ch, t_s, n, logged, floor)).collect();
