@@ -146,6 +146,11 @@ pub struct LoopFreeEstimate {
     pub logged_phase: LoggedPhase,
     /// Whether the bookkeeping was chosen by the data.
     pub bookkeeping_chosen: bool,
+    /// RMS of each detrended regressor column \[rad per Hz/(m/s²)\]: the
+    /// phase a unit of Γ along the axis put into the fit, the loop-free
+    /// counterpart of the estimate's excitation RMS (the same threshold
+    /// decides whether the axis is observable).
+    pub excitation_rms: [f64; 3],
 }
 
 impl LoopFreeEstimate {
@@ -356,6 +361,7 @@ fn fit(
     }
     let tau = if searched { m.search_offset(&regressor, offsets, log_interval_s) } else { offsets[0] };
     let x = m.regressors(&regressor, tau);
+    let excitation_rms = [0, 1, 2].map(|i| (x.iter().map(|r| r[i] * r[i]).sum::<f64>() / x.len() as f64).sqrt());
     let ranges = m.ranges();
     let lag = (2.5 / log_interval_s).ceil() as usize;
     let fit = gls(&m.phase, &x, &ranges, &GlsSettings { hac_max_lag: Some(lag), ..GlsSettings::default() })
@@ -379,6 +385,7 @@ fn fit(
         loop_interval_s: settings.loop_interval_s,
         logged_phase: if n_window > 1 { LoggedPhase::Mean } else { LoggedPhase::Last },
         bookkeeping_chosen: false,
+        excitation_rms,
     })
 }
 

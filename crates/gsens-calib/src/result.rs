@@ -125,10 +125,11 @@ impl Calibration {
     /// systematic σ ([`crate::imu_systematic_sigma`] at the new Γ̂) is added
     /// on the diagonal as for any estimate; the compensation figures are
     /// `figures`, computed with the new Γ̂. What describes the data and the
-    /// loop (observability, excitation, the loop check's joint fit, the
-    /// shaking verdicts, the history) stays; the Huber fit and the white σ,
-    /// which belong to the estimate through the loop model, are dropped. An
-    /// axis observable here with no finite loop-free σ becomes unobservable.
+    /// loop (the loop check's joint fit, the shaking verdicts, the history)
+    /// stays; the Huber fit and the white σ, which belong to the estimate
+    /// through the loop model, are dropped. Whether an axis is observable is
+    /// the loop-free estimate's own: its excitation RMS (the detrended
+    /// regressor's) at or above the same threshold, and a finite σ.
     pub(crate) fn adopt_loop_free(
         &mut self,
         free: &crate::LoopFreeEstimate,
@@ -142,13 +143,27 @@ impl Calibration {
             self.settings.imu_misalignment_sigma_rad,
         );
         let ppb = |v: f64| gsens_core::units::hz_per_mps2_to_ppb_per_g(v, self.settings.carrier_hz);
-        let usable: [bool; 3] =
-            [0, 1, 2].map(|i| self.observable[i] && gamma[i].is_finite() && stat[i].is_finite() && stat[i] > 0.0);
+        let min_excitation = self.settings.criteria.min_excitation_rms;
+        let usable: [bool; 3] = [0, 1, 2].map(|i| {
+            free.excitation_rms[i] >= min_excitation && gamma[i].is_finite() && stat[i].is_finite() && stat[i] > 0.0
+        });
         for i in 0..3 {
             if !usable[i] {
                 continue;
             }
             let sigma = stat[i].hypot(sys[i]);
+            if !self.observable[i] {
+                let v = &mut self.axes[i];
+                v.observable = true;
+                v.text = format!(
+                    "{}: observable in the loop-free estimate (excitation RMS {:.2}); through the loop model: {}",
+                    v.axis,
+                    free.excitation_rms[i],
+                    v.text.split_once(": ").map_or(v.text.as_str(), |(_, r)| r)
+                );
+            }
+            self.observable[i] = true;
+            self.excitation_rms[i] = free.excitation_rms[i];
             self.gamma_hz_per_mps2[i] = Some(gamma[i]);
             self.sigma_statistical_hz_per_mps2[i] = Some(stat[i]);
             self.sigma_imu_hz_per_mps2[i] = Some(sys[i]);
@@ -173,8 +188,8 @@ impl Calibration {
         self.rms_g_induced_rad = figures.rms_g_induced_rad;
         self.predicted_peak_phase_err_rad = figures.peak_phase_err_rad;
         for i in 0..3 {
-            if self.observable[i] && !usable[i] {
-                self.make_unobservable(i, "the loop-free estimate has no finite σ on it");
+            if !usable[i] {
+                self.make_unobservable(i, "too little excitation in the loop-free estimate");
             }
         }
     }
