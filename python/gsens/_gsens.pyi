@@ -150,7 +150,7 @@ def montecarlo(
     runs: int = 20,
     seed: int = 1,
     methods: Sequence[str] = ...,
-    stated_bn_scale: Optional[float] = 1.0,
+    stated_bn_scale: Optional[float] = ...,
     overrides: Optional[Mapping[str, Any]] = None,
     **settings: Any,
 ) -> Dict[str, Any]: ...
