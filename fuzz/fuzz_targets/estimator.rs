@@ -84,6 +84,7 @@ impl Options {
             carrier_hz: self.carrier_hz.or(d.carrier_hz),
             method: [MethodName::Batch, MethodName::Gls, MethodName::Rls, MethodName::Gradient]
                 [self.method as usize % 4],
+            measurement: d.measurement,
             receiver_loop: gsens_calib::LoopOptions {
                 order: self.order,
                 bn_hz: self.bn_hz.opt(d.receiver_loop.bn_hz),
