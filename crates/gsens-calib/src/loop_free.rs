@@ -267,11 +267,10 @@ pub fn estimate_loop_free_choosing(
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(k, _)| k);
     match best {
-        Some(k) => {
-            let mut chosen = results[k].clone()?;
+        Some(k) => results.into_iter().nth(k).unwrap_or_else(|| unreachable!("index of a result")).map(|mut chosen| {
             chosen.bookkeeping_chosen = true;
-            Ok(chosen)
-        }
+            chosen
+        }),
         None => results
             .into_iter()
             .next()

@@ -306,35 +306,36 @@ fn loop_free(s: &mut String, doc: &ResultDocument) {
         "θ_NCO + φ, no loop model; {} channel(s), {} segment(s), {} left out for a slip; IMU offset {:+.4} s, {offset}",
         free.tracks, free.segments, free.slipped_segments, free.imu_time_offset_s
     );
-    let truth = doc.truth_gamma_hz_per_mps2;
-    if let (Measurement::InputPhase, Some(closed)) = (doc.measurement, &doc.tracking_error) {
-        let _ = writeln!(s, "\nthe estimate above is the loop-free one ({details})");
-        let _ = writeln!(s, "cross-check, the estimate through the loop model ({}):", doc.calibration.loop_used);
-        for i in 0..3 {
-            let (Some(g), Some(sg)) = (closed.gamma_hz_per_mps2[i], closed.sigma_hz_per_mps2[i]) else {
-                let _ = writeln!(s, "  {}  unobservable", AXES[i]);
-                continue;
-            };
-            let _ = write!(s, "  {}  {g:+.5}  ±{sg:.5}", AXES[i]);
-            if let Some(z) = check.z_difference[i] {
-                let _ = write!(s, "     through the loop − loop-free: {z:+.2}σ");
-            }
-            if let Some(t) = truth {
-                let _ = write!(s, "     error {:+.5} ({:+.2}σ)", g - t[i], (g - t[i]) / sg);
-            }
-            let _ = writeln!(s);
-        }
-        return;
-    }
-    let _ = writeln!(s, "\nloop-free estimate ({details}):");
     let sigma = free.sigma_hz_per_mps2();
-    for i in 0..3 {
-        let (g, sg) = (free.gamma_hz_per_mps2[i], sigma[i]);
+    // The other estimate's rows: the one through the loop model where the loop-free one is above.
+    let (heading, rows, difference): (String, [Option<(f64, f64)>; 3], &str) =
+        match (doc.measurement, &doc.tracking_error) {
+            (Measurement::InputPhase, Some(closed)) => (
+                format!(
+                    "\nthe estimate above is the loop-free one ({details})\ncross-check, the estimate through the loop \
+                     model ({}):",
+                    doc.calibration.loop_used
+                ),
+                [0, 1, 2].map(|i| closed.gamma_hz_per_mps2[i].zip(closed.sigma_hz_per_mps2[i])),
+                "through the loop − loop-free",
+            ),
+            _ => (
+                format!("\nloop-free estimate ({details}):"),
+                [0, 1, 2].map(|i| Some((free.gamma_hz_per_mps2[i], sigma[i]))),
+                "above − loop-free",
+            ),
+        };
+    let _ = writeln!(s, "{heading}");
+    for (i, row) in rows.iter().enumerate() {
+        let Some((g, sg)) = *row else {
+            let _ = writeln!(s, "  {}  unobservable", AXES[i]);
+            continue;
+        };
         let _ = write!(s, "  {}  {g:+.5}  ±{sg:.5}", AXES[i]);
         if let Some(z) = check.z_difference[i] {
-            let _ = write!(s, "     above − loop-free: {z:+.2}σ");
+            let _ = write!(s, "     {difference}: {z:+.2}σ");
         }
-        if let Some(t) = truth {
+        if let Some(t) = doc.truth_gamma_hz_per_mps2 {
             let _ = write!(s, "     error {:+.5} ({:+.2}σ)", g - t[i], (g - t[i]) / sg);
         }
         let _ = writeln!(s);
