@@ -52,5 +52,7 @@ pub use pll::{
     LoopFilterCoeffs, LoopOrderError, LoopSpec, LoopState, ModelLoop, loop_state_space, second_order_bn_from_wn,
     second_order_wn_from_bn, third_order_bn_over_wn,
 };
-pub use regressor::{LoggedPhase, RegressorError, RegressorModel, compensate_interpolation, loop_substeps};
+pub use regressor::{
+    LoggedPhase, RegressorError, RegressorModel, RowQuantity, compensate_interpolation, loop_substeps,
+};
 pub use robust::{HuberWeights, sandwich_covariance};

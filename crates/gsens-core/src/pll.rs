@@ -252,6 +252,29 @@ impl LoopFilterCoeffs {
         -g / (one + g * zi * fd / Complex::new(TAU, 0.0))
     }
 
+    /// Discrete response of the NCO command f_k in force during update k to
+    /// the sequence Δf_k, for the loop of this module's docs \[Hz/Hz\]. The NCO
+    /// accumulates the phase it ran at, so φ = −G(z)·(f + Δf) with
+    /// G(z) = π·T·(z+1)/(z−1) (module docs), hence
+    ///
+    /// ```text
+    /// f/Δf = −1 − L_d(z)/G(z) = −H_d(z)
+    /// ```
+    ///
+    /// which tends to −H(s) = −F/(s + F) ([`Self::closed_loop_continuous`])
+    /// as T → 0: the NCO follows the oscillator's frequency error through the
+    /// closed loop, with the opposite sign.
+    pub fn nco_response_discrete(&self, f_hz: f64, t_s: f64) -> Complex<f64> {
+        let w = TAU * f_hz * t_s;
+        let z = Complex::new(cos(w), sin(w));
+        let one = Complex::new(1.0, 0.0);
+        if f_hz == 0.0 || (z - one).norm_sqr() < 1e-300 {
+            return -self.closed_loop_continuous(0.0);
+        }
+        let g = Complex::new(PI * t_s, 0.0) * (z + one) / (z - one);
+        -one - self.response_discrete(f_hz, t_s) / g
+    }
+
     /// Whether the discrete loop at update interval `t_s` is stable: every
     /// root of the characteristic polynomial of [`DiscretePll`] (the
     /// denominator of L_d(z), multiplied out),
@@ -502,6 +525,11 @@ pub trait LinearLoop {
     fn settle(&mut self, delta_f_hz: f64);
     /// Back to rest.
     fn reset(&mut self);
+    /// The NCO command in force during the next update \[Hz\], without the
+    /// oscillator's bias (what a receiver logs as its NCO frequency, less the
+    /// satellite's carrier): −Δf in the steady state of a constant bias Δf, so
+    /// that the command follows −H\[Δf\], H the closed-loop transfer.
+    fn nco_freq_hz(&self) -> f64;
     /// The loop's state between two updates: with it and the next Δf the
     /// next update is determined. At most [`LOOP_STATE_LEN`] numbers in an
     /// order of the implementation's own; entries it does not use are 0.
@@ -557,6 +585,9 @@ impl LinearLoop for DiscretePll {
     }
     fn reset(&mut self) {
         DiscretePll::reset(self)
+    }
+    fn nco_freq_hz(&self) -> f64 {
+        self.carrier.nco_freq_hz
     }
     /// (e, f, a1, a2): the phase error at the start of the next integration
     /// \[rad\], the NCO command during it \[Hz\], the filter's integrators.
@@ -623,6 +654,13 @@ impl LinearLoop for ModelLoop {
             ModelLoop::Kaplan(p) => p.reset(),
             ModelLoop::GnssSdr(p) => p.reset(),
             ModelLoop::PocketSdr(p) => p.reset(),
+        }
+    }
+    fn nco_freq_hz(&self) -> f64 {
+        match self {
+            ModelLoop::Kaplan(p) => p.nco_freq_hz(),
+            ModelLoop::GnssSdr(p) => p.nco_freq_hz(),
+            ModelLoop::PocketSdr(p) => p.nco_freq_hz(),
         }
     }
     fn state(&self) -> LoopState {

@@ -23,6 +23,18 @@ impl LoggedPhase {
     }
 }
 
+/// What the regressor of a log row models: the row's tracking error, or the
+/// NCO frequency the loop commanded during the row's latest integration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RowQuantity {
+    /// The discriminator output φ, as the row holds it: φ = L\[Δf\].
+    PhaseError(LoggedPhase),
+    /// The NCO command in force during the latest integration (centred on
+    /// the row's stamp) \[Hz\], without the oscillator's bias
+    /// ([`LinearLoop::nco_freq_hz`]): −H\[Δf\], H the closed-loop transfer.
+    NcoFrequency,
+}
+
 /// Errors building a [`RegressorModel`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -105,7 +117,7 @@ impl core::error::Error for RegressorError {}
 pub struct RegressorModel<L = ModelLoop> {
     triad: [L; 3],
     substeps: u32,
-    logged: LoggedPhase,
+    quantity: RowQuantity,
     prev_accel_mps2: Option<[f64; 3]>,
     /// The map of one log interval, when it holds more than one update.
     lifted: Option<LiftedInterval>,
@@ -135,12 +147,12 @@ pub(crate) struct LiftedInterval {
 
 impl LiftedInterval {
     /// The map of `substeps` updates of `model_loop` (its own state is not
-    /// used) whose log row is `logged`.
-    pub(crate) fn of_loop<L: LinearLoop + Clone>(model_loop: &L, substeps: u32, logged: LoggedPhase) -> Self {
+    /// used) whose log row holds `quantity`.
+    pub(crate) fn of_loop<L: LinearLoop + Clone>(model_loop: &L, substeps: u32, quantity: RowQuantity) -> Self {
         let run = |state: LoopState, a_prev: f64, a_cur: f64| {
             let mut l = model_loop.clone();
             l.set_state(&state);
-            let out = interval_updates(&mut l, a_prev, a_cur, substeps, logged);
+            let out = interval_updates(&mut l, a_prev, a_cur, substeps, quantity);
             (l.state(), out)
         };
         let mut phi = [[0.0; LOOP_STATE_LEN]; LOOP_STATE_LEN];
@@ -160,7 +172,7 @@ impl LiftedInterval {
     }
 
     /// Advances `state` over one interval from sample `a_prev` to `a_cur`;
-    /// returns the logged φ.
+    /// returns what the row holds.
     #[inline]
     pub(crate) fn step(&self, state: &mut LoopState, a_prev: f64, a_cur: f64) -> f64 {
         let s = *state;
@@ -183,18 +195,21 @@ impl LiftedInterval {
 /// The n loop updates of one log interval, one at a time, on the linear
 /// interpolation a_prev + (j/n)·(a_cur − a_prev), j = 1…n: the recursion
 /// `LiftedInterval` condenses (and its probe). Returns what the log row holds.
-fn interval_updates<L: LinearLoop>(l: &mut L, a_prev: f64, a_cur: f64, substeps: u32, logged: LoggedPhase) -> f64 {
+fn interval_updates<L: LinearLoop>(l: &mut L, a_prev: f64, a_cur: f64, substeps: u32, quantity: RowQuantity) -> f64 {
     let inv_n = 1.0 / f64::from(substeps);
     let mut sum = 0.0;
     let mut last = 0.0;
+    let mut nco_last_hz = 0.0;
     for j in 1..=substeps {
         let w = f64::from(j) * inv_n;
+        nco_last_hz = l.nco_freq_hz();
         last = l.step(a_prev + w * (a_cur - a_prev));
         sum += last;
     }
-    match logged {
-        LoggedPhase::Last => last,
-        LoggedPhase::Mean => sum * inv_n,
+    match quantity {
+        RowQuantity::PhaseError(LoggedPhase::Last) => last,
+        RowQuantity::PhaseError(LoggedPhase::Mean) => sum * inv_n,
+        RowQuantity::NcoFrequency => nco_last_hz,
     }
 }
 
@@ -237,14 +252,26 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         log_interval_s: f64,
         logged: LoggedPhase,
     ) -> Result<Self, RegressorError> {
+        Self::of_quantity(model_loop, loop_interval_s, log_interval_s, RowQuantity::PhaseError(logged))
+    }
+
+    /// [`RegressorModel::with_loop`] for rows holding `quantity`: with
+    /// [`RowQuantity::NcoFrequency`] each epoch returns −H\[a\] per axis \[Hz
+    /// per Hz/(m/s²)\], the NCO command a unit sensitivity would cause.
+    pub fn of_quantity(
+        model_loop: L,
+        loop_interval_s: f64,
+        log_interval_s: f64,
+        quantity: RowQuantity,
+    ) -> Result<Self, RegressorError> {
         let substeps = loop_substeps(loop_interval_s, log_interval_s)?;
         let mut l = model_loop;
         l.reset();
-        let lifted = (substeps > 1).then(|| LiftedInterval::of_loop(&l, substeps, logged));
+        let lifted = (substeps > 1).then(|| LiftedInterval::of_loop(&l, substeps, quantity));
         Ok(RegressorModel {
             triad: [l.clone(), l.clone(), l],
             substeps,
-            logged,
+            quantity,
             prev_accel_mps2: None,
             lifted,
             states: [[0.0; LOOP_STATE_LEN]; 3],
@@ -283,11 +310,8 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         };
         self.prev_accel_mps2 = Some(*accel_mps2);
         let Some(lifted) = &self.lifted else {
-            return [
-                self.triad[0].step(accel_mps2[0]),
-                self.triad[1].step(accel_mps2[1]),
-                self.triad[2].step(accel_mps2[2]),
-            ];
+            let quantity = self.quantity;
+            return [0, 1, 2].map(|axis| interval_updates(&mut self.triad[axis], 0.0, accel_mps2[axis], 1, quantity));
         };
         [0, 1, 2].map(|axis| lifted.step(&mut self.states[axis], prev[axis], accel_mps2[axis]))
     }
@@ -346,7 +370,7 @@ mod tests {
 
     /// The update-by-update reference: three loops settled on the first
     /// sample, then [`interval_updates`] per epoch.
-    fn by_updates<L: LinearLoop + Clone>(l: &L, n: u32, logged: LoggedPhase, epochs: usize) -> [f64; 3] {
+    fn by_updates<L: LinearLoop + Clone>(l: &L, n: u32, logged: RowQuantity, epochs: usize) -> [f64; 3] {
         let mut triad = [l.clone(), l.clone(), l.clone()];
         let first = accel(0);
         for (pll, a) in triad.iter_mut().zip(first) {
@@ -367,9 +391,14 @@ mod tests {
     }
 
     fn assert_lifted_equals_updates<L: LinearLoop + Clone>(l: L, loop_interval_s: f64, log_interval_s: f64) {
-        for logged in [LoggedPhase::Last, LoggedPhase::Mean] {
+        let quantities = [
+            RowQuantity::PhaseError(LoggedPhase::Last),
+            RowQuantity::PhaseError(LoggedPhase::Mean),
+            RowQuantity::NcoFrequency,
+        ];
+        for logged in quantities {
             let n = libm::round(log_interval_s / loop_interval_s) as u32;
-            let mut model = RegressorModel::with_loop(l.clone(), loop_interval_s, log_interval_s, logged).unwrap();
+            let mut model = RegressorModel::of_quantity(l.clone(), loop_interval_s, log_interval_s, logged).unwrap();
             assert_eq!(model.lifted.is_some(), n > 1);
             let epochs = 4000;
             let want_energy = by_updates(&l, n, logged, epochs);
@@ -399,7 +428,7 @@ mod tests {
             }
             // After reset the model starts again from the first sample's steady state.
             model.reset();
-            let mut fresh = RegressorModel::with_loop(l.clone(), loop_interval_s, log_interval_s, logged).unwrap();
+            let mut fresh = RegressorModel::of_quantity(l.clone(), loop_interval_s, log_interval_s, logged).unwrap();
             for k in 0..3 {
                 assert_eq!(model.epoch(&accel(k)), fresh.epoch(&accel(k)));
             }
@@ -425,7 +454,7 @@ mod tests {
         // Φ = Aⁿ: the state transition of n updates with no input.
         let l = DiscretePll::new(spec(2, 3.0), 0.001);
         let (a, _, _, _) = crate::pll::loop_state_space(&l);
-        let lifted = LiftedInterval::of_loop(&l, 25, LoggedPhase::Last);
+        let lifted = LiftedInterval::of_loop(&l, 25, RowQuantity::PhaseError(LoggedPhase::Last));
         let a_n = a.pow(25);
         for i in 0..LOOP_STATE_LEN {
             for j in 0..LOOP_STATE_LEN {

@@ -117,6 +117,34 @@ fn discrete_response_matches_time_domain_loop() {
     }
 }
 
+/// The NCO command of the time-domain loop answers a sinusoidal Δf as the
+/// z-domain −1 − L_d/G says, and that tends to the continuous −H(s) = −F/(s + F)
+/// as the update interval shrinks.
+#[test]
+fn nco_command_follows_minus_the_closed_loop() {
+    for (c, t_s) in [(paper(), 0.025), (paper(), 0.001), (LoopSpec::third_order_kaplan(5.0).coeffs().unwrap(), 0.02)] {
+        for f_hz in [0.3, 0.9, 3.0] {
+            let mut pll = DiscretePll::new(c, t_s);
+            let span_s = 20.0 / f_hz;
+            let model = c.nco_response_discrete(f_hz, t_s);
+            let nco_in_force = |x: f64| {
+                let f = pll.nco_freq_hz();
+                pll.step(x);
+                f
+            };
+            assert_sinusoid_response(nco_in_force, f_hz, t_s, (30.0, span_s), model, 2e-3, "NCO command");
+        }
+    }
+    let c = paper();
+    for f_hz in [0.3, 0.9, 2.0] {
+        let h = c.closed_loop_continuous(f_hz);
+        // One update of latency: a delay of about T, first order in T.
+        let rel = (c.nco_response_discrete(f_hz, 0.0002) + h).norm() / h.norm();
+        assert!(rel < 5e-3, "{f_hz} Hz: {rel}");
+    }
+    assert_eq!(c.nco_response_discrete(0.0, 0.001).re, -1.0);
+}
+
 #[test]
 fn stability_checks() {
     assert!(paper().is_stable_at(0.001));

@@ -366,6 +366,10 @@ impl LinearLoop for GnssSdrPll {
         self.nco_hz = 0.0;
     }
 
+    fn nco_freq_hz(&self) -> f64 {
+        self.nco_hz
+    }
+
     /// (e, f_prev, w, x): the phase error at the start of the next record
     /// \[rad\], the NCO command during it \[Hz\], the filter's integrators.
     fn state(&self) -> LoopState {

@@ -264,6 +264,10 @@ impl LinearLoop for PocketSdrPll {
         self.prev_cycles = 0.0;
     }
 
+    fn nco_freq_hz(&self) -> f64 {
+        self.nco_hz
+    }
+
     /// (e, f, A, c_{k−1}) of the step's recursion.
     fn state(&self) -> LoopState {
         [self.err_start_rad, self.nco_hz, self.acc_hz_per_s, self.prev_cycles]
