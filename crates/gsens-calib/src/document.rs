@@ -164,8 +164,9 @@ pub struct ResultDocument {
     /// The producing library and version, e.g. `gsens 0.1.0`.
     pub tool: String,
     /// What the estimate is made from: `input_phase` (the loop-free
-    /// estimate, wherever the log holds the NCO's phase) or
-    /// `tracking_error` (through the loop model).
+    /// estimate, wherever the log holds the NCO's phase),
+    /// `tracking_error` (through the loop model) or `nco_frequency` (the
+    /// NCO's frequency through the loop model's closed loop, on request).
     #[serde(default = "tracking_error")]
     pub measurement: Measurement,
     /// The estimate (flattened: its keys are the document's).
@@ -213,6 +214,11 @@ pub struct ResultDocument {
     /// that hold it (`nco_phase_cycles`; PocketSDR's `adr`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loop_free: Option<crate::LoopFreeCheck>,
+    /// The estimate from the NCO's frequency through the loop model's closed
+    /// loop beside this one, for logs that hold it (`nco_freq_hz`), against
+    /// the estimate through the tracking error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nco_frequency: Option<crate::LoopFreeCheck>,
     /// The estimate through the loop model, where the document's estimate
     /// is made from another measurement: the cross-check's other side.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -271,6 +277,10 @@ impl ResultDocument {
             let check = crate::LoopFreeCheck::new(outcome.closed_loop(), loop_free);
             doc.warnings.extend(check.warning());
             doc.loop_free = Some(check);
+        }
+        if let Some(nco_frequency) = &outcome.nco_frequency {
+            doc.nco_frequency =
+                Some(crate::LoopFreeCheck::of(Measurement::NcoFrequency, outcome.closed_loop(), nco_frequency));
         }
         let inputs = crate::checks::input_warnings(outcome, &doc.calibration, &doc.loop_summary);
         doc.warnings.extend(inputs);
@@ -421,6 +431,7 @@ impl ResultDocument {
             source: None,
             report: None,
             loop_free: None,
+            nco_frequency: None,
             tracking_error: None,
         };
         doc.judge();

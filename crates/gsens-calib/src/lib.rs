@@ -62,6 +62,7 @@ pub mod gls;
 mod joint;
 mod loop_free;
 mod measurement;
+mod nco_frequency;
 pub mod option_values;
 mod options;
 mod pipeline;
@@ -93,6 +94,7 @@ pub use loop_free::{
     TrackInputPhase, estimate_loop_free, estimate_loop_free_choosing, estimate_loop_free_from,
 };
 pub use measurement::{Measurement, MeasurementChoice};
+pub use nco_frequency::estimate_nco_frequency;
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,
     TimeOffsetOption,

@@ -170,6 +170,18 @@ pub enum LoopFreeError {
         /// The tracking log's name.
         source_name: String,
     },
+    /// No track of the log has the NCO frequency.
+    #[error("{source_name}: no track has the NCO frequency (column nco_freq_hz), which the estimate from it needs")]
+    NoNcoFrequency {
+        /// The tracking log's name.
+        source_name: String,
+    },
+    /// The loop model the NCO frequency is seen through cannot run.
+    #[error("the loop model cannot run: {why}")]
+    Loop {
+        /// Why.
+        why: String,
+    },
     /// The loop interval is not a whole fraction of the log interval.
     #[error(
         "the log interval ({log_interval_s} s) is not a whole number of loop intervals ({loop_interval_s} s) within 1e-6"
@@ -217,17 +229,9 @@ pub fn estimate_loop_free(
     if tracks.is_empty() {
         return Err(LoopFreeError::NoNcoPhase { source_name: tracking.source_name().to_owned() });
     }
-    let phases = InputPhases {
-        epoch_t_s: epochs.to_vec(),
-        tracks: tracks
-            .iter()
-            .map(|tr| TrackInputPhase {
-                input_phase_rad: input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings),
-                scale_to_l1: tr.carrier.scale_to_l1(),
-                mean_cn0_dbhz: tr.mean_cn0_dbhz(),
-            })
-            .collect(),
-    };
+    let phases = InputPhases::of_tracks(epochs, &tracks, |tr| {
+        input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings)
+    });
     let n_window = if settings.logged_phase == LoggedPhase::Mean { substeps } else { 1 };
     fit(&phases, imu, settings, n_window)
 }
@@ -290,6 +294,43 @@ pub struct InputPhases {
     pub tracks: Vec<TrackInputPhase>,
 }
 
+impl InputPhases {
+    /// Each of `tracks` with its values on `epochs` (`values`), its
+    /// carrier's scale to L1 and its mean C/N0.
+    pub(crate) fn of_tracks(
+        epochs: &[f64],
+        tracks: &[&gsens_io::ChannelTrack],
+        values: impl Fn(&gsens_io::ChannelTrack) -> Vec<Option<f64>>,
+    ) -> Self {
+        InputPhases {
+            epoch_t_s: epochs.to_vec(),
+            tracks: tracks
+                .iter()
+                .map(|tr| TrackInputPhase {
+                    input_phase_rad: values(tr),
+                    scale_to_l1: tr.carrier.scale_to_l1(),
+                    mean_cn0_dbhz: tr.mean_cn0_dbhz(),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The (row, epoch) index pairs of a track's rows that fall on an epoch of
+/// `epochs` (rows of an epoch share its stamp exactly), in order.
+pub(crate) fn rows_on_epochs<'a>(
+    tr: &'a gsens_io::ChannelTrack,
+    epochs: &'a [f64],
+) -> impl Iterator<Item = (usize, usize)> + 'a {
+    let mut e = 0usize;
+    (0..tr.len()).filter_map(move |k| {
+        while e < epochs.len() && epochs[e] < tr.t_s[k] {
+            e += 1;
+        }
+        (e < epochs.len() && epochs[e] == tr.t_s[k]).then_some((k, e))
+    })
+}
+
 /// One track's input phase on [`InputPhases::epoch_t_s`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackInputPhase {
@@ -323,6 +364,40 @@ fn fit(
     settings: &LoopFreeSettings,
     n_window: usize,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
+    let regressor = Regressor {
+        integral: ForceIntegral::new(imu),
+        epochs: &phases.epoch_t_s,
+        n_window,
+        loop_interval_s: settings.loop_interval_s,
+    };
+    // A step of half the smallest slip flags one: the smallest is a half cycle of the discriminator,
+    // 4·max|φ| (π for atan Costas at max|φ| = π/4).
+    let mut estimate = fit_rows(phases, &regressor, settings, 2.0 * settings.max_abs_phase_rad)?;
+    estimate.logged_phase = if n_window > 1 { LoggedPhase::Mean } else { LoggedPhase::Last };
+    Ok(estimate)
+}
+
+/// The regressor of the rows an estimate from the NCO's record fits, read on
+/// the epochs at an IMU time offset τ \[s\].
+pub(crate) trait RowRegressor: Sync {
+    /// Whether the IMU covers what epoch `k`'s value reads at offset `tau`.
+    fn covers(&self, k: usize, tau: f64) -> bool;
+    /// The values at the epochs `at` (ascending, each covered).
+    fn values(&self, at: &[usize], tau: f64) -> Vec<[f64; 3]>;
+}
+
+/// The estimate from per-track values on common epochs (`phases`: the input
+/// phase \[rad\], or any other row quantity the regressor models, in its unit),
+/// regressed on `regressor`: channels chosen, segments detrended, tracks that
+/// step by `slip_step` or more in a segment left out of it (infinite: no
+/// slip test), the IMU offset searched where asked, then GLS under the AR
+/// noise model.
+pub(crate) fn fit_rows(
+    phases: &InputPhases,
+    regressor: &impl RowRegressor,
+    settings: &LoopFreeSettings,
+    slip_step: f64,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
     let epochs = phases.epoch_t_s.as_slice();
     let log_interval_s = median_step(epochs);
     let mut tracks: Vec<&TrackInputPhase> = phases.tracks.iter().collect();
@@ -330,8 +405,6 @@ fn fit(
         tracks.sort_by(|a, b| b.mean_cn0_dbhz.total_cmp(&a.mean_cn0_dbhz));
         tracks.truncate(settings.channels);
     }
-    let regressor =
-        Regressor { integral: ForceIntegral::new(imu), epochs, n_window, loop_interval_s: settings.loop_interval_s };
     let (offsets, searched) = match settings.time_offset {
         crate::TimeOffset::Fixed { imu_time_offset_s } => ([imu_time_offset_s; 2], false),
         crate::TimeOffset::Auto { max_abs_s } => ([-max_abs_s, max_abs_s], true),
@@ -342,24 +415,15 @@ fn fit(
         .collect();
     let inputs: Vec<(&[Option<f64>], f64)> =
         tracks.iter().map(|t| (t.input_phase_rad.as_slice(), t.scale_to_l1)).collect();
-    // A step of half the smallest slip flags one: the smallest is a half cycle of the discriminator,
-    // 4·max|φ| (π for atan Costas at max|φ| = π/4).
     // The slip test compares means of a second of rows (at least 3).
     let slip_window = ((1.0 / log_interval_s).round() as usize).max(3);
-    let m = CommonPhase::assemble(
-        epochs,
-        &usable,
-        &inputs,
-        settings.segment_s,
-        2.0 * settings.max_abs_phase_rad,
-        slip_window,
-    );
+    let m = CommonPhase::assemble(epochs, &usable, &inputs, settings.segment_s, slip_step, slip_window);
     let too_few = || LoopFreeError::TooFewEpochs { epochs: m.phase.len(), segment_s: settings.segment_s };
     if m.phase.len() < 10 {
         return Err(too_few());
     }
-    let tau = if searched { m.search_offset(&regressor, offsets, log_interval_s) } else { offsets[0] };
-    let x = m.regressors(&regressor, tau);
+    let tau = if searched { m.search_offset(regressor, offsets, log_interval_s) } else { offsets[0] };
+    let x = m.regressors(regressor, tau);
     let excitation_rms = [0, 1, 2].map(|i| (x.iter().map(|r| r[i] * r[i]).sum::<f64>() / x.len() as f64).sqrt());
     let ranges = m.ranges();
     let lag = (2.5 / log_interval_s).ceil() as usize;
@@ -382,7 +446,7 @@ fn fit(
         slipped_segments: m.slipped,
         residual_variance_rad2: fit.estimate.residual_variance_rad2,
         loop_interval_s: settings.loop_interval_s,
-        logged_phase: if n_window > 1 { LoggedPhase::Mean } else { LoggedPhase::Last },
+        logged_phase: LoggedPhase::Last,
         bookkeeping_chosen: false,
         excitation_rms,
     })
@@ -403,10 +467,6 @@ impl Regressor<'_> {
         (0..self.n_window).map(move |j| last - j as f64 * self.loop_interval_s)
     }
 
-    fn covers(&self, k: usize, tau: f64) -> bool {
-        self.instants(k, tau).all(|t| self.integral.covers(t))
-    }
-
     fn at(&self, k: usize, tau: f64) -> [f64; 3] {
         let mut sum = [0.0; 3];
         for t in self.instants(k, tau) {
@@ -414,6 +474,16 @@ impl Regressor<'_> {
             (0..3).for_each(|i| sum[i] += v[i]);
         }
         sum.map(|v| -TAU * v / self.n_window as f64)
+    }
+}
+
+impl RowRegressor for Regressor<'_> {
+    fn covers(&self, k: usize, tau: f64) -> bool {
+        self.instants(k, tau).all(|t| self.integral.covers(t))
+    }
+
+    fn values(&self, at: &[usize], tau: f64) -> Vec<[f64; 3]> {
+        at.iter().map(|&k| self.at(k, tau)).collect()
     }
 }
 
@@ -536,10 +606,14 @@ impl CommonPhase {
     }
 
     /// The regressors at offset `tau`, detrended on the same segments.
-    fn regressors(&self, regressor: &Regressor, tau: f64) -> Vec<[f64; 3]> {
+    fn regressors(&self, regressor: &impl RowRegressor, tau: f64) -> Vec<[f64; 3]> {
+        let at: Vec<usize> = self.segments.iter().flat_map(|(at, _)| at.iter().copied()).collect();
+        let raw = regressor.values(&at, tau);
         let mut out = Vec::with_capacity(self.phase.len());
+        let mut start = 0;
         for (at, basis) in &self.segments {
-            let raw: Vec<[f64; 3]> = at.iter().map(|&k| regressor.at(k, tau)).collect();
+            let raw = &raw[start..start + at.len()];
+            start += at.len();
             let columns: [Vec<f64>; 3] =
                 [0, 1, 2].map(|i| basis.residual(&raw.iter().map(|r| r[i]).collect::<Vec<_>>()));
             out.extend((0..at.len()).map(|j| [columns[0][j], columns[1][j], columns[2][j]]));
@@ -548,7 +622,7 @@ impl CommonPhase {
     }
 
     /// The least-squares residual variance at offset `tau`.
-    fn residual_variance(&self, regressor: &Regressor, tau: f64) -> f64 {
+    fn residual_variance(&self, regressor: &impl RowRegressor, tau: f64) -> f64 {
         let mut ne = gsens_core::NormalEquations::default();
         for (row, y) in self.regressors(regressor, tau).iter().zip(&self.phase) {
             ne.add(*y, row);
@@ -560,7 +634,7 @@ impl CommonPhase {
     /// interval apart, then golden-section refinement between the best
     /// point's neighbours to a thousandth of the log interval (the residual
     /// is smooth in τ: a shaking period spans tens of grid steps).
-    fn search_offset(&self, regressor: &Regressor, range: [f64; 2], log_interval_s: f64) -> f64 {
+    fn search_offset(&self, regressor: &impl RowRegressor, range: [f64; 2], log_interval_s: f64) -> f64 {
         let n = ((range[1] - range[0]) / (log_interval_s / 2.0)).ceil().max(1.0) as usize;
         let grid: Vec<f64> = (0..=n).map(|j| range[0] + (range[1] - range[0]) * j as f64 / n as f64).collect();
         let cost = |tau: f64| self.residual_variance(regressor, tau);
@@ -585,7 +659,7 @@ impl CommonPhase {
     }
 }
 
-fn check_settings(s: &LoopFreeSettings) -> Result<(), LoopFreeError> {
+pub(crate) fn check_settings(s: &LoopFreeSettings) -> Result<(), LoopFreeError> {
     let positive = |name, value: f64| {
         if value > 0.0 && value.is_finite() {
             Ok(())
@@ -621,7 +695,7 @@ fn check_settings(s: &LoopFreeSettings) -> Result<(), LoopFreeError> {
 
 /// The median spacing of the stamps (the high median: one of the spacings;
 /// NaN for fewer than two stamps).
-fn median_step(t_s: &[f64]) -> f64 {
+pub(crate) fn median_step(t_s: &[f64]) -> f64 {
     let mut steps: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
     gsens_core::stats::median_high_in_place(&mut steps)
 }
@@ -659,15 +733,7 @@ fn input_phase_on_epochs(
     // Rows j and j + 1 are one log interval apart (no gap between them).
     let next_is_adjacent =
         |j: usize| j + 1 < tr.len() && ((tr.t_s[j + 1] - tr.t_s[j]) - log_interval_s).abs() < 0.1 * log_interval_s;
-    let mut e = 0usize;
-    for k in 0..tr.len() {
-        // Rows of an epoch share its stamp exactly.
-        while e < epochs.len() && epochs[e] < tr.t_s[k] {
-            e += 1;
-        }
-        if e == epochs.len() || epochs[e] != tr.t_s[k] {
-            continue;
-        }
+    for (k, e) in rows_on_epochs(tr, epochs) {
         if tr.t_s[k] < tr.t_s[0] + settings.warmup_s || tr.phase_err_rad[k].abs() > settings.max_abs_phase_rad {
             continue;
         }
@@ -952,7 +1018,17 @@ impl LoopFreeCheck {
     /// The check of `calibration` (the estimate through the loop model)
     /// against `loop_free`.
     pub fn new(calibration: &crate::Calibration, loop_free: &Result<LoopFreeEstimate, LoopFreeError>) -> Self {
-        let (estimate, error) = match loop_free {
+        Self::of(Measurement::InputPhase, calibration, loop_free)
+    }
+
+    /// The check of `calibration` against `other`, an estimate from
+    /// `measurement` (the NCO's phase or frequency).
+    pub fn of(
+        measurement: Measurement,
+        calibration: &crate::Calibration,
+        other: &Result<LoopFreeEstimate, LoopFreeError>,
+    ) -> Self {
+        let (estimate, error) = match other {
             Ok(e) => (Some(e.clone()), None),
             Err(e) => (None, Some(e.to_string())),
         };
@@ -962,7 +1038,7 @@ impl LoopFreeCheck {
             let joint = s.hypot(free.sigma_hz_per_mps2()[i]);
             (joint > 0.0 && joint.is_finite()).then(|| (g - free.gamma_hz_per_mps2[i]) / joint)
         });
-        LoopFreeCheck { measurement: Measurement::InputPhase, estimate, error, z_difference }
+        LoopFreeCheck { measurement, estimate, error, z_difference }
     }
 
     /// |z| beyond which the estimates disagree: Φ⁻¹(1 − α/6) = 3.59 for

@@ -242,6 +242,11 @@ pub struct Outcome {
     /// The loop-free estimate from the NCO's phase ([`crate::estimate_loop_free`]),
     /// for a tracking log that holds it; `None` for one that does not.
     pub loop_free: Option<Result<crate::LoopFreeEstimate, crate::LoopFreeError>>,
+    /// The estimate from the NCO's frequency through the loop model's closed
+    /// loop ([`crate::estimate_nco_frequency`], with the loop the estimate
+    /// through the loop model settled on), for a tracking log that holds it;
+    /// `None` for one that does not.
+    pub nco_frequency: Option<Result<crate::LoopFreeEstimate, crate::LoopFreeError>>,
 }
 
 impl Outcome {
@@ -262,14 +267,21 @@ impl Outcome {
             self.calibration = closed;
             self.measurement = Measurement::TrackingError;
         }
-        let chosen = choice.resolve(self.loop_free.as_ref()).map_err(|why| PipelineError::Measurement { why })?;
-        if let (Measurement::InputPhase, Some(Ok(free))) = (chosen, &self.loop_free) {
+        let chosen = choice
+            .resolve(self.loop_free.as_ref(), self.nco_frequency.as_ref())
+            .map_err(|why| PipelineError::Measurement { why })?;
+        let direct = match chosen {
+            Measurement::InputPhase => self.loop_free.as_ref(),
+            Measurement::NcoFrequency => self.nco_frequency.as_ref(),
+            _ => None,
+        };
+        if let Some(Ok(estimate)) = direct {
             let mut adopted = self.calibration.clone();
             let series = series_of(&self.session);
-            let figures = crate::estimate::residual_figures(&series, &adopted.settings, &free.gamma_hz_per_mps2)?;
-            adopted.adopt_loop_free(free, figures);
+            let figures = crate::estimate::residual_figures(&series, &adopted.settings, &estimate.gamma_hz_per_mps2)?;
+            adopted.adopt_direct(chosen, estimate, figures);
             self.tracking_error = Some(std::mem::replace(&mut self.calibration, adopted));
-            self.measurement = Measurement::InputPhase;
+            self.measurement = chosen;
         }
         Ok(())
     }
@@ -368,8 +380,11 @@ fn calibrate_prepared(
     let PreparedImu { despiked, spikes_t_s, flat_runs } = imu;
     let imu = &despiked;
     // A log with the NCO's phase is kept for the loop-free estimate, which reads every track's rows.
-    let nco_log =
-        tracking.tracks().iter().any(|t| !t.nco_phase_cycles.is_empty()).then(|| tracking.clone().into_owned());
+    let nco_log = tracking
+        .tracks()
+        .iter()
+        .any(|t| !t.nco_phase_cycles.is_empty() || !t.nco_freq_hz.is_empty())
+        .then(|| tracking.clone().into_owned());
     // The session holds what the estimate needs of the log; a log given to
     // the pipeline is freed as soon as its rows are taken.
     crate::progress::stage("preparing the session", None);
@@ -404,16 +419,22 @@ fn calibrate_prepared(
         joint = Some(fit);
     }
     let loop_free_settings = loop_free_settings(settings, &estimate, session.log_interval_s);
-    let (closed_loop, loop_free) = rayon::join(
+    let receiver_loop = estimate.loop_at(session.log_interval_s);
+    let (closed_loop, (loop_free, nco_frequency)) = rayon::join(
         || estimate_and_check_response(&session, &estimate, joint),
         || {
-            nco_log.map(|log| match settings.loop_stated {
-                true => crate::estimate_loop_free(&log, imu, &loop_free_settings),
+            let Some(log) = nco_log.as_ref() else { return (None, None) };
+            let has = |column: fn(&gsens_io::ChannelTrack) -> bool| log.tracks().iter().any(column);
+            let loop_free = has(|t| !t.nco_phase_cycles.is_empty()).then(|| match settings.loop_stated {
+                true => crate::estimate_loop_free(log, imu, &loop_free_settings),
                 // Nothing stated of the loop: the rows' bookkeeping is the data's choice too.
                 false => {
-                    crate::estimate_loop_free_choosing(&log, imu, &loop_free_settings, &crate::TYPICAL_LOOP_INTERVALS_S)
+                    crate::estimate_loop_free_choosing(log, imu, &loop_free_settings, &crate::TYPICAL_LOOP_INTERVALS_S)
                 }
-            })
+            });
+            let nco_frequency = has(|t| !t.nco_freq_hz.is_empty())
+                .then(|| crate::estimate_nco_frequency(log, imu, &loop_free_settings, &receiver_loop));
+            (loop_free, nco_frequency)
         },
     );
     let (calibration, loop_response) = closed_loop?;
@@ -431,6 +452,7 @@ fn calibrate_prepared(
         imu_flat_run_epochs: flat_run_epochs,
         inputs: Vec::new(),
         loop_free,
+        nco_frequency,
     };
     outcome.choose_measurement(settings.measurement)?;
     Ok(outcome)

@@ -120,21 +120,28 @@ impl Calibration {
         Ok((gamma, cov))
     }
 
-    /// Makes the loop-free estimate this calibration's: Γ̂, its statistical
+    /// Makes an estimate from the NCO's record this calibration's (the
+    /// loop-free one from its phase, or the one from its frequency, as
+    /// `measurement` says): Γ̂, its statistical
     /// covariance and bound, and the IMU offset are `free`'s; the IMU's
     /// systematic σ ([`crate::imu_systematic_sigma`] at the new Γ̂) is added
     /// on the diagonal as for any estimate; the compensation figures are
     /// `figures`, computed with the new Γ̂. What describes the data and the
     /// loop (the loop check's joint fit, the shaking verdicts, the history)
     /// stays; the Huber fit and the white σ, which belong to the estimate
-    /// through the loop model, are dropped. Whether an axis is observable is
-    /// the loop-free estimate's own: its excitation RMS (the detrended
+    /// through the tracking error, are dropped. Whether an axis is observable
+    /// is the new estimate's own: its excitation RMS (the detrended
     /// regressor's) at or above the same threshold, and a finite σ.
-    pub(crate) fn adopt_loop_free(
+    pub(crate) fn adopt_direct(
         &mut self,
+        measurement: crate::Measurement,
         free: &crate::LoopFreeEstimate,
         figures: crate::estimate::ResidualFigures,
     ) {
+        let estimate_name = match measurement {
+            crate::Measurement::NcoFrequency => "the estimate from the NCO frequency",
+            _ => "the loop-free estimate",
+        };
         let gamma = free.gamma_hz_per_mps2;
         let stat = free.sigma_hz_per_mps2();
         let sys = crate::imu_systematic_sigma(
@@ -156,7 +163,7 @@ impl Calibration {
                 let v = &mut self.axes[i];
                 v.observable = true;
                 v.text = format!(
-                    "{}: observable in the loop-free estimate (excitation RMS {:.2}); through the loop model: {}",
+                    "{}: observable in {estimate_name} (excitation RMS {:.2}); through the tracking error: {}",
                     v.axis,
                     free.excitation_rms[i],
                     v.text.split_once(": ").map_or(v.text.as_str(), |(_, r)| r)
@@ -189,7 +196,7 @@ impl Calibration {
         self.predicted_peak_phase_err_rad = figures.peak_phase_err_rad;
         for i in 0..3 {
             if !usable[i] {
-                self.make_unobservable(i, "too little excitation in the loop-free estimate");
+                self.make_unobservable(i, &format!("too little excitation in {estimate_name}"));
             }
         }
     }

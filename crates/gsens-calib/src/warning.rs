@@ -257,7 +257,8 @@ pub fn untrusted_codes(warnings: &[Warning], measurement: crate::Measurement) ->
     use WarningCode::*;
     let loop_at_fault = warnings.iter().any(|w| matches!(w.code, LoopNotStated | LoopRejected | LoopResponse));
     let counts = |code: WarningCode| match measurement {
-        crate::Measurement::TrackingError => code.affects_trust(),
+        // The NCO frequency is seen through the loop model as the tracking error is.
+        crate::Measurement::TrackingError | crate::Measurement::NcoFrequency => code.affects_trust(),
         crate::Measurement::InputPhase if code == LoopFreeDisagrees => !loop_at_fault,
         crate::Measurement::InputPhase => code.affects_trust() && !code.concerns_the_loop_model(),
     };

@@ -223,6 +223,11 @@ pub fn method_stats(runs: &[Run], j: usize) -> MethodStats {
 /// depend on the method) wherever the scenario logs the NCO's phase.
 pub const LOOP_FREE: &str = "loop-free";
 
+/// The name of the row of the estimate from the NCO's frequency through the
+/// methods' loop model ([`gsens_calib::estimate_nco_frequency`]), made once
+/// per run beside [`LOOP_FREE`] wherever the scenario logs the NCO.
+pub const NCO_FREQUENCY: &str = "nco-frequency";
+
 /// A method's result in a run from its `outcome` and the run's `truth`
 /// (`true_fn_hz`: the scenario loop's ωn/2π).
 fn method_run(outcome: &Outcome, truth: &gsens_sim::session::Truth, true_fn_hz: Option<f64>) -> MethodRun {
@@ -246,8 +251,9 @@ fn method_run(outcome: &Outcome, truth: &gsens_sim::session::Truth, true_fn_hz: 
 
 /// Simulates run `seed` into memory and calibrates it with each of `methods`
 /// (pipeline settings, one per method), as `gsens estimate` would the files;
-/// where the scenario logs the NCO's phase, the loop-free estimate follows
-/// as one more row ([`LOOP_FREE`]), judged as the document that presents it.
+/// where the scenario logs the NCO, the estimates from its phase and its
+/// frequency follow as two more rows ([`LOOP_FREE`], [`NCO_FREQUENCY`]), each
+/// judged as the document that presents it.
 pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> Result<Run, MonteCarloError> {
     let logs = simulate_logs(scenario, seed).map_err(|source| MonteCarloError::Simulation { seed, source })?;
     let (tracking, imu, truth) = (&logs.tracking, &logs.imu, &logs.truth);
@@ -259,7 +265,7 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
         .and_then(|c| gsens_core::LoopSpec::Coefficients(c).wn_rad_per_s())
         .map(|wn| wn / std::f64::consts::TAU);
     let mut results = Vec::with_capacity(methods.len() + 1);
-    let mut loop_free = None;
+    let mut from_the_nco: Vec<MethodOutcome> = Vec::new();
     for settings in methods {
         let method = method_name(&settings.estimate.method);
         let mut outcome = match calibrate_logs(tracking, imu, &imu_name, settings) {
@@ -270,18 +276,20 @@ pub fn run_one(scenario: &Scenario, seed: u64, methods: &[PipelineSettings]) -> 
             }
         };
         results.push(MethodOutcome { method, result: Some(method_run(&outcome, truth, true_fn_hz)), error: None });
-        if loop_free.is_none() && scenario.log.nco {
-            loop_free = Some(match outcome.choose_measurement(MeasurementChoice::InputPhase) {
-                Ok(()) => MethodOutcome {
-                    method: LOOP_FREE,
-                    result: Some(method_run(&outcome, truth, true_fn_hz)),
-                    error: None,
-                },
-                Err(e) => MethodOutcome { method: LOOP_FREE, result: None, error: Some(e.to_string()) },
-            });
+        if from_the_nco.is_empty() && scenario.log.nco {
+            for (method, choice) in
+                [(LOOP_FREE, MeasurementChoice::InputPhase), (NCO_FREQUENCY, MeasurementChoice::NcoFrequency)]
+            {
+                from_the_nco.push(match outcome.choose_measurement(choice) {
+                    Ok(()) => {
+                        MethodOutcome { method, result: Some(method_run(&outcome, truth, true_fn_hz)), error: None }
+                    }
+                    Err(e) => MethodOutcome { method, result: None, error: Some(e.to_string()) },
+                });
+            }
         }
     }
-    results.extend(loop_free);
+    results.extend(from_the_nco);
     Ok(Run {
         seed,
         gamma_hz_per_mps2: truth.sensitivity.gamma_hz_per_mps2,
@@ -308,8 +316,8 @@ pub struct MonteCarlo {
     pub stated_bn_scale: Option<f64>,
     /// The method whose largest RMSE/CRLB over the axes is smallest.
     pub best_method: Option<String>,
-    /// Statistics per method, in the order given, then the loop-free
-    /// estimate's ([`LOOP_FREE`]) where the scenario logs the NCO's phase.
+    /// Statistics per method, in the order given, then the estimates' from
+    /// the NCO ([`LOOP_FREE`], [`NCO_FREQUENCY`]) where the scenario logs it.
     #[serde(serialize_with = "ser_stats")]
     pub methods: Vec<(&'static str, MethodStats)>,
     /// Every run's estimates.
@@ -402,6 +410,7 @@ pub fn monte_carlo(
         methods.iter().enumerate().map(|(j, m)| (method_name(&m.estimate.method), method_stats(&per_run, j))).collect();
     if scenario.log.nco {
         stats.push((LOOP_FREE, method_stats(&per_run, methods.len())));
+        stats.push((NCO_FREQUENCY, method_stats(&per_run, methods.len() + 1)));
     }
     let worst = |s: &MethodStats| s.rmse_over_crlb.iter().fold(0.0f64, |a, &b| a.max(b));
     // The first method within 1e-6 of the smallest worst axis (RLS with λ = 1

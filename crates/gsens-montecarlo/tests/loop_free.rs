@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{session_of, truth};
+use common::{assert_calibrated, session_of, truth};
 use gsens_calib::{LoopFreeError, LoopFreeSettings, estimate_loop_free};
 use gsens_core::LoggedPhase;
 
@@ -27,14 +27,6 @@ fn log_phase(settings: LoopFreeSettings) -> &'static str {
         LoggedPhase::Mean => "phase = \"mean\"",
         LoggedPhase::Last => "phase = \"last\"",
     }
-}
-
-/// E[z²] = 1, with standard error √(2/n) for n independent standard normal z.
-fn assert_calibrated(z: &[f64]) {
-    let mean_z2 = z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64;
-    let se = (2.0 / z.len() as f64).sqrt();
-    eprintln!("mean z² = {mean_z2:.3} over {} axis estimates (3 SE = {:.3})", z.len(), 3.0 * se);
-    assert!((mean_z2 - 1.0).abs() < 3.0 * se, "mean z² = {mean_z2} over {} (3 SE = {}): {z:?}", z.len(), 3.0 * se);
 }
 
 /// The paper's session (2nd-order 3 Hz loop at 1 ms, rows the mean of 25

@@ -25,11 +25,15 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         Some(k) => format!("the receiver's loop stated with {k} times its bandwidth"),
         None => "no receiver loop stated (the data choose it)".to_string(),
     };
-    let loop_free = if stats.iter().any(|(n, _)| *n == gsens_montecarlo::LOOP_FREE) {
-        format!("; {}: the input phase θ_NCO + φ, no loop model", gsens_montecarlo::LOOP_FREE)
-    } else {
-        String::new()
-    };
+    let has = |row: &str| stats.iter().any(|(n, _)| *n == row);
+    let mut loop_free = String::new();
+    if has(gsens_montecarlo::LOOP_FREE) {
+        loop_free += &format!("; {}: the input phase θ_NCO + φ, no loop model", gsens_montecarlo::LOOP_FREE);
+    }
+    if has(gsens_montecarlo::NCO_FREQUENCY) {
+        loop_free +=
+            &format!("; {}: the NCO frequency through the loop model's closed loop", gsens_montecarlo::NCO_FREQUENCY);
+    }
     let _ = writeln!(s_, "methods: the tracking error through the loop model, {stated}{loop_free}");
     let _ = writeln!(
         s_,

@@ -23,7 +23,7 @@ pub fn render_text(doc: &ResultDocument) -> String {
         let _ = writeln!(s, "{}", r.summary());
     }
     estimate_table(&mut s, doc);
-    loop_free(&mut s, doc);
+    nco_estimates(&mut s, doc);
     shaking(&mut s, doc);
     compensation(&mut s, doc);
     let _ = writeln!(s, "\n{}", verdict_line(doc));
@@ -129,8 +129,9 @@ fn channels(s: &mut String, doc: &ResultDocument) {
 /// The estimator, its robust weighting if any, and the IMU time offset.
 fn method(s: &mut String, doc: &ResultDocument) {
     let c = &doc.calibration;
-    if doc.measurement == Measurement::InputPhase {
-        let _ = writeln!(s, "method: generalized least squares, an AR noise model per segment (loop-free)");
+    if doc.measurement != Measurement::TrackingError {
+        let what = if doc.measurement == Measurement::InputPhase { "loop-free" } else { "NCO frequency through H" };
+        let _ = writeln!(s, "method: generalized least squares, an AR noise model per segment ({what})");
         let how = if c.imu_time_offset_estimated { "searched" } else { "given" };
         let _ = writeln!(s, "IMU time offset: {:+.4} s, {how}", c.imu_time_offset_s);
         return;
@@ -243,7 +244,7 @@ fn estimate_table(s: &mut String, doc: &ResultDocument) {
     let c = &doc.calibration;
     let truth = doc.truth_gamma_hz_per_mps2;
     let head = if truth.is_some() { "      truth       error" } else { "" };
-    if doc.measurement == Measurement::InputPhase {
+    if doc.measurement != Measurement::TrackingError {
         let _ = write!(s, "\nestimate from {}:", doc.measurement.description());
     }
     let _ = writeln!(s, "\n     Γ̂ [Hz/(m/s²)]      1σ        Γ̂ [ppb/g]     1σ{head}");
@@ -290,39 +291,59 @@ fn estimate_table(s: &mut String, doc: &ResultDocument) {
     }
 }
 
-/// The loop-free estimate from the NCO's phase, for logs that hold it: what
-/// went into it, and either its Γ̂ with its σ per axis beside the estimate
-/// through the loop model above, or, where it is the estimate above, the
-/// estimate through the loop model as the cross-check.
-fn loop_free(s: &mut String, doc: &ResultDocument) {
-    let Some(check) = &doc.loop_free else { return };
+/// The estimates from the NCO's record, for logs that hold it: the
+/// loop-free one from its phase, then the one from its frequency.
+fn nco_estimates(s: &mut String, doc: &ResultDocument) {
+    for check in [&doc.loop_free, &doc.nco_frequency].into_iter().flatten() {
+        nco_estimate(s, doc, check);
+    }
+}
+
+/// One estimate from the NCO's record: what went into it, and either its Γ̂
+/// with its σ per axis beside the estimate above, or, where it is the
+/// estimate above, the estimate through the loop model as the cross-check.
+fn nco_estimate(s: &mut String, doc: &ResultDocument, check: &gsens_calib::LoopFreeCheck) {
+    let (name, short) = match check.measurement {
+        Measurement::NcoFrequency => ("estimate from the NCO frequency", "NCO frequency"),
+        _ => ("loop-free estimate", "loop-free"),
+    };
     let Some(free) = &check.estimate else {
-        let _ =
-            writeln!(s, "\nloop-free estimate (from the NCO's phase): none: {}", check.error.as_deref().unwrap_or("?"));
+        let source = if check.measurement == Measurement::NcoFrequency { "" } else { " (from the NCO's phase)" };
+        let _ = writeln!(s, "\n{name}{source}: none: {}", check.error.as_deref().unwrap_or("?"));
         return;
     };
     let offset = if free.time_offset_searched { "searched" } else { "given" };
-    let details = format!(
-        "θ_NCO + φ, no loop model; {} channel(s), {} segment(s), {} left out for a slip; IMU offset {:+.4} s, {offset}",
-        free.tracks, free.segments, free.slipped_segments, free.imu_time_offset_s
-    );
+    let details = match check.measurement {
+        Measurement::NcoFrequency => format!(
+            "f_NCO through the loop model's closed loop H; {} channel(s), {} segment(s); IMU offset {:+.4} s, {offset}",
+            free.tracks, free.segments, free.imu_time_offset_s
+        ),
+        _ => format!(
+            "θ_NCO + φ, no loop model; {} channel(s), {} segment(s), {} left out for a slip; IMU offset {:+.4} s, \
+             {offset}",
+            free.tracks, free.segments, free.slipped_segments, free.imu_time_offset_s
+        ),
+    };
     let sigma = free.sigma_hz_per_mps2();
-    // The other estimate's rows: the one through the loop model where the loop-free one is above.
-    let (heading, rows, difference): (String, [Option<(f64, f64)>; 3], &str) =
-        match (doc.measurement, &doc.tracking_error) {
-            (Measurement::InputPhase, Some(closed)) => (
+    // The other estimate's rows: the one through the loop model where this one is above.
+    let (heading, rows, difference): (String, [Option<(f64, f64)>; 3], String) =
+        match (doc.measurement == check.measurement, &doc.tracking_error) {
+            (true, Some(closed)) => (
                 format!(
-                    "\nthe estimate above is the loop-free one ({details})\ncross-check, the estimate through the loop \
+                    "\nthe estimate above is the {short} one ({details})\ncross-check, the estimate through the loop \
                      model ({}):",
                     doc.calibration.loop_used
                 ),
                 [0, 1, 2].map(|i| closed.gamma_hz_per_mps2[i].zip(closed.sigma_hz_per_mps2[i])),
-                "through the loop − loop-free",
+                format!("through the loop − {short}"),
             ),
             _ => (
-                format!("\nloop-free estimate ({details}):"),
+                format!("\n{name} ({details}):"),
                 [0, 1, 2].map(|i| Some((free.gamma_hz_per_mps2[i], sigma[i]))),
-                "above − loop-free",
+                match doc.measurement {
+                    Measurement::TrackingError => format!("above − {short}"),
+                    _ => format!("through the loop − {short}"),
+                },
             ),
         };
     let _ = writeln!(s, "{heading}");
@@ -389,8 +410,8 @@ fn compensation(s: &mut String, doc: &ResultDocument) {
             b[1],
             b[2],
             match doc.measurement {
-                Measurement::InputPhase => "an AR model per segment".to_string(),
-                _ => format!("AR({}) model", c.noise_ar_order),
+                Measurement::TrackingError => format!("AR({}) model", c.noise_ar_order),
+                _ => "an AR model per segment".to_string(),
             }
         );
     }

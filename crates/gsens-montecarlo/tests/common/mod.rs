@@ -126,3 +126,11 @@ pub(crate) fn assert_within_3_sigma(doc: &ResultDocument, truth: [f64; 3]) {
         assert!((g - truth[i]).abs() < 3.0 * s, "axis {i}: {g} vs {} ± {s}", truth[i]);
     }
 }
+
+/// E[z²] = 1, with standard error √(2/n) for n independent standard normal z.
+pub(crate) fn assert_calibrated(z: &[f64]) {
+    let mean_z2 = z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64;
+    let se = (2.0 / z.len() as f64).sqrt();
+    eprintln!("mean z² = {mean_z2:.3} over {} axis estimates (3 SE = {:.3})", z.len(), 3.0 * se);
+    assert!((mean_z2 - 1.0).abs() < 3.0 * se, "mean z² = {mean_z2} over {} (3 SE = {}): {z:?}", z.len(), 3.0 * se);
+}

@@ -1,0 +1,146 @@
+//! The estimate from the NCO's frequency: Γ from the command each loop gave
+//! its NCO, through the closed loop.
+//!
+//! A receiver that logs the frequency its NCO ran at (`nco_freq_hz`: the
+//! command in force during the row's latest integration, without the
+//! oscillator's bias) logs the loop's answer to everything its input holds.
+//! The replica runs at the command plus the bias Δf = aᵀΓ, and the loop
+//! steers the replica onto the signal, so per channel i
+//!
+//! ```text
+//! f_NCO,i = H[f_signal,i] − H[aᵀΓ],     common mode −H[aᵀΓ]
+//! ```
+//!
+//! with H = F/(s + F) the closed-loop transfer (in discrete time
+//! −1 − L_d/G, [`gsens_core::LoopFilterCoeffs::nco_response_discrete`]).
+//! The regressor is the loop model's NCO command for a unit Γ along each
+//! axis ([`gsens_core::RowQuantity::NcoFrequency`]), read at each row's
+//! latest integration: the same loop model as the tracking error's, where
+//! L = φ/Δf becomes −H. H is 1 at low frequencies for any loop, so a loop
+//! stated a little wrong moves the NCO's answer to a shaking well below the
+//! loop's bandwidth much less than the tracking error's: 1 − H ≈ (f/fn)² for a
+//! 2nd-order loop, where L's relative error follows the loop's whole error.
+//!
+//! Everything else is the loop-free estimate's ([`crate::estimate_loop_free`]):
+//! each satellite's Doppler is smooth, so a cubic in time is projected out of
+//! each channel's frequency and of each regressor column over segments of
+//! equal length, the channels of highest C/N0 are averaged (scaled to L1),
+//! and the average is fitted by GLS under an AR noise model, the IMU offset
+//! searched where asked. A cycle slip leaves the frequency as it was (only the
+//! phase keeps the half cycle), so no slip test applies.
+
+use crate::loop_free::{
+    InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, RowRegressor, check_settings, fit_rows,
+    median_step, rows_on_epochs,
+};
+use gsens_core::{LoopModel, RegressorModel, RowQuantity};
+use gsens_io::{ImuSeries, TrackingLog};
+
+/// Estimates Γ from the NCO's frequency through the closed loop of
+/// `receiver_loop` (see the module documentation); `settings` as for the
+/// loop-free estimate (its loop interval unused: the loop model's is).
+pub fn estimate_nco_frequency(
+    tracking: &TrackingLog,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    receiver_loop: &LoopModel,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
+    check_settings(settings)?;
+    let epochs = tracking.epoch_t_s();
+    let log_interval_s = median_step(epochs);
+    let receiver_loop = receiver_loop.with_default_interval(log_interval_s);
+    let loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
+    let runnable = receiver_loop.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
+    let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, RowQuantity::NcoFrequency)
+        .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
+    let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_freq_hz.is_empty()).collect();
+    if tracks.is_empty() {
+        return Err(LoopFreeError::NoNcoFrequency { source_name: tracking.source_name().to_owned() });
+    }
+    let rows = InputPhases::of_tracks(epochs, &tracks, |tr| frequency_on_epochs(tr, epochs, settings));
+    let regressor = ModelRegressor::new(epochs, log_interval_s, imu, model, settings.warmup_s);
+    let mut estimate = fit_rows(&rows, &regressor, settings, f64::INFINITY)?;
+    estimate.loop_interval_s = loop_interval_s;
+    Ok(estimate)
+}
+
+/// A track's NCO frequency \[Hz\] on the log's epochs: `None` where it has no
+/// row, during its warm-up, and where |φ| passes the settings' limit (near the
+/// discriminator's wrap the loop is pulled by a half cycle).
+fn frequency_on_epochs(tr: &gsens_io::ChannelTrack, epochs: &[f64], settings: &LoopFreeSettings) -> Vec<Option<f64>> {
+    let mut out = vec![None; epochs.len()];
+    for (k, e) in rows_on_epochs(tr, epochs) {
+        let warm = tr.t_s[k] >= tr.t_s[0] + settings.warmup_s;
+        if warm && tr.phase_err_rad[k].abs() <= settings.max_abs_phase_rad {
+            out[e] = Some(tr.nco_freq_hz[k]);
+        }
+    }
+    out
+}
+
+/// The loop model's NCO command for a unit Γ per axis, on the log's uniform
+/// grid: the model runs from `lead_s` before the first epoch asked for (its
+/// start-up transient dies out there), fed the IMU's specific force at each
+/// grid instant plus τ (linear interpolation, compensated for the model's own
+/// interpolation between epochs as for the tracking error's regressors).
+struct ModelRegressor<'a> {
+    /// Each epoch's index on the grid t₀ + j·h.
+    grid: Vec<usize>,
+    t0_s: f64,
+    log_interval_s: f64,
+    imu: &'a ImuSeries,
+    model: RegressorModel,
+    lead_s: f64,
+}
+
+impl<'a> ModelRegressor<'a> {
+    fn new(epochs: &[f64], log_interval_s: f64, imu: &'a ImuSeries, model: RegressorModel, lead_s: f64) -> Self {
+        let t0_s = epochs.first().copied().unwrap_or(0.0);
+        let grid = epochs.iter().map(|t| ((t - t0_s) / log_interval_s).round().max(0.0) as usize).collect();
+        ModelRegressor { grid, t0_s, log_interval_s, imu, model, lead_s }
+    }
+
+    fn imu_span(&self) -> (f64, f64) {
+        (self.imu.t_s.first().copied().unwrap_or(f64::NAN), self.imu.t_s.last().copied().unwrap_or(f64::NAN))
+    }
+
+    fn grid_t_s(&self, j: usize) -> f64 {
+        self.t0_s + j as f64 * self.log_interval_s
+    }
+}
+
+impl RowRegressor for ModelRegressor<'_> {
+    fn covers(&self, k: usize, tau: f64) -> bool {
+        let (first, last) = self.imu_span();
+        let t = self.grid_t_s(self.grid[k]) + tau;
+        t - self.lead_s >= first && t <= last
+    }
+
+    fn values(&self, at: &[usize], tau: f64) -> Vec<[f64; 3]> {
+        let (Some(&first), Some(&last)) = (at.first(), at.last()) else { return Vec::new() };
+        let (imu_first, imu_last) = self.imu_span();
+        let lead = (self.lead_s / self.log_interval_s).ceil() as usize;
+        let j_last = self.grid[last];
+        let mut j_start = self.grid[first].saturating_sub(lead);
+        while j_start < self.grid[first] && self.grid_t_s(j_start) + tau < imu_first {
+            j_start += 1;
+        }
+        let mut cursor = 0;
+        let accel: Vec<[f64; 3]> = (j_start..=j_last)
+            .map(|j| self.imu.interpolate_at((self.grid_t_s(j) + tau).clamp(imu_first, imu_last), &mut cursor))
+            .collect();
+        let mut model = self.model.clone();
+        model.reset();
+        let input = crate::estimate::model_input(&accel, &model);
+        let mut out = Vec::with_capacity(at.len());
+        let mut next = 0;
+        for (i, a) in input.iter().enumerate() {
+            let value = model.epoch(a);
+            while next < at.len() && self.grid[at[next]] == j_start + i {
+                out.push(value);
+                next += 1;
+            }
+        }
+        out
+    }
+}
