@@ -221,6 +221,18 @@ pub fn estimate_loop_free(
     imu: &ImuSeries,
     settings: &LoopFreeSettings,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
+    estimate_with(tracking, imu, settings, true)
+}
+
+/// [`estimate_loop_free`], a `last` row's half-integration step taken with
+/// the logged command (`logged_frequency`, where the log has it) or with the
+/// NCO phase's mean rate between rows.
+fn estimate_with(
+    tracking: &TrackingLog,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    logged_frequency: bool,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
     check_settings(settings)?;
     let epochs = tracking.epoch_t_s();
     let log_interval_s = median_step(epochs);
@@ -230,7 +242,7 @@ pub fn estimate_loop_free(
         return Err(LoopFreeError::NoNcoPhase { source_name: tracking.source_name().to_owned() });
     }
     let phases = InputPhases::of_tracks(epochs, &tracks, |tr| {
-        input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings)
+        input_phase_on_epochs(tr, epochs, log_interval_s, substeps, settings, logged_frequency)
     });
     let n_window = if settings.logged_phase == LoggedPhase::Mean { substeps } else { 1 };
     fit(&phases, imu, settings, n_window)
@@ -238,13 +250,22 @@ pub fn estimate_loop_free(
 
 /// [`estimate_loop_free`] for a log whose bookkeeping is not known: every
 /// update interval of `loop_intervals_s` that divides the log interval (and
-/// the log interval itself), each with `last` and `mean` rows, estimated in
-/// parallel; the least residual variance of the prewhitened fit wins. A
-/// row booked at the wrong instant leaves the loop's own response to the
-/// shaking and to the noise in θ_NCO + φ (the combination cancels it only
-/// where both are taken at the same instant), which the whitened residual
-/// shows; bookkeepings that differ by less than that give the same Γ̂
-/// within its σ.
+/// the log interval itself when it is no longer than the longest of them),
+/// each with `last` and `mean` rows, estimated in parallel; the least
+/// residual variance of the prewhitened fit wins, and the winner is
+/// estimated again as [`estimate_loop_free`] would. A row booked at the
+/// wrong instant leaves the loop's own response to the shaking and to the
+/// noise in θ_NCO + φ (the combination cancels it only where both are taken
+/// at the same instant), which the whitened residual shows; bookkeepings
+/// that differ by less than that give the same Γ̂ within its σ.
+///
+/// The candidates are compared with each `last` row's half-integration step
+/// taken at the NCO phase's mean rate between rows, not at the logged
+/// command: the command carries the loop's proportional response to the
+/// row's own φ (c0·φ/2π), so a step of T/2 at the command cancels part of
+/// φ's thermal noise, the more the longer T is, and the residual would
+/// reward a wrong T (on a PocketSDR log of 1 ms updates, T = 0.1 s with
+/// Γ̂ 25 % low).
 pub fn estimate_loop_free_choosing(
     tracking: &TrackingLog,
     imu: &ImuSeries,
@@ -252,8 +273,10 @@ pub fn estimate_loop_free_choosing(
     loop_intervals_s: &[f64],
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
     let log_interval_s = median_step(tracking.epoch_t_s());
+    let longest_s = loop_intervals_s.iter().copied().fold(0.0, f64::max);
+    let log_rate = (log_interval_s <= longest_s * (1.0 + 1e-9)).then_some(log_interval_s);
     let mut candidates: Vec<LoopFreeSettings> = Vec::new();
-    for &t in loop_intervals_s.iter().chain([&log_interval_s]) {
+    for &t in loop_intervals_s.iter().chain(&log_rate) {
         let Ok(n) = substeps(log_interval_s, t) else { continue };
         let phases: &[LoggedPhase] = if n > 1 { &[LoggedPhase::Last, LoggedPhase::Mean] } else { &[LoggedPhase::Last] };
         for &logged_phase in phases {
@@ -262,23 +285,23 @@ pub fn estimate_loop_free_choosing(
             }
         }
     }
-    let results: Vec<Result<LoopFreeEstimate, LoopFreeError>> =
-        candidates.par_iter().map(|c| estimate_loop_free(tracking, imu, c)).collect();
-    let best = results
-        .iter()
-        .enumerate()
-        .filter_map(|(k, r)| r.as_ref().ok().map(|e| (k, e.residual_variance_rad2)))
+    let residuals: Vec<Result<f64, LoopFreeError>> = candidates
+        .par_iter()
+        .map(|c| estimate_with(tracking, imu, c, false).map(|e| e.residual_variance_rad2))
+        .collect();
+    let best = (0..candidates.len())
+        .filter_map(|k| residuals[k].as_ref().ok().map(|&r| (k, r)))
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(k, _)| k);
     match best {
-        Some(k) => results.into_iter().nth(k).unwrap_or_else(|| unreachable!("index of a result")).map(|mut chosen| {
+        Some(k) => estimate_loop_free(tracking, imu, &candidates[k]).map(|mut chosen| {
             chosen.bookkeeping_chosen = true;
             chosen
         }),
-        None => results
-            .into_iter()
-            .next()
-            .unwrap_or(Err(LoopFreeError::Intervals { log_interval_s, loop_interval_s: settings.loop_interval_s })),
+        None => Err(residuals.into_iter().find_map(Result::err).unwrap_or(LoopFreeError::Intervals {
+            log_interval_s,
+            loop_interval_s: settings.loop_interval_s,
+        })),
     }
 }
 
@@ -712,8 +735,8 @@ fn substeps(log_interval_s: f64, loop_interval_s: f64) -> Result<usize, LoopFree
 ///
 /// `last`: the row's φ is the latest integration's, centred on the stamp, and
 /// the NCO phase is the integration's end, so θ_in = 2π(c − f·T/2) + φ with
-/// f the commanded frequency (`nco_freq_hz`, or the phase's mean rate from
-/// the neighbouring row without it). `mean`: φ is the mean over the n
+/// f the commanded frequency (`nco_freq_hz` where `logged_frequency` and the
+/// log has it, else the phase's mean rate from the neighbouring row). `mean`: φ is the mean over the n
 /// integrations since the previous row, so θ_NCO is averaged over their
 /// centres t − iT (i = 0…n−1) on the cubic through the NCO phases of four
 /// consecutive rows around it (at their integrations' ends, t_j + T/2): the
@@ -726,6 +749,7 @@ fn input_phase_on_epochs(
     log_interval_s: f64,
     substeps: usize,
     settings: &LoopFreeSettings,
+    logged_frequency: bool,
 ) -> Vec<Option<f64>> {
     let mut out = vec![None; epochs.len()];
     let c = &tr.nco_phase_cycles;
@@ -739,7 +763,7 @@ fn input_phase_on_epochs(
         }
         out[e] = match settings.logged_phase {
             LoggedPhase::Last => {
-                let freq_hz = match tr.nco_freq_hz.get(k) {
+                let freq_hz = match tr.nco_freq_hz.get(k).filter(|_| logged_frequency) {
                     Some(&f) => Some(f),
                     None if k >= 1 => Some((c[k] - c[k - 1]) / (tr.t_s[k] - tr.t_s[k - 1])),
                     None if tr.len() > 1 => Some((c[1] - c[0]) / (tr.t_s[1] - tr.t_s[0])),
@@ -945,7 +969,7 @@ mod tests {
         .remove(0);
         tr.nco_phase_cycles = rows.iter().map(|t| phase(t + t_loop / 2.0)).collect();
         let settings = LoopFreeSettings { warmup_s: 0.0, ..LoopFreeSettings::new(t_loop, LoggedPhase::Mean) };
-        let theta = input_phase_on_epochs(&tr, &rows, h, 25, &settings);
+        let theta = input_phase_on_epochs(&tr, &rows, h, 25, &settings, true);
         for (k, th) in theta.iter().enumerate() {
             let want = TAU * (0..25).map(|i| phase(rows[k] - i as f64 * t_loop)).sum::<f64>() / 25.0;
             let got = th.expect("four adjacent rows around every row");
