@@ -151,6 +151,9 @@ pub struct LoopFreeEstimate {
     /// counterpart of the estimate's excitation RMS (the same threshold
     /// decides whether the axis is observable).
     pub excitation_rms: [f64; 3],
+    /// Order of the AR model of the residual noise the fit whitened with
+    /// (one model, restarted at each segment).
+    pub noise_ar_order: usize,
 }
 
 impl LoopFreeEstimate {
@@ -298,10 +301,10 @@ pub fn estimate_loop_free_choosing(
             chosen.bookkeeping_chosen = true;
             chosen
         }),
-        None => Err(residuals.into_iter().find_map(Result::err).unwrap_or(LoopFreeError::Intervals {
-            log_interval_s,
-            loop_interval_s: settings.loop_interval_s,
-        })),
+        None => Err(residuals
+            .into_iter()
+            .find_map(Result::err)
+            .unwrap_or(LoopFreeError::Intervals { log_interval_s, loop_interval_s: settings.loop_interval_s })),
     }
 }
 
@@ -472,6 +475,7 @@ pub(crate) fn fit_rows(
         logged_phase: LoggedPhase::Last,
         bookkeeping_chosen: false,
         excitation_rms,
+        noise_ar_order: fit.noise.coeffs.len(),
     })
 }
 

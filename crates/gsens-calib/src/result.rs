@@ -190,6 +190,7 @@ impl Calibration {
         self.imu_time_offset_estimated = free.time_offset_searched;
         self.imu_time_offset_sigma_s = None;
         self.epochs_used = free.epochs as u64;
+        self.noise_ar_order = free.noise_ar_order;
         self.rms_before_rad = figures.rms_before_rad;
         self.rms_after_rad = figures.rms_after_rad;
         self.rms_g_induced_rad = figures.rms_g_induced_rad;

@@ -83,6 +83,7 @@ impl<'a> Figure<'a> {
 pub struct FigureInputs<'a> {
     session: &'a PreparedSession,
     calibration: &'a Calibration,
+    measurement: gsens_calib::Measurement,
     tracking: Option<&'a TrackingLog>,
     truth: Option<[f64; 3]>,
     before: Vec<Option<f64>>,
@@ -139,6 +140,7 @@ impl<'a> FigureInputs<'a> {
         Ok(FigureInputs {
             session,
             calibration,
+            measurement: outcome.measurement,
             tracking,
             truth,
             before,
@@ -207,8 +209,16 @@ impl<'a> FigureInputs<'a> {
             title: "Fig. 4: the estimation process".into(),
             caption: format!(
                 "Specific force in the IMU frame (top) and the components of Γ̂ as the estimator runs (bottom), with \
-                 ±1σ bands assuming white residuals{}. An axis is estimated once it is shaken.",
-                if self.truth.is_some() { "; the truth dashed" } else { "" }
+                 ±1σ bands assuming white residuals{}. An axis is estimated once it is shaken.{}",
+                if self.truth.is_some() { "; the truth dashed" } else { "" },
+                match self.measurement {
+                    gsens_calib::Measurement::TrackingError => String::new(),
+                    m => format!(
+                        " The Γ̂ drawn is the estimate through the tracking error as the observer runs; the report's \
+                         estimate is made from {}.",
+                        m.description()
+                    ),
+                }
             ),
             render: Box::new(move |f| {
                 let d = EstimationData {

@@ -411,7 +411,7 @@ fn compensation(s: &mut String, doc: &ResultDocument) {
             b[2],
             match doc.measurement {
                 Measurement::TrackingError => format!("AR({}) model", c.noise_ar_order),
-                _ => "an AR model per segment".to_string(),
+                _ => format!("AR({}) model restarted per segment", c.noise_ar_order),
             }
         );
     }
