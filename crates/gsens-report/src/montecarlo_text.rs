@@ -39,15 +39,18 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         s_,
         "errors Γ̂ − Γ_imu (Γ through the IMU's scale and misalignment) [Hz/(m/s²)]; CRLB: RMS over runs of each run's bound\n"
     );
+    // The name column fits the longest row name (at least the methods' 9).
+    let w = stats.iter().map(|(n, _)| n.chars().count()).fold(9, usize::max);
     let _ = writeln!(
         s_,
-        "method    axis      bias        RMSE        CRLB   RMSE/CRLB  |e|≤1σ  |e|≤2σ  |e|≤3σ   z RMS   RMSE vs body Γ"
+        "{:<w$} axis      bias        RMSE        CRLB   RMSE/CRLB  |e|≤1σ  |e|≤2σ  |e|≤3σ   z RMS   RMSE vs body Γ",
+        "method"
     );
     for (name, st) in stats {
         if st.runs == 0 {
             let _ = writeln!(
                 s_,
-                "{name:<9}      no statistics: none of the {} runs gave an estimate of every axis",
+                "{name:<w$}      no statistics: none of the {} runs gave an estimate of every axis",
                 mc.runs
             );
             continue;
@@ -55,7 +58,7 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         for i in 0..3 {
             let _ = writeln!(
                 s_,
-                "{:<9} {:>3}  {:>+10.6}  {:>10.6}  {:>10.6}  {:>9.3}  {:>5.1} %  {:>5.1} %  {:>5.1} %  {:>6.2}   {:>10.6}",
+                "{:<w$} {:>3}  {:>+10.6}  {:>10.6}  {:>10.6}  {:>9.3}  {:>5.1} %  {:>5.1} %  {:>5.1} %  {:>6.2}   {:>10.6}",
                 if i == 0 { *name } else { "" },
                 AXES[i],
                 st.bias[i],
@@ -71,7 +74,7 @@ pub fn render_montecarlo_text(mc: &MonteCarlo) -> String {
         }
         if st.failures > 0 {
             let _ =
-                writeln!(s_, "{:<9}      {} of {} runs failed or left an axis unobservable", "", st.failures, mc.runs);
+                writeln!(s_, "{:<w$}      {} of {} runs failed or left an axis unobservable", "", st.failures, mc.runs);
         }
     }
     if let Some(b) = &mc.best_method {
