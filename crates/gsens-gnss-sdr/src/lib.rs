@@ -264,7 +264,7 @@ pub use calibrate::{Conversion, GnssSdrOutcome, calibrate_gnss_sdr, gnss_sdr_tra
 pub use conf::{GnssSdrConf, IqConfOptions, TrackingConf, write_iq_conf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
 pub use error::{GnssSdrError, LayoutSpecError};
-pub use export::{Export, ExportError};
+pub use export::Export;
 pub use import::{
     ImportOverrides, ImportSettings, Imported, TrackFate, import_dir, import_dump, render_tracks, resample,
 };
