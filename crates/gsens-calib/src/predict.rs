@@ -35,9 +35,11 @@
 
 use gsens_core::{LoopModel, LoopSpec};
 
+mod request;
 mod setup;
 mod sweep;
 mod table;
+pub use request::{EstimateSource, PredictError, PredictRequest, VibrationSource};
 pub use setup::{FeedForward, StatedGammaError, ToneError, diagonal_covariance, parse_tone, stated_gamma};
 use statrs::distribution::{ContinuousCDF, Normal};
 pub use sweep::{BN_GRID_HZ, Sweep, SweepError, SweepRow, SweepSettings};

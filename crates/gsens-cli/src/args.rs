@@ -2,20 +2,20 @@
 //! they become library objects: a calibration's options are
 //! `gsens_calib::CalibrationOptions`' groups (the names the Python module
 //! takes too, which build `gsens_calib::PipelineSettings`); the converters'
-//! become `gsens_gnss_sdr::ImportSettings` and
-//! `gsens_pocketsdr::ImportSettings`; the input options become
-//! `gsens_inputs::Inputs`.
+//! become `gsens_gnss_sdr::ImportOverrides` and
+//! `gsens_pocketsdr::ImportOptions`; the input options become
+//! `gsens_inputs::InputChoice`.
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, anyhow};
 use clap::Args;
 use gsens_calib::option_values::positive;
 use gsens_calib::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MeasurementChoice, MethodName, PipelineSettings,
     SelectionOptions, SystematicOptions,
 };
-use gsens_gnss_sdr::{ImportOverrides, ImportSettings};
-use gsens_inputs::{Inputs, Log};
-use std::path::{Path, PathBuf};
+use gsens_gnss_sdr::{GnssSdrError, ImportOverrides};
+use gsens_inputs::{InputChoice, Inputs, InputsError};
+use std::path::PathBuf;
 
 /// The flag of the option `name` (`bn_hz` is `--bn-hz`).
 pub(crate) fn flag(name: &str) -> String {
@@ -152,24 +152,27 @@ pub(crate) struct ConversionArgs {
 }
 
 impl ConversionArgs {
-    /// The conversion settings for dumps made with the configuration `conf`
-    /// (GNSS-SDR's defaults when none is given), with the options that
-    /// override the configuration's lock detector.
-    pub(crate) fn import_settings(&self, conf: Option<&Path>) -> Result<ImportSettings> {
-        let mut s = ImportSettings::from_conf(conf, self.gnss_sdr_fs_hz).map_err(|e| match e {
-            gsens_gnss_sdr::GnssSdrError::UnknownSamplingRate => anyhow!("{e}; give --gnss-sdr-fs-hz"),
-            e => e.into(),
-        })?;
-        let overrides = ImportOverrides {
+    /// What the options set instead of the configuration's conversion.
+    pub(crate) fn overrides(&self) -> ImportOverrides {
+        ImportOverrides {
             min_cn0_dbhz: self.gnss_sdr_min_cn0_dbhz,
             min_lock_test: self.gnss_sdr_min_lock_test,
             max_carrier_lock_fail: self.gnss_sdr_max_carrier_lock_fail,
             max_lock_fail: self.gnss_sdr_max_lock_fail,
             settle_s: self.gnss_sdr_settle_s,
             layout: self.gnss_sdr_layout.clone(),
-        };
-        s.override_with(&overrides).map_err(|e| flagged("gnss-sdr-", e.setting(), e))?;
-        Ok(s)
+        }
+    }
+}
+
+/// A receiver's conversion error with the setting it is about given as its
+/// flag (`--gnss-sdr-…`, `--pocketsdr-…`).
+pub(crate) fn conversion_error(e: InputsError) -> anyhow::Error {
+    match e {
+        InputsError::GnssSdr(GnssSdrError::UnknownSamplingRate) => anyhow!("{e}; give --gnss-sdr-fs-hz"),
+        InputsError::GnssSdr(e) => flagged("gnss-sdr-", e.setting(), e),
+        InputsError::PocketSdr(e) => flagged("pocketsdr-", e.setting(), e),
+        e => e.into(),
     }
 }
 
@@ -207,18 +210,13 @@ pub(crate) struct PocketSdrConversionArgs {
 }
 
 impl PocketSdrConversionArgs {
-    /// The conversion settings.
-    pub(crate) fn import_settings(&self) -> Result<gsens_pocketsdr::ImportSettings> {
-        let mut s = gsens_pocketsdr::ImportSettings::from_options_file(self.pocketsdr_conf.as_deref())?;
-        s.settle_s = self.pocketsdr_settle_s;
-        s.toff_s = self.pocketsdr_toff_s;
-        s.check().map_err(|e| flagged("pocketsdr-", e.setting(), e))?;
-        Ok(s)
-    }
-
-    /// Whether any option differs from its default (they need a log to act on).
-    pub(crate) fn given(&self) -> bool {
-        self.pocketsdr_conf.is_some() || self.pocketsdr_settle_s.is_some() || self.pocketsdr_toff_s != 0.0
+    /// The conversion the options name.
+    pub(crate) fn options(&self) -> gsens_pocketsdr::ImportOptions {
+        gsens_pocketsdr::ImportOptions {
+            conf: self.pocketsdr_conf.clone(),
+            settle_s: self.pocketsdr_settle_s,
+            toff_s: self.pocketsdr_toff_s,
+        }
     }
 }
 
@@ -252,31 +250,17 @@ pub(crate) struct InputArgs {
 impl InputArgs {
     /// The inputs the options name, with their conversion settings.
     pub(crate) fn inputs(&self) -> Result<Inputs> {
-        let imu = self.imu.clone();
-        if let Some(log) = &self.pocketsdr.pocketsdr {
-            let import = self.pocketsdr.conversion.import_settings()?;
-            return Ok(Inputs::PocketSdr { imu, log: log.clone(), import });
-        }
-        if self.pocketsdr.conversion.given() {
-            bail!("--pocketsdr-conf, --pocketsdr-settle-s and --pocketsdr-toff-s need --pocketsdr LOG");
-        }
-        let g = &self.gnss_sdr;
-        let conf = g.gnss_sdr_conf.as_deref();
-        Ok(match (&g.gnss_sdr, &self.tracking, conf) {
-            (Some(dir), _, _) => Inputs::GnssSdrDumps {
-                imu,
-                dumps_dir: dir.clone(),
-                import: g.conversion.import_settings(conf)?,
-                conf: conf.map(Path::to_path_buf),
-            },
-            (None, Some(t), Some(conf)) => Inputs::GnssSdrRows {
-                imu: Log::File(imu),
-                tracking: Log::File(t.clone()),
-                import: g.conversion.import_settings(Some(conf))?,
-                conf: conf.to_path_buf(),
-            },
-            (None, Some(t), None) => Inputs::Csv { imu: Log::File(imu), tracking: Log::File(t.clone()) },
-            (None, None, _) => bail!("--tracking is required (or --gnss-sdr, or --pocketsdr)"),
-        })
+        let (g, p) = (&self.gnss_sdr, &self.pocketsdr);
+        let choice = InputChoice {
+            imu: self.imu.clone(),
+            tracking: self.tracking.clone(),
+            gnss_sdr: g.gnss_sdr.clone(),
+            gnss_sdr_conf: g.gnss_sdr_conf.clone(),
+            gnss_sdr_fs_hz: g.conversion.gnss_sdr_fs_hz,
+            gnss_sdr_overrides: g.conversion.overrides(),
+            pocketsdr: p.pocketsdr.clone(),
+            pocketsdr_options: p.conversion.options(),
+        };
+        choice.inputs(flag).map_err(conversion_error)
     }
 }

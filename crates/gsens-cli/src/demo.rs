@@ -5,7 +5,7 @@
 use crate::args::AnalysisArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_montecarlo::simulate_demo;
+use gsens_montecarlo::{render_demo_start, simulate_demo};
 use gsens_report::write_demo_figures;
 use gsens_tui::progress::{observed, progress_bar, spinner};
 use std::path::PathBuf;
@@ -48,32 +48,17 @@ pub(crate) fn run(args: &DemoArgs, given: &[&str]) -> Result<crate::Status> {
         crate::check_dir("--figures", d)?;
     }
     let scenario = args.scenario.load()?;
-    crate::out(&format!(
-        "simulating {:.0} s of the {} (seed {}) into {}{} …\n",
-        scenario.duration_s(),
-        if args.scenario.scenario.is_some() { "given scenario" } else { "paper's experiment" },
-        args.scenario.seed,
-        dir.display(),
-        if scratch.is_some() { " (removed at the end: --out DIR keeps the logs)" } else { "" }
-    ))?;
+    let (named, seed) = (args.scenario.scenario.is_some(), args.scenario.seed);
+    crate::out(&render_demo_start(&scenario, named, seed, dir, scratch.is_some(), crate::args::flag))?;
     let bar = progress_bar("simulating");
-    let demo = simulate_demo(&scenario, args.scenario.seed, dir, &args.analysis.options(), |f| {
-        bar.set_position((f * 1000.0) as u64)
-    })?;
+    let demo =
+        simulate_demo(&scenario, seed, dir, &args.analysis.options(), |f| bar.set_position((f * 1000.0) as u64))?;
     bar.finish_and_clear();
-    let (i, t) = (demo.imu.display(), demo.tracking.display());
-    let stated = demo.stated_options().into_iter().map(|(name, v)| format!("--{} {v}", name.replace('_', "-")));
-    let flags: Vec<String> = stated.chain(analysis_flags_given()).collect();
-    crate::out(&format!(
-        "estimating from {i} and {t} (the command line: gsens estimate --imu {i} --tracking {t} {})\n\n",
-        flags.join(" ")
-    ))?;
+    crate::out(&demo.estimate_line(&analysis_flags_given(), crate::args::flag))?;
     let outcome = observed(|| demo.calibrate())?;
     let doc = demo.document(&outcome);
     crate::out(&gsens_report::render_text(&doc))?;
-    if let Some(path) = &args.json {
-        doc.write_json_file(path).with_context(|| format!("{}: cannot write", path.display()))?;
-    }
+    crate::write_json(args.json.as_deref(), &doc, "\n")?;
     if let Some(fig_dir) = &args.figures {
         let bar = spinner();
         let ids = write_demo_figures(fig_dir, &demo, &outcome, |id| bar.set_message(format!("drawing {id}")))?;

@@ -35,17 +35,13 @@ pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracki
             },
         )
         .map_err(|e| match e {
-            InputsError::LoopStatedTwice { .. } => anyhow!(LOOP_STATED_TWICE),
+            InputsError::LoopStatedTwice { .. } => anyhow!(gsens_gnss_sdr::loop_stated_twice(crate::args::flag)),
             e => e.into(),
         })?;
     let loop_note = calibrated.loop_note().map(|note| note + "\n");
     crate::out(&(calibrated.track_summary().unwrap_or_default() + &loop_note.unwrap_or_default()))?;
     Ok(calibrated)
 }
-
-/// The error of a receiver's configuration given with loop options.
-pub(crate) const LOOP_STATED_TWICE: &str =
-    "--gnss-sdr-conf states the receiver loop: leave out --order, --bn-hz and the like";
 
 pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> {
     let settings = args.calibration.settings(given)?;
@@ -54,9 +50,7 @@ pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> 
     let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
-    if let Some(path) = &args.json {
-        doc.write_json_file(path).with_context(|| format!("{}: cannot write", path.display()))?;
-    }
+    crate::write_json(args.json.as_deref(), &doc, "\n")?;
     if let Some(path) = &args.epochs_out {
         let s = outcome.series();
         std::fs::File::create(path)

@@ -1,9 +1,9 @@
 //! `gsens import`: another receiver's logs as gsens's `tracking.csv`.
 
-use crate::args::{ConversionArgs, PocketSdrConversionArgs};
+use crate::args::{ConversionArgs, PocketSdrConversionArgs, conversion_error};
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use gsens_gnss_sdr::import_dir;
+use gsens_gnss_sdr::{ImportSettings, import_dir};
 use gsens_tui::progress::with_spinner;
 use std::path::PathBuf;
 
@@ -41,7 +41,7 @@ pub(crate) struct ImportPocketSdrArgs {
 }
 
 fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
-    let settings = a.conversion.import_settings()?;
+    let settings = a.conversion.options().settings().map_err(|e| conversion_error(e.into()))?;
     crate::check_file("--out", Some(&a.out), None)?;
     crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
     let imported = with_spinner("reading the PocketSDR log", || gsens_pocketsdr::import_file(&a.log, &settings))?;
@@ -83,7 +83,9 @@ pub(crate) fn run(args: &ImportArgs) -> Result<()> {
     // The dumps first: a missing or empty directory is the first thing to fix,
     // whatever the configuration says.
     gsens_gnss_sdr::find_dumps(&a.dump_dir, None)?;
-    let settings = a.conversion.import_settings(a.conf.as_deref())?;
+    let c = &a.conversion;
+    let settings = ImportSettings::from_conf_with(a.conf.as_deref(), c.gnss_sdr_fs_hz, &c.overrides())
+        .map_err(|e| conversion_error(e.into()))?;
     crate::check_file("--out", Some(&a.out), None)?;
     crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
     let imported = with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;

@@ -7,7 +7,7 @@ use crate::args::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
-use gsens_live::{Display, InputChoice, InputChoiceError, LOOP_NOT_STATED, Runtime, RuntimeConfig, SystemClock};
+use gsens_live::{Display, InputChoice, InputChoiceError, Runtime, RuntimeConfig, SystemClock};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -75,21 +75,16 @@ fn choice(args: &LiveArgs) -> InputChoice {
 
 /// An input's error with the options named by their flags.
 fn flagged(e: InputChoiceError) -> anyhow::Error {
-    match e {
-        InputChoiceError::NoInput => anyhow::anyhow!(
-            "no input: give --stdin (the merged stream `gsens replay` writes), --follow-imu IMU.CSV with \
-             --follow-tracking TRACKING.CSV (growing files), or --follow-imu IMU.CSV with --gnss-sdr-monitor ADDR \
-             and --gnss-sdr-conf CONF (GNSS-SDR's tracking monitor)"
-        ),
-        InputChoiceError::NotAFile { option, .. } => crate::args::flagged("", Some(option), e),
-        InputChoiceError::LoopStatedTwice { .. } => anyhow::anyhow!(crate::estimate::LOOP_STATED_TWICE),
-        e => e.into(),
+    match e.named(crate::args::flag) {
+        Some(message) => anyhow::Error::msg(message),
+        None => e.into(),
     }
 }
 
 pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     choice(args).check().map_err(flagged)?;
-    let (settings, loop_note) = crate::report::settings_and_loop_note(&args.calibration, given, args.truth.as_deref())?;
+    let mut settings = args.calibration.settings(given)?;
+    let loop_note = gsens_inputs::truth_loop_note(&mut settings, args.truth.as_deref())?;
     crate::check_dir("--out", &args.out)?;
     let (inputs, note) = choice(args).inputs(args.calibration.receiver_loop.stated()).map_err(flagged)?;
     crate::err(note.as_deref().unwrap_or_default());
@@ -106,33 +101,23 @@ pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
     }
-    crate::out(&format!("gsens live: {}\n", runtime.shaking_advice()))?;
-    if !runtime.session().config().settings.loop_stated {
-        crate::out(LOOP_NOT_STATED)?;
-    }
+    crate::out(&runtime.opening())?;
     let ending = if args.plain || !std::io::stdout().is_terminal() {
         runtime.run(Display::Plain(&mut Stdout))?
     } else {
         // The terminal is restored when the screen is dropped, before the final report.
         runtime.run(Display::Screen(&mut gsens_tui::Terminal::new()?))?
     };
-    crate::out(&format!("ended: {ending}; the final estimate on everything received:\n"))?;
+    crate::out(&ending.heading())?;
     let mut finished = runtime.finish()?;
     if let Some(t) = &args.truth {
         finished.outcome.inputs.push(("truth".into(), t.display().to_string()));
     }
     let status =
         crate::report::write_report(&finished.outcome, &finished.tracking, truth, &args.out, &args.title, args.header)?;
-    if !finished.target_met {
-        crate::out(&format!(
-            "the target σ ({} Hz/(m/s²)) was not met on every axis: shake longer, or lower the target\n",
-            args.target_sigma
-        ))?;
-        if status == crate::Status::Done {
-            return Ok(crate::Status::TargetMissed);
-        }
-    }
-    Ok(status)
+    let missed = finished.target_missed(args.target_sigma);
+    crate::out(missed.as_deref().unwrap_or_default())?;
+    Ok(if missed.is_some() && status == crate::Status::Done { crate::Status::TargetMissed } else { status })
 }
 
 /// Standard output as the plain screen writes it ([`crate::out`]: a closed pipe ends quietly).

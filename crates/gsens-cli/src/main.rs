@@ -18,7 +18,7 @@ mod response;
 mod simulate;
 mod validate;
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::io::Write;
@@ -127,19 +127,9 @@ pub fn check_dir(flag: &str, path: &Path) -> Result<()> {
     gsens_io::check_output_dir(path).map_err(|e| anyhow!("{flag} {e}"))
 }
 
-/// Writes `bytes` to the file `path`.
-pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> Result<()> {
-    std::fs::write(path, bytes).with_context(|| format!("{}: cannot write", path.display()))
-}
-
 /// Writes `value` as pretty JSON followed by `end` to the file `path`, when one is given.
 pub fn write_json(path: Option<&Path>, value: &impl serde::Serialize, end: &str) -> Result<()> {
-    path.map_or(Ok(()), |p| write(p, serde_json::to_string_pretty(value)? + end))
-}
-
-/// Writes the figure `image` to the file `path`.
-pub fn write_image(path: &Path, image: gsens_report::figures::Image) -> Result<()> {
-    image.write_to(path).with_context(|| format!("{}: cannot write", path.display()))
+    path.map_or(Ok(()), |p| Ok(gsens_io::write_file(p, serde_json::to_string_pretty(value)? + end)?))
 }
 
 /// glibc's malloc gives each thread that allocates an arena of its own and

@@ -56,8 +56,6 @@ pub(crate) fn run(args: &MonteCarloArgs, given: &[&str]) -> Result<crate::Status
     let mc = monte_carlo(&scenario, &name, args.runs, args.scenario.seed, &methods, || bar.inc(1))?;
     bar.finish_and_clear();
     crate::out(&gsens_report::render_montecarlo_text(&mc))?;
-    if let Some(path) = &args.json {
-        crate::write(path, serde_json::to_string_pretty(&mc)? + "\n")?;
-    }
+    crate::write_json(args.json.as_deref(), &mc, "\n")?;
     Ok(crate::Status::Done)
 }

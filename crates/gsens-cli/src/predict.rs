@@ -4,13 +4,11 @@
 //! the 3σ rule, and the narrowest loop that keeps lock in each case
 //! (`gsens_calib::predict`).
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, bail};
 use clap::Args;
-use gsens_calib::ResultDocument;
 use gsens_calib::option_values::{finite_non_negative, positive};
 use gsens_calib::predict::{
-    FeedForward, PredictionInput, SweepContext, SweepError, SweepSettings, Vibration, parse_tone, render_sweep_text,
-    stated_gamma,
+    EstimateSource, FeedForward, PredictRequest, SweepContext, VibrationSource, render_sweep_text,
 };
 use gsens_montecarlo::frequency_noise;
 use gsens_report::figures::Format;
@@ -81,47 +79,35 @@ pub(crate) struct PredictArgs {
 pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--figure", args.figure.as_deref(), None)?;
-    let (gamma, covariance) = match (&args.from, &args.gamma, &args.sigma) {
-        (Some(path), _, _) => ResultDocument::read_gamma_file(path)?,
-        (None, Some(g), Some(s)) => stated_gamma(g, s)?,
+    let estimate = match (&args.from, &args.gamma, &args.sigma) {
+        (Some(path), _, _) => EstimateSource::Document(path.clone()),
+        (None, Some(gamma), Some(sigma)) => EstimateSource::Stated { gamma: gamma.clone(), sigma: sigma.clone() },
         _ => bail!("give --from report.json, or --gamma with --sigma"),
     };
-    let vibration = match &args.psd {
-        Some(path) => Vibration::Spectrum(gsens_io::read_vibration_psd_file(path)?),
-        None => Vibration::Tones(
-            args.tone.iter().map(|t| parse_tone(t).map_err(|e| anyhow!("--tone {t}: {e}"))).collect::<Result<_>>()?,
-        ),
-    };
-    let oscillator = args.oscillator.config();
     let feed_forward = FeedForward { imu_rate_hz: args.imu_rate_hz, latency_s: args.latency_s };
-    let settings = SweepSettings {
-        base: PredictionInput {
-            gamma_hz_per_mps2: gamma,
-            covariance,
-            vibration,
-            oscillator: oscillator.map(|o| frequency_noise(&o, args.carrier_hz)),
-            cn0_dbhz: Some(args.cn0_dbhz),
-            delay_s: feed_forward.delay_s(),
-            imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
-            doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
-        },
+    let request = PredictRequest {
+        estimate,
+        vibration: args
+            .psd
+            .clone()
+            .map_or_else(|| VibrationSource::Tones(args.tone.clone()), VibrationSource::Spectrum),
         levels: args.levels.clone(),
+        oscillator: args.oscillator.config().map(|o| frequency_noise(&o, args.carrier_hz)),
+        cn0_dbhz: Some(args.cn0_dbhz),
         bn_hz: args.bn_hz,
         zeta: args.zeta,
         loop_interval_s: args.loop_interval_s,
+        feed_forward,
+        imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
+        doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
     };
-    let sweep = settings.sweep().map_err(|e| match e {
-        SweepError::Level(level) => anyhow!("--levels {level}: must be finite and ≥ 0"),
-        e => e.into(),
-    })?;
+    let (settings, sweep) = request.sweep().map_err(|e| crate::args::flagged("", e.setting(), e))?;
     let oscillator = args.oscillator.to_string();
     let context = SweepContext { oscillator: &oscillator, feed_forward };
     crate::out(&render_sweep_text(&settings, &sweep, &context))?;
     if let (Some(path), Some(&level)) = (&args.figure, args.levels.last()) {
-        crate::write_image(
-            path,
-            fig_lock_margin_at(&settings, &context, level, Format::of_path(path).unwrap_or(Format::Png))?,
-        )?;
+        let format = Format::of_path(path).unwrap_or(Format::Png);
+        gsens_io::write_file(path, fig_lock_margin_at(&settings, &context, level, format)?.as_bytes())?;
     }
     crate::write_json(args.json.as_deref(), &sweep, "")?;
     Ok(crate::Status::Done)

@@ -4,7 +4,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use gsens_live::{ReplaySink, SystemClock, read_session_dir, replay};
+use gsens_live::{ReplaySink, SystemClock, check_speed, read_session_dir, replay};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -21,16 +21,11 @@ pub(crate) struct ReplayArgs {
 }
 
 pub(crate) fn run(args: &ReplayArgs) -> Result<()> {
-    if !(args.speed.is_finite() && args.speed >= 0.0) {
-        anyhow::bail!("--speed {}: must be 0 (as fast as possible) or positive", args.speed);
-    }
+    check_speed(args.speed).map_err(|e| crate::args::flagged("", Some("speed"), e))?;
     if let Some(d) = &args.out {
         crate::check_dir("--out", d)?;
     }
     let inputs = read_session_dir(&args.dir).map_err(anyhow::Error::msg)?;
-    if inputs.is_empty() {
-        anyhow::bail!("{}: no records to replay", args.dir.display());
-    }
     let mut sink = match &args.out {
         Some(dir) => ReplaySink::files_in(dir)?,
         None => ReplaySink::Merged(Box::new(std::io::stdout().lock())),

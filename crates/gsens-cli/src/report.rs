@@ -41,26 +41,10 @@ pub(crate) struct HeaderArgs {
     pub write_untrusted_header: bool,
 }
 
-/// The settings of the options, with the receiver loop of a simulated
-/// session's `truth.json` when it states one and no loop option is given (an
-/// estimate of a simulated session should model the loop that made its log);
-/// with a note saying which loop is modelled and why.
-pub(crate) fn settings_and_loop_note(
-    calibration: &CalibrationArgs,
-    given: &[&str],
-    truth: Option<&Path>,
-) -> Result<(gsens_calib::PipelineSettings, Option<String>)> {
-    let mut settings = calibration.settings(given)?;
-    let Some(path) = truth else { return Ok((settings, None)) };
-    let note = gsens_live::take_truth_loop(&mut settings, path)?.note(path);
-    Ok((settings, Some(note)))
-}
-
 pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
     let inputs = args.inputs.inputs()?;
-    // A receiver's log comes with the receiver's own loop: a simulated session's loop is not put in its place.
-    let truth_loop = args.truth.as_deref().filter(|_| !inputs.models_the_loop());
-    let (settings, loop_note) = settings_and_loop_note(&args.calibration, given, truth_loop)?;
+    let mut settings = args.calibration.settings(given)?;
+    let loop_note = inputs.truth_loop_note(&mut settings, args.truth.as_deref())?;
     crate::check_dir("--out", &args.out)?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {

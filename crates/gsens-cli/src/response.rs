@@ -30,10 +30,7 @@ pub(crate) struct ResponseArgs {
 }
 
 pub(crate) fn run(args: &ResponseArgs, given: &[&str]) -> Result<()> {
-    anyhow::ensure!(
-        args.f_min_hz > 0.0 && args.f_max_hz > args.f_min_hz && args.points >= 2,
-        "need 0 < --f-min-hz < --f-max-hz and --points ≥ 2"
-    );
+    ResponseData::check_range(args.f_min_hz, args.f_max_hz, args.points, crate::args::flag)?;
     args.receiver_loop.refuse_other_shape(given, crate::args::flag)?;
     crate::check_file("--json", args.json.as_deref(), None)?;
     crate::check_file("--plot", args.plot.as_deref(), None)?;
@@ -42,14 +39,14 @@ pub(crate) fn run(args: &ResponseArgs, given: &[&str]) -> Result<()> {
         .with_context(|| format!("the loop ({model})"))?;
     crate::out(&gsens_report::render_response_text(&table))?;
     if let Some(path) = &args.json {
-        crate::write(path, response_json(&model, &table)?)?;
+        gsens_io::write_file(path, response_json(&model, &table)?)?;
     }
     if let Some(path) = &args.plot {
         let Some(format) = Format::of_path(path) else {
             anyhow::bail!("{}: the figure's name must end in .png or .svg", path.display())
         };
         let plot = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, 300, model.to_string())?;
-        crate::write_image(path, fig_response(&plot, format, DEFAULT_SIZE)?)?;
+        gsens_io::write_file(path, fig_response(&plot, format, DEFAULT_SIZE)?.as_bytes())?;
         crate::out(&format!("figure: {}\n", path.display()))?;
     }
     Ok(())

@@ -57,10 +57,8 @@ pub(crate) fn run(args: &ValidateArgs) -> Result<crate::Status> {
     if let Some(path) = &args.figure {
         let trace = trials.first().and_then(|t| t.trace.as_ref()).context("no channel to draw")?;
         let format = Format::of_path(path).unwrap_or(Format::Png);
-        crate::write_image(
-            path,
-            fig_in_the_loop(&trace.t_s, &trace.uncompensated_rad, &trace.compensated_rad, format)?,
-        )?;
+        let image = fig_in_the_loop(&trace.t_s, &trace.uncompensated_rad, &trace.compensated_rad, format)?;
+        gsens_io::write_file(path, image.as_bytes())?;
     }
     Ok(crate::Status::Done)
 }

@@ -121,7 +121,7 @@ fn the_screen_of_the_default_session_at_60_s() {
     use gsens_live::{LiveConfig, LiveSession, read_session_dir};
     let dir = temp_dir("live-screen");
     gsens(&["simulate", "--out", dir.to_str().unwrap(), "--seed", "1"]);
-    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+    let settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     let mut live = LiveSession::new(LiveConfig::new(settings, 8e-4)).unwrap();
     for (k, x) in read_session_dir(&dir).unwrap().iter().enumerate() {
         if x.t_s() > 60.0 {

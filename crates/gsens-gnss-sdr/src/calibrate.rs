@@ -58,6 +58,14 @@ pub fn with_gnss_sdr_loop(settings: &PipelineSettings, import: &ImportSettings) 
     settings.with_exact_loop(LoopModel::GnssSdr(import.stage()), Discriminator::AtanCostas)
 }
 
+/// Why settings that state a receiver loop are refused with a GNSS-SDR
+/// configuration, which states its own ([`with_gnss_sdr_loop`]): the
+/// options named by `name` (a command line's flag, say).
+pub fn loop_stated_twice(name: impl Fn(&str) -> String) -> String {
+    let (conf, order, bn_hz) = (name("gnss_sdr_conf"), name("order"), name("bn_hz"));
+    format!("{conf} states the receiver loop: leave out {order}, {bn_hz} and the like")
+}
+
 /// A calibration from GNSS-SDR dumps: the pipeline's outcome, what the
 /// conversion did, and the tracking log the dumps became.
 #[derive(Debug, Clone)]
@@ -120,4 +128,14 @@ fn loop_free(
     let free = settings.loop_free(imported.interval_s);
     let phases = gnss_sdr_input_phases(imported, imported.interval_s, free.max_abs_phase_rad);
     estimate_loop_free_from(&phases, imu, &free)
+}
+
+#[cfg(test)]
+mod tests {
+    /// The refusal names the options as the caller spells them.
+    #[test]
+    fn a_loop_stated_twice_names_the_options() {
+        let said = super::loop_stated_twice(|n| format!("<{n}>"));
+        assert_eq!(said, "<gnss_sdr_conf> states the receiver loop: leave out <order>, <bn_hz> and the like");
+    }
 }

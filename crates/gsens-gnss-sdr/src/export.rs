@@ -5,22 +5,8 @@
 
 use crate::calibrate::Conversion;
 use crate::import::{ImportSettings, Imported, render_tracks, resample, write_imported_csv};
+use gsens_io::ExportError;
 use std::path::Path;
-
-/// Why an import's files could not be written.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ExportError {
-    /// A file could not be made or written.
-    #[error(transparent)]
-    File(#[from] gsens_io::FileError),
-    /// Writing the rows, or telling about them, failed.
-    #[error(transparent)]
-    Io(#[from] std::io::Error),
-    /// The tracks could not be put as JSON.
-    #[error(transparent)]
-    Json(#[from] serde_json::Error),
-}
 
 /// Where an import of the dumps in `dump_dir` (made with the configuration
 /// `conf`) goes: the tracking log `csv`, on the common grid when
@@ -73,7 +59,7 @@ impl Export<'_> {
         ))?;
         if let Some(path) = self.tracks_json {
             let conversion = Conversion { conversion: settings, tracks: imported.tracks };
-            gsens_io::write_file(path, serde_json::to_string_pretty(&conversion)? + "\n")?;
+            gsens_io::write_file(path, serde_json::to_string_pretty(&conversion).map_err(ExportError::encode)? + "\n")?;
         }
         Ok(())
     }

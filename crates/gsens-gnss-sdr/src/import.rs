@@ -77,6 +77,19 @@ impl ImportSettings {
         Ok(ImportSettings::new(fs_hz, tracking))
     }
 
+    /// [`ImportSettings::from_conf`] with the values `overrides` gives in
+    /// place of the configuration's ([`ImportSettings::override_with`]): the
+    /// conversion as a caller names it.
+    pub fn from_conf_with(
+        conf: Option<&Path>,
+        fs_hz: Option<f64>,
+        overrides: &ImportOverrides,
+    ) -> Result<Self, GnssSdrError> {
+        let mut settings = ImportSettings::from_conf(conf, fs_hz)?;
+        settings.override_with(overrides)?;
+        Ok(settings)
+    }
+
     /// Overrides the configuration's lock detector, the settling time and
     /// the record layout with the values `overrides` gives, each checked
     /// first. Every error names the override: a
@@ -1142,12 +1155,18 @@ mod tests {
             settle_s: Some(0.0),
             layout: Some("gnss-sdr-0.0.21".into()),
         };
-        s.override_with(&o).unwrap();
+        // Named with the configuration (GNSS-SDR's defaults here): the same settings.
+        assert_eq!(ImportSettings::from_conf_with(None, Some(4e6), &o).unwrap(), {
+            s.override_with(&o).unwrap();
+            s.clone()
+        });
         let lock = &s.tracking.lock;
         assert_eq!((lock.cn0_min_dbhz.value, lock.carrier_lock_th.value), (30.0, -0.5));
         assert_eq!((lock.max_carrier_lock_fail.value, lock.max_lock_fail.value), (7, 9));
         assert_eq!(s.settle_s, Some(0.0));
         assert!(s.layout.is_some());
+        let e = ImportSettings::from_conf_with(None, None, &ImportOverrides::default()).unwrap_err();
+        assert!(matches!(e, GnssSdrError::UnknownSamplingRate), "{e}");
     }
 
     #[test]

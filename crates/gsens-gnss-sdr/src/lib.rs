@@ -260,11 +260,13 @@ pub mod mat;
 pub mod monitor;
 pub(crate) mod nco;
 
-pub use calibrate::{Conversion, GnssSdrOutcome, calibrate_gnss_sdr, gnss_sdr_tracking_log, with_gnss_sdr_loop};
+pub use calibrate::{
+    Conversion, GnssSdrOutcome, calibrate_gnss_sdr, gnss_sdr_tracking_log, loop_stated_twice, with_gnss_sdr_loop,
+};
 pub use conf::{GnssSdrConf, IqConfOptions, TrackingConf, write_iq_conf};
 pub use dump::{DumpLayout, TrackingDump, TrackingRecord, find_dumps, parse_dump, read_dump};
 pub use error::{GnssSdrError, LayoutSpecError};
-pub use export::{Export, ExportError};
+pub use export::Export;
 pub use import::{
     ImportOverrides, ImportSettings, Imported, TrackFate, import_dir, import_dump, render_tracks, resample,
 };

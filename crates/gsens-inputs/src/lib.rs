@@ -10,12 +10,22 @@
 //! in [`Calibrated`].
 //!
 //! The command line, the Python module and any other front end build an
-//! [`Inputs`] from their own words and share everything after that: a route
-//! added here works in all of them.
+//! [`Inputs`] from their own words — or name the files in an
+//! [`InputChoice`], whose rule picks the route — and share everything after
+//! that: a route added here works in all of them. A simulated session's
+//! `truth.json` states the loop that made its log, which the settings take
+//! when they state none ([`take_truth_loop`]) and the route does not model
+//! its receiver's own ([`Inputs::truth_loop_note`]).
 //!
 //! The crate sits above `gsens_calib`, `gsens_gnss_sdr` and
 //! `gsens_pocketsdr` (the PocketSDR crate itself depends on `gsens_calib`,
 //! so the routes cannot all live there).
+
+mod choice;
+mod truth;
+
+pub use choice::InputChoice;
+pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop, truth_loop_note};
 
 use gsens_calib::{Outcome, PipelineError, PipelineSettings};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
@@ -136,6 +146,10 @@ pub enum InputsError {
     /// The PocketSDR log or its conversion failed.
     #[error(transparent)]
     PocketSdr(#[from] PocketSdrError),
+    /// The inputs named are incomplete or name a conversion without its
+    /// log ([`InputChoice::inputs`]; the message names the options).
+    #[error("{0}")]
+    Choice(String),
     /// A route that models its receiver's loop got settings that state
     /// another one.
     #[error("{conf}: the GNSS-SDR configuration states the receiver loop; the settings must leave it unstated")]

@@ -121,7 +121,8 @@ pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use output::{
-    FileError, OutputPathError, check_output_dir, check_output_file, check_output_file_in, create_file, write_file,
+    ExportError, FileError, OutputPathError, check_output_dir, check_output_file, check_output_file_in, create_file,
+    write_file,
 };
 pub use row::{RowError, parse_imu_row, parse_tracking_row};
 pub use signal::{CARRIER_MATCH_HZ, Carrier, GLONASS_K, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};

@@ -56,6 +56,31 @@ pub struct FileError {
     pub source: std::io::Error,
 }
 
+/// Why an export (a converted log, what became of its tracks, the text
+/// telling about them) could not be written: one type for every receiver's
+/// export, whatever encodes its records.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExportError {
+    /// A file could not be made or written.
+    #[error(transparent)]
+    File(#[from] FileError),
+    /// Writing the rows, or telling about them, failed.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// A record could not be encoded (as JSON, say).
+    #[error(transparent)]
+    Encode(Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl ExportError {
+    /// The error of the encoder of a record (`serde_json`'s, say), kept as
+    /// it is: its message is this error's.
+    pub fn encode(error: impl std::error::Error + Send + Sync + 'static) -> Self {
+        ExportError::Encode(Box::new(error))
+    }
+}
+
 /// The file `path`, made afresh (emptied if it exists).
 pub fn create_file(path: &Path) -> Result<std::fs::File, FileError> {
     std::fs::File::create(path).map_err(|source| FileError { path: path.to_path_buf(), action: "create", source })
@@ -132,6 +157,11 @@ mod tests {
         assert_eq!(e.to_string(), format!("{}: cannot create", missing.display()));
         let e = write_file(&missing, "x").unwrap_err();
         assert_eq!((e.action, e.source.kind()), ("write", std::io::ErrorKind::NotFound));
+        // An export's error says what its cause says.
+        let e = ExportError::from(write_file(&missing, "x").unwrap_err());
+        assert_eq!(e.to_string(), format!("{}: cannot write", missing.display()));
+        let encoded = ExportError::encode(std::fmt::Error);
+        assert_eq!(encoded.to_string(), std::fmt::Error.to_string());
         let fine = dir.path().join("f.csv");
         write_file(&fine, "x").unwrap();
         assert_eq!(std::fs::read_to_string(&fine).unwrap(), "x");

@@ -10,7 +10,7 @@ fn session_at_60_s() -> (LiveSession, Vec<Input>) {
     let dir = std::env::temp_dir().join(format!("gsens-live-bench-{}", std::process::id()));
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, &dir, |_| {}).unwrap();
     let inputs = read_session_dir(&dir).unwrap();
-    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+    let settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     let mut live = LiveSession::new(LiveConfig::new(settings, 8e-4)).unwrap();
     let mut rest = Vec::new();
     for (k, x) in inputs.into_iter().enumerate() {

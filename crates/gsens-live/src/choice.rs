@@ -55,6 +55,31 @@ pub enum InputChoiceError {
     Monitor(#[from] GnssSdrError),
 }
 
+impl InputChoiceError {
+    /// The message with every option it names spelled by `name` (a command
+    /// line's flag, say): what to give for an input, a file to follow, the
+    /// loop options to leave out; `None` where it names no option (its own
+    /// message stands).
+    pub fn named(&self, name: impl Fn(&str) -> String) -> Option<String> {
+        match self {
+            InputChoiceError::NoInput => {
+                let (stdin, imu, tracking) = (name("stdin"), name("follow_imu"), name("follow_tracking"));
+                let (monitor, conf) = (name("gnss_sdr_monitor"), name("gnss_sdr_conf"));
+                Some(format!(
+                    "no input: give {stdin} (the merged stream `gsens replay` writes), {imu} IMU.CSV with {tracking} \
+                     TRACKING.CSV (growing files), or {imu} IMU.CSV with {monitor} ADDR and {conf} CONF (GNSS-SDR's \
+                     tracking monitor)"
+                ))
+            }
+            InputChoiceError::NotAFile { option, .. } => {
+                Some(format!("{}{}", name(option), &self.to_string()[option.len()..]))
+            }
+            InputChoiceError::LoopStatedTwice { .. } => Some(gsens_gnss_sdr::loop_stated_twice(name)),
+            InputChoiceError::Monitor(_) => None,
+        }
+    }
+}
+
 impl InputChoice {
     /// Checks that one input is named completely and that the files to
     /// follow exist.
@@ -124,6 +149,15 @@ mod tests {
         let e = files.check().unwrap_err();
         assert!(matches!(&e, InputChoiceError::NotAFile { option: "follow_tracking", exists: true, .. }), "{e}");
         assert!(e.to_string().ends_with(": not a file"), "{e}");
+        let flag = |n: &str| format!("<{n}>");
+        let named = format!("<follow_tracking> {}: not a file", dir.path().display());
+        assert_eq!(e.named(flag), Some(named));
+        let no_input = InputChoiceError::NoInput.named(flag).unwrap();
+        assert!(
+            no_input.starts_with("no input: give <stdin> (")
+                && no_input.ends_with("<gnss_sdr_conf> CONF (GNSS-SDR's tracking monitor)"),
+            "{no_input}"
+        );
         let tracking = dir.path().join("tracking.csv");
         std::fs::write(&tracking, "").unwrap();
         let files = InputChoice { follow_tracking: Some(tracking.clone()), ..files };
@@ -146,5 +180,7 @@ mod tests {
         };
         let Err(e) = choice.inputs(true) else { panic!("a stated loop with a monitor was accepted") };
         assert!(matches!(&e, InputChoiceError::LoopStatedTwice { conf: c } if *c == conf), "{e}");
+        let named = e.named(|n| n.to_string()).unwrap();
+        assert_eq!(named, "gnss_sdr_conf states the receiver loop: leave out order, bn_hz and the like");
     }
 }

@@ -46,7 +46,6 @@ mod runtime;
 mod session;
 mod sources;
 mod stream;
-mod truth;
 
 pub use choice::{InputChoice, InputChoiceError, LOOP_NOT_STATED};
 pub use clock::{Clock, ManualClock, SystemClock};
@@ -58,7 +57,7 @@ pub use input::{
 pub use monitor::{Datagrams, MonitorInput, receive_monitor, record_monitor};
 pub use monitor_setup::{MonitorSetup, NoticeLimit, monitor_setup, render_recorded_tracks};
 pub use motion::{MotionWindow, Shaking};
-pub use pacing::{CreateError, ReplaySink, replay};
+pub use pacing::{CreateError, ReplaySink, SpeedError, check_speed, replay};
 pub use recording::{MonitorRecording, RecordingError};
 pub use replay::read_session_dir;
 pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
@@ -67,4 +66,3 @@ pub use session::{
 };
 pub use sources::{LineFormat, Source, SourceEvent};
 pub use stream::{Epoch, EpochAverager, StreamEstimate};
-pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop};

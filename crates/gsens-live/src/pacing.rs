@@ -74,6 +74,17 @@ impl ReplaySink {
     }
 }
 
+/// A replay's speed that is neither 0 (as fast as possible) nor a finite
+/// multiple of real time above 0.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("speed {0}: must be 0 (as fast as possible) or positive")]
+pub struct SpeedError(pub f64);
+
+/// Checks a replay's speed: 0 (as fast as possible) or finite and > 0.
+pub fn check_speed(speed: f64) -> Result<(), SpeedError> {
+    if speed.is_finite() && speed >= 0.0 { Ok(()) } else { Err(SpeedError(speed)) }
+}
+
 /// Writes `inputs` to `sink` at `speed` times real time as `clock` keeps it
 /// (0: as fast as possible): the record stamped t goes out once
 /// (t − t₀)/speed has passed since the start, t₀ the first record's stamp,
@@ -109,6 +120,16 @@ mod tests {
     use crate::clock::ManualClock;
     use gsens_io::TrackingRow;
     use std::sync::{Arc, Mutex};
+
+    /// 0 and finite speeds above it replay; anything else is refused, named.
+    #[test]
+    fn a_speed_is_0_or_finite_and_positive() {
+        assert!(check_speed(0.0).is_ok() && check_speed(2.5).is_ok());
+        for bad in [-1.0, -0.0 - 1e-9, f64::NAN, f64::INFINITY] {
+            assert!(check_speed(bad).is_err(), "{bad}");
+        }
+        assert_eq!(check_speed(-1.0).unwrap_err().to_string(), "speed -1: must be 0 (as fast as possible) or positive");
+    }
 
     /// A writer into a shared buffer; fails with a closed pipe once `limit` bytes are in.
     #[derive(Clone)]

@@ -136,6 +136,13 @@ impl core::fmt::Display for Ending {
     }
 }
 
+impl Ending {
+    /// The line that leads the final report: why the session ended.
+    pub fn heading(&self) -> String {
+        format!("ended: {self}; the final estimate on everything received:\n")
+    }
+}
+
 /// What can stop a live session.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -191,6 +198,19 @@ pub struct Finished {
     pub tracking: TrackingLog,
     /// Whether every axis met the target σ.
     pub target_met: bool,
+}
+
+impl Finished {
+    /// What to do when the session ended before every axis met the target
+    /// σ `target_sigma_hz_per_mps2`; `None` when it met it.
+    pub fn target_missed(&self, target_sigma_hz_per_mps2: f64) -> Option<String> {
+        (!self.target_met).then(|| {
+            format!(
+                "the target σ ({target_sigma_hz_per_mps2} Hz/(m/s²)) was not met on every axis: shake longer, or \
+                 lower the target\n"
+            )
+        })
+    }
 }
 
 /// A live session running: its inputs' threads started, its files kept.
@@ -287,6 +307,14 @@ impl Runtime {
             band.band_hz[1],
             self.session.protocol().why()
         )
+    }
+
+    /// The lines that open the session: the shaking advice
+    /// ([`Runtime::shaking_advice`]), and the warning of settings that state
+    /// no receiver loop ([`crate::LOOP_NOT_STATED`]).
+    pub fn opening(&self) -> String {
+        let unstated = if self.session.config().settings.loop_stated { "" } else { crate::LOOP_NOT_STATED };
+        format!("gsens live: {}\n{unstated}", self.shaking_advice())
     }
 
     /// Runs the session until every input ended, a key, or the target σ on every axis.

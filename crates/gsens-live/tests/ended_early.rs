@@ -20,7 +20,7 @@ fn ended_at_30_s_the_estimate_holds_its_sigma() {
             serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
         let gamma_imu: Vec<f64> =
             truth["gamma_imu_axes_hz_per_mps2"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-        let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+        let settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
         let mut live = LiveSession::new(LiveConfig::new(settings, 1e-5)).unwrap();
         for (k, x) in read_session_dir(&dir).unwrap().iter().enumerate() {
             if x.t_s() > 30.0 {

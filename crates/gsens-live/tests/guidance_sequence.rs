@@ -12,7 +12,7 @@ fn asks_for_x_then_y_then_z_and_stops_at_the_target() {
     let scenario = gsens_sim::scenario::Scenario::default();
     gsens_sim::simulate_to_dir(&scenario, 1, &dir, |_| {}).unwrap();
     let inputs = read_session_dir(&dir).unwrap();
-    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+    let settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     let mut live = LiveSession::new(LiveConfig::new(settings, 8e-4)).unwrap();
     let mut said: Vec<(f64, Instruction)> = Vec::new();
     let mut stopped_at = None;

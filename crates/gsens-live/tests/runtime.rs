@@ -42,6 +42,8 @@ fn a_replayed_session_reaches_the_target() {
     let inputs = Inputs::Events { sources, events: rx };
     let mut runtime = Runtime::start(config(inputs, &out, settings, 0.0), Arc::new(ManualClock::new())).unwrap();
     assert!(runtime.shaking_advice().starts_with("target σ 0.0008 Hz/(m/s²) per axis; shake each axis at"));
+    // The loop is truth.json's, stated: the opening is the advice alone.
+    assert_eq!(runtime.opening(), format!("gsens live: {}\n", runtime.shaking_advice()));
     let mut lines = Vec::new();
     let ending = runtime.run(Display::Plain(&mut lines)).unwrap();
     let text = String::from_utf8(lines).unwrap();
@@ -51,8 +53,9 @@ fn a_replayed_session_reaches_the_target() {
     let order = ["rest: measuring", "shake x", "shake y", "shake z", "done: every axis meets the target σ"].map(first);
     assert!(order.iter().all(Option::is_some) && order.is_sorted(), "{}", said.join("\n"));
     assert!(text.lines().any(|l| l.contains("Γ̂ [Hz/(m/s²)]") && l.ends_with("| trustworthy")), "{text}");
+    assert_eq!(ending.heading(), "ended: every axis meets the target σ; the final estimate on everything received:\n");
     let finished = runtime.finish().unwrap();
-    assert!(finished.target_met);
+    assert!(finished.target_met && finished.target_missed(8e-4).is_none());
     let doc = finished.outcome.document(None);
     assert!(doc.trustworthy, "{:?}", doc.warnings);
     for s in finished.outcome.calibration.sigma_statistical_hz_per_mps2 {
@@ -69,7 +72,7 @@ fn a_replayed_session_reaches_the_target() {
 /// The default session (seed 1) simulated into `dir`; the settings with its loop.
 fn simulated_session(dir: &std::path::Path) -> PipelineSettings {
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, dir, |_| {}).unwrap();
-    gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap()
+    gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap()
 }
 
 /// The session's plain lines (instructions, batch estimates) and its end,
@@ -82,6 +85,11 @@ fn whole_session(inputs: Inputs, out: &std::path::Path, settings: PipelineSettin
     assert_eq!(runtime.run(Display::Plain(&mut lines)).unwrap(), Ending::InputEnded);
     let said = String::from_utf8(lines).unwrap().lines().filter(|l| l.starts_with('[')).map(String::from).collect();
     let finished = runtime.finish().unwrap();
+    let missed = finished.target_missed(1e-6).unwrap();
+    assert_eq!(
+        missed,
+        "the target σ (0.000001 Hz/(m/s²)) was not met on every axis: shake longer, or lower the target\n"
+    );
     (said, finished.target_met, finished.outcome.document(None).trustworthy)
 }
 

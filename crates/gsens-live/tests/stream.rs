@@ -19,7 +19,7 @@ fn session(dir_name: &str) -> (tempfile::TempDir, PipelineSettings) {
     let scratch = tempfile::Builder::new().prefix(&format!("gsens-live-{dir_name}-")).tempdir().unwrap();
     let dir = scratch.path();
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, dir, |_| {}).unwrap();
-    let settings = gsens_live::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+    let settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
     (scratch, settings)
 }
 

@@ -66,6 +66,24 @@ pub fn simulate_demo(
     Ok(Demo { scenario: scenario.clone(), seed, truth, imu, tracking, settings })
 }
 
+/// The line that opens a demo of `scenario` (`named`: the caller's, else
+/// the embedded paper experiment) at `seed` into `dir`, a folder of the
+/// run's own removed at the end when `scratch` (the option `out`, named by
+/// `name`, keeps the logs).
+pub fn render_demo_start(
+    scenario: &Scenario,
+    named: bool,
+    seed: u64,
+    dir: &Path,
+    scratch: bool,
+    name: impl Fn(&str) -> String,
+) -> String {
+    let which = if named { "given scenario" } else { "paper's experiment" };
+    let kept =
+        if scratch { format!(" (removed at the end: {} DIR keeps the logs)", name("out")) } else { String::new() };
+    format!("simulating {:.0} s of the {which} (seed {seed}) into {}{kept} …\n", scenario.duration_s(), dir.display())
+}
+
 impl Demo {
     /// The estimate from the files written, as `calibrate_files` makes it.
     pub fn calibrate(&self) -> Result<Outcome, PipelineError> {
@@ -102,6 +120,22 @@ impl Demo {
             options.push(("imu_misalignment_sigma_mrad", Decimal(e.imu_misalignment_sigma_rad * 1e3).to_string()));
         }
         options
+    }
+
+    /// The line that says how the demo estimates: from the logs written,
+    /// as `gsens estimate` would with the [`Demo::stated_options`] and
+    /// `given` (the caller's own estimation options, as given), every
+    /// option named by `name` (a command line's flag, say).
+    pub fn estimate_line(&self, given: &[String], name: impl Fn(&str) -> String) -> String {
+        let (i, t) = (self.imu.display(), self.tracking.display());
+        let stated = self.stated_options().into_iter().map(|(option, v)| format!("{} {v}", name(option)));
+        let options: Vec<String> = stated.chain(given.iter().cloned()).collect();
+        format!(
+            "estimating from {i} and {t} (the command line: gsens estimate {} {i} {} {t} {})\n\n",
+            name("imu"),
+            name("tracking"),
+            options.join(" ")
+        )
     }
 
     /// The Allan deviation of the scenario's oscillator, simulated for 20
@@ -141,6 +175,22 @@ mod tests {
         let demo = demo_of(&scenario, dir.path());
         assert!(demo.imu.is_file() && demo.tracking.is_file() && dir.path().join("truth.json").is_file());
         let stated: Vec<String> = demo.stated_options().iter().map(|(k, v)| format!("{k}={v}")).collect();
+        let line = demo.estimate_line(&["<method>".into(), "gls".into()], |n| format!("<{n}>"));
+        let (i, t) = (demo.imu.display(), demo.tracking.display());
+        let expected = format!(
+            "estimating from {i} and {t} (the command line: gsens estimate <imu> {i} <tracking> {t} <order> 2 <bn_hz> 3 \
+             <loop_interval_s> 0.001 <logged_phase> mean <imu_scale_sigma_ppm> 1000 <imu_misalignment_sigma_mrad> 1 \
+             <method> gls)\n\n"
+        );
+        assert_eq!(line, expected);
+        let start = render_demo_start(&scenario, false, 3, dir.path(), true, |n| format!("<{n}>"));
+        let into = dir.path().display();
+        let expected = format!(
+            "simulating 45 s of the paper's experiment (seed 3) into {into} (removed at the end: <out> DIR keeps the logs) …\n"
+        );
+        assert_eq!(start, expected);
+        let kept = render_demo_start(&scenario, true, 3, dir.path(), false, |n| format!("<{n}>"));
+        assert_eq!(kept, format!("simulating 45 s of the given scenario (seed 3) into {into} …\n"));
         // The embedded scenario: the paper's 2nd-order 3 Hz loop at 1 ms, the mean logged,
         // an IMU with 1000 ppm scale and 1 mrad misalignment; GPS L1.
         let expected = [

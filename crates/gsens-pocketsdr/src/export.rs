@@ -2,22 +2,8 @@
 //! pocketsdr` does), with what became of each track as JSON when asked.
 
 use crate::import::{Imported, render_summary};
+use gsens_io::ExportError;
 use std::path::Path;
-
-/// Why an import's files could not be written.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ExportError {
-    /// A file could not be made or written.
-    #[error(transparent)]
-    File(#[from] gsens_io::FileError),
-    /// Writing the rows, or telling about them, failed.
-    #[error(transparent)]
-    Io(#[from] std::io::Error),
-    /// The conversion could not be put as JSON.
-    #[error(transparent)]
-    Json(#[from] serde_json::Error),
-}
 
 /// Where an import of the log `log` (made with the options file `conf`)
 /// goes: the tracking log `csv`, and the conversion as JSON in `tracks_json`.
@@ -57,7 +43,7 @@ impl Export<'_> {
             imported.stage.bw_hz
         ))?;
         if let Some(path) = self.tracks_json {
-            gsens_io::write_file(path, serde_json::to_string_pretty(imported)? + "\n")?;
+            gsens_io::write_file(path, serde_json::to_string_pretty(imported).map_err(ExportError::encode)? + "\n")?;
         }
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! The crate documentation's section "From `$CH` lines to tracking rows" describes this module.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
@@ -15,6 +15,37 @@ use crate::options::{DEFAULT_EPOCH_S, PocketSdrOptions, Setting, SettingSource};
 
 /// The signal gsens estimates from.
 pub(crate) const L1CA: &str = "L1CA";
+
+/// A log's conversion as a caller names it: the options file `pocket_trk`
+/// ran with and the values set instead of the derived ones; every field at
+/// its default names PocketSDR's defaults.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImportOptions {
+    /// The `pocket_trk` options file (`-opt FILE`); `None`: PocketSDR's defaults.
+    pub conf: Option<PathBuf>,
+    /// [`ImportSettings::settle_s`] \[s\].
+    pub settle_s: Option<f64>,
+    /// [`ImportSettings::toff_s`] \[s\].
+    pub toff_s: f64,
+}
+
+impl ImportOptions {
+    /// The settings they name, checked ([`ImportSettings::check`]).
+    pub fn settings(&self) -> Result<ImportSettings, PocketSdrError> {
+        let settings = ImportSettings {
+            settle_s: self.settle_s,
+            toff_s: self.toff_s,
+            ..ImportSettings::from_options_file(self.conf.as_deref())?
+        };
+        settings.check()?;
+        Ok(settings)
+    }
+
+    /// Whether any option is set (they need a log to act on).
+    pub fn given(&self) -> bool {
+        *self != ImportOptions::default()
+    }
+}
 
 /// How a log is converted.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -622,6 +653,22 @@ pub fn render_summary(imported: &Imported) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The options name the settings (PocketSDR's defaults when none is
+    /// given), are checked as the settings are, and are given when any
+    /// differs from its default.
+    #[test]
+    fn options_name_their_settings_and_say_when_any_is_given() {
+        let none = ImportOptions::default();
+        assert!(!none.given());
+        assert_eq!(none.settings().unwrap(), ImportSettings::from_options_file(None).unwrap());
+        let set = ImportOptions { settle_s: Some(2.0), toff_s: 0.5, ..ImportOptions::default() };
+        assert!(set.given() && ImportOptions { toff_s: f64::NAN, ..none.clone() }.given());
+        let s = set.settings().unwrap();
+        assert_eq!((s.settle_s, s.toff_s), (Some(2.0), 0.5));
+        let e = ImportOptions { toff_s: -1.0, ..none }.settings().unwrap_err();
+        assert_eq!((e.to_string().as_str(), e.setting()), ("toff_s must be ≥ 0 and finite, got -1", Some("toff_s")));
+    }
 
     /// A settling time or `-toff` below 0 (or not finite) is refused, the
     /// message beginning with the field's name.

@@ -124,8 +124,8 @@ mod options;
 mod pipeline;
 
 pub use error::PocketSdrError;
-pub use export::{Export, ExportError};
-pub use import::{ImportSettings, Imported, TrackSummary, import_file, import_log, render_summary};
+pub use export::Export;
+pub use import::{ImportOptions, ImportSettings, Imported, TrackSummary, import_file, import_log, render_summary};
 pub use log::{ChRecord, Garbled, PocketSdrLog, parse_log, read_log};
 pub use options::{PocketSdrOptions, Setting, SettingSource};
 pub use pipeline::{PocketSdrOutcome, calibrate_pocketsdr, pocketsdr_tracking_log};

@@ -681,7 +681,28 @@ pub struct ResponseData {
     pub description: String,
 }
 
+/// A response table's range that is not 0 < f_min < f_max with at least
+/// two points ([`ResponseData::check_range`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ResponseRangeError(String);
+
 impl ResponseData {
+    /// Checks a table's range: 0 < `f_min_hz` < `f_max_hz` and `points` ≥ 2;
+    /// the message names the three by `name` (a command line's flag, say).
+    pub fn check_range(
+        f_min_hz: f64,
+        f_max_hz: f64,
+        points: usize,
+        name: impl Fn(&str) -> String,
+    ) -> Result<(), ResponseRangeError> {
+        if f_min_hz > 0.0 && f_max_hz > f_min_hz && points >= 2 {
+            return Ok(());
+        }
+        let (min, max, points) = (name("f_min_hz"), name("f_max_hz"), name("points"));
+        Err(ResponseRangeError(format!("need 0 < {min} < {max} and {points} ≥ 2")))
+    }
+
     /// Samples the response of `model` at `points` log-spaced frequencies from
     /// `f_min_hz` to `f_max_hz` (below the Nyquist frequency of its update
     /// rate) with its peak and half-power band, all from the loop itself
@@ -1437,6 +1458,16 @@ pub fn fig_lock_margin(data: &LockMarginData, format: Format, size: (u32, u32)) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A table needs 0 < f_min < f_max and two points; the message names them as the caller does.
+    #[test]
+    fn a_response_range_is_checked() {
+        assert!(ResponseData::check_range(0.05, 20.0, 2, |s: &str| s.to_string()).is_ok());
+        for (lo, hi, n) in [(0.0, 20.0, 25), (5.0, 1.0, 25), (0.05, 20.0, 1), (f64::NAN, 20.0, 25)] {
+            let e = ResponseData::check_range(lo, hi, n, |s| format!("<{s}>")).unwrap_err();
+            assert_eq!(e.to_string(), "need 0 < <f_min_hz> < <f_max_hz> and <points> ≥ 2");
+        }
+    }
 
     #[test]
     fn ticks() {

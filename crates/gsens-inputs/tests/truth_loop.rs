@@ -4,7 +4,7 @@
 
 use gsens_calib::{CalibrationOptions, calibrate_files};
 use gsens_core::LoggedPhase;
-use gsens_live::take_truth_loop;
+use gsens_inputs::take_truth_loop;
 use gsens_sim::motion::Segment;
 use gsens_sim::scenario::Scenario;
 use std::path::Path;

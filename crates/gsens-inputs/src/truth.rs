@@ -67,6 +67,29 @@ pub fn take_truth_loop(settings: &mut PipelineSettings, truth_json: &Path) -> Re
     Ok(TruthLoopUse::Taken { truth })
 }
 
+/// [`take_truth_loop`] of `truth_json` when one is given, with its note
+/// ([`TruthLoopUse::note`]); `None` without one.
+pub fn truth_loop_note(
+    settings: &mut PipelineSettings,
+    truth_json: Option<&Path>,
+) -> Result<Option<String>, LoadError> {
+    truth_json.map(|path| Ok(take_truth_loop(settings, path)?.note(path))).transpose()
+}
+
+impl crate::Inputs {
+    /// [`truth_loop_note`] for a calibration from these inputs: a
+    /// receiver's log comes with its receiver's loop
+    /// ([`crate::Inputs::models_the_loop`]), which a simulated session's is
+    /// not put in place of (`None`: nothing taken, nothing to say).
+    pub fn truth_loop_note(
+        &self,
+        settings: &mut PipelineSettings,
+        truth_json: Option<&Path>,
+    ) -> Result<Option<String>, LoadError> {
+        truth_loop_note(settings, truth_json.filter(|_| !self.models_the_loop()))
+    }
+}
+
 /// The default settings with the loop of the simulated session's
 /// `truth_json` (the default's stated loop when it states none).
 pub fn settings_of_simulated_session(truth_json: &Path) -> Result<PipelineSettings, LoadError> {
@@ -110,5 +133,8 @@ mod tests {
             TruthLoopUse::NotStated.note(&path),
             format!("receiver loop: from the options ({shown} states none)")
         );
+        // The note of a truth.json given, nothing without one.
+        assert_eq!(truth_loop_note(&mut settings, Some(&path)).unwrap(), Some(expected));
+        assert_eq!(truth_loop_note(&mut settings, None).unwrap(), None);
     }
 }
