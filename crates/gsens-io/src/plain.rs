@@ -196,6 +196,23 @@ pub(crate) fn split(text: &[u8]) -> Vec<&[u8]> {
     text.split(|&b| b == b',').collect()
 }
 
+/// The value of the decimal digits that start `text` (at most `max` of
+/// them, `max` ≤ 19 so that the value fits) and their count.
+#[inline]
+fn leading_digits(text: &[u8], max: usize) -> (u64, usize) {
+    let mut v = 0u64;
+    let mut len = 0;
+    for &b in text.iter().take(max) {
+        let d = b.wrapping_sub(b'0');
+        if d > 9 {
+            break;
+        }
+        v = v * 10 + u64::from(d);
+        len += 1;
+    }
+    (v, len)
+}
+
 /// The cells of a record read in place, left to right, each parsed as it is
 /// reached: no pass to find the commas first. A cell is taken only when it
 /// is exactly what [`crate::parse`]'s rules would make of it without
@@ -248,6 +265,14 @@ impl<'a> Cells<'a> {
             self.past(rest, 0);
             return Some(None);
         }
+        // A whole number of up to 15 digits (C/N0 and elevation as many
+        // receivers log them) is below 2⁵³, so exact as an f64: the value
+        // the float parser would give, read without it.
+        let (v, len) = leading_digits(rest, 15);
+        if len > 0 && matches!(rest.get(len), None | Some(b',')) {
+            self.past(rest, len);
+            return Some(Some(v as f64));
+        }
         // fast-float2's full parse is this partial one with every byte used:
         // the same number, read without first finding where the cell ends.
         let (v, len) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
@@ -259,12 +284,22 @@ impl<'a> Cells<'a> {
     #[inline]
     pub(crate) fn integer(&mut self) -> Option<u32> {
         let rest = self.rest?;
-        let len = rest.iter().take(10).take_while(|b| b.is_ascii_digit()).count();
+        let (v, len) = leading_digits(rest, 10);
         if len == 0 || len > 9 {
             return None;
         }
-        let v = rest[..len].iter().fold(0u32, |acc, d| acc * 10 + u32::from(d - b'0'));
-        self.past(rest, len).then_some(v)
+        self.past(rest, len).then_some(v as u32)
+    }
+
+    /// Moves past the next cell when it is exactly `text` (followed by a
+    /// comma or the line's end): the common case of a cell that repeats
+    /// the previous row's, recognized without searching for its end.
+    #[inline]
+    pub(crate) fn skip_if(&mut self, text: &[u8]) -> bool {
+        match self.rest {
+            Some(rest) if rest.starts_with(text) => self.past(rest, text.len()),
+            _ => false,
+        }
     }
 
     /// Whether every cell has been read.
@@ -358,8 +393,23 @@ mod tests {
     #[test]
     fn cells_read_what_the_rules_read() {
         use crate::parse::{cell_f64, cell_u32};
-        let plain_numbers =
-            ["0", "12", "123456789", "0.042199930681108805", "-3.5e-7", "1.", ".5", "-.5e3", "9.80665", "1e-400", ""];
+        let plain_numbers = [
+            "0",
+            "12",
+            "007",
+            "123456789",
+            "999999999999999",
+            "9007199254740993",
+            "1234567890123456789012",
+            "0.042199930681108805",
+            "-3.5e-7",
+            "1.",
+            ".5",
+            "-.5e3",
+            "9.80665",
+            "1e-400",
+            "",
+        ];
         let others = [
             "1234567890",
             "4294967296",

@@ -902,17 +902,50 @@ fn plain_rows(
         carrier: Carrier::GPS_L1,
         nco: [None; 2],
     };
+    // The writer's layout (the six columns in their order, nothing else) is
+    // read cell after cell without consulting the layout.
+    let writers_layout = fields == TRACKING_COLUMNS.len() && cols.iter().enumerate().all(|(i, &c)| c == i);
     let mut values = |text: &[u8]| -> Option<RowValues> {
+        if writers_layout {
+            let mut cells = Cells::new(text);
+            let mut stamp_of = |cells: &mut Cells| match stamp.t_s {
+                // The rows of an epoch repeat its stamp's text.
+                Some(t) if cells.skip_if(&stamp.text) => Some(t),
+                _ => cells.text().and_then(|c| stamp.get(c, || cell_f64(c).ok().flatten().ok_or(())).ok()),
+            };
+            let row = (|| {
+                Some(RowValues {
+                    t_s: stamp_of(&mut cells)?,
+                    channel: cells.integer()?,
+                    prn: cells.integer()?,
+                    cn0_dbhz: cells.number()??,
+                    elev_deg: cells.number()?.unwrap_or(nan),
+                    phase_err_rad: cells.number()??,
+                    carrier: Carrier::GPS_L1,
+                    nco: [None; 2],
+                })
+            })();
+            if let Some(r) = row.filter(|_| cells.finished()) {
+                return Some(r);
+            }
+        }
         // In place first; a row it does not take is split and read by the rules.
         let mut cells = Cells::new(text);
         let mut r = blank;
         let in_place = layout.iter().all(|cell| {
             let got = match cell {
                 Cell::Other => cells.text().map(|_| ()),
-                Cell::T => cells
-                    .text()
-                    .and_then(|c| stamp.get(c, || cell_f64(c).ok().flatten().ok_or(())).ok())
-                    .map(|t| r.t_s = t),
+                Cell::T => match stamp.t_s {
+                    // The rows of an epoch repeat its stamp's text.
+                    Some(t) if cells.skip_if(&stamp.text) => {
+                        r.t_s = t;
+                        Some(())
+                    }
+                    _ => cells
+                        .text()
+                        .and_then(|c| stamp.get(c, || cell_f64(c).ok().flatten().ok_or(())).ok())
+                        .map(|t| r.t_s = t),
+                },
                 Cell::Channel => cells.integer().map(|v| r.channel = v),
                 Cell::Prn => cells.integer().map(|v| r.prn = v),
                 Cell::Cn0 => cells.number().flatten().map(|v| r.cn0_dbhz = v),
@@ -1459,6 +1492,22 @@ mod tests {
                 "{m}"
             );
         }
+    }
+
+    /// A stamp whose text starts with the previous row's (`0.1` then
+    /// `0.12`, `1` then `10`) is a new epoch, read on its own.
+    #[test]
+    fn stamps_that_extend_the_previous_ones_text_are_new_epochs() {
+        let mut text = String::from(HEADER);
+        for t in ["0.1", "0.12", "0.125", "1", "10", "10.5", "105"] {
+            for c in 0..3 {
+                text.push_str(&format!("{t},{c},{},40,30,0.0{c}\n", c + 1));
+            }
+        }
+        let f = TempFile::new("stamp-prefixes.csv", &text);
+        let plain = read_plain(&f.0, &path_name(&f.0), text.len() as u64, CHUNK_BYTES).expect("a clean file");
+        assert_eq!(plain.epoch_t_s(), [0.1, 0.12, 0.125, 1.0, 10.0, 10.5, 105.0]);
+        assert_eq!(plain, read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
     }
 
     /// The quote-free fast path of [`read_tracking_file`] gives the log the
