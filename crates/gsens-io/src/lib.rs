@@ -103,6 +103,7 @@
 //! L1's scale (docs/conventions.md, "Tracking log").
 #![deny(missing_docs)]
 
+mod columns;
 mod config;
 mod error;
 mod imu;
@@ -117,13 +118,14 @@ mod tracking;
 mod vibration;
 mod writers;
 
+pub use columns::{HeaderError, TrackingColumns};
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
 pub use output::{
     FileError, OutputPathError, check_output_dir, check_output_file, check_output_file_in, create_file, write_file,
 };
-pub use row::{RowError, parse_imu_row, parse_tracking_row};
+pub use row::{RowError, TrackingRecord, parse_imu_row, parse_tracking_row};
 pub use signal::{CARRIER_MATCH_HZ, Carrier, GLONASS_K, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{
     CARRIER_COLUMNS, ChannelTrack, NCO_COLUMNS, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file,
