@@ -34,7 +34,10 @@
 //! carrier of each row in `signal`, `glo_k` and `carrier_hz` ([`CARRIER_COLUMNS`]).
 //!
 //! The columns may come in any order and extra columns are ignored, but the six
-//! must all be present. `elev_deg` may be empty (unknown elevation); every other
+//! must all be present. Where they are is read off the header
+//! ([`TrackingColumns`]); the file reader parses each row by that map, and
+//! [`TrackingColumns::parse_row`] parses one line by the same row parser for
+//! logs read a line at a time (a row with its optional columns: [`TrackingRecord`]). `elev_deg` may be empty (unknown elevation); every other
 //! cell must hold a finite number (`channel` and `prn`: non-negative integers).
 //! Channels may appear, disappear and reappear.
 //!
