@@ -34,7 +34,10 @@
 //! carrier of each row in `signal`, `glo_k` and `carrier_hz` ([`CARRIER_COLUMNS`]).
 //!
 //! The columns may come in any order and extra columns are ignored, but the six
-//! must all be present. `elev_deg` may be empty (unknown elevation); every other
+//! must all be present. Where they are is read off the header
+//! ([`TrackingColumns`]); the file reader parses each row by that map, and
+//! [`TrackingColumns::parse_row`] parses one line by the same row parser for
+//! logs read a line at a time (a row with its optional columns: [`TrackingRecord`]). `elev_deg` may be empty (unknown elevation); every other
 //! cell must hold a finite number (`channel` and `prn`: non-negative integers).
 //! Channels may appear, disappear and reappear.
 //!
@@ -103,6 +106,7 @@
 //! L1's scale (docs/conventions.md, "Tracking log").
 #![deny(missing_docs)]
 
+mod columns;
 mod config;
 mod error;
 mod imu;
@@ -117,6 +121,7 @@ mod tracking;
 mod vibration;
 mod writers;
 
+pub use columns::{HeaderError, TrackingColumns};
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
@@ -124,7 +129,7 @@ pub use output::{
     ExportError, FileError, OutputPathError, check_output_dir, check_output_file, check_output_file_in, create_file,
     write_file,
 };
-pub use row::{RowError, parse_imu_row, parse_tracking_row};
+pub use row::{RowError, TrackingRecord, parse_imu_row, parse_tracking_row};
 pub use signal::{CARRIER_MATCH_HZ, Carrier, GLONASS_K, GNSS_BAND_HZ, SIGNALS, Signal, SignalError, SignalSpec};
 pub use tracking::{
     CARRIER_COLUMNS, ChannelTrack, NCO_COLUMNS, TRACKING_COLUMNS, TrackingLog, read_tracking, read_tracking_file,

@@ -2,6 +2,7 @@
 
 use std::io::Read;
 
+use crate::columns::{CellFault, Fault, HeaderError};
 use crate::error::{Column, FormatError};
 
 /// The bytes of a source as the `csv` reader reads them, kept from the
@@ -123,32 +124,40 @@ impl<R: Read> CsvSource<R> {
         Ok((src, indices))
     }
 
-    /// The 0-based position of the optional column `name`, `None` when the
-    /// header lacks it; a column named twice is an error.
-    pub(crate) fn optional_column(&self, name: &str) -> Result<Option<usize>, FormatError> {
-        let mut found = self.header.iter().enumerate().filter(|(_, h)| *h == name).map(|(i, _)| i);
-        match (found.next(), found.next()) {
-            (Some(a), Some(b)) => Err(FormatError::DuplicateColumn {
+    /// The error of a header whose columns gsens cannot read.
+    #[cold]
+    pub(crate) fn header_error(&self, e: HeaderError) -> FormatError {
+        match e {
+            HeaderError::Missing { name } => FormatError::MissingColumn {
+                file: self.file.clone(),
+                missing: name.to_owned(),
+                header: self.header.join(","),
+                expected_header: crate::tracking::TRACKING_COLUMNS.join(","),
+            },
+            HeaderError::Duplicate { name, first_index, second_index } => FormatError::DuplicateColumn {
                 file: self.file.clone(),
                 name: name.to_owned(),
-                first_index: a + 1,
-                second_index: b + 1,
-            }),
-            (a, _) => Ok(a),
+                first_index,
+                second_index,
+            },
         }
     }
 
-    /// Parses the cell at column `index` as an integer (`None` if empty).
-    pub(crate) fn opt_i64_at(&self, index: usize) -> Result<Option<i64>, FormatError> {
-        let raw = self.cell(index).trim_ascii();
-        if raw.is_empty() {
-            return Ok(None);
+    /// The error of a cell of the current record the row parser refused.
+    #[cold]
+    pub(crate) fn cell_error(&self, f: CellFault) -> FormatError {
+        let index = f.index;
+        match f.fault {
+            Fault::Cell { bad: BadCell::Empty, expected } => self.empty_cell_error(index, expected),
+            Fault::Cell { bad: BadCell::NonFinite, .. } => self.non_finite_error(index),
+            Fault::Cell { bad: BadCell::NotANumber, expected } => self.not_a_number_error(index, expected),
+            Fault::Carrier(error) => FormatError::InvalidCarrier {
+                file: self.file.clone(),
+                line: self.line(),
+                column: self.column(index),
+                error: Box::new(error),
+            },
         }
-        std::str::from_utf8(raw)
-            .ok()
-            .and_then(|s| s.trim_start_matches('+').parse::<i64>().ok())
-            .map(Some)
-            .ok_or_else(|| self.not_a_number_error(index, "an integer"))
     }
 
     /// Reads the next record into `self.record`; `false` at the end of the input.
@@ -211,16 +220,6 @@ impl<R: Read> CsvSource<R> {
             Ok(v) => Ok(v),
             Err(BadCell::NonFinite) => Err(self.non_finite_error(index)),
             Err(_) => Err(self.not_a_number_error(index, "a number")),
-        }
-    }
-
-    /// Parses the cell at column `index` as a `u32`.
-    #[inline]
-    pub(crate) fn u32_at(&self, index: usize) -> Result<u32, FormatError> {
-        match cell_u32(self.cell(index)) {
-            Ok(v) => Ok(v),
-            Err(BadCell::Empty) => Err(self.empty_cell_error(index, "a non-negative integer")),
-            Err(_) => Err(self.not_a_number_error(index, "a non-negative integer")),
         }
     }
 

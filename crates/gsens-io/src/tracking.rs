@@ -5,9 +5,11 @@ use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
+use crate::columns::{RowParser, TrackingColumns};
 use crate::error::{Column, FormatError};
 use crate::parse::{CsvSource, path_name};
-use crate::signal::{Carrier, Signal, SignalError};
+use crate::row::TrackingRecord;
+use crate::signal::Carrier;
 use crate::writers::TrackingRow;
 
 /// The columns of `tracking.csv`, in the order the writer emits them.
@@ -206,6 +208,23 @@ struct RowValues {
     carrier: Carrier,
     /// `nco_phase_cycles` and `nco_freq_hz`, when the log has the columns.
     nco: [Option<f64>; 2],
+}
+
+impl RowValues {
+    /// The values of a parsed record (an unknown elevation as NaN, GPS L1 without a carrier).
+    #[inline]
+    fn of(r: &TrackingRecord) -> Self {
+        RowValues {
+            t_s: r.row.t_s,
+            channel: r.row.channel,
+            prn: r.row.prn,
+            cn0_dbhz: r.row.cn0_dbhz,
+            elev_deg: r.row.elev_deg.unwrap_or(f64::NAN),
+            phase_err_rad: r.row.phase_err_rad,
+            carrier: r.carrier_or_l1(),
+            nco: [r.nco_phase_cycles, r.nco_freq_hz],
+        }
+    }
 }
 
 /// Assembles a [`TrackingLog`] row by row with the format's checks (time
@@ -464,7 +483,7 @@ impl TrackingLog {
         source_name: &str,
         rows: impl IntoIterator<Item = R>,
     ) -> Result<TrackingLog, FormatError> {
-        Self::build(source_name, rows.into_iter().map(|r| (r, Carrier::GPS_L1, None)), false)
+        Self::build(source_name, rows.into_iter().map(|r| (r, Carrier::GPS_L1, [None; 2])), false, [None; 2])
     }
 
     /// [`TrackingLog::from_rows`] with each row's carrier, checked as the reader
@@ -475,7 +494,7 @@ impl TrackingLog {
         source_name: &str,
         rows: impl IntoIterator<Item = (R, Carrier)>,
     ) -> Result<TrackingLog, FormatError> {
-        Self::build(source_name, rows.into_iter().map(|(r, c)| (r, c, None)), true)
+        Self::build(source_name, rows.into_iter().map(|(r, c)| (r, c, [None; 2])), true, [None; 2])
     }
 
     /// [`TrackingLog::from_rows_on`] with each row's NCO record
@@ -487,13 +506,69 @@ impl TrackingLog {
         source_name: &str,
         rows: impl IntoIterator<Item = (R, Carrier, [f64; 2])>,
     ) -> Result<TrackingLog, FormatError> {
-        Self::build(source_name, rows.into_iter().map(|(r, c, n)| (r, c, Some(n))), true)
+        let first_nco = TRACKING_COLUMNS.len() + 3;
+        let rows = rows.into_iter().map(|(r, c, [phase, freq])| (r, c, [Some(phase), Some(freq)]));
+        Self::build(source_name, rows, true, [Some(first_nco), Some(first_nco + 1)])
     }
 
+    /// A tracking log from records in memory with the columns of the first
+    /// ([`TrackingRecord::header`]: the carrier and NCO columns it has),
+    /// checked as [`TrackingLog::from_rows`] checks rows and as the reader
+    /// checks those columns. Errors name `source_name`, the line and the
+    /// column each record would have in the `tracking.csv` that
+    /// [`crate::TrackingWriter::for_record`] writes; a record without a
+    /// column the first has is an error naming it, one with a column more
+    /// an error counting them.
+    pub fn from_records<R: Borrow<TrackingRecord>>(
+        source_name: &str,
+        records: impl IntoIterator<Item = R>,
+    ) -> Result<TrackingLog, FormatError> {
+        let mut records = records.into_iter().peekable();
+        let header = records.peek().map(|r| r.borrow().header()).unwrap_or_else(|| TRACKING_COLUMNS.to_vec());
+        let position = |name: &str| header.iter().position(|h| *h == name).map(|i| i + 1);
+        let nco_index = [position(NCO_COLUMNS[0]), position(NCO_COLUMNS[1])];
+        let carrier_columns = position(CARRIER_COLUMNS[0]).is_some();
+        let mut line = 1;
+        let mut checked = Vec::new();
+        let rows = records.map_while(|r| {
+            let r = *r.borrow();
+            line += 1;
+            let columns = r.header();
+            if columns == header {
+                return Some((r.row, r.carrier_or_l1(), [r.nco_phase_cycles, r.nco_freq_hz]));
+            }
+            let file = source_name.to_owned();
+            checked.push(match header.iter().position(|h| !columns.contains(h)) {
+                Some(i) => FormatError::EmptyCell {
+                    file,
+                    line,
+                    column: Column { index: i + 1, name: header[i].to_owned() },
+                    expected: if i < TRACKING_COLUMNS.len() + 2 && carrier_columns {
+                        "the row's carrier (a signal name or carrier_hz)"
+                    } else {
+                        "a number"
+                    },
+                },
+                None => FormatError::FieldCount { file, line, expected: header.len(), found: columns.len() },
+            });
+            None
+        });
+        let log = Self::build(source_name, rows, carrier_columns, nco_index);
+        match checked.pop() {
+            Some(e) => Err(e),
+            None => log,
+        }
+    }
+
+    /// The log of `rows`, each with its carrier and NCO values, written with
+    /// the carrier columns (`signal,carrier_hz` after the six) when
+    /// `carrier_columns` and the NCO columns at the 1-based `nco_index`
+    /// (for errors); a row's NCO value is `None` where its column is absent.
     fn build<R: Borrow<TrackingRow>>(
         source_name: &str,
-        rows: impl IntoIterator<Item = (R, Carrier, Option<[f64; 2]>)>,
+        rows: impl IntoIterator<Item = (R, Carrier, [Option<f64>; 2])>,
         carrier_columns: bool,
+        nco_index: [Option<usize>; 2],
     ) -> Result<TrackingLog, FormatError> {
         let column = |i: usize| Column { index: i + 1, name: TRACKING_COLUMNS[i].to_owned() };
         let carrier_column = Column { index: TRACKING_COLUMNS.len() + 2, name: "carrier_hz".to_owned() };
@@ -514,14 +589,13 @@ impl TrackingLog {
                     })
                 }
             };
-            let nco_finite = |v: f64, k: usize| {
-                if v.is_finite() {
-                    Ok(v)
-                } else {
-                    let index = TRACKING_COLUMNS.len() + 3 + k;
+            let nco_finite = |v: Option<f64>, k: usize| match v {
+                Some(v) if !v.is_finite() => {
+                    let index = nco_index[k].unwrap_or(TRACKING_COLUMNS.len() + 3 + k);
                     let column = Column { index, name: NCO_COLUMNS[k].to_owned() };
                     Err(FormatError::NonFinite { file: source_name.to_owned(), line, column, value: v.to_string() })
                 }
+                v => Ok(v),
             };
             let checked = Carrier::from_hz(carrier.carrier_hz).and_then(|_| match carrier.signal {
                 Some(s) => s.check_carrier(carrier.carrier_hz),
@@ -546,119 +620,11 @@ impl TrackingLog {
                 },
                 phase_err_rad: finite(row.phase_err_rad, 5)?,
                 carrier,
-                nco: match nco {
-                    Some([phase, freq]) => [Some(nco_finite(phase, 0)?), Some(nco_finite(freq, 1)?)],
-                    None => [None; 2],
-                },
+                nco: [nco_finite(nco[0], 0)?, nco_finite(nco[1], 1)?],
             };
             b.push(&values, line)?;
         }
         b.finish()
-    }
-}
-
-/// The carrier columns of a file (0-based positions) and the last row's carrier cells.
-struct CarrierCells {
-    signal: Option<usize>,
-    glo_k: Option<usize>,
-    carrier_hz: Option<usize>,
-    /// The raw cells of the previous row and its carrier: rows of one track repeat them.
-    prev: Option<(Vec<u8>, Carrier)>,
-}
-
-impl CarrierCells {
-    fn find<R: Read>(src: &CsvSource<R>) -> Result<Self, FormatError> {
-        Ok(CarrierCells {
-            signal: src.optional_column(CARRIER_COLUMNS[0])?,
-            glo_k: src.optional_column(CARRIER_COLUMNS[1])?,
-            carrier_hz: src.optional_column(CARRIER_COLUMNS[2])?,
-            prev: None,
-        })
-    }
-
-    fn any(&self) -> bool {
-        self.signal.is_some() || self.glo_k.is_some() || self.carrier_hz.is_some()
-    }
-
-    /// The column that names the carrier in errors about a track's carrier.
-    fn main_column(&self) -> Option<usize> {
-        self.signal.or(self.carrier_hz).or(self.glo_k)
-    }
-
-    /// The carrier of the current row.
-    fn carrier<R: Read>(&mut self, src: &CsvSource<R>) -> Result<Carrier, FormatError> {
-        if !self.any() {
-            return Ok(Carrier::GPS_L1);
-        }
-        let mut key = Vec::new();
-        for c in [self.signal, self.glo_k, self.carrier_hz].into_iter().flatten() {
-            key.extend_from_slice(src.cell(c));
-            key.push(b',');
-        }
-        if let Some((k, carrier)) = &self.prev
-            && *k == key
-        {
-            return Ok(*carrier);
-        }
-        let carrier = self.parse(src)?;
-        self.prev = Some((key, carrier));
-        Ok(carrier)
-    }
-
-    fn parse<R: Read>(&self, src: &CsvSource<R>) -> Result<Carrier, FormatError> {
-        let fail = |col: usize, error: SignalError| FormatError::InvalidCarrier {
-            file: src.file.clone(),
-            line: src.line(),
-            column: src.column(col),
-            error: Box::new(error),
-        };
-        let name = self
-            .signal
-            .map(|c| String::from_utf8_lossy(src.cell(c).trim_ascii()).into_owned())
-            .filter(|n| !n.is_empty());
-        let glo_k = match self.glo_k {
-            Some(c) => src.opt_i64_at(c)?,
-            None => None,
-        };
-        let hz = match self.carrier_hz {
-            Some(c) => src.opt_f64_at(c)?,
-            None => None,
-        };
-        let hz_col = self.carrier_hz.unwrap_or(0);
-        if let Some(f) = hz {
-            Carrier::from_hz(f).map_err(|e| fail(hz_col, e))?;
-        }
-        match (name, glo_k, hz) {
-            (Some(name), k, hz) => {
-                let sig_col = self.signal.expect("a name comes from the signal column");
-                let fdma = crate::signal::SIGNALS.iter().any(|s| s.name == name && s.fdma_step_hz.is_some());
-                let signal = match (k, hz) {
-                    (None, Some(f)) if fdma => Signal::with_carrier(&name, f).map_err(|e| fail(hz_col, e))?,
-                    (k, _) => Signal::new(&name, k).map_err(|e| match e {
-                        SignalError::Unknown(_) | SignalError::MissingK(_) => fail(sig_col, e),
-                        _ => fail(self.glo_k.unwrap_or(sig_col), e),
-                    })?,
-                };
-                if let Some(f) = hz {
-                    signal.check_carrier(f).map_err(|e| fail(hz_col, e))?;
-                }
-                Ok(Carrier::of(signal))
-            }
-            (None, Some(k), _) => {
-                let col = self.signal.unwrap_or(self.glo_k.expect("k comes from the glo_k column"));
-                Err(fail(col, SignalError::Unknown(format!("(empty signal with glo_k = {k})"))))
-            }
-            (None, None, Some(f)) => Ok(Carrier { carrier_hz: f, signal: None }),
-            (None, None, None) => {
-                let col = self.main_column().expect("some carrier column");
-                Err(FormatError::EmptyCell {
-                    file: src.file.clone(),
-                    line: src.line(),
-                    column: src.column(col),
-                    expected: "the row's carrier (a signal name or carrier_hz)",
-                })
-            }
-        }
     }
 }
 
@@ -671,7 +637,7 @@ pub fn read_tracking<R: Read>(input: R, source_name: &str) -> Result<TrackingLog
 /// The time stamp of the previous row: the rows of one epoch share the
 /// text of their stamp, which is then parsed once.
 #[derive(Default)]
-struct StampCache {
+pub(crate) struct StampCache {
     text: Vec<u8>,
     t_s: Option<f64>,
 }
@@ -680,7 +646,7 @@ impl StampCache {
     /// The stamp of `cell`: the previous row's when the text is the same,
     /// else `parse()`.
     #[inline]
-    fn get<E>(&mut self, cell: &[u8], parse: impl FnOnce() -> Result<f64, E>) -> Result<f64, E> {
+    pub(crate) fn get<E>(&mut self, cell: &[u8], parse: impl FnOnce() -> Result<f64, E>) -> Result<f64, E> {
         match self.t_s {
             Some(t) if cell == self.text.as_slice() => Ok(t),
             _ => {
@@ -704,46 +670,39 @@ fn read_tracking_sized<R: Read>(
     source_name: &str,
     total_bytes: Option<u64>,
 ) -> Result<TrackingLog, FormatError> {
-    let (mut src, cols) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
-    let mut b = builder_for(&src, &cols)?;
-    read_rows(&mut src, &cols, &mut b, total_bytes)?;
+    let (mut src, _) = CsvSource::open(input, source_name, &TRACKING_COLUMNS)?;
+    let columns = columns_of(&src)?;
+    let mut b = builder_for(&src, &columns);
+    read_rows(&mut src, &columns, &mut b, total_bytes)?;
     b.finish()
 }
 
-/// An empty builder for the rows of `src` (its header read; `cols` the
-/// positions of [`TRACKING_COLUMNS`] in it).
-fn builder_for<R: Read>(src: &CsvSource<R>, cols: &[usize]) -> Result<Builder, FormatError> {
-    let carrier_column = CarrierCells::find(src)?.main_column().map(|c| src.column(c));
-    Ok(Builder::new(src.file.clone(), src.column(cols[0]), src.column(cols[1]), carrier_column))
+/// The columns of `src`'s header (read).
+fn columns_of<R: Read>(src: &CsvSource<R>) -> Result<TrackingColumns, FormatError> {
+    TrackingColumns::from_header(&src.header).map_err(|e| src.header_error(e))
 }
 
-/// Reads every remaining record of `src` into `b` (columns `cols`, in the
-/// order of [`TRACKING_COLUMNS`]); `total_bytes` sizes the columns after the
-/// first rows (the rest of the source at the average row length so far).
+/// An empty builder for the rows of `src` (its header read, its `columns`).
+fn builder_for<R: Read>(src: &CsvSource<R>, columns: &TrackingColumns) -> Builder {
+    let [ct, cch, ..] = columns.required();
+    let carrier_column = columns.carrier_column().map(|c| src.column(c));
+    Builder::new(src.file.clone(), src.column(ct), src.column(cch), carrier_column)
+}
+
+/// Reads every remaining record of `src` into `b` by the row parser of
+/// `columns`; `total_bytes` sizes the columns after the first rows (the
+/// rest of the source at the average row length so far).
 fn read_rows<R: Read>(
     src: &mut CsvSource<R>,
-    cols: &[usize],
+    columns: &TrackingColumns,
     b: &mut Builder,
     total_bytes: Option<u64>,
 ) -> Result<(), FormatError> {
-    let (ct, cch, cprn, ccn0, celev, cphase) = (cols[0], cols[1], cols[2], cols[3], cols[4], cols[5]);
-    let mut carriers = CarrierCells::find(src)?;
-    let nco = [src.optional_column(NCO_COLUMNS[0])?, src.optional_column(NCO_COLUMNS[1])?];
-    let mut stamp = StampCache::default();
+    let mut parser = RowParser::new(columns);
     while src.next_record()? {
         src.check_field_count()?;
-        let t_s = stamp.get(src.cell(ct), || src.f64_at(ct))?;
-        let values = RowValues {
-            t_s,
-            channel: src.u32_at(cch)?,
-            prn: src.u32_at(cprn)?,
-            cn0_dbhz: src.f64_at(ccn0)?,
-            elev_deg: src.opt_f64_at(celev)?.unwrap_or(f64::NAN),
-            phase_err_rad: src.f64_at(cphase)?,
-            carrier: carriers.carrier(src)?,
-            nco: [nco[0].map(|c| src.f64_at(c)).transpose()?, nco[1].map(|c| src.f64_at(c)).transpose()?],
-        };
-        b.push(&values, src.line())?;
+        let record = parser.record(|i| src.cell(i)).map_err(|f| src.cell_error(f))?;
+        b.push(&RowValues::of(&record), src.line())?;
         if let Some(total) = total_bytes.filter(|_| b.rows == ROWS_BEFORE_RESERVE) {
             b.reserve_for(src.record.position().map_or(0, |p| p.byte()), total);
         }
@@ -819,9 +778,8 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<T
     use rayon::prelude::*;
     let crate::plain::PlainFile { mut file, header: src, cols, data_start: start } =
         crate::plain::open_plain(path, name, &TRACKING_COLUMNS, total)?;
-    if CarrierCells::find(&src).ok()?.any()
-        || NCO_COLUMNS.iter().any(|c| src.optional_column(c).ok().flatten().is_some())
-    {
+    let columns = columns_of(&src).ok()?;
+    if columns.has_optional() {
         return None;
     }
     let fields = src.header.len();
@@ -834,7 +792,7 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<T
         let parsed: Vec<Option<(Builder, u64)>> = wave
             .par_iter()
             .map(|&(k, (from, to))| {
-                let mut b = builder_for(&src, &cols).ok()?;
+                let mut b = builder_for(&src, &columns);
                 // The first chunk's columns are sized for the whole file: the others' rows join them.
                 let (first_line, reserve) = if k == 0 { (2, total - start) } else { (1, to - from) };
                 let input = crate::plain::byte_range(path, from, to)?;
@@ -1183,7 +1141,7 @@ mod tests {
     }
 
     fn carrier_of(label: &str) -> Carrier {
-        Carrier::of(Signal::from_label(label).unwrap())
+        Carrier::of(crate::Signal::from_label(label).unwrap())
     }
 
     #[test]

@@ -9,6 +9,7 @@
 use std::io::{self, BufWriter, Write};
 
 use crate::imu::{IMU_COLUMNS, ImuSeries};
+use crate::row::TrackingRecord;
 use crate::signal::Carrier;
 use crate::tracking::{CARRIER_COLUMNS, TRACKING_COLUMNS};
 
@@ -63,6 +64,28 @@ pub fn write_tracking_csv_on<W: Write>(w: W, rows: &[(TrackingRow, Carrier)]) ->
         out.write_row_on(row, carrier, &[])?;
     }
     out.finish()
+}
+
+/// The cells of `row` (the empty cell for an unknown elevation), then
+/// `signal,carrier_hz` of `carrier` where given, then `extra`, comma-separated,
+/// without a line end: the one way a tracking row is written.
+pub(crate) fn write_row_cells(
+    out: &mut impl Write,
+    row: &TrackingRow,
+    carrier: Option<&Carrier>,
+    extra: &[f64],
+) -> io::Result<()> {
+    match row.elev_deg {
+        Some(e) => write!(out, "{},{},{},{},{},{}", row.t_s, row.channel, row.prn, row.cn0_dbhz, e, row.phase_err_rad)?,
+        None => write!(out, "{},{},{},{},,{}", row.t_s, row.channel, row.prn, row.cn0_dbhz, row.phase_err_rad)?,
+    }
+    if let Some(carrier) = carrier {
+        write!(out, ",{},{}", carrier.signal.map_or("", |s| s.name()), carrier.carrier_hz)?;
+    }
+    for v in extra {
+        write!(out, ",{v}")?;
+    }
+    Ok(())
 }
 
 /// A streaming writer of `imu.csv`, one sample at a time (header written by
@@ -237,25 +260,26 @@ impl<W: Write> TrackingWriter<W> {
         for (name, v) in self.extra_columns.iter().zip(extra) {
             check(name, *v, n)?;
         }
-        match row.elev_deg {
-            Some(e) => write!(
-                self.out,
-                "{},{},{},{},{},{}",
-                row.t_s, row.channel, row.prn, row.cn0_dbhz, e, row.phase_err_rad
-            )?,
-            None => {
-                write!(self.out, "{},{},{},{},,{}", row.t_s, row.channel, row.prn, row.cn0_dbhz, row.phase_err_rad)?
-            }
-        }
-        if self.carriers {
-            write!(self.out, ",{},{}", carrier.signal.map_or("", |s| s.name()), carrier.carrier_hz)?;
-        }
-        for v in extra {
-            write!(self.out, ",{v}")?;
-        }
+        write_row_cells(&mut self.out, row, self.carriers.then_some(carrier), extra)?;
         writeln!(self.out)?;
         self.rows = n;
         Ok(())
+    }
+
+    /// Starts a `tracking.csv` on `w` for records like `first`: with the
+    /// carrier columns where it has a carrier, and its NCO columns
+    /// ([`TrackingRecord::header`]); rows by [`TrackingWriter::write_record`].
+    /// Errors: I/O errors.
+    pub fn for_record(w: W, first: &TrackingRecord) -> io::Result<Self> {
+        let nco: Vec<&str> = first.nco().map(|(name, _)| name).collect();
+        Self::start(w, &nco, first.carrier.is_some())
+    }
+
+    /// Writes `record` on a writer made by [`TrackingWriter::for_record`]
+    /// for records with the same columns. Errors as [`TrackingWriter::write_row_on`].
+    pub fn write_record(&mut self, record: &TrackingRecord) -> io::Result<()> {
+        let nco: Vec<f64> = record.nco().map(|(_, v)| v).collect();
+        self.write_row_on(&record.row, &record.carrier_or_l1(), &nco)
     }
 
     /// Number of data rows written so far.

@@ -15,7 +15,11 @@ pub(crate) struct Kept {
     /// Per source, every line as received (none for a source of parsed records).
     received: Vec<Option<LineWriter<File>>>,
     imu: gsens_io::ImuWriter<LineWriter<File>>,
-    tracking: gsens_io::TrackingWriter<LineWriter<File>>,
+    /// `tracking.csv` before its first record, empty: its header has the
+    /// columns of the first record kept (the session refuses records with
+    /// other columns after it).
+    tracking_file: Option<LineWriter<File>>,
+    tracking: Option<gsens_io::TrackingWriter<LineWriter<File>>>,
     imu_path: PathBuf,
     tracking_path: PathBuf,
 }
@@ -49,7 +53,8 @@ impl Kept {
         Ok(Kept {
             received,
             imu: gsens_io::ImuWriter::new(file(&imu_path)?)?,
-            tracking: gsens_io::TrackingWriter::new(file(&tracking_path)?)?,
+            tracking_file: Some(file(&tracking_path)?),
+            tracking: None,
             imu_path,
             tracking_path,
         })
@@ -68,14 +73,30 @@ impl Kept {
     pub(crate) fn record(&mut self, x: &Input) -> std::io::Result<()> {
         match x {
             Input::Imu { t_s, accel_mps2 } => self.imu.write_sample(*t_s, accel_mps2),
-            Input::Tracking(r) => self.tracking.write_row(r),
+            Input::Tracking(r) => {
+                let w = match &mut self.tracking {
+                    Some(w) => w,
+                    None => {
+                        let file = self.tracking_file.take().ok_or_else(|| {
+                            std::io::Error::other("tracking.csv could not be started (its header failed)")
+                        })?;
+                        self.tracking.insert(gsens_io::TrackingWriter::for_record(file, r)?)
+                    }
+                };
+                w.write_record(r)
+            }
         }
     }
 
     /// Closes the logs; their paths (`imu.csv`, `tracking.csv`).
     pub(crate) fn finish(self) -> std::io::Result<(PathBuf, PathBuf)> {
         drop(self.imu.finish()?);
-        drop(self.tracking.finish()?);
+        match (self.tracking, self.tracking_file) {
+            (Some(w), _) => drop(w.finish()?),
+            // No record: the header of the six.
+            (None, Some(file)) => drop(gsens_io::TrackingWriter::new(file)?.finish()?),
+            (None, None) => {}
+        }
         Ok((self.imu_path, self.tracking_path))
     }
 }

@@ -1,7 +1,7 @@
 //! Live calibration: what `gsens live` runs between its inputs and its screen.
 //!
 //! - the inputs as they arrive, from lines of `imu.csv`, `tracking.csv` or
-//!   one merged stream ([`parse_merged_line`], format in its docs), with
+//!   one merged stream ([`LineParser`], format in its module's docs), with
 //!   every line that is not data reported as a [`Notice`] (garbage, out of
 //!   order, a logger restarting), never dropped silently;
 //! - a growing file read as it grows ([`Follower`], `tail -f`), surviving a
@@ -52,7 +52,7 @@ pub use clock::{Clock, ManualClock, SystemClock};
 pub use follow::Follower;
 pub use guidance::{GENTLER_FRACTION, Instruction, LoopBand, Protocol, Situation, instruct};
 pub use input::{
-    Input, LineError, LineKind, Notice, merged_line, parse_imu_line, parse_merged_line, parse_tracking_line,
+    Input, LineError, LineFormat, LineKind, LineParser, Notice, merged_header, merged_line, parse_imu_line,
 };
 pub use monitor::{Datagrams, MonitorInput, receive_monitor, record_monitor};
 pub use monitor_setup::{MonitorSetup, NoticeLimit, monitor_setup, render_recorded_tracks};
@@ -64,5 +64,5 @@ pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, Runtim
 pub use session::{
     AxisProgress, BatchJob, BatchResult, BatchVerdict, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed,
 };
-pub use sources::{LineFormat, Source, SourceEvent};
+pub use sources::{Source, SourceEvent};
 pub use stream::{Epoch, EpochAverager, StreamEstimate};

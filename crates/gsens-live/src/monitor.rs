@@ -11,6 +11,7 @@ use gsens_gnss_sdr::ImportSettings;
 use gsens_gnss_sdr::monitor::{
     LiveGrid, MonitorEvent, MonitorReceiver, Notice, Received, Recorder, write_capture_record,
 };
+use gsens_io::TrackingRecord;
 
 use crate::clock::Clock;
 use crate::input::Input;
@@ -95,14 +96,22 @@ pub fn receive_monitor(
                 return;
             }
             for row in grid.push(e) {
-                if tx.send(SourceEvent::Record { source, line: datagram, input: Input::Tracking(row) }).is_err() {
+                if tx
+                    .send(SourceEvent::Record {
+                        source,
+                        line: datagram,
+                        input: Input::Tracking(TrackingRecord::plain(row)),
+                    })
+                    .is_err()
+                {
                     return;
                 }
             }
         }
     }
     for row in grid.flush() {
-        let _ = tx.send(SourceEvent::Record { source, line: datagram, input: Input::Tracking(row) });
+        let _ =
+            tx.send(SourceEvent::Record { source, line: datagram, input: Input::Tracking(TrackingRecord::plain(row)) });
     }
     let _ = raw.flush();
     let why = format!("no datagram for {idle_timeout_s} s; {} rows came too late for the grid", grid.late());

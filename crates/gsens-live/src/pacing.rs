@@ -4,17 +4,20 @@
 //! `tracking.csv` files (`gsens live --follow-imu --follow-tracking`).
 
 use crate::clock::Clock;
-use crate::input::{Input, merged_line};
+use crate::input::{Input, merged_header, merged_line};
 use std::io::{ErrorKind, LineWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Where a replay writes its records.
 pub enum ReplaySink {
-    /// One merged stream: a [`merged_line`] per record.
+    /// One merged stream: a [`merged_line`] per record, and before the
+    /// first tracking record whose columns are not the six (and at each
+    /// change of columns) the [`merged_header`] that declares them.
     Merged(Box<dyn Write>),
     /// The logs' own lines (the merged line without its tag): IMU records
-    /// to `imu`, tracking rows to `tracking`.
+    /// to `imu`, tracking rows to `tracking`, whose header line (the columns
+    /// of the first tracking record) goes before its first row.
     Files {
         /// Receives the IMU records.
         imu: Box<dyn Write>,
@@ -35,9 +38,10 @@ pub struct CreateError {
 }
 
 impl ReplaySink {
-    /// `dir/imu.csv` and `dir/tracking.csv` made afresh with their header
-    /// lines (the folder too, if need be), each written a line at a time so
-    /// a follower sees whole lines.
+    /// `dir/imu.csv` and `dir/tracking.csv` made afresh (the folder too, if
+    /// need be), `imu.csv` with its header line, each written a line at a
+    /// time so a follower sees whole lines; `tracking.csv` gets its header
+    /// line with the first tracking record, which says its columns.
     pub fn files_in(dir: &Path) -> Result<ReplaySink, CreateError> {
         let error = |path: &Path| {
             let path = path.to_path_buf();
@@ -47,19 +51,34 @@ impl ReplaySink {
         let open = |name: &str, columns: &[&str]| -> Result<Box<dyn Write>, CreateError> {
             let path = dir.join(name);
             let mut w = LineWriter::new(std::fs::File::create(&path).map_err(error(&path))?);
-            writeln!(w, "{}", columns.join(",")).map_err(error(&path))?;
+            if !columns.is_empty() {
+                writeln!(w, "{}", columns.join(",")).map_err(error(&path))?;
+            }
             Ok(Box::new(w))
         };
-        Ok(ReplaySink::Files {
-            imu: open("imu.csv", &gsens_io::IMU_COLUMNS)?,
-            tracking: open("tracking.csv", &gsens_io::TRACKING_COLUMNS)?,
-        })
+        Ok(ReplaySink::Files { imu: open("imu.csv", &gsens_io::IMU_COLUMNS)?, tracking: open("tracking.csv", &[])? })
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
         match self {
             ReplaySink::Merged(w) => w.flush(),
             ReplaySink::Files { imu, tracking } => imu.flush().and(tracking.flush()),
+        }
+    }
+
+    /// The columns a merged stream's tracking records have before any header line.
+    fn declared_at_start(&self) -> Option<Vec<&'static str>> {
+        match self {
+            ReplaySink::Merged(_) => Some(gsens_io::TRACKING_COLUMNS.to_vec()),
+            ReplaySink::Files { .. } => None,
+        }
+    }
+
+    /// Declares the columns of the tracking records like `record`.
+    fn declare(&mut self, record: &gsens_io::TrackingRecord) -> std::io::Result<()> {
+        match self {
+            ReplaySink::Merged(w) => writeln!(w, "{}", merged_header(record)),
+            ReplaySink::Files { tracking, .. } => writeln!(tracking, "{}", record.header().join(",")),
         }
     }
 
@@ -97,6 +116,7 @@ pub fn replay(inputs: &[Input], speed: f64, clock: &dyn Clock, sink: &mut Replay
     };
     let Some(t0) = inputs.first().map(Input::t_s) else { return Ok(()) };
     let start = clock.now();
+    let mut declared = sink.declared_at_start();
     for x in inputs {
         if speed > 0.0 {
             let due = Duration::from_secs_f64((x.t_s() - t0).max(0.0) / speed);
@@ -105,6 +125,15 @@ pub fn replay(inputs: &[Input], speed: f64, clock: &dyn Clock, sink: &mut Replay
                     return Ok(());
                 }
                 clock.sleep(wait);
+            }
+        }
+        if let Input::Tracking(r) = x {
+            let columns = r.header();
+            if declared.as_ref() != Some(&columns) {
+                if quiet(sink.declare(r))? {
+                    return Ok(());
+                }
+                declared = Some(columns);
             }
         }
         if quiet(sink.write(x))? {
@@ -118,7 +147,7 @@ pub fn replay(inputs: &[Input], speed: f64, clock: &dyn Clock, sink: &mut Replay
 mod tests {
     use super::*;
     use crate::clock::ManualClock;
-    use gsens_io::TrackingRow;
+    use gsens_io::{TrackingRecord, TrackingRow};
     use std::sync::{Arc, Mutex};
 
     /// 0 and finite speeds above it replay; anything else is refused, named.
@@ -154,7 +183,7 @@ mod tests {
         (0..=10)
             .flat_map(|k| {
                 let t_s = f64::from(k);
-                [Input::Imu { t_s, accel_mps2: [0.0, 0.0, 9.81] }, Input::Tracking(row(t_s))]
+                [Input::Imu { t_s, accel_mps2: [0.0, 0.0, 9.81] }, Input::Tracking(TrackingRecord::plain(row(t_s)))]
             })
             .collect()
     }

@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-use crate::input::{Input, LineKind};
-use crate::sources::LineFormat;
+use crate::input::{Input, LineFormat, LineKind};
 
 /// The records of `dir/imu.csv` and `dir/tracking.csv` in time order (at
 /// equal time stamps the IMU first: a receiver's row at t uses the IMU up to
@@ -15,8 +14,9 @@ pub fn read_session_dir(dir: &Path) -> Result<Vec<Input>, String> {
         let path = dir.join(name);
         let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut out = Vec::new();
+        let mut parser = format.parser();
         for (i, line) in text.lines().enumerate() {
-            match format.parse(line).map_err(|e| format!("{}:{}: {e}", path.display(), i + 1))? {
+            match parser.parse(line).map_err(|e| format!("{}:{}: {e}", path.display(), i + 1))? {
                 LineKind::Data(x) => out.push(x),
                 LineKind::Skip => {}
             }

@@ -21,13 +21,13 @@ use gsens_io::TrackingLog;
 
 use crate::clock::Clock;
 use crate::guidance::Protocol;
-use crate::input::{Input, LineKind, Notice};
+use crate::input::{Input, LineFormat, LineKind, LineParser, Notice};
 use crate::kept::{Kept, create, received_dir};
 use crate::merge::Merger;
 use crate::monitor::{MonitorInput, RECEIVE_WAIT_MS, receive_monitor};
 use crate::plain::Plain;
 use crate::session::{BatchResult, LiveConfig, LiveSession, LiveView};
-use crate::sources::{LineFormat, Source, SourceEvent, spawn_follow, spawn_lines};
+use crate::sources::{Source, SourceEvent, spawn_follow, spawn_lines};
 
 /// The screen is redrawn at most this often [ms]: with the followers' 20 ms
 /// polls a record reaches the screen within 70 ms, inside a 100 ms budget.
@@ -48,7 +48,7 @@ const EVENTS_PER_ROUND: usize = 2000;
 
 /// The inputs of a session.
 pub enum Inputs {
-    /// One merged stream (`imu,…` and `trk,…` lines, [`crate::parse_merged_line`]), read to its end.
+    /// One merged stream (`imu,…` and `trk,…` lines, [`crate::LineParser`]), read to its end.
     Merged {
         /// Its name in notices and in `received/` (`stdin`).
         name: String,
@@ -218,6 +218,8 @@ pub struct Runtime {
     session: LiveSession,
     kept: Kept,
     sources: Vec<Source>,
+    /// Per line source, the parser of its lines (its tracking columns).
+    parsers: Vec<Option<LineParser>>,
     events: Receiver<SourceEvent>,
     /// Per source, whether it ended.
     ended: Vec<bool>,
@@ -279,7 +281,8 @@ impl Runtime {
         let kept = Kept::create(&out_dir, &sources)?;
         let merger =
             (sources.len() > 1 && sources.iter().all(|s| s.format.is_some())).then(|| Merger::new(sources.len()));
-        Ok(Runtime { session, kept, ended: vec![false; sources.len()], sources, events, merger, clock })
+        let parsers = sources.iter().map(|s| s.format.map(LineFormat::parser)).collect();
+        Ok(Runtime { session, kept, ended: vec![false; sources.len()], sources, parsers, events, merger, clock })
     }
 
     /// The session.
@@ -404,9 +407,10 @@ impl Runtime {
     fn handle(&mut self, event: SourceEvent, mut out: Option<&mut dyn Write>) -> Result<Option<Ending>, RuntimeError> {
         match event {
             SourceEvent::Line { source, line, text } => {
-                let Some(format) = self.sources[source].format else { return Ok(None) };
+                let Some(parser) = self.parsers[source].as_mut() else { return Ok(None) };
+                let parsed = parser.parse(&text);
                 self.kept.line(source, &text)?;
-                match format.parse(&text) {
+                match parsed {
                     Ok(LineKind::Data(x)) => match self.merger.as_mut() {
                         Some(m) => {
                             m.put(source, line, x);
@@ -429,6 +433,8 @@ impl Runtime {
             }
             SourceEvent::Notice { source, text } => self.notice(source, 0, text, &mut out)?,
             SourceEvent::Restarted { source } => {
+                // Read again from its start: its header comes again.
+                self.parsers[source] = self.sources[source].format.map(LineFormat::parser);
                 let text = "the file became shorter (a logger restarted?): read again from its start";
                 self.notice(source, 0, text.into(), &mut out)?;
             }

@@ -4,7 +4,7 @@
 use std::collections::{BTreeMap, VecDeque};
 
 use gsens_calib::{Measurement, Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
-use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
+use gsens_io::{Carrier, ImuSeries, TrackingLog, TrackingRecord, TrackingRow};
 
 use crate::guidance::{Instruction, LoopBand, Protocol, Situation, instruct};
 use crate::input::{Input, Notice};
@@ -57,11 +57,56 @@ impl LiveConfig {
     }
 }
 
+/// The tracking records received: the six columns of each, and beside them
+/// the optional columns of the session's log, those of its first record
+/// (each empty where the log lacks it; the session refuses records with
+/// other columns).
+#[derive(Debug, Clone, Default)]
+struct Records {
+    rows: Vec<TrackingRow>,
+    carriers: Vec<Carrier>,
+    nco_phase_cycles: Vec<f64>,
+    nco_freq_hz: Vec<f64>,
+    /// The columns of the first record ([`TrackingRecord::header`]).
+    columns: Option<Vec<&'static str>>,
+}
+
+impl Records {
+    fn push(&mut self, r: &TrackingRecord) {
+        self.columns.get_or_insert_with(|| r.header());
+        self.rows.push(r.row);
+        self.carriers.extend(r.carrier);
+        self.nco_phase_cycles.extend(r.nco_phase_cycles);
+        self.nco_freq_hz.extend(r.nco_freq_hz);
+    }
+
+    fn record(&self, i: usize) -> TrackingRecord {
+        TrackingRecord {
+            row: self.rows[i],
+            carrier: self.carriers.get(i).copied(),
+            nco_phase_cycles: self.nco_phase_cycles.get(i).copied(),
+            nco_freq_hz: self.nco_freq_hz.get(i).copied(),
+        }
+    }
+
+    /// The first `n` records.
+    fn first(&self, n: usize) -> Records {
+        let cut = |v: &Vec<f64>| v[..n.min(v.len())].to_vec();
+        Records {
+            rows: self.rows[..n].to_vec(),
+            carriers: self.carriers[..n.min(self.carriers.len())].to_vec(),
+            nco_phase_cycles: cut(&self.nco_phase_cycles),
+            nco_freq_hz: cut(&self.nco_freq_hz),
+            columns: self.columns.clone(),
+        }
+    }
+}
+
 /// A batch estimate to run, on a copy of the data received so far (in any
 /// thread: the session goes on receiving meanwhile).
 #[derive(Debug, Clone)]
 pub struct BatchJob {
-    rows: Vec<TrackingRow>,
+    records: Records,
     imu: ImuSeries,
     settings: PipelineSettings,
     data_end_s: f64,
@@ -80,7 +125,8 @@ impl BatchJob {
     /// estimate settled on (the session catches that stream up to its
     /// newest epoch in [`LiveSession::apply`]).
     pub fn run(self) -> BatchResult {
-        let outcome = TrackingLog::from_rows("received tracking rows", &self.rows)
+        let records = (0..self.records.rows.len()).map(|i| self.records.record(i));
+        let outcome = TrackingLog::from_records("received tracking rows", records)
             .map_err(|e| e.to_string())
             .and_then(|log| {
                 calibrate_logs(&log, &self.imu, "received IMU samples", &self.settings).map_err(|e| e.to_string())
@@ -237,7 +283,7 @@ pub struct LiveSession {
     config: LiveConfig,
     band: LoopBand,
     imu: ImuSeries,
-    rows: Vec<TrackingRow>,
+    records: Records,
     channels: BTreeMap<u32, ChannelStatus>,
     /// Channels seen at the latest tracking time stamp.
     epoch_channels: Vec<u32>,
@@ -283,7 +329,7 @@ impl LiveSession {
             config,
             band,
             imu: ImuSeries::default(),
-            rows: Vec::new(),
+            records: Records::default(),
             channels: BTreeMap::new(),
             epoch_channels: Vec::new(),
             motion,
@@ -333,16 +379,16 @@ impl LiveSession {
     /// with a notice, once per burst of such records; the first record used
     /// after a burst brings the burst's count.
     pub fn push(&mut self, source: &str, line: u64, input: Input) -> Pushed {
-        let used_before = (self.imu.len(), self.rows.len());
+        let used_before = (self.imu.len(), self.records.rows.len());
         let notice = self.take(source, line, input);
-        Pushed { used: (self.imu.len(), self.rows.len()) != used_before, notice }
+        Pushed { used: (self.imu.len(), self.records.rows.len()) != used_before, notice }
     }
 
     fn take(&mut self, source: &str, line: u64, input: Input) -> Option<Notice> {
         let t = input.t_s();
         let (stream, result) = match input {
             Input::Imu { t_s, accel_mps2 } => (IMU_STREAM, self.take_imu(t_s, accel_mps2)),
-            Input::Tracking(row) => (TRACKING_STREAM, self.take_tracking(row)),
+            Input::Tracking(record) => (TRACKING_STREAM, self.take_tracking(record)),
         };
         let notice = match result {
             Err(message) => self.refuse(stream, source, line, message),
@@ -408,10 +454,23 @@ impl LiveSession {
         }
     }
 
-    /// Takes a tracking row, or says why not (its time before the previous
-    /// row's, or its channel already seen at its time stamp).
-    fn take_tracking(&mut self, row: TrackingRow) -> Result<(), String> {
-        let last_t = self.rows.last().map(|r| r.t_s);
+    /// Takes a tracking record, or says why not (its time before the
+    /// previous row's, its channel already seen at its time stamp, or
+    /// columns other than the first record's).
+    fn take_tracking(&mut self, record: TrackingRecord) -> Result<(), String> {
+        let row = record.row;
+        if let Some(first) = &self.records.columns {
+            let columns = record.header();
+            if columns != *first {
+                return Err(format!(
+                    "a tracking row with the columns {}, not the first row's {}: not used (kept in the raw log; a \
+                     logger restarted with other columns needs a new `gsens live`)",
+                    columns.join(","),
+                    first.join(",")
+                ));
+            }
+        }
+        let last_t = self.records.rows.last().map(|r| r.t_s);
         if let Some(last) = last_t.filter(|&l| row.t_s < l) {
             return Err(format!(
                 "tracking time {} s before the previous row's {last} s: not used (kept in the raw log)",
@@ -431,11 +490,13 @@ impl LiveSession {
             back.2 += 1;
         }
         self.update_channel(&row);
-        if let Some(epoch) = self.averager.row(&row) {
+        // The channels' average on L1's scale, as the batch path averages them.
+        let on_l1 = TrackingRow { phase_err_rad: row.phase_err_rad * record.carrier_or_l1().scale_to_l1(), ..row };
+        if let Some(epoch) = self.averager.row(&on_l1) {
             self.epochs.push(epoch);
             self.stream.advance(&self.epochs, &self.imu);
         }
-        self.rows.push(row);
+        self.records.push(&record);
         Ok(())
     }
 
@@ -480,7 +541,7 @@ impl LiveSession {
 
     /// The latest time both streams reached \[s\].
     pub fn data_t_s(&self) -> f64 {
-        match (self.last_imu_t_s, self.rows.last()) {
+        match (self.last_imu_t_s, self.records.rows.last()) {
             (Some(a), Some(r)) => a.min(r.t_s),
             _ => f64::NEG_INFINITY,
         }
@@ -508,11 +569,12 @@ impl LiveSession {
 
     fn job(&self) -> BatchJob {
         let end = self.last_imu_t_s.unwrap_or(f64::NEG_INFINITY);
-        let rows: Vec<TrackingRow> = self.rows.iter().filter(|r| r.t_s <= end).copied().collect();
+        // Rows come in time order: those up to the end are the first.
+        let records = self.records.first(self.records.rows.partition_point(|r| r.t_s <= end));
         let epochs = self.epochs.iter().take_while(|e| e.0 <= end).copied().collect();
         BatchJob {
             epochs,
-            rows,
+            records,
             imu: self.imu.clone(),
             settings: self.config.settings.clone(),
             data_end_s: end,
@@ -613,7 +675,7 @@ impl LiveSession {
             protocol: self.protocol(),
             shaken_by_rate_s: self.shaken_by_rate_s,
         };
-        let latest_trk = self.rows.last().map_or(f64::NEG_INFINITY, |r| r.t_s);
+        let latest_trk = self.records.rows.last().map_or(f64::NEG_INFINITY, |r| r.t_s);
         let channels =
             self.channels.values().map(|c| ChannelStatus { tracking: latest_trk - c.last_t_s <= 1.0, ..*c }).collect();
         let (batch, batch_error) = self.batch_summary.clone();
@@ -631,7 +693,7 @@ impl LiveSession {
             batch,
             batch_error,
             notices: (self.notices.iter().cloned().collect(), self.notices_total),
-            received: (self.imu.len() as u64, self.rows.len() as u64),
+            received: (self.imu.len() as u64, self.records.rows.len() as u64),
         }
     }
 }
@@ -644,8 +706,15 @@ mod tests {
         LiveSession::new(LiveConfig::new(PipelineSettings::default(), 1e-3)).unwrap()
     }
 
-    fn row(t_s: f64, channel: u32, cn0_dbhz: f64) -> TrackingRow {
-        TrackingRow { t_s, channel, prn: channel + 1, cn0_dbhz, elev_deg: None, phase_err_rad: 0.01 }
+    fn row(t_s: f64, channel: u32, cn0_dbhz: f64) -> TrackingRecord {
+        TrackingRecord::plain(TrackingRow {
+            t_s,
+            channel,
+            prn: channel + 1,
+            cn0_dbhz,
+            elev_deg: None,
+            phase_err_rad: 0.01,
+        })
     }
 
     #[test]
@@ -679,7 +748,7 @@ mod tests {
         assert!(s.take_tracking(row(1.025, 0, 43.0)).is_ok());
         let e = s.take_tracking(row(0.5, 0, 44.0)).unwrap_err();
         assert!(e.starts_with("tracking time 0.5 s before the previous row's 1.025 s"), "{e}");
-        assert_eq!((s.imu.len(), s.rows.len()), (1, 3));
+        assert_eq!((s.imu.len(), s.records.rows.len()), (1, 3));
         let c = &s.channels[&0];
         assert_eq!((c.rows, c.cn0_dbhz, c.last_t_s, c.prn), (2, 43.0, 1.025, 1));
         assert_eq!((s.channels[&1].rows, s.channels[&1].cn0_dbhz), (1, 41.0));

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use crate::clock::Clock;
 use crate::follow::Follower;
-use crate::input::{Input, LineError, LineKind, parse_imu_line, parse_merged_line, parse_tracking_line};
+use crate::input::{Input, LineFormat};
 
 /// What a reader thread sends; `source` indexes the session's [`Source`]s.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,28 +51,6 @@ pub enum SourceEvent {
         /// Why, when not simply the end of its input.
         why: Option<String>,
     },
-}
-
-/// The format of a source's text lines.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LineFormat {
-    /// Lines of `imu.csv`.
-    Imu,
-    /// Lines of `tracking.csv`.
-    Tracking,
-    /// The merged stream (`imu,…` and `trk,…`, see [`crate::parse_merged_line`]).
-    Merged,
-}
-
-impl LineFormat {
-    /// Parses one line of this format.
-    pub fn parse(self, line: &str) -> Result<LineKind, LineError> {
-        match self {
-            LineFormat::Imu => parse_imu_line(line),
-            LineFormat::Tracking => parse_tracking_line(line),
-            LineFormat::Merged => parse_merged_line(line),
-        }
-    }
 }
 
 /// One input of a session: its name (in notices and the kept files) and the

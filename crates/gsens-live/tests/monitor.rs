@@ -99,7 +99,7 @@ fn the_monitor_loop_grids_rows_keeps_new_datagrams_and_ends_when_idle() {
     let rows: Vec<(u64, f64)> = events
         .iter()
         .filter_map(|e| match e {
-            SourceEvent::Record { source: 1, line, input: Input::Tracking(r) } => Some((*line, r.t_s)),
+            SourceEvent::Record { source: 1, line, input: Input::Tracking(r) } => Some((*line, r.row.t_s)),
             _ => None,
         })
         .collect();

@@ -2,15 +2,16 @@
 //! so once per burst and goes on with what it can use.
 
 use gsens_calib::PipelineSettings;
-use gsens_io::TrackingRow;
-use gsens_live::{Input, LineKind, LiveConfig, LiveSession, parse_merged_line};
+use gsens_io::{TrackingRecord, TrackingRow};
+use gsens_live::{Input, LineFormat, LineKind, LiveConfig, LiveSession};
 
 fn imu(t_s: f64) -> Input {
     Input::Imu { t_s, accel_mps2: [0.0, 0.0, 9.81] }
 }
 
 fn trk(t_s: f64, channel: u32) -> Input {
-    Input::Tracking(TrackingRow { t_s, channel, prn: channel + 1, cn0_dbhz: 45.0, elev_deg: None, phase_err_rad: 0.01 })
+    let row = TrackingRow { t_s, channel, prn: channel + 1, cn0_dbhz: 45.0, elev_deg: None, phase_err_rad: 0.01 };
+    Input::Tracking(TrackingRecord::plain(row))
 }
 
 #[test]
@@ -49,8 +50,8 @@ fn garbage_lines_are_errors_naming_the_column() {
         ("trk,1.0,0,5,45.0,,nan", "column 7 (`phase_err_rad`): `nan` is not a finite number"),
         ("imu,1.0,0.0,0.0,9.8,7", "more than 5 columns"),
     ] {
-        let e = parse_merged_line(line).unwrap_err().to_string();
+        let e = LineFormat::Merged.parser().parse(line).unwrap_err().to_string();
         assert!(e.contains(what), "{line:?}: {e}");
     }
-    assert_eq!(parse_merged_line("").unwrap(), LineKind::Skip);
+    assert_eq!(LineFormat::Merged.parser().parse("").unwrap(), LineKind::Skip);
 }

@@ -19,7 +19,10 @@ fn session(dir_name: &str) -> (tempfile::TempDir, PipelineSettings) {
     let scratch = tempfile::Builder::new().prefix(&format!("gsens-live-{dir_name}-")).tempdir().unwrap();
     let dir = scratch.path();
     gsens_sim::simulate_to_dir(&gsens_sim::scenario::Scenario::default(), 1, dir, |_| {}).unwrap();
-    let settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+    let mut settings = gsens_inputs::settings_of_simulated_session(&dir.join("truth.json")).unwrap();
+    // The stream is the batch path's least squares through the loop model:
+    // compared with the batch estimate through the loop model, not the loop-free one.
+    settings.measurement = gsens_calib::MeasurementChoice::TrackingError;
     (scratch, settings)
 }
 

@@ -123,7 +123,7 @@ fn a_cycle_slip_leaves_its_segment_out() {
 
 #[test]
 fn a_log_without_the_nco_phase_is_refused_by_name() {
-    let logs = session_of("", 1);
+    let logs = session_of("[log]\nnco = false", 1);
     let e = estimate_loop_free(&logs.tracking, &logs.imu, &LoopFreeSettings::new(0.001, LoggedPhase::Mean));
     assert!(matches!(e, Err(LoopFreeError::NoNcoPhase { .. })), "{e:?}");
     let bad = LoopFreeSettings::new(0.003, LoggedPhase::Mean);

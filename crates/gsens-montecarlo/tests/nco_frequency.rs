@@ -50,7 +50,7 @@ fn another_loop_gives_estimates_within_their_sigma() {
 /// The log without the column is an error naming it.
 #[test]
 fn a_log_without_the_nco_frequency_is_refused() {
-    let logs = session_of("", 1);
+    let logs = session_of("[log]\nnco = false\n", 1);
     let settings = LoopFreeSettings::new(0.001, LoggedPhase::Mean);
     let err = estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, &paper_loop(3.0)).unwrap_err();
     assert!(err.to_string().contains("nco_freq_hz"), "{err}");

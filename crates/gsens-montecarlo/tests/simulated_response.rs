@@ -25,6 +25,8 @@ fn simulated_session(seed: u64, assert_wrong_fails: bool) {
     let logs = gsens_sim::simulate_logs(&scenario, seed).unwrap();
     let mut ps = PipelineSettings::default();
     ps.estimate = scenario_settings(&scenario, &EstimateSettings::default()).unwrap();
+    // The response is measured against Γ̂ through the loop model.
+    ps.measurement = gsens_calib::MeasurementChoice::TrackingError;
     let outcome = calibrate_logs(&logs.tracking, &logs.imu, "imu", &ps).unwrap();
     let c = &outcome.calibration;
     let r = measure_response(&outcome.series(), &c.settings, &c.gamma_raw_hz_per_mps2).unwrap();

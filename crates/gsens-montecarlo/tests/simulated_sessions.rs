@@ -68,7 +68,7 @@ fn simulate_then_estimate_recovers_the_truth() {
 #[test]
 fn screening_removes_channels_that_lost_lock_and_recovers_gamma() {
     let logs = session_of(
-        "[log]\ndrop_unlocked = false\n[satellites.cn0]\nzenith_cn0_dbhz = 54.0\nhorizon_cn0_dbhz = 14.0\n\
+        "[log]\ndrop_unlocked = false\nnco = false\n[satellites.cn0]\nzenith_cn0_dbhz = 54.0\nhorizon_cn0_dbhz = 14.0\n\
          elevation_exponent = 1.0\n",
         1,
     );
@@ -189,6 +189,8 @@ fn session_shaken_only_along_x_and_y_reports_z_unobservable() {
     let text = gsens_sim::scenario::Scenario::default_toml();
     let (head, tail) = text.split_once("axis = \"z\"").unwrap();
     let toml = format!("{head}axis = \"z\"{}", tail.replacen("amplitude_mps2 = 3.0", "amplitude_mps2 = 0.001", 1));
+    // The observability of the estimate through the loop model: the tracking error only.
+    let toml = toml.replacen("nco = true", "nco = false", 1);
     // As the demo runs it: simulated into files and estimated from them, the scenario's receiver stated.
     let scenario = gsens_sim::scenario::Scenario::from_toml_str(&toml).unwrap();
     let dir = tempfile::Builder::new().prefix("gsens-montecarlo-xy-").tempdir().unwrap();

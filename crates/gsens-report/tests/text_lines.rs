@@ -29,7 +29,8 @@ fn stated() -> CalibrationOptions {
 /// screening excludes them whole, and Huber's fit has its line.
 #[test]
 fn a_whole_track_excluded_and_the_robust_fit_are_said() {
-    let toml = "[log]\ndrop_unlocked = false\n[satellites.cn0]\nzenith_cn0_dbhz = 54.0\nhorizon_cn0_dbhz = 14.0\n\
+    // The screening and the fit of the estimate through the loop model: the tracking error only.
+    let toml = "[log]\ndrop_unlocked = false\nnco = false\n[satellites.cn0]\nzenith_cn0_dbhz = 54.0\nhorizon_cn0_dbhz = 14.0\n\
                 elevation_exponent = 1.0\n";
     let options = {
         let mut o = stated();
@@ -49,6 +50,8 @@ fn an_axis_shaken_too_little_is_unobservable() {
     let text = Scenario::default_toml();
     let (head, tail) = text.split_once("axis = \"z\"").unwrap();
     let toml = format!("{head}axis = \"z\"{}", tail.replacen("amplitude_mps2 = 3.0", "amplitude_mps2 = 0.001", 1));
+    // The observability of the estimate through the loop model: the tracking error only.
+    let toml = toml.replacen("nco = true", "nco = false", 1);
     let text = text_of(&toml, 1, &stated());
     assert!(text.contains("z: too little excitation"), "{text}");
     assert!(text.contains("unobservable"), "{text}");

@@ -347,7 +347,9 @@ pub struct LogSection {
     pub drop_unlocked: bool,
     /// Log where each loop put its replica: the columns `nco_phase_cycles`
     /// (at the end of the latest integration) and `nco_freq_hz` (commanded
-    /// during it) of `tracking.csv`.
+    /// during it) of `tracking.csv` (default on: the log then gives both the
+    /// loop-free estimate and the one through the loop model; off for a
+    /// receiver that logs the tracking error only, as the seed paper's).
     pub nco: bool,
 }
 
@@ -358,7 +360,7 @@ impl Default for LogSection {
             phase: LoggedPhase::Mean,
             cn0: Cn0Logged::Estimated,
             drop_unlocked: true,
-            nco: false,
+            nco: true,
         }
     }
 }

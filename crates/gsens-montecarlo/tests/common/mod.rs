@@ -11,9 +11,11 @@ use gsens_io::{ImuSeries, TrackingLog, TrackingRow};
 use gsens_sim::scenario::Scenario;
 use gsens_sim::{SimulatedLogs, simulate_logs};
 
-/// The default scenario (the paper's experiment) simulated with `seed`.
+/// The default scenario (the paper's experiment) simulated with `seed`, its
+/// tracking log as the paper's receiver logs it: the tracking error only (no
+/// NCO columns), so that the estimate is the one through the loop model.
 pub(crate) fn session(seed: u64) -> SimulatedLogs {
-    simulate_logs(&Scenario::default(), seed).expect("the default scenario simulates")
+    session_of("[log]\nnco = false", seed)
 }
 
 /// The scenario of `toml` (on top of the defaults) simulated with `seed`.
