@@ -53,8 +53,8 @@ def test_overrides_change_the_scenario_key_by_key():
 
 def test_montecarlo_runs_are_the_single_estimates_of_their_seeds():
     mc = gsens.montecarlo(runs=2, seed=3, methods=["batch", "gls"])
-    # The default scenario logs the NCO's phase: the loop-free row beside the methods asked for.
-    assert set(mc["methods"]) == {"batch", "gls", "loop-free"} and mc["runs"] == 2
+    # The default scenario logs the NCO: the rows from its phase and its frequency beside the methods asked for.
+    assert set(mc["methods"]) == {"batch", "gls", "loop-free", "nco-frequency"} and mc["runs"] == 2
     for run in mc["per_run"]:
         s = gsens.simulate(seed=run["seed"])
         e = gsens.estimate(s.imu, s.tracking, **s.estimate_settings())
