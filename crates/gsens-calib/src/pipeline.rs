@@ -379,7 +379,7 @@ fn calibrate_prepared(
     check_carrier(settings, &tracking)?;
     let PreparedImu { despiked, spikes_t_s, flat_runs } = imu;
     let imu = &despiked;
-    // A log with the NCO's phase is kept for the loop-free estimate, which reads every track's rows.
+    // A log with the NCO (phase or frequency) is kept for the estimates from it, which read every track's rows.
     let nco_log = tracking
         .tracks()
         .iter()
