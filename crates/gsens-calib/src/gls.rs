@@ -131,7 +131,12 @@ impl ArModel {
 
     /// Whitening of N series side by side (N lanes per tap), each innovation
     /// vector handed to `out` in order; `exact_start` as in [`ArModel::whiten_exact`].
-    fn whiten_lanes<const N: usize>(&self, z: &[[f64; N]], exact_start: bool, out: &mut impl FnMut([f64; N])) {
+    pub(crate) fn whiten_lanes<const N: usize>(
+        &self,
+        z: &[[f64; N]],
+        exact_start: bool,
+        out: &mut impl FnMut([f64; N]),
+    ) {
         let p = self.order();
         let filter = |a: &[f64], scale: f64, k: usize| {
             let mut e = z[k];

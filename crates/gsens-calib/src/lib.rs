@@ -63,6 +63,7 @@ mod joint;
 mod loop_free;
 mod measurement;
 mod nco_frequency;
+mod nco_loop;
 pub mod option_values;
 mod options;
 mod pipeline;
@@ -95,6 +96,10 @@ pub use loop_free::{
 };
 pub use measurement::{Measurement, MeasurementChoice};
 pub use nco_frequency::estimate_nco_frequency;
+pub use nco_loop::{
+    IDENTIFY_BN_RANGE_HZ, IdentifiedLoop, IdentifiedNcoEstimate, LoopResolution, ShapeFit,
+    estimate_nco_frequency_identified, identification_shapes,
+};
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,
     TimeOffsetOption,

@@ -50,7 +50,7 @@
 //! larger of the fit's Cramér–Rao bound and its Newey–West covariance.
 
 use crate::Measurement;
-use crate::gls::{GlsSettings, gls};
+use crate::gls::{GlsFit, GlsSettings, gls};
 use gsens_core::LoggedPhase;
 use gsens_core::interpolate::lagrange;
 use gsens_io::{ImuSeries, TrackingLog};
@@ -424,6 +424,23 @@ pub(crate) fn fit_rows(
     settings: &LoopFreeSettings,
     slip_step: f64,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
+    fit_rows_kept(phases, regressor, settings, slip_step).map(|fitted| fitted.estimate)
+}
+
+/// What [`fit_rows`] fitted, kept for a fit of more parameters on the same rows.
+struct RowsFit {
+    estimate: LoopFreeEstimate,
+    rows: CommonPhase,
+    regressors: Vec<[f64; 3]>,
+    gls: GlsFit,
+}
+
+fn fit_rows_kept(
+    phases: &InputPhases,
+    regressor: &impl RowRegressor,
+    settings: &LoopFreeSettings,
+    slip_step: f64,
+) -> Result<RowsFit, LoopFreeError> {
     let epochs = phases.epoch_t_s.as_slice();
     let log_interval_s = median_step(epochs);
     let mut tracks: Vec<&TrackInputPhase> = phases.tracks.iter().collect();
@@ -460,7 +477,7 @@ pub(crate) fn fit_rows(
         Some(robust) if (0..3).map(|i| robust[i][i]).sum::<f64>() > (0..3).map(|i| crlb[i][i]).sum::<f64>() => robust,
         _ => crlb,
     };
-    Ok(LoopFreeEstimate {
+    let estimate = LoopFreeEstimate {
         gamma_hz_per_mps2: fit.estimate.gamma_hz_per_mps2,
         covariance,
         crlb_hz_per_mps2: fit.crlb_hz_per_mps2(),
@@ -476,7 +493,87 @@ pub(crate) fn fit_rows(
         bookkeeping_chosen: false,
         excitation_rms,
         noise_ar_order: fit.noise.coeffs.len(),
-    })
+    };
+    Ok(RowsFit { estimate, rows: m, regressors: x, gls: fit })
+}
+
+/// A fit of Γ with the regressor's loop scaled by s = e^θ as one more
+/// parameter (and the IMU offset τ where it is searched).
+pub(crate) struct ScaledFit {
+    /// The fit at θ, its covariance that of Γ̂ with θ (and τ) unknown.
+    pub estimate: LoopFreeEstimate,
+    /// The Gauss–Newton step of θ from the fit at θ.
+    pub step_ln_scale: f64,
+    /// The variance of θ̂.
+    pub var_ln_scale: f64,
+}
+
+/// Γ and the loop's scale θ = ln s fitted together: `at(θ)` is the
+/// regressor of the loop scaled by e^θ (or why that loop cannot run). The
+/// rows are fitted at θ as by [`fit_rows`] (offset τ̂ searched where asked);
+/// then, under the same AR noise model, the model is linearized in the
+/// nuisance parameters ν = (θ, and τ where searched),
+///
+/// ```text
+/// y = X·Γ + D·δν + n,   D = [(X(θ + h) − X(θ − h))·Γ̂/2h, (X(τ̂ + ε) − X(τ̂ − ε))·Γ̂/2ε],
+/// ```
+///
+/// and the prewhitened least squares of y on Z = [X, D] gives the
+/// Gauss–Newton step δθ and the joint covariance σ²(Z_wᵀZ_w)⁻¹. Its Γ block,
+/// the conditional bound σ²A⁻¹ (A = X_wᵀX_w) plus what the nuisance leaves
+/// unknown (the Schur complement), is what θ and τ add to Γ̂'s variance:
+/// that difference is added to the fit's own covariance (which may be the
+/// larger Newey–West one). Where a shaking at one rate cannot tell a loop's
+/// phase lag from a delay, τ's column is what keeps var(θ̂) honest.
+pub(crate) fn fit_rows_scaled<R: RowRegressor>(
+    phases: &InputPhases,
+    at: impl Fn(f64) -> Result<R, LoopFreeError>,
+    ln_scale: f64,
+    h: f64,
+    settings: &LoopFreeSettings,
+) -> Result<ScaledFit, LoopFreeError> {
+    let RowsFit { mut estimate, rows, regressors: x, gls: fit } =
+        fit_rows_kept(phases, &at(ln_scale)?, settings, f64::INFINITY)?;
+    let tau = estimate.imu_time_offset_s;
+    let g = estimate.gamma_hz_per_mps2;
+    let derivative = |up: Vec<[f64; 3]>, down: Vec<[f64; 3]>, step: f64| -> Vec<f64> {
+        up.iter().zip(&down).map(|(u, w)| (0..3).map(|i| (u[i] - w[i]) * g[i]).sum::<f64>() / (2.0 * step)).collect()
+    };
+    let scaled = at(ln_scale + h)?;
+    let d_scale = derivative(rows.regressors(&scaled, tau), rows.regressors(&at(ln_scale - h)?, tau), h);
+    let model = at(ln_scale)?;
+    let eps = 0.05 * median_step(&phases.epoch_t_s);
+    let d_tau = if estimate.time_offset_searched {
+        derivative(rows.regressors(&model, tau + eps), rows.regressors(&model, tau - eps), eps)
+    } else {
+        vec![0.0; x.len()]
+    };
+    let m = if estimate.time_offset_searched { 5 } else { 4 };
+    // Cross products of the prewhitened [y, X, D] over the segments.
+    let mut zz = nalgebra::DMatrix::<f64>::zeros(m, m);
+    let mut zy = nalgebra::DVector::<f64>::zeros(m);
+    for r in rows.ranges() {
+        let z: Vec<[f64; 6]> = r.map(|k| [rows.phase[k], x[k][0], x[k][1], x[k][2], d_scale[k], d_tau[k]]).collect();
+        fit.noise.whiten_lanes(&z, false, &mut |e: [f64; 6]| {
+            let v = nalgebra::DVector::from_column_slice(&e[1..1 + m]);
+            zz += &v * v.transpose();
+            zy += v * e[0];
+        });
+    }
+    let sigma2 = fit.noise.innovation_variance;
+    let a = zz.view((0, 0), (3, 3)).into_owned();
+    let (Some(a_inv), Some(joint)) = (a.try_inverse(), zz.clone().try_inverse()) else {
+        return Err(LoopFreeError::TooFewEpochs { epochs: rows.phase.len(), segment_s: settings.segment_s });
+    };
+    for i in 0..3 {
+        for j in 0..3 {
+            estimate.covariance[i][j] += sigma2 * (joint[(i, j)] - a_inv[(i, j)]);
+        }
+    }
+    estimate.crlb_hz_per_mps2 = [0, 1, 2].map(|i| (sigma2 * joint[(i, i)]).sqrt());
+    let var_ln_scale = if joint[(3, 3)] > 0.0 { sigma2 * joint[(3, 3)] } else { f64::INFINITY };
+    let step_ln_scale = (&joint * &zy)[3];
+    Ok(ScaledFit { estimate, step_ln_scale, var_ln_scale })
 }
 
 /// The regressor ρ = −2π∫a dt read at an epoch's integration centres (one,

@@ -67,7 +67,11 @@ pub fn estimate_nco_frequency(
 /// A track's NCO frequency \[Hz\] on the log's epochs: `None` where it has no
 /// row, during its warm-up, and where |φ| passes the settings' limit (near the
 /// discriminator's wrap the loop is pulled by a half cycle).
-fn frequency_on_epochs(tr: &gsens_io::ChannelTrack, epochs: &[f64], settings: &LoopFreeSettings) -> Vec<Option<f64>> {
+pub(crate) fn frequency_on_epochs(
+    tr: &gsens_io::ChannelTrack,
+    epochs: &[f64],
+    settings: &LoopFreeSettings,
+) -> Vec<Option<f64>> {
     let mut out = vec![None; epochs.len()];
     for (k, e) in rows_on_epochs(tr, epochs) {
         let warm = tr.t_s[k] >= tr.t_s[0] + settings.warmup_s;
@@ -83,7 +87,7 @@ fn frequency_on_epochs(tr: &gsens_io::ChannelTrack, epochs: &[f64], settings: &L
 /// start-up transient dies out there), fed the IMU's specific force at each
 /// grid instant plus τ (linear interpolation, compensated for the model's own
 /// interpolation between epochs as for the tracking error's regressors).
-struct ModelRegressor<'a> {
+pub(crate) struct ModelRegressor<'a> {
     /// Each epoch's index on the grid t₀ + j·h.
     grid: Vec<usize>,
     t0_s: f64,
@@ -94,7 +98,13 @@ struct ModelRegressor<'a> {
 }
 
 impl<'a> ModelRegressor<'a> {
-    fn new(epochs: &[f64], log_interval_s: f64, imu: &'a ImuSeries, model: RegressorModel, lead_s: f64) -> Self {
+    pub(crate) fn new(
+        epochs: &[f64],
+        log_interval_s: f64,
+        imu: &'a ImuSeries,
+        model: RegressorModel,
+        lead_s: f64,
+    ) -> Self {
         let t0_s = epochs.first().copied().unwrap_or(0.0);
         let grid = epochs.iter().map(|t| ((t - t0_s) / log_interval_s).round().max(0.0) as usize).collect();
         ModelRegressor { grid, t0_s, log_interval_s, imu, model, lead_s }
