@@ -497,6 +497,36 @@ fn fit_rows_kept(
     Ok(RowsFit { estimate, rows: m, regressors: x, gls: fit })
 }
 
+/// The AR noise model [`fit_rows`] fits to the rows' residuals under `regressor`.
+pub(crate) fn rows_noise(
+    phases: &InputPhases,
+    regressor: &impl RowRegressor,
+    settings: &LoopFreeSettings,
+) -> Result<crate::gls::ArModel, LoopFreeError> {
+    fit_rows_kept(phases, regressor, settings, f64::INFINITY).map(|fitted| fitted.gls.noise)
+}
+
+/// The innovation variance of the rows fitted on `regressor` at the IMU
+/// offset `tau`, prewhitened by a given `noise` model: with one noise model
+/// for every regressor compared, N·ln of it is −2 ln L up to a constant
+/// (each fit's own AR model would move it by its order's choice).
+pub(crate) fn rows_score(
+    phases: &InputPhases,
+    regressor: &impl RowRegressor,
+    settings: &LoopFreeSettings,
+    tau: f64,
+    noise: &crate::gls::ArModel,
+) -> Result<f64, LoopFreeError> {
+    let RowsFit { rows, .. } = fit_rows_kept(phases, regressor, settings, f64::INFINITY)?;
+    let x = rows.regressors(regressor, tau);
+    let mut ne = gsens_core::NormalEquations::default();
+    for r in rows.ranges() {
+        let z: Vec<[f64; 4]> = r.map(|k| [rows.phase[k], x[k][0], x[k][1], x[k][2]]).collect();
+        noise.whiten_lanes(&z, false, &mut |e: [f64; 4]| ne.add(e[0], &[e[1], e[2], e[3]]));
+    }
+    Ok(ne.solve().residual_variance_rad2)
+}
+
 /// A fit of Γ with the regressor's loop scaled by s = e^θ as one more
 /// parameter (and the IMU offset τ where it is searched).
 pub(crate) struct ScaledFit {

@@ -74,12 +74,41 @@ pub(crate) fn frequency_on_epochs(
 ) -> Vec<Option<f64>> {
     let mut out = vec![None; epochs.len()];
     for (k, e) in rows_on_epochs(tr, epochs) {
-        let warm = tr.t_s[k] >= tr.t_s[0] + settings.warmup_s;
-        if warm && tr.phase_err_rad[k].abs() <= settings.max_abs_phase_rad {
+        if usable_row(tr, k, settings) {
             out[e] = Some(tr.nco_freq_hz[k]);
         }
     }
     out
+}
+
+/// A track's mean NCO frequency over each log interval \[Hz\]: the NCO
+/// phase's advance from the previous epoch's row, over the interval (the
+/// mean of the commands in force over the interval's updates). `None`
+/// where either row is missing or not usable ([`frequency_on_epochs`]).
+pub(crate) fn mean_frequency_on_epochs(
+    tr: &gsens_io::ChannelTrack,
+    epochs: &[f64],
+    settings: &LoopFreeSettings,
+) -> Vec<Option<f64>> {
+    let mut out = vec![None; epochs.len()];
+    let mut previous: Option<(usize, usize)> = None;
+    for (k, e) in rows_on_epochs(tr, epochs) {
+        if let Some((k0, e0)) = previous.filter(|&(k0, e0)| e0 + 1 == e && usable_row(tr, k0, settings))
+            && usable_row(tr, k, settings)
+        {
+            out[e] = Some((tr.nco_phase_cycles[k] - tr.nco_phase_cycles[k0]) / (epochs[e] - epochs[e0]));
+        }
+        previous = Some((k, e));
+    }
+    out
+}
+
+/// Whether row `k` is past the track's warm-up and its |φ| within the
+/// settings' limit (near the discriminator's wrap the loop is pulled by a
+/// half cycle); a track without φ has no such test.
+fn usable_row(tr: &gsens_io::ChannelTrack, k: usize, settings: &LoopFreeSettings) -> bool {
+    let warm = tr.t_s[k] >= tr.t_s[0] + settings.warmup_s;
+    warm && tr.phase_err_rad.get(k).is_none_or(|p| p.abs() <= settings.max_abs_phase_rad)
 }
 
 /// The loop model's NCO command for a unit Γ per axis, on the log's uniform

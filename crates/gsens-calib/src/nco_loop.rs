@@ -22,9 +22,9 @@
 
 use crate::loop_free::{
     InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, check_settings, fit_rows, fit_rows_scaled,
-    median_step,
+    median_step, rows_noise, rows_score,
 };
-use crate::nco_frequency::{ModelRegressor, frequency_on_epochs};
+use crate::nco_frequency::{ModelRegressor, frequency_on_epochs, mean_frequency_on_epochs};
 use gsens_core::{LoopModel, LoopSpec, RegressorModel, RowQuantity};
 use gsens_io::{ImuSeries, TrackingLog};
 use rayon::prelude::*;
@@ -35,9 +35,11 @@ use serde::{Deserialize, Serialize};
 /// within 0.1 % up to a few hertz of shaking.
 pub const IDENTIFY_BN_RANGE_HZ: [f64; 2] = [1.0, 60.0];
 
-/// The model loops' largest Bn·T: the candidates run near their continuous
-/// limit, whatever the receiver's (unknown) update interval.
-const MAX_BN_T: f64 = 0.02;
+/// The update intervals the identification tries \[s\] (those that divide
+/// the log interval): receivers update their carrier loops every 1 to 20 ms,
+/// and at Bn·T of a few hundredths the discrete loop's response already
+/// departs from the continuous one by more than a delay.
+pub const IDENTIFY_INTERVALS_S: [f64; 5] = [0.001, 0.002, 0.005, 0.01, 0.02];
 
 /// Gauss–Newton steps of θ = ln Bn after the grid.
 const REFINE_STEPS: usize = 4;
@@ -61,6 +63,8 @@ pub enum LoopResolution {
 pub struct ShapeFit {
     /// The loop's order (2 or 3).
     pub order: u8,
+    /// Its update interval \[s\].
+    pub loop_interval_s: f64,
     /// Its best noise bandwidth \[Hz\].
     pub bn_hz: f64,
     /// The innovation variance of the fit there \[Hz²\].
@@ -71,12 +75,13 @@ pub struct ShapeFit {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct IdentifiedLoop {
-    /// The loop kept (its shape scaled to the fitted Bn; model interval
-    /// chosen so that Bn·T ≤ 0.02).
+    /// The loop kept (its shape scaled to the fitted Bn).
     #[serde(skip)]
     pub model: Option<LoopModel>,
     /// Its order.
     pub order: u8,
+    /// Its update interval \[s\].
+    pub loop_interval_s: f64,
     /// Whether the other shapes fit clearly worse (Δ(−2 ln L) > 1); where
     /// not, the spread of their Γ̂ is in Γ̂'s variance, and Bn is the kept
     /// shape's.
@@ -101,90 +106,164 @@ pub struct IdentifiedNcoEstimate {
     pub identified: IdentifiedLoop,
 }
 
-/// The loop shapes the identification tries: a 2nd-order loop of ζ = 1/√2
-/// and Kaplan's 3rd-order loop (their Bn is searched).
-pub fn identification_shapes() -> [LoopSpec; 2] {
-    [LoopSpec::PAPER, LoopSpec::third_order_kaplan(gsens_core::defaults::DEFAULT_BN_HZ)]
+/// The loop shapes the identification tries for a log every
+/// `log_interval_s`: a 2nd-order loop of ζ = 1/√2 and Kaplan's 3rd-order
+/// loop, each updated at every interval of [`IDENTIFY_INTERVALS_S`] that
+/// divides the log interval (their Bn is searched).
+pub fn identification_shapes(log_interval_s: f64) -> Vec<LoopModel> {
+    let specs = [LoopSpec::PAPER, LoopSpec::third_order_kaplan(gsens_core::defaults::DEFAULT_BN_HZ)];
+    specs
+        .iter()
+        .flat_map(|spec| {
+            IDENTIFY_INTERVALS_S
+                .iter()
+                .filter(|&&t| gsens_core::loop_substeps(t, log_interval_s).is_ok())
+                .map(|&t| LoopModel::Kaplan { spec: *spec, interval_s: Some(t) })
+        })
+        .collect()
+}
+
+/// Which of the NCO's records the rows are made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum NcoRecord {
+    /// `nco_freq_hz`: the command in force during the row's latest update
+    /// ([`RowQuantity::NcoFrequency`]).
+    Command,
+    /// `nco_phase_cycles` differenced between consecutive rows: the mean
+    /// command over the log interval ([`RowQuantity::NcoFrequencyMean`]), as
+    /// a carrier phase differenced or a Doppler averaged over the interval.
+    /// It averages the loop's thermal noise over the interval's updates.
+    PhaseDifference,
 }
 
 /// Estimates Γ from the NCO's frequency with the loop identified (see the
-/// module documentation) among `shapes` (their Bn is searched).
+/// module documentation) among `shapes` (their Bn is searched), from the
+/// rows `record` says.
 pub fn estimate_nco_frequency_identified(
     tracking: &TrackingLog,
     imu: &ImuSeries,
     settings: &LoopFreeSettings,
-    shapes: &[LoopSpec],
+    shapes: &[LoopModel],
+    record: NcoRecord,
 ) -> Result<IdentifiedNcoEstimate, LoopFreeError> {
     check_settings(settings)?;
     let epochs = tracking.epoch_t_s();
     let log_interval_s = median_step(epochs);
-    let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_freq_hz.is_empty()).collect();
-    if tracks.is_empty() {
-        return Err(LoopFreeError::NoNcoFrequency { source_name: tracking.source_name().to_owned() });
-    }
-    let rows = InputPhases::of_tracks(epochs, &tracks, |tr| frequency_on_epochs(tr, epochs, settings));
+    let source_name = tracking.source_name().to_owned();
+    let (tracks, quantity): (Vec<_>, _) = match record {
+        NcoRecord::Command => {
+            let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_freq_hz.is_empty()).collect();
+            if tracks.is_empty() {
+                return Err(LoopFreeError::NoNcoFrequency { source_name });
+            }
+            (tracks, RowQuantity::NcoFrequency)
+        }
+        NcoRecord::PhaseDifference => {
+            let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_phase_cycles.is_empty()).collect();
+            if tracks.is_empty() {
+                return Err(LoopFreeError::NoNcoPhase { source_name });
+            }
+            (tracks, RowQuantity::NcoFrequencyMean)
+        }
+    };
+    let rows = InputPhases::of_tracks(epochs, &tracks, |tr| match record {
+        NcoRecord::Command => frequency_on_epochs(tr, epochs, settings),
+        NcoRecord::PhaseDifference => mean_frequency_on_epochs(tr, epochs, settings),
+    });
     // Every candidate's model starts this long before the first epoch, so
     // that all are fitted on the same epochs: the narrowest's settling
     // (2nd order: 5τ = 5/(ζωn) ≈ 3.75/Bn).
     let lead_s = settings.warmup_s.max(4.0 / IDENTIFY_BN_RANGE_HZ[0]);
     let (bn_lo, bn_hi) = (IDENTIFY_BN_RANGE_HZ[0], IDENTIFY_BN_RANGE_HZ[1]);
     let grid: Vec<f64> = (0..).map(|k| bn_lo * 1.25f64.powi(k)).take_while(|bn| *bn <= bn_hi * 1.0001).collect();
-    // The model interval: Bn·T ≤ MAX_BN_T for the widest loop a step may reach.
-    let substeps = ((log_interval_s * bn_hi * 1.5 / MAX_BN_T).ceil() as usize).max(1);
-    let loop_interval_s = log_interval_s / substeps as f64;
-    let model_at = |shape: &LoopSpec, ln_bn: f64| -> Result<ModelRegressor<'_>, LoopFreeError> {
-        let base = LoopModel::Kaplan { spec: *shape, interval_s: Some(loop_interval_s) };
-        let bn0 = base.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
-        let scaled = base.with_bn_scaled(ln_bn.exp() / bn0);
+    let model_at = |shape: &LoopModel, ln_bn: f64| -> Result<ModelRegressor<'_>, LoopFreeError> {
+        let loop_interval_s = shape.interval_s().unwrap_or(log_interval_s);
+        let bn0 = shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+        let scaled = shape.with_bn_scaled(ln_bn.exp() / bn0);
         let runnable = scaled.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
-        let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, RowQuantity::NcoFrequency)
+        let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, quantity)
             .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
         Ok(ModelRegressor::new(epochs, log_interval_s, imu, model, lead_s))
     };
     let mut candidates = Vec::new();
     let mut shape_fits = Vec::new();
     for shape in shapes {
+        // The bandwidths at which the shape's discrete loop is stable (with room for a refining step).
+        let stable = |bn: f64| model_at(shape, (bn * 1.25).ln()).is_ok();
+        let grid: Vec<f64> = grid.iter().copied().filter(|&bn| stable(bn)).collect();
+        if grid.len() < 3 {
+            continue;
+        }
         let profile: Vec<Result<LoopFreeEstimate, LoopFreeError>> =
             grid.par_iter().map(|bn| fit_rows(&rows, &model_at(shape, bn.ln())?, settings, f64::INFINITY)).collect();
         let profile: Vec<LoopFreeEstimate> = profile.into_iter().collect::<Result<_, _>>()?;
         let candidate = refine(&rows, shape, &grid, &profile, |ln_bn| model_at(shape, ln_bn), settings)?;
         shape_fits.push(ShapeFit {
             order: shape.order(),
+            loop_interval_s: shape.interval_s().unwrap_or(log_interval_s),
             bn_hz: candidate.bn_hz,
             innovation_variance_hz2: candidate.estimate.residual_variance_rad2,
         });
         candidates.push(candidate);
     }
-    let score = |c: &Candidate| c.estimate.residual_variance_rad2;
-    let Some(k_best) = (0..candidates.len()).min_by(|&a, &b| score(&candidates[a]).total_cmp(&score(&candidates[b])))
+    let own_score = |c: &Candidate| c.estimate.residual_variance_rad2;
+    let Some(k_first) =
+        (0..candidates.len()).min_by(|&a, &b| own_score(&candidates[a]).total_cmp(&own_score(&candidates[b])))
     else {
         return Err(LoopFreeError::Loop { why: "no loop shape to identify".into() });
     };
-    // Shapes the data cannot tell from the best (Δ(−2 ln L) ≤ 1): their Γ̂
-    // are as likely, so their spread joins Γ̂'s variance and the order is
-    // not resolved.
+    // The shapes compared under one noise model (the provisional best's):
+    // each fit's own AR model would move its σ² by the choice of its order.
+    let regressor_of = |c: &Candidate| model_at(&c.shape, c.bn_hz.ln());
+    let noise = rows_noise(&rows, &regressor_of(&candidates[k_first])?, settings)?;
+    let scores: Vec<f64> = candidates
+        .par_iter()
+        .map(|c| rows_score(&rows, &regressor_of(c)?, settings, c.estimate.imu_time_offset_s, &noise))
+        .collect::<Result<_, _>>()?;
+    let k_best = (0..candidates.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b])).unwrap_or(k_first);
+    // Each shape's weight exp(−Δ(−2 ln L)/2): the spread of the shapes' Γ̂
+    // about the best one's, so weighted, joins Γ̂'s variance, and the order
+    // is resolved when the other order's shapes weigh under 5 %.
     let n = candidates[k_best].estimate.epochs as f64;
-    let alike: Vec<usize> = (0..candidates.len())
-        .filter(|&k| k != k_best && n * (score(&candidates[k]) / score(&candidates[k_best])).ln() <= 1.0)
-        .collect();
-    let others: Vec<[f64; 3]> = alike.iter().map(|&k| candidates[k].estimate.gamma_hz_per_mps2).collect();
+    let weights: Vec<f64> = scores.iter().map(|s| (-0.5 * n * (s / scores[k_best]).ln()).exp()).collect();
+    let total: f64 = weights.iter().sum();
+    let g_best = candidates[k_best].estimate.gamma_hz_per_mps2;
+    let spread: [f64; 3] = [0, 1, 2].map(|i| {
+        candidates
+            .iter()
+            .zip(&weights)
+            .map(|(c, w)| w * (c.estimate.gamma_hz_per_mps2[i] - g_best[i]).powi(2))
+            .sum::<f64>()
+            / total
+    });
+    let order_best = candidates[k_best].shape.order();
+    let other_order: f64 =
+        candidates.iter().zip(&weights).filter(|(c, _)| c.shape.order() != order_best).map(|(_, w)| w).sum::<f64>();
+    let order_resolved = other_order / total < 0.05;
+    // Bn trades with the update interval: the spread of ln Bn over the
+    // shapes of the same order, so weighted, joins its variance.
+    let ln_bn_best = candidates[k_best].bn_hz.ln();
+    let same_order = candidates.iter().zip(&weights).filter(|(c, _)| c.shape.order() == order_best);
+    let (w_sum, w_spread) =
+        same_order.fold((0.0, 0.0), |(ws, sp), (c, w)| (ws + w, sp + w * (c.bn_hz.ln() - ln_bn_best).powi(2)));
     let mut c = candidates.swap_remove(k_best);
-    for g in &others {
-        for i in 0..3 {
-            let spread = (g[i] - c.estimate.gamma_hz_per_mps2[i]).powi(2);
-            c.estimate.covariance[i][i] += spread;
-        }
+    c.sigma_ln_bn = (c.sigma_ln_bn.powi(2) + w_spread / w_sum).sqrt();
+    for (i, s) in spread.iter().enumerate() {
+        c.estimate.covariance[i][i] += s;
     }
-    let model = LoopModel::Kaplan { spec: c.shape, interval_s: Some(loop_interval_s) };
-    let bn0 = model.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+    let bn0 = c.shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+    let loop_interval_s = c.shape.interval_s().unwrap_or(log_interval_s);
     let mut estimate = c.estimate;
     estimate.loop_interval_s = loop_interval_s;
     Ok(IdentifiedNcoEstimate {
         estimate,
         identified: IdentifiedLoop {
-            model: Some(model.with_bn_scaled(c.bn_hz / bn0)),
+            model: Some(c.shape.with_bn_scaled(c.bn_hz / bn0)),
             order: c.shape.order(),
-            order_resolved: others.is_empty(),
+            loop_interval_s,
+            order_resolved,
             bn_hz: c.bn_hz,
             sigma_ln_bn: c.sigma_ln_bn,
             resolution: c.resolution,
@@ -195,7 +274,7 @@ pub fn estimate_nco_frequency_identified(
 
 /// One shape's identified loop and estimate.
 struct Candidate {
-    shape: LoopSpec,
+    shape: LoopModel,
     bn_hz: f64,
     sigma_ln_bn: f64,
     resolution: LoopResolution,
@@ -207,7 +286,7 @@ struct Candidate {
 /// bound when it is at an end (module documentation).
 fn refine<'a>(
     rows: &InputPhases,
-    shape: &LoopSpec,
+    shape: &LoopModel,
     grid: &[f64],
     profile: &[LoopFreeEstimate],
     at: impl Fn(f64) -> Result<ModelRegressor<'a>, LoopFreeError> + Sync,

@@ -33,6 +33,10 @@ pub enum RowQuantity {
     /// the row's stamp) \[Hz\], without the oscillator's bias
     /// ([`LinearLoop::nco_freq_hz`]): −H\[Δf\], H the closed-loop transfer.
     NcoFrequency,
+    /// The mean of the NCO commands in force over the row's updates \[Hz\]:
+    /// the NCO's phase advance over the log interval divided by it (a
+    /// carrier phase differenced, or a Doppler averaged over the interval).
+    NcoFrequencyMean,
 }
 
 /// Errors building a [`RegressorModel`].
@@ -199,10 +203,11 @@ fn interval_updates<L: LinearLoop>(l: &mut L, a_prev: f64, a_cur: f64, substeps:
     let inv_n = 1.0 / f64::from(substeps);
     let mut sum = 0.0;
     let mut last = 0.0;
-    let mut nco_last_hz = 0.0;
+    let (mut nco_last_hz, mut nco_sum_hz) = (0.0, 0.0);
     for j in 1..=substeps {
         let w = f64::from(j) * inv_n;
         nco_last_hz = l.nco_freq_hz();
+        nco_sum_hz += nco_last_hz;
         last = l.step(a_prev + w * (a_cur - a_prev));
         sum += last;
     }
@@ -210,6 +215,7 @@ fn interval_updates<L: LinearLoop>(l: &mut L, a_prev: f64, a_cur: f64, substeps:
         RowQuantity::PhaseError(LoggedPhase::Last) => last,
         RowQuantity::PhaseError(LoggedPhase::Mean) => sum * inv_n,
         RowQuantity::NcoFrequency => nco_last_hz,
+        RowQuantity::NcoFrequencyMean => nco_sum_hz * inv_n,
     }
 }
 
@@ -395,6 +401,7 @@ mod tests {
             RowQuantity::PhaseError(LoggedPhase::Last),
             RowQuantity::PhaseError(LoggedPhase::Mean),
             RowQuantity::NcoFrequency,
+            RowQuantity::NcoFrequencyMean,
         ];
         for logged in quantities {
             let n = libm::round(log_interval_s / loop_interval_s) as u32;
