@@ -98,7 +98,7 @@ pub use measurement::{Measurement, MeasurementChoice};
 pub use nco_frequency::estimate_nco_frequency;
 pub use nco_loop::{
     IDENTIFY_BN_RANGE_HZ, IDENTIFY_INTERVALS_S, IdentifiedLoop, IdentifiedNcoEstimate, LoopResolution, NcoRecord,
-    ShapeFit, estimate_nco_frequency_identified, identification_shapes,
+    ShapeFit, estimate_nco_frequency_identified, estimate_nco_frequency_identified_from, identification_shapes,
 };
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,

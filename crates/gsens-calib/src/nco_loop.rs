@@ -150,7 +150,6 @@ pub fn estimate_nco_frequency_identified(
 ) -> Result<IdentifiedNcoEstimate, LoopFreeError> {
     check_settings(settings)?;
     let epochs = tracking.epoch_t_s();
-    let log_interval_s = median_step(epochs);
     let source_name = tracking.source_name().to_owned();
     let (tracks, quantity): (Vec<_>, _) = match record {
         NcoRecord::Command => {
@@ -172,6 +171,24 @@ pub fn estimate_nco_frequency_identified(
         NcoRecord::Command => frequency_on_epochs(tr, epochs, settings),
         NcoRecord::PhaseDifference => mean_frequency_on_epochs(tr, epochs, settings),
     });
+    estimate_nco_frequency_identified_from(&rows, imu, settings, shapes, quantity)
+}
+
+/// [`estimate_nco_frequency_identified`] from frequency rows a receiver's
+/// adapter made (each track's NCO frequency on the common epochs \[Hz\], in
+/// [`InputPhases`]'s value field, with the receiver's sign: the common mode
+/// −H\[aᵀΓ\]): `quantity` says what a row holds,
+/// [`RowQuantity::NcoFrequency`] or [`RowQuantity::NcoFrequencyMean`].
+pub fn estimate_nco_frequency_identified_from(
+    rows: &InputPhases,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    shapes: &[LoopModel],
+    quantity: RowQuantity,
+) -> Result<IdentifiedNcoEstimate, LoopFreeError> {
+    check_settings(settings)?;
+    let epochs = rows.epoch_t_s.as_slice();
+    let log_interval_s = median_step(epochs);
     // Every candidate's model starts this long before the first epoch, so
     // that all are fitted on the same epochs: the narrowest's settling
     // (2nd order: 5τ = 5/(ζωn) ≈ 3.75/Bn).
@@ -197,9 +214,9 @@ pub fn estimate_nco_frequency_identified(
             continue;
         }
         let profile: Vec<Result<LoopFreeEstimate, LoopFreeError>> =
-            grid.par_iter().map(|bn| fit_rows(&rows, &model_at(shape, bn.ln())?, settings, f64::INFINITY)).collect();
+            grid.par_iter().map(|bn| fit_rows(rows, &model_at(shape, bn.ln())?, settings, f64::INFINITY)).collect();
         let profile: Vec<LoopFreeEstimate> = profile.into_iter().collect::<Result<_, _>>()?;
-        let candidate = refine(&rows, shape, &grid, &profile, |ln_bn| model_at(shape, ln_bn), settings)?;
+        let candidate = refine(rows, shape, &grid, &profile, |ln_bn| model_at(shape, ln_bn), settings)?;
         shape_fits.push(ShapeFit {
             order: shape.order(),
             loop_interval_s: shape.interval_s().unwrap_or(log_interval_s),
@@ -217,10 +234,10 @@ pub fn estimate_nco_frequency_identified(
     // The shapes compared under one noise model (the provisional best's):
     // each fit's own AR model would move its σ² by the choice of its order.
     let regressor_of = |c: &Candidate| model_at(&c.shape, c.bn_hz.ln());
-    let noise = rows_noise(&rows, &regressor_of(&candidates[k_first])?, settings)?;
+    let noise = rows_noise(rows, &regressor_of(&candidates[k_first])?, settings)?;
     let scores: Vec<f64> = candidates
         .par_iter()
-        .map(|c| rows_score(&rows, &regressor_of(c)?, settings, c.estimate.imu_time_offset_s, &noise))
+        .map(|c| rows_score(rows, &regressor_of(c)?, settings, c.estimate.imu_time_offset_s, &noise))
         .collect::<Result<_, _>>()?;
     let k_best = (0..candidates.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b])).unwrap_or(k_first);
     // Each shape's weight exp(−Δ(−2 ln L)/2): the spread of the shapes' Γ̂
