@@ -25,7 +25,9 @@
 //! and counted.
 //!
 //! The header must parse: a file that is not RINEX, or not an observation
-//! file, is an error naming it (and the line, where the crate names one). An
+//! file, is an error naming it (and the line, where the crate names one); so
+//! is an input on which the crate panics (it slices some malformed lines
+//! unchecked: the panic is caught, its message printed by the panic hook). An
 //! epoch the crate cannot decode is skipped and counted with its line in the
 //! file. A field the crate cannot read as a number is absent from its
 //! epoch, as a blank one is.

@@ -81,8 +81,16 @@ pub fn read_rinex<R: Read>(mut input: R, source_name: &str) -> Result<Observatio
 pub fn read_rinex_bytes(bytes: &[u8], source_name: &str) -> Result<ObservationLog, RinexError> {
     let file = source_name.to_owned();
     let header_lines = header_line_count(bytes);
-    let (rinex, diagnostics) =
-        Rinex::parse_with_diagnostics(&mut BufReader::new(bytes)).map_err(|e| parse_error(&file, &e, header_lines))?;
+    // The crate slices some malformed lines without checking their length, and panics: such an
+    // input is refused like any other the crate cannot read.
+    let parsed = std::panic::catch_unwind(|| Rinex::parse_with_diagnostics(&mut BufReader::new(bytes)));
+    let (rinex, diagnostics) = match parsed {
+        Ok(parsed) => parsed.map_err(|e| parse_error(&file, &e, header_lines))?,
+        Err(_) => {
+            let reason = "the rinex crate failed on a malformed line".to_owned();
+            return Err(RinexError::Parse { file, where_: String::new(), reason });
+        }
+    };
     if !rinex.is_observation_rinex() {
         return Err(RinexError::NotObservation { file, kind: format!("{:?}", rinex.header.rinex_type) });
     }

@@ -213,3 +213,16 @@ fn hatanaka_compressed_files_read_as_the_plain_file() {
     let b = read_rinex_bytes(&crinex, "sim.crx").unwrap();
     assert_eq!(a.tracks, b.tracks);
 }
+
+#[test]
+fn an_input_the_rinex_crate_panics_on_is_refused() {
+    // A GLONASS SLOT / FRQ # record cut after its count (found by the fuzz target): the crate
+    // slices it unchecked.
+    let text = fixture_text().replacen(
+        &header_line("", "END OF HEADER"),
+        &(header_line("  1 R1", "GLONASS SLOT / FRQ #") + &header_line("", "END OF HEADER")),
+        1,
+    );
+    let e = read_rinex_bytes(text.as_bytes(), "cut.rnx").unwrap_err().to_string();
+    assert_eq!(e, "cut.rnx: not a readable RINEX observation file: the rinex crate failed on a malformed line");
+}
