@@ -283,7 +283,8 @@ impl ObservationLogBuilder {
 
     /// Appends `obs` at `t_s` (from [`Self::start_epoch`]) to the series of
     /// `sv`'s signal `code`, which starts on `carrier` if new. A signal the
-    /// epoch already holds is skipped and counted.
+    /// epoch already holds, or one on another carrier than its series' (a
+    /// GLONASS satellite whose frequency channel changed), is skipped and counted.
     pub fn push(&mut self, sv: &str, code: &str, carrier: Carrier, t_s: f64, obs: &Observation) {
         let key = (sv.to_owned(), code.to_owned());
         let tracks = &mut self.log.tracks;
@@ -292,6 +293,11 @@ impl ObservationLogBuilder {
             tracks.len() - 1
         });
         let track = &mut self.log.tracks[i];
+        if track.carrier != carrier {
+            let reason = format!("{sv} {code} on another carrier than its first ({})", track.carrier.label());
+            self.skip(&reason, || format!("t = {t_s} s"));
+            return;
+        }
         if track.t_s.last().is_some_and(|&last| last >= t_s) {
             let reason = format!("{sv} {code} twice in one epoch (the first kept)");
             self.skip(&reason, || format!("t = {t_s} s"));
@@ -355,12 +361,14 @@ mod tests {
         let t1 = b.start_epoch(2301, 0.5, || "line 22".into()).unwrap();
         b.push("G05", "1C", l1, t1, &obs);
         b.push("G05", "1C", l1, t1, &obs);
+        b.push("G05", "1C", Carrier::of(Signal::new("L5I", None).unwrap()), t1 + 0.1, &obs);
         assert_eq!((t0, t1), (604_799.5, 604_800.5));
         assert!(b.start_epoch(2301, 0.5, || "line 24".into()).is_none());
         let log = b.finish();
         assert_eq!((log.gps_week, log.epochs, log.tracks[0].len()), (2300, 2, 2));
-        assert_eq!(log.skipped_count(), 2);
-        assert_eq!(log.skipped[1].to_string(), "1 × epoch time not after the previous epoch's (first at line 24)");
+        assert_eq!(log.skipped_count(), 3);
+        assert_eq!(log.skipped[1].reason, "G05 1C on another carrier than its first (L1CA)");
+        assert_eq!(log.skipped[2].to_string(), "1 × epoch time not after the previous epoch's (first at line 24)");
         assert!(log.validate().is_ok());
         assert_eq!(log.track("G05", "1C").unwrap().label(), "G05 1C (L1CA)");
     }

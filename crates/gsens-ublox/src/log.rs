@@ -47,7 +47,8 @@ pub struct UbxLog {
     pub sensor_time: SensorTime,
     /// Frames with a valid checksum.
     pub frames: usize,
-    /// Bytes outside every valid frame (garbage, corrupt and truncated frames).
+    /// Bytes outside every frame read: garbage, and frames corrupt, cut off or
+    /// with a malformed payload.
     pub bytes_outside_frames: usize,
 }
 
