@@ -104,12 +104,40 @@
 //! Δf_c = f_c·y, so one loop on f_c sees (f_c/f_L1) times the phase error of
 //! the same loop on L1: [`Carrier::scale_to_l1`] = f_L1/f_c brings it onto
 //! L1's scale (docs/conventions.md, "Tracking log").
+//!
+//! # Carrier phase and Doppler logs
+//!
+//! Receivers that log no tracking error but their measurements (RINEX
+//! observation files, u-blox UBX RXM-RAWX) are read into one type,
+//! [`ObservationLog`]: one [`SatelliteSeries`] per signal of each satellite
+//! (pseudorange, carrier phase, Doppler, C/N0, [`obs_flags`], and the
+//! format's signal strength or lock time), with what the reader skipped
+//! ([`Skipped`], by reason) and the receiver clock jumps it saw
+//! ([`ClockEvent`]). The readers themselves are the receiver crates'
+//! (`gsens-rinex`, `gsens-ublox`); they build the log with
+//! [`ObservationLogBuilder`].
+//!
+//! Time: every `t_s` is GPS time in seconds since the start of the GPS week
+//! of the log's first epoch ([`ObservationLog::gps_week`]), continuing past
+//! the week's end: t = (week − first week)·604800 s + time of week.
+//!
+//! The observables are kept as the file states them, in its units and with
+//! its signs (docs/conventions.md, "Carrier phase and Doppler logs"):
+//!
+//! - Doppler \[Hz\], positive for an approaching satellite (RINEX 3.04 §3.4;
+//!   u-blox RXM-RAWX `doMes` likewise);
+//! - carrier phase \[cycles\], changing in the same sense as the range
+//!   (RINEX 3.04 §3.3: Φ = ρ/λ + …, so dΦ/dt = −D for a receiver that keeps
+//!   time; RXM-RAWX `cpMes` the same, its ambiguity set to bring it near the
+//!   pseudorange): a receiver's NCO phase θ, which runs at +D, is −Φ up to a
+//!   constant.
 #![deny(missing_docs)]
 
 mod columns;
 mod config;
 mod error;
 mod imu;
+mod observations;
 mod output;
 mod parse;
 mod plain;
@@ -125,6 +153,9 @@ pub use columns::{HeaderError, TrackingColumns};
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
 pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
+pub use observations::{
+    ClockEvent, GPS_WEEK_S, Observation, ObservationLog, ObservationLogBuilder, SatelliteSeries, Skipped, obs_flags,
+};
 pub use output::{
     ExportError, FileError, OutputPathError, check_output_dir, check_output_file, check_output_file_in, create_file,
     write_file,
