@@ -293,17 +293,20 @@ pub(crate) mod flag {
     ];
 }
 
-/// The rows of the candidate tracks, flat, track after track, each in time order.
+/// The rows of the candidate tracks, each track's in time order in columns
+/// of its own (a log given to the session lends its own columns, converted
+/// in place). A row's index r counts across the tracks, track after track:
+/// the screening's per-row arrays are flat in it.
 #[derive(Debug, Default)]
 pub(crate) struct Rows {
     /// The rows of track `i` are `track_start[i]..track_start[i + 1]`.
     pub track_start: Vec<usize>,
-    /// Epoch index of each row (strictly increasing within a track).
-    pub epoch: Vec<u32>,
-    /// Phase error \[rad\].
-    pub phase: Vec<f64>,
-    /// C/N0 \[dB-Hz\].
-    pub cn0: Vec<f64>,
+    /// Per track: the epoch index of each row (strictly increasing).
+    pub epoch: Vec<Vec<u32>>,
+    /// Per track: the phase error of each row \[rad\].
+    pub phase: Vec<Vec<f64>>,
+    /// Per track: the C/N0 of each row \[dB-Hz\].
+    pub cn0: Vec<Vec<f64>>,
     /// Per track: the factor f_L1/f_c its phases were scaled by onto L1's scale
     /// (missing: 1). The linear-range test compares the discriminator's own
     /// output, phase/to_l1, with the limit.
@@ -321,6 +324,38 @@ impl Rows {
 
     pub(crate) fn range(&self, i: usize) -> core::ops::Range<usize> {
         self.track_start[i]..self.track_start[i + 1]
+    }
+
+    /// The number of rows of all the tracks.
+    pub(crate) fn len(&self) -> usize {
+        self.track_start.last().copied().unwrap_or(0)
+    }
+
+    /// Track `i`'s epochs.
+    pub(crate) fn epochs(&self, i: usize) -> &[u32] {
+        &self.epoch[i]
+    }
+
+    /// Track `i`'s phases \[rad\].
+    pub(crate) fn phases(&self, i: usize) -> &[f64] {
+        &self.phase[i]
+    }
+
+    /// Track `i`'s C/N0 \[dB-Hz\].
+    pub(crate) fn cn0s(&self, i: usize) -> &[f64] {
+        &self.cn0[i]
+    }
+
+    /// Appends a track of these rows (test fixtures).
+    #[cfg(test)]
+    pub(crate) fn push_track(&mut self, epoch: Vec<u32>, phase: Vec<f64>, cn0: Vec<f64>) {
+        if self.track_start.is_empty() {
+            self.track_start.push(0);
+        }
+        self.track_start.push(self.len() + epoch.len());
+        self.epoch.push(epoch);
+        self.phase.push(phase);
+        self.cn0.push(cn0);
     }
 
     /// The factor track `i`'s phases were scaled by (f_L1/f_c).
@@ -361,7 +396,7 @@ pub(crate) struct Screened {
 impl Screened {
     /// Nothing excluded, one segment per track.
     pub(crate) fn none(rows: &Rows) -> Self {
-        let n = rows.epoch.len();
+        let n = rows.len();
         Screened {
             flags: vec![0; n],
             segment: vec![0; n],
@@ -397,10 +432,6 @@ fn order_key(v: f64) -> i32 {
 /// The most tracks at one epoch the median computation handles on the stack.
 const MAX_AT_EPOCH: usize = 64;
 
-/// Spans of [`deviations`] computed at once: enough to keep a few threads
-/// busy, few enough that their outputs held at once stay small.
-const WAVE_SPANS: usize = 8;
-
 /// The deviations of every row from the median of the other tracks at its
 /// epoch (NaN where fewer than two others), with the tracks' offsets `c`
 /// removed; rows with `flags & mask != 0` do not enter the medians, and the
@@ -408,9 +439,9 @@ const WAVE_SPANS: usize = 8;
 /// included), if given.
 ///
 /// Each epoch's medians need only that epoch's rows: spans of epochs are
-/// computed in parallel, a wave of [`WAVE_SPANS`] spans at a time (so that
-/// the spans' outputs held at once stay small whatever the thread count),
-/// and copied into `d`.
+/// computed in parallel, each writing its rows' deviations straight into
+/// its own parts of `d` (a span's rows of one track are contiguous), so no
+/// span holds a buffer of its own.
 fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], shift: Option<&[f64]>, d: &mut [f64]) {
     const SPAN_EPOCHS: usize = 1 << 14;
     let n_tracks = rows.tracks();
@@ -419,39 +450,28 @@ fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], s
         (0..n_tracks)
             .map(|i| {
                 let range = rows.range(i);
-                range.start + rows.epoch[range].partition_point(|&ep| (ep as usize) < e)
+                range.start + rows.epochs(i).partition_point(|&ep| (ep as usize) < e)
             })
             .collect()
     };
-    let spans: Vec<(usize, usize)> =
-        (0..n_epochs).step_by(SPAN_EPOCHS).map(|e0| (e0, (e0 + SPAN_EPOCHS).min(n_epochs))).collect();
-    for wave in spans.chunks(WAVE_SPANS) {
-        let parts: Vec<(Vec<usize>, Vec<usize>, Vec<f64>)> = wave
-            .par_iter()
-            .map(|&(e0, e1)| {
-                let (first, end) = (first_at(e0), first_at(e1));
-                let mut offset = Vec::with_capacity(n_tracks);
-                let mut total = 0;
-                for i in 0..n_tracks {
-                    offset.push(total);
-                    total += end[i] - first[i];
-                }
-                let mut out = vec![f64::NAN; total];
-                deviations_span(rows, (e0, e1), &first, flags, mask, c, shift, &mut |i, r, v| {
-                    out[offset[i] + r - first[i]] = v
-                });
-                (first, end, out)
-            })
-            .collect();
-        for (first, end, out) in parts {
-            let mut at = 0;
-            for i in 0..n_tracks {
-                let len = end[i] - first[i];
-                d[first[i]..end[i]].copy_from_slice(&out[at..at + len]);
-                at += len;
-            }
+    let bounds: Vec<usize> = (0..n_epochs).step_by(SPAN_EPOCHS).chain([n_epochs]).collect();
+    let firsts: Vec<Vec<usize>> = bounds.iter().map(|&e| first_at(e)).collect();
+    // Per span, per track: the part of `d` that holds its rows there.
+    let mut parts: Vec<Vec<&mut [f64]>> = (1..bounds.len()).map(|_| Vec::with_capacity(n_tracks)).collect();
+    for (i, mut rest) in per_track(d, &rows.track_start).into_iter().enumerate() {
+        for (s, part) in parts.iter_mut().enumerate() {
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(firsts[s + 1][i] - firsts[s][i]);
+            part.push(head);
+            rest = tail;
         }
     }
+    let spans: Vec<_> = bounds.windows(2).zip(&firsts).zip(parts).collect();
+    spans.into_par_iter().for_each(|((e, first), mut part)| {
+        for p in part.iter_mut() {
+            p.fill(f64::NAN);
+        }
+        deviations_span(rows, (e[0], e[1]), first, flags, mask, c, shift, &mut |i, r, v| part[i][r - first[i]] = v);
+    });
 }
 
 /// [`deviations`] over the epochs `e0..e1` of `span`, whose rows start at
@@ -485,25 +505,29 @@ fn deviations_span(
         value.fill(f64::NAN);
         block_start.copy_from_slice(&cursor);
         for i in 0..n_tracks {
-            let end = rows.track_start[i + 1];
-            while cursor[i] < end && (rows.epoch[cursor[i]] as usize) < e1 {
-                let r = cursor[i];
-                let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
-                let p = rows.phase[r] - c[i];
+            // The track's own rows, indexed from its first.
+            let (range, ep, ph) = (rows.range(i), rows.epochs(i), rows.phases(i));
+            let (s0, fl, sh) = (range.start, &flags[range.clone()], shift.map(|s| &s[range]));
+            let mut j = cursor[i] - s0;
+            while j < ep.len() && (ep[j] as usize) < e1 {
+                let k = (ep[j] as usize - e0) * n_tracks + i;
+                let p = ph[j] - c[i];
                 present[k] = p;
-                if flags[r] & mask == 0 {
-                    value[k] = p - shift.map_or(0.0, |s| s[r]);
+                if fl[j] & mask == 0 {
+                    value[k] = p - sh.map_or(0.0, |s| s[j]);
                 }
-                cursor[i] += 1;
+                j += 1;
             }
+            cursor[i] = s0 + j;
         }
         for e in 0..e1 - e0 {
             let (p_row, v_row) = (&present[e * n_tracks..][..n_tracks], &value[e * n_tracks..][..n_tracks]);
             scratch.deviations(p_row, v_row, &mut dev[e * n_tracks..][..n_tracks]);
         }
         for i in 0..n_tracks {
+            let (s0, ep) = (rows.track_start[i], rows.epochs(i));
             for r in block_start[i]..cursor[i] {
-                let k = (rows.epoch[r] as usize - e0) * n_tracks + i;
+                let k = (ep[r - s0] as usize - e0) * n_tracks + i;
                 out(i, r, dev[k]);
             }
         }
@@ -625,36 +649,38 @@ fn initial_offsets(rows: &Rows, n_epochs: usize, flags: &[u8]) -> Vec<f64> {
     let sampled: Vec<usize> = (0..n_epochs).step_by(stride).collect();
     // The departures of a run of sampled epochs, per track.
     let departures = |epochs: &[usize]| -> Vec<Vec<f64>> {
-        let mut cursor: Vec<usize> = rows.track_start[..n_tracks].to_vec();
+        // Per track: the index of its next row among its own.
+        let mut cursor: Vec<usize> = vec![0; n_tracks];
         let mut dep: Vec<Vec<f64>> = vec![Vec::new(); n_tracks];
         let mut at: Vec<(usize, usize)> = Vec::with_capacity(n_tracks);
         for &e in epochs {
             at.clear();
             let (mut sum, mut n) = (0.0, 0usize);
             for i in 0..n_tracks {
-                let end = rows.track_start[i + 1];
+                let (ep, start) = (rows.epochs(i), rows.track_start[i]);
+                let end = ep.len();
                 // The track's row at epoch e, if any (its rows are in epoch order).
                 let c = &mut cursor[i];
-                if *c < end && (rows.epoch[*c] as usize) < e {
+                if *c < end && (ep[*c] as usize) < e {
                     // Rows are mostly consecutive epochs: jump, then adjust.
-                    let guess = (*c + (e - rows.epoch[*c] as usize)).min(end - 1);
-                    *c = if rows.epoch[guess] as usize >= e {
-                        *c + rows.epoch[*c..=guess].partition_point(|&x| (x as usize) < e)
+                    let guess = (*c + (e - ep[*c] as usize)).min(end - 1);
+                    *c = if ep[guess] as usize >= e {
+                        *c + ep[*c..=guess].partition_point(|&x| (x as usize) < e)
                     } else {
-                        guess + rows.epoch[guess..end].partition_point(|&x| (x as usize) < e)
+                        guess + ep[guess..end].partition_point(|&x| (x as usize) < e)
                     };
                 }
-                if *c < end && rows.epoch[*c] as usize == e {
+                if *c < end && ep[*c] as usize == e {
                     at.push((i, *c));
-                    if flags[*c] & (flag::CN0_DROP | flag::STARTUP_CN0) == 0 {
-                        sum += rows.phase[*c];
+                    if flags[start + *c] & (flag::CN0_DROP | flag::STARTUP_CN0) == 0 {
+                        sum += rows.phases(i)[*c];
                         n += 1;
                     }
                 }
             }
             if n >= 2 {
                 for &(i, r) in &at {
-                    dep[i].push(rows.phase[r] - sum / n as f64);
+                    dep[i].push(rows.phases(i)[r] - sum / n as f64);
                 }
             }
         }
@@ -694,7 +720,7 @@ fn sampled_median(values: &[f64], scratch: &mut Vec<f64>, f: impl Fn(f64) -> f64
 /// (test 3), what could not be checked, and each track's outcome.
 pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &ScreeningConfig) -> Screened {
     let mut out = Screened::none(rows);
-    if !cfg.enabled || rows.epoch.is_empty() {
+    if !cfg.enabled || rows.len() == 0 {
         return out;
     }
     let windows = Windows::new(log_interval_s, cfg);
@@ -712,7 +738,7 @@ pub(crate) fn screen(rows: &Rows, n_epochs: usize, log_interval_s: f64, cfg: &Sc
     per_track(&mut out.flags, &rows.track_start).into_par_iter().enumerate().for_each(|(i, fl)| {
         if dev.sigma[i].is_finite() {
             let range = rows.range(i);
-            let (ep, d, lvl) = (&rows.epoch[range.clone()], &dev.d[range.clone()], &dev.level[range]);
+            let (ep, d, lvl) = (rows.epochs(i), &dev.d[range.clone()], &dev.level[range]);
             noisy_windows(ep, d, lvl, dev.sigma[i], windows.noisy, cfg.noisy_rms_k, windows.guard, fl);
         }
     });
@@ -753,10 +779,9 @@ fn cn0_drops(rows: &Rows, cfg: &ScreeningConfig, guard: u32, flags: &mut [u8]) -
         .into_par_iter()
         .enumerate()
         .map_init(Vec::new, |scratch, (i, fl)| {
-            let range = rows.range(i);
-            let median_cn0 = sampled_median(&rows.cn0[range.clone()], scratch, |v| v);
+            let median_cn0 = sampled_median(rows.cn0s(i), scratch, |v| v);
             if let Some(x) = cfg.cn0_drop_db {
-                let (ep, cn0) = (&rows.epoch[range.clone()], &rows.cn0[range]);
+                let (ep, cn0) = (rows.epochs(i), rows.cn0s(i));
                 let low: Vec<bool> = cn0.iter().map(|&v| v < median_cn0 - x).collect();
                 let mut drop: Vec<u8> = low.iter().map(|&l| if l { flag::CN0_DROP } else { 0 }).collect();
                 spread_with_guard(ep, &mut drop, flag::CN0_DROP, guard);
@@ -821,8 +846,8 @@ fn deviations_and_slips(
     // tracks does not change), over a regular subsample of the epochs.
     let mut dev = Deviation {
         c: initial_offsets(rows, n_epochs, &out.flags),
-        d: vec![f64::NAN; rows.epoch.len()],
-        level: vec![0.0; rows.epoch.len()],
+        d: vec![f64::NAN; rows.len()],
+        level: vec![0.0; rows.len()],
         sigma: vec![f64::NAN; n_tracks],
     };
     let mut startup_events = vec![0usize; n_tracks];
@@ -868,7 +893,7 @@ fn refine_offsets(rows: &Rows, noisy_window: u32, cfg: &ScreeningConfig, dev: &m
                 for v in d.iter_mut() {
                     *v -= m;
                 }
-                (m, local_sigma(&rows.epoch[rows.range(i)], d, noisy_window, scratch).max(cfg.min_sigma_rad))
+                (m, local_sigma(rows.epochs(i), d, noisy_window, scratch).max(cfg.min_sigma_rad))
             })
         })
         .collect();
@@ -911,7 +936,7 @@ fn slip_round(
                 return None;
             }
             let range = rows.range(i);
-            let (ep, dv) = (&rows.epoch[range.clone()], &d[range]);
+            let (ep, dv) = (rows.epochs(i), &d[range]);
             let startup_end = rows.startup_end(i);
             Some(slip_events(ep, dv, sigma[i], log_interval_s, cfg, guard, startup_end, lvl, fl, seg, buf))
         })
@@ -930,7 +955,7 @@ fn phase_range(rows: &Rows, dev: &Deviation, limit: f64, guard: u32, flags: &mut
         // plus the noise margin (docs of `phase_range_margin_rad`).
         let limit = limit * rows.to_l1(i) + phase_range_margin_rad(dev.sigma[i], range.len());
         for (f, r) in fl.iter_mut().zip(range.clone()) {
-            let (p, d) = (rows.phase[r], dev.d[r]);
+            let (p, d) = (rows.phases(i)[r - range.start], dev.d[r]);
             // A start-up row is excluded already, as the pull-in it is.
             if *f & flag::ANY_STARTUP != 0 {
                 continue;
@@ -939,7 +964,7 @@ fn phase_range(rows: &Rows, dev: &Deviation, limit: f64, guard: u32, flags: &mut
                 *f |= flag::PHASE_RANGE;
             }
         }
-        spread_with_guard(&rows.epoch[range], fl, flag::PHASE_RANGE, guard);
+        spread_with_guard(rows.epochs(i), fl, flag::PHASE_RANGE, guard);
     });
 }
 
@@ -957,8 +982,8 @@ fn low_gain(
         .map(|i| {
             let range = rows.range(i);
             dev.sigma[i].is_finite().then(|| GainInput {
-                epoch: &rows.epoch[range.clone()],
-                phase: &rows.phase[range.clone()],
+                epoch: rows.epochs(i),
+                phase: rows.phases(i),
                 dev: &dev.d[range.clone()],
                 level: &dev.level[range],
                 offset: dev.c[i],
@@ -1031,7 +1056,7 @@ fn track_outcomes(rows: &Rows, cfg: &ScreeningConfig, out: &mut Screened) {
             }
         }
         count_rows(fl, sum);
-        *spans = excluded_spans(&rows.epoch[range], fl);
+        *spans = excluded_spans(rows.epochs(i), fl);
     });
 }
 
@@ -1561,7 +1586,7 @@ fn low_gain_windows(
     }
     for (track, first, last) in low {
         let range = rows.range(track);
-        let (ep, fl) = (&rows.epoch[range.clone()], &mut flags[range]);
+        let (ep, fl) = (rows.epochs(track), &mut flags[range]);
         flag_epochs(ep, fl, first.saturating_sub(guard), last + guard, flag::LOW_GAIN);
     }
     // The whole track: its windows pooled (inverse-variance weights; the

@@ -243,10 +243,11 @@ pub fn prepare_session(
     prepare_session_from(Cow::Borrowed(tracking), imu, imu_name, selection, imu_time_offset_s)
 }
 
-/// [`prepare_session`] on a log lent or given: a given log is freed once the
-/// rows that pass the masks are copied out, before the screening, so that the
-/// log and the screening's per-row arrays are never held at once (the peak
-/// memory of an estimate).
+/// [`prepare_session`] on a log lent or given: a given log becomes the
+/// screening's rows in place (each track's phase and C/N0 columns keep the
+/// rows that pass the masks, its other columns are freed), before the
+/// screening, so that the log and the screening's per-row arrays are never
+/// held at once (the peak memory of an estimate) and its rows are not copied.
 ///
 /// The stages: the grid and its usable span (`grid`), the rows passing
 /// the masks (`rows`), the screening, the ranking (`rank`), the used rows

@@ -12,12 +12,13 @@ fn synthetic_rows(tracks: usize, epochs: usize) -> Rows {
     };
     let mut rows = Rows { track_start: vec![0], ..Rows::default() };
     for i in 0..tracks {
+        let (mut epoch, mut phase, mut cn0) = (Vec::new(), Vec::new(), Vec::new());
         for e in 0..epochs {
-            rows.epoch.push(e as u32);
-            rows.phase.push(0.1 * (e as f64 * 0.2).sin() + 0.05 * rnd() + 0.01 * i as f64);
-            rows.cn0.push(40.0 + i as f64 + rnd());
+            epoch.push(e as u32);
+            phase.push(0.1 * (e as f64 * 0.2).sin() + 0.05 * rnd() + 0.01 * i as f64);
+            cn0.push(40.0 + i as f64 + rnd());
         }
-        rows.track_start.push(rows.epoch.len());
+        rows.push_track(epoch, phase, cn0);
     }
     rows
 }
@@ -31,7 +32,7 @@ fn timing() {
         let t = std::time::Instant::now();
         let s = screen(&rows, 144_000, 0.025, &ScreeningConfig::default());
         best = best.min(t.elapsed().as_secs_f64());
-        assert_eq!(s.flags.len(), rows.epoch.len());
+        assert_eq!(s.flags.len(), rows.len());
     }
     let s = screen(&rows, 144_000, 0.025, &ScreeningConfig::default());
     let slips: usize = s.summaries.iter().map(|t| t.slips).sum();

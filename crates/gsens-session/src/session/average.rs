@@ -78,15 +78,17 @@ pub(super) fn gather(
         slot_base.push(slot_base.last().copied().unwrap_or(0) + screened.segments[c]);
     }
     let blocks = epoch_blocks(n_epochs);
-    let for_each_used_row = |epochs: Range<usize>, f: &mut dyn FnMut(usize, usize, f64)| {
+    // Calls f(slot, epoch, phase, C/N0, to_l1) for each used row at `epochs`.
+    let for_each_used_row = |epochs: Range<usize>, f: &mut dyn FnMut(usize, u32, f64, f64, f64)| {
         for (sel, &c) in selected.iter().enumerate() {
+            let (ep, phase, cn0) = (rows.epochs(c), rows.phases(c), rows.cn0s(c));
             let range = rows.range(c);
-            let ep = &rows.epoch[range.clone()];
-            let first = range.start + ep.partition_point(|&x| (x as usize) < epochs.start);
-            let end = range.start + ep.partition_point(|&x| (x as usize) < epochs.end);
-            for r in first..end {
-                if screened.flags[r] == 0 {
-                    f(slot_base[sel] + screened.segment[r] as usize, r, rows.to_l1[c]);
+            let (flags, segment) = (&screened.flags[range.clone()], &screened.segment[range]);
+            let first = ep.partition_point(|&x| (x as usize) < epochs.start);
+            let end = ep.partition_point(|&x| (x as usize) < epochs.end);
+            for j in first..end {
+                if flags[j] == 0 {
+                    f(slot_base[sel] + segment[j] as usize, ep[j], phase[j], cn0[j], rows.to_l1[c]);
                 }
             }
         }
@@ -94,7 +96,7 @@ pub(super) fn gather(
     let mut start = vec![0usize; n_epochs + 1];
     start[1..].par_chunks_mut(EPOCH_BLOCK).zip(&blocks).for_each(|(counts, epochs)| {
         let e0 = epochs.start;
-        for_each_used_row(epochs.clone(), &mut |_, r, _| counts[rows.epoch[r] as usize - e0] += 1);
+        for_each_used_row(epochs.clone(), &mut |_, epoch, _, _, _| counts[epoch as usize - e0] += 1);
     });
     for e in 0..n_epochs {
         start[e + 1] += start[e];
@@ -113,9 +115,9 @@ pub(super) fn gather(
         let base = start[epochs.start];
         let mut fill: Vec<usize> = start[epochs.clone()].iter().map(|s| s - base).collect();
         let e0 = epochs.start;
-        for_each_used_row(epochs.clone(), &mut |slot, r, to_l1| {
-            let e = rows.epoch[r] as usize - e0;
-            out[fill[e]] = (slot, row_weight(weighting, rows.cn0[r], to_l1), rows.phase[r]);
+        for_each_used_row(epochs.clone(), &mut |slot, epoch, phase, cn0, to_l1| {
+            let e = epoch as usize - e0;
+            out[fill[e]] = (slot, row_weight(weighting, cn0, to_l1), phase);
             fill[e] += 1;
         });
     });
@@ -292,9 +294,9 @@ mod tests {
     fn two_tracks() -> (Rows, Screened) {
         let rows = Rows {
             track_start: vec![0, 3, 7],
-            epoch: vec![0, 1, 3, 0, 1, 2, 3],
-            phase: vec![0.1, 0.2, 0.3, 1.0, 1.1, 1.2, 1.3],
-            cn0: vec![40.0, 40.0, 30.0, 20.0, 20.0, 20.0, 10.0],
+            epoch: vec![vec![0, 1, 3], vec![0, 1, 2, 3]],
+            phase: vec![vec![0.1, 0.2, 0.3], vec![1.0, 1.1, 1.2, 1.3]],
+            cn0: vec![vec![40.0, 40.0, 30.0], vec![20.0, 20.0, 20.0, 10.0]],
             to_l1: vec![1.0, 2.0],
             startup_end: vec![],
         };

@@ -73,9 +73,9 @@ pub(super) fn standings(c: &Candidates, screened: &Screened) -> Vec<Standing> {
     // Per candidate: rows kept by the screening and their C/N0 sum.
     let kept: Vec<(usize, f64)> = (0..rows.tracks())
         .map(|k| {
-            (rows.track_start[k]..rows.track_start[k + 1])
-                .filter(|&r| screened.flags[r] == 0)
-                .fold((0, 0.0), |(n, sum), r| (n + 1, sum + rows.cn0[r]))
+            (screened.flags[rows.range(k)].iter().zip(rows.cn0s(k)))
+                .filter(|&(&f, _)| f == 0)
+                .fold((0, 0.0), |(n, sum), (_, &cn0)| (n + 1, sum + cn0))
         })
         .collect();
     (0..c.tracks.len())
@@ -218,7 +218,9 @@ mod tests {
     #[test]
     fn the_standing_is_the_mean_over_the_rows_kept_or_else_the_widest_count() {
         // Candidate 0 (track 0) keeps rows 0 and 2 (C/N0 40 and 44); candidate 1 (track 2) keeps none.
-        let rows = Rows { track_start: vec![0, 3, 4], cn0: vec![40.0, 99.0, 44.0, 50.0], ..Rows::default() };
+        let mut rows = Rows::default();
+        rows.push_track(vec![0, 1, 2], vec![0.0; 3], vec![40.0, 99.0, 44.0]);
+        rows.push_track(vec![0], vec![0.0], vec![50.0]);
         let mut screened = Screened::none(&rows);
         screened.flags = vec![0, 1, 0, 4];
         screened.summaries[0].deviation_sigma_rad = Some(0.02);

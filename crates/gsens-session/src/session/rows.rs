@@ -1,6 +1,6 @@
 //! The second stage of a session's preparation: the rows of the log that
-//! pass the span and the masks, copied out track by track into the
-//! screening's row table.
+//! pass the span and the masks, taken track by track into the screening's
+//! row table (a log given to the session converted in place).
 
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -9,7 +9,7 @@ use gsens_io::{ChannelTrack, TrackingLog};
 
 use super::SelectionConfig;
 use super::grid::{Grid, Span};
-use crate::screening::{self, Rows};
+use crate::screening::Rows;
 
 /// Which rows of the log enter the session: those in the usable span, at or
 /// above the elevation mask (unknown elevation passes) and at or above the
@@ -56,8 +56,9 @@ pub(super) struct Candidates {
     pub rows: Rows,
 }
 
-/// One track's part of the row table: its epochs, phases and C/N0.
-type RowSlices<'a> = (&'a mut [u32], &'a mut [f64], &'a mut [f64]);
+/// One track's rows in the row table: its epochs, phases and C/N0, and the
+/// epoch where its start-up ends.
+type TrackRows = (Vec<u32>, Vec<f64>, Vec<f64>, u32);
 
 impl RowFilter {
     /// The filter of `selection`'s masks over `span`.
@@ -101,32 +102,53 @@ impl RowFilter {
         s
     }
 
-    /// Copies the passing rows of `track` (at grid epochs `ks`) into `to`,
-    /// the phases scaled to L1 (f_L1/f_c); returns the epoch, counted from
-    /// the span's first, where its start-up ends: `startup_epochs` after its
-    /// first row in the log (which may precede the span), 0 when that lies
-    /// before the span.
-    fn copy_rows(&self, ks: &[u64], track: &ChannelTrack, to: RowSlices, startup_epochs: u64) -> u32 {
+    /// The passing rows of `track` (at grid epochs `ks`; `passing` of
+    /// them), the phases scaled to L1 (f_L1/f_c), and the epoch, counted
+    /// from the span's first, where its start-up ends: `startup_epochs`
+    /// after its first row in the log (which may precede the span), 0 when
+    /// that lies before the span. A track given is converted in place: its
+    /// phase and C/N0 columns become the rows' (a row's index never passes
+    /// its index in the log), the rest of it is freed.
+    fn take_rows(&self, ks: &[u64], track: Cow<'_, ChannelTrack>, passing: usize, startup_epochs: u64) -> TrackRows {
         let to_l1 = track.carrier.scale_to_l1();
-        let mut r = 0;
-        for (j, &k) in ks.iter().enumerate() {
-            if self.passes(k, track.elev_deg[j], track.cn0_dbhz[j]) {
-                to.0[r] = self.span.epoch_of(k);
-                to.1[r] = track.phase_err_rad[j] * to_l1;
-                to.2[r] = track.cn0_dbhz[j];
-                r += 1;
+        let startup_end = (ks[0] + startup_epochs).saturating_sub(self.span.k_first).min(u32::MAX as u64) as u32;
+        let mut epoch = Vec::with_capacity(passing);
+        let (phase, cn0) = match track {
+            Cow::Owned(ChannelTrack { phase_err_rad: mut phase, cn0_dbhz: mut cn0, elev_deg, .. }) => {
+                for (j, &k) in ks.iter().enumerate() {
+                    if self.passes(k, elev_deg[j], cn0[j]) {
+                        let r = epoch.len();
+                        epoch.push(self.span.epoch_of(k));
+                        phase[r] = phase[j] * to_l1;
+                        cn0[r] = cn0[j];
+                    }
+                }
+                phase.truncate(epoch.len());
+                cn0.truncate(epoch.len());
+                (phase, cn0)
             }
-        }
-        (ks[0] + startup_epochs).saturating_sub(self.span.k_first).min(u32::MAX as u64) as u32
+            Cow::Borrowed(track) => {
+                let (mut phase, mut cn0) = (Vec::with_capacity(passing), Vec::with_capacity(passing));
+                for (j, &k) in ks.iter().enumerate() {
+                    if self.passes(k, track.elev_deg[j], track.cn0_dbhz[j]) {
+                        epoch.push(self.span.epoch_of(k));
+                        phase.push(track.phase_err_rad[j] * to_l1);
+                        cn0.push(track.cn0_dbhz[j]);
+                    }
+                }
+                (phase, cn0)
+            }
+        };
+        (epoch, phase, cn0, startup_end)
     }
 }
 
 /// The candidates of `tracking` under `filter`: every track's counts, then
-/// the passing rows of the tracks that have some, in one table sized by the
-/// counts, each candidate's rows filled on either core. A given log is freed
-/// track by track as its rows are taken, so that the log and the row table
-/// are never both whole in memory. `startup_s`: the start-up's length after
-/// a track's first row (`ScreeningConfig::startup_s`).
+/// the passing rows of the tracks that have some, the tracks in parallel.
+/// A given log is converted track by track into the row table (its phase
+/// and C/N0 columns kept, the rest freed), so that no copy of its rows is
+/// made. `startup_s`: the start-up's length after a track's first row
+/// (`ScreeningConfig::startup_s`).
 pub(super) fn candidates(
     tracking: Cow<'_, TrackingLog>,
     grid: &Grid,
@@ -150,41 +172,32 @@ pub(super) fn candidates(
         .map(|t| TrackMeta { channel: t.channel, prn: t.prn, carrier: t.carrier, mean_cn0_dbhz: t.mean_cn0_dbhz() })
         .collect();
     let (mut rows, candidate_of) = row_table(&stats, &tracks);
-    let mut into: Vec<Option<RowSlices>> = (0..tracks.len()).map(|_| None).collect();
-    let candidate_tracks = candidate_of.iter().enumerate().filter_map(|(i, c)| c.map(|_| i));
-    let starts = &rows.track_start;
-    let (epoch, phase) = (screening::per_track(&mut rows.epoch, starts), screening::per_track(&mut rows.phase, starts));
-    let cn0 = screening::per_track(&mut rows.cn0, starts);
-    for (i, ((epoch, phase), cn0)) in candidate_tracks.zip(epoch.into_iter().zip(phase).zip(cn0)) {
-        into[i] = Some((epoch, phase, cn0));
-    }
     let startup_epochs = (startup_s / grid.log_interval_s).round() as u64;
-    let take_rows = |ks: &mut Vec<u64>, tr: &ChannelTrack, to: RowSlices| {
-        grid.track_ks(stamps, &tr.t_s, ks);
-        filter.copy_rows(ks, tr, to, startup_epochs)
+    let take = |ks: &mut Vec<u64>, (i, tr): (usize, Cow<'_, ChannelTrack>)| {
+        candidate_of[i].is_some().then(|| {
+            grid.track_ks(stamps, &tr.t_s, ks);
+            filter.take_rows(ks, tr, stats[i].passing, startup_epochs)
+        })
     };
-    let startup_end: Vec<Option<u32>> = match tracking {
-        Cow::Owned(log) => log
-            .into_tracks()
-            .into_par_iter()
-            .zip(into)
-            .map_init(Vec::new, |ks, (tr, to)| to.map(|to| take_rows(ks, &tr, to)))
-            .collect(),
+    let taken: Vec<Option<TrackRows>> = match tracking {
+        Cow::Owned(log) => {
+            log.into_tracks().into_par_iter().map(Cow::Owned).enumerate().map_init(Vec::new, take).collect()
+        }
         // A borrowed log stays with its owner.
-        Cow::Borrowed(log) => log
-            .tracks()
-            .par_iter()
-            .zip(into)
-            .map_init(Vec::new, |ks, (tr, to)| to.map(|to| take_rows(ks, tr, to)))
-            .collect(),
+        Cow::Borrowed(log) => log.tracks().par_iter().map(Cow::Borrowed).enumerate().map_init(Vec::new, take).collect(),
     };
-    rows.startup_end = startup_end.into_iter().flatten().collect();
+    for (epoch, phase, cn0, startup_end) in taken.into_iter().flatten() {
+        rows.epoch.push(epoch);
+        rows.phase.push(phase);
+        rows.cn0.push(cn0);
+        rows.startup_end.push(startup_end);
+    }
     Candidates { tracks, stats, candidate_of, rows }
 }
 
 /// The row table of the candidates, the tracks with passing rows (in the
-/// log's order), sized by their counts with every row zeroed, and each
-/// track's index among them.
+/// log's order), laid out by their counts (the rows themselves still to be
+/// taken), and each track's index among them.
 fn row_table(stats: &[TrackStats], tracks: &[TrackMeta]) -> (Rows, Vec<Option<usize>>) {
     let mut candidate_of: Vec<Option<usize>> = vec![None; tracks.len()];
     let mut rows = Rows { track_start: vec![0], ..Rows::default() };
@@ -193,9 +206,6 @@ fn row_table(stats: &[TrackStats], tracks: &[TrackMeta]) -> (Rows, Vec<Option<us
         rows.track_start.push(rows.track_start.last().copied().unwrap_or(0) + s.passing);
         rows.to_l1.push(tracks[i].carrier.scale_to_l1());
     }
-    let n_rows = *rows.track_start.last().expect("starts at 0");
-    // Zeroed by the allocator (untouched pages), each written once after.
-    (rows.epoch, rows.phase, rows.cn0) = (vec![0; n_rows], vec![0.0; n_rows], vec![0.0; n_rows]);
     (rows, candidate_of)
 }
 
@@ -264,9 +274,9 @@ mod tests {
             assert_eq!(c.candidate_of, [Some(0), None, Some(1)]);
             assert_eq!(c.stats[1].passing, 0);
             assert_eq!(c.rows.track_start, [0, 5, 7]);
-            assert_eq!(c.rows.epoch, [0, 1, 2, 3, 4, 3, 4]);
-            assert_eq!(c.rows.phase, [0.5, 1.0, 1.5, 2.0, 2.5, -1.0, -1.0]);
-            assert_eq!(c.rows.cn0, [41.0, 42.0, 43.0, 44.0, 45.0, 44.0, 44.0]);
+            assert_eq!(c.rows.epoch, [vec![0, 1, 2, 3, 4], vec![3, 4]]);
+            assert_eq!(c.rows.phase, [vec![0.5, 1.0, 1.5, 2.0, 2.5], vec![-1.0, -1.0]]);
+            assert_eq!(c.rows.cn0, [vec![41.0, 42.0, 43.0, 44.0, 45.0], vec![44.0, 44.0]]);
             assert_eq!(c.rows.to_l1, [1.0, 1.0]);
             // Channel 1 starts at k 0 (before the span): its start-up ends at k 2, epoch 1; channel 3's at k 6, epoch 5.
             assert_eq!(c.rows.startup_end, [1, 5]);
@@ -279,8 +289,8 @@ mod tests {
         let meta = |carrier| TrackMeta { channel: 0, prn: 1, carrier, mean_cn0_dbhz: 40.0 };
         let stats = [TrackStats { passing: 2, ..TrackStats::default() }, TrackStats::default()];
         let (rows, of) = row_table(&stats, &[meta(l5), meta(l5)]);
+        assert_eq!(rows.len(), 2);
         assert_eq!((rows.track_start, of), (vec![0, 2], vec![Some(0), None]));
         assert_eq!(rows.to_l1, [gsens_core::units::GPS_L1_HZ / l5.carrier_hz]);
-        assert_eq!(rows.epoch.len(), 2);
     }
 }

@@ -110,7 +110,9 @@ mod tests {
     /// (split in two segments), 3 not.
     fn three() -> (Candidates, Screened, Selection) {
         let meta = |channel| TrackMeta { channel, prn: 7, carrier: gsens_io::Carrier::default(), mean_cn0_dbhz: 30.0 };
-        let rows = Rows { track_start: vec![0, 2, 5], epoch: vec![0; 5], ..Rows::default() };
+        let mut rows = Rows::default();
+        rows.push_track(vec![0; 2], vec![0.0; 2], vec![0.0; 2]);
+        rows.push_track(vec![0; 3], vec![0.0; 3], vec![0.0; 3]);
         let c = Candidates {
             tracks: vec![meta(3), meta(1), meta(2)],
             stats: vec![TrackStats::default(); 3],

@@ -636,8 +636,10 @@ fn given_and_lent_logs_give_the_same_session() {
     assert_eq!(lent.channels.iter().filter(|c| c.epochs > 0).count(), 6);
 }
 
-/// The session is the same on one thread and on several: the epochs go in
-/// fixed blocks (several here, one starting mid-gap), whatever the pool.
+/// The session is the same on one thread and on several, from a log lent
+/// or given (converted in place): the epochs go in fixed blocks and spans
+/// (several here, one starting mid-gap), the tracks one by one, whatever
+/// the pool.
 #[test]
 fn the_session_is_the_same_on_any_number_of_threads() {
     let mut rows = Vec::new();
@@ -652,13 +654,18 @@ fn the_session_is_the_same_on_any_number_of_threads() {
     }
     let log = log_from(&rows);
     let (imu, cfg) = (wide_imu(), SelectionConfig::default());
-    let on = |threads: usize| {
+    let on = |threads: usize, given: bool| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        format!("{:?}", pool.install(|| prep(&log, &imu, &cfg).unwrap()))
+        let tracking = if given { Cow::Owned(log.clone()) } else { Cow::Borrowed(&log) };
+        format!("{:?}", pool.install(|| prepare_session_from(tracking, &imu, "imu.csv", &cfg, 0.0).unwrap()))
     };
-    let one = on(1);
-    assert_eq!(on(2), one);
-    assert_eq!(on(5), one);
+    let one = on(1, false);
+    for threads in [2, 4, 5] {
+        assert_eq!(on(threads, false), one, "{threads} threads");
+    }
+    for threads in [1, 4] {
+        assert_eq!(on(threads, true), one, "{threads} threads, the log given");
+    }
 }
 
 /// Standard normal deviates from a splitmix64 stream (Box–Muller).
