@@ -54,8 +54,7 @@ pub(crate) struct PredictArgs {
 }
 
 pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
-    crate::check_file("--json", args.json.as_deref(), None)?;
-    crate::check_file("--figure", args.figure.as_deref(), None)?;
+    crate::check_files(&[("--json", args.json.as_deref()), ("--figure", args.figure.as_deref())], None)?;
     let estimate = match (&args.from, &args.gamma, &args.sigma) {
         (Some(path), _, _) => EstimateSource::Document(path.clone()),
         (None, Some(gamma), Some(sigma)) => EstimateSource::Stated { gamma: gamma.clone(), sigma: sigma.clone() },
