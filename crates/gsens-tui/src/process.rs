@@ -85,13 +85,23 @@ pub fn exit_code<E>(result: Result<Status, E>) -> ExitCode
 where
     E: Display + AsRef<dyn Error + Send + Sync + 'static>,
 {
+    let (code, message) = ending(result);
+    if let Some(message) = message {
+        err(&message);
+    }
+    ExitCode::from(code)
+}
+
+/// The exit status of a command's `result` and what standard error says
+/// of it ([`exit_code`]).
+fn ending<E>(result: Result<Status, E>) -> (u8, Option<String>)
+where
+    E: Display + AsRef<dyn Error + Send + Sync + 'static>,
+{
     match result {
-        Ok(status) => ExitCode::from(status.exit_code()),
-        Err(e) if is_broken_pipe(e.as_ref()) => ExitCode::SUCCESS,
-        Err(e) => {
-            err(&format!("error: {e:#}\n"));
-            ExitCode::from(FAILED)
-        }
+        Ok(status) => (status.exit_code(), None),
+        Err(e) if is_broken_pipe(e.as_ref()) => (0, None),
+        Err(e) => (FAILED, Some(format!("error: {e:#}\n"))),
     }
 }
 
@@ -175,8 +185,9 @@ mod tests {
     #[test]
     fn a_failure_exits_2_and_a_closed_pipe_0() {
         let failed = Failure("no such file".into());
-        assert_eq!(exit_code::<Failure>(Err(failed)), ExitCode::from(2));
+        assert_eq!(ending::<Failure>(Err(failed)), (2, Some("error: no such file\n".into())));
         let pipe = Failure(Box::new(std::io::Error::from(ErrorKind::BrokenPipe)));
-        assert_eq!(exit_code::<Failure>(Err(pipe)), ExitCode::SUCCESS);
+        assert_eq!(ending::<Failure>(Err(pipe)), (0, None));
+        assert_eq!(ending::<Failure>(Ok(Status::Untrustworthy)), (3, None));
     }
 }
