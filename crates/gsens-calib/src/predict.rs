@@ -39,7 +39,7 @@ mod request;
 mod setup;
 mod sweep;
 mod table;
-pub use request::{EstimateSource, PredictError, PredictRequest, VibrationSource};
+pub use request::{EstimateSource, PredictError, PredictRequest, ReceiverConditions, VibrationSource};
 pub use setup::{FeedForward, StatedGammaError, ToneError, diagonal_covariance, parse_tone, stated_gamma};
 use statrs::distribution::{ContinuousCDF, Normal};
 pub use sweep::{BN_GRID_HZ, Sweep, SweepError, SweepRow, SweepSettings};

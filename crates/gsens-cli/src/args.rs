@@ -2,9 +2,8 @@
 //! they become library objects: a calibration's options are
 //! `gsens_calib::CalibrationOptions`' groups (the names the Python module
 //! takes too, which build `gsens_calib::PipelineSettings`); the converters'
-//! become `gsens_gnss_sdr::ImportOverrides` and
-//! `gsens_pocketsdr::ImportOptions`; the input options become
-//! `gsens_inputs::InputChoice`.
+//! are `gsens_gnss_sdr::ImportOverrides` and `gsens_pocketsdr::ImportOptions`;
+//! the input options become `gsens_inputs::InputChoice`.
 
 use anyhow::{Result, anyhow};
 use clap::Args;
@@ -123,46 +122,8 @@ pub(crate) struct ConversionArgs {
     /// Sampling rate of the tracking [Hz] when the configuration does not give it.
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub gnss_sdr_fs_hz: Option<f64>,
-    /// C/N0 threshold of GNSS-SDR's lock detector (Tracking_1C.cn0_min) [dB-Hz]: a record below
-    /// it counts as a code-lock failure [default: the conf's cn0_min, GNSS-SDR's 25 when absent].
-    #[arg(long, allow_negative_numbers = true)]
-    pub gnss_sdr_min_cn0_dbhz: Option<f64>,
-    /// Carrier lock test threshold of GNSS-SDR's lock detector (Tracking_1C.carrier_lock_th): a
-    /// record below it counts as a carrier-lock failure [default: the conf's carrier_lock_th,
-    /// GNSS-SDR's 0.7 when absent].
-    #[arg(long, allow_negative_numbers = true)]
-    pub gnss_sdr_min_lock_test: Option<f64>,
-    /// Carrier-lock failures (net of passes) after which GNSS-SDR's lock detector declares a loss
-    /// of lock (Tracking_1C.max_carrier_lock_fail) [default: the conf's, GNSS-SDR's 5000 when absent].
-    #[arg(long)]
-    pub gnss_sdr_max_carrier_lock_fail: Option<u32>,
-    /// Code-lock (C/N0) failures (net of passes) after which GNSS-SDR's lock detector declares a
-    /// loss of lock (Tracking_1C.max_lock_fail) [default: the conf's, GNSS-SDR's 50 when absent].
-    #[arg(long)]
-    pub gnss_sdr_max_lock_fail: Option<u32>,
-    /// Seconds dropped after a channel switches to the narrow loop (default: derived from the
-    /// narrow loop's slowest mode).
-    #[arg(long, allow_negative_numbers = true)]
-    pub gnss_sdr_settle_s: Option<f64>,
-    /// Record layout of the dumps: a known one's name (gnss-sdr-0.0.17, gnss-sdr-0.0.21,
-    /// gnss-sdr-kf-cc, gnss-sdr-legacy-88) to force it, or `name:type,...` for versions the
-    /// reader does not know (default: recognised from each file).
-    #[arg(long)]
-    pub gnss_sdr_layout: Option<String>,
-}
-
-impl ConversionArgs {
-    /// What the options set instead of the configuration's conversion.
-    pub(crate) fn overrides(&self) -> ImportOverrides {
-        ImportOverrides {
-            min_cn0_dbhz: self.gnss_sdr_min_cn0_dbhz,
-            min_lock_test: self.gnss_sdr_min_lock_test,
-            max_carrier_lock_fail: self.gnss_sdr_max_carrier_lock_fail,
-            max_lock_fail: self.gnss_sdr_max_lock_fail,
-            settle_s: self.gnss_sdr_settle_s,
-            layout: self.gnss_sdr_layout.clone(),
-        }
-    }
+    #[command(flatten)]
+    pub overrides: ImportOverrides,
 }
 
 /// A receiver's conversion error with the setting it is about given as its
@@ -176,61 +137,6 @@ pub(crate) fn conversion_error(e: InputsError) -> anyhow::Error {
     }
 }
 
-/// Options of `gsens estimate` and `gsens report` for GNSS-SDR tracking dumps.
-#[derive(Args, Debug, Clone)]
-pub(crate) struct GnssSdrArgs {
-    /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead of --tracking.
-    #[arg(long, requires = "gnss_sdr_conf")]
-    pub gnss_sdr: Option<PathBuf>,
-    /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
-    /// With --tracking instead of --gnss-sdr: rows that came from that GNSS-SDR run another way
-    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop.
-    #[arg(long)]
-    pub gnss_sdr_conf: Option<PathBuf>,
-    #[command(flatten)]
-    pub conversion: ConversionArgs,
-}
-
-/// How a PocketSDR log is converted (`gsens import pocketsdr` and `gsens estimate --pocketsdr`).
-#[derive(Args, Debug, Clone)]
-#[command(next_help_heading = "PocketSDR logs")]
-pub(crate) struct PocketSdrConversionArgs {
-    /// The pocket_trk options file (-opt FILE) the log was made with: its b_pll (the PLL
-    /// bandwidth) and epoch (the $CH interval) [default: PocketSDR's defaults, b_pll = 5 Hz, and
-    /// the log's own interval].
-    #[arg(long)]
-    pub pocketsdr_conf: Option<PathBuf>,
-    /// Seconds dropped after a track's 1 s FLL pull-in [default: five time constants of the
-    /// PLL's slowest mode, 5.2 s at 5 Hz].
-    #[arg(long, allow_negative_numbers = true)]
-    pub pocketsdr_settle_s: Option<f64>,
-    /// pocket_trk's -toff: seconds it skipped at the start of the IF file.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub pocketsdr_toff_s: f64,
-}
-
-impl PocketSdrConversionArgs {
-    /// The conversion the options name.
-    pub(crate) fn options(&self) -> gsens_pocketsdr::ImportOptions {
-        gsens_pocketsdr::ImportOptions {
-            conf: self.pocketsdr_conf.clone(),
-            settle_s: self.pocketsdr_settle_s,
-            toff_s: self.pocketsdr_toff_s,
-        }
-    }
-}
-
-/// Options of `gsens estimate` and `gsens report` for PocketSDR logs.
-#[derive(Args, Debug, Clone)]
-pub(crate) struct PocketSdrArgs {
-    /// A pocket_trk log (-log FILE, its $CH lines) to use instead of --tracking; PocketSDR's
-    /// carrier loop is modelled exactly.
-    #[arg(long, conflicts_with = "gnss_sdr")]
-    pub pocketsdr: Option<PathBuf>,
-    #[command(flatten)]
-    pub conversion: PocketSdrConversionArgs,
-}
-
 /// Where a calibration's logs come from (`estimate`, `report`): an IMU log
 /// with a tracking log, GNSS-SDR dumps or a PocketSDR log.
 #[derive(Args, Debug, Clone)]
@@ -241,25 +147,36 @@ pub(crate) struct InputArgs {
     /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr, --pocketsdr).
     #[arg(long, required_unless_present_any = ["gnss_sdr", "pocketsdr"], conflicts_with_all = ["gnss_sdr", "pocketsdr"])]
     pub tracking: Option<PathBuf>,
+    /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead of --tracking.
+    #[arg(long, requires = "gnss_sdr_conf")]
+    pub gnss_sdr: Option<PathBuf>,
+    /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
+    /// With --tracking instead of --gnss-sdr: rows that came from that GNSS-SDR run another way
+    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop.
+    #[arg(long)]
+    pub gnss_sdr_conf: Option<PathBuf>,
     #[command(flatten)]
-    pub gnss_sdr: GnssSdrArgs,
+    pub gnss_sdr_conversion: ConversionArgs,
+    /// A pocket_trk log (-log FILE, its $CH lines) to use instead of --tracking; PocketSDR's
+    /// carrier loop is modelled exactly.
+    #[arg(long, conflicts_with = "gnss_sdr")]
+    pub pocketsdr: Option<PathBuf>,
     #[command(flatten)]
-    pub pocketsdr: PocketSdrArgs,
+    pub pocketsdr_conversion: gsens_pocketsdr::ImportOptions,
 }
 
 impl InputArgs {
     /// The inputs the options name, with their conversion settings.
     pub(crate) fn inputs(&self) -> Result<Inputs> {
-        let (g, p) = (&self.gnss_sdr, &self.pocketsdr);
         let choice = InputChoice {
             imu: self.imu.clone(),
             tracking: self.tracking.clone(),
-            gnss_sdr: g.gnss_sdr.clone(),
-            gnss_sdr_conf: g.gnss_sdr_conf.clone(),
-            gnss_sdr_fs_hz: g.conversion.gnss_sdr_fs_hz,
-            gnss_sdr_overrides: g.conversion.overrides(),
-            pocketsdr: p.pocketsdr.clone(),
-            pocketsdr_options: p.conversion.options(),
+            gnss_sdr: self.gnss_sdr.clone(),
+            gnss_sdr_conf: self.gnss_sdr_conf.clone(),
+            gnss_sdr_fs_hz: self.gnss_sdr_conversion.gnss_sdr_fs_hz,
+            gnss_sdr_overrides: self.gnss_sdr_conversion.overrides.clone(),
+            pocketsdr: self.pocketsdr.clone(),
+            pocketsdr_options: self.pocketsdr_conversion.clone(),
         };
         choice.inputs(flag).map_err(conversion_error)
     }

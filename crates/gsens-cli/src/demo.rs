@@ -3,11 +3,11 @@
 //! estimate next to the truth.
 
 use crate::args::AnalysisArgs;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gsens_montecarlo::{render_demo_start, simulate_demo};
+use gsens_montecarlo::{DemoFolder, render_demo_start, simulate_demo};
 use gsens_report::write_demo_figures;
-use gsens_tui::progress::{observed, progress_bar, spinner};
+use gsens_tui::progress::{drawing, observed, with_fraction_bar};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -31,38 +31,24 @@ pub(crate) struct DemoArgs {
 
 pub(crate) fn run(args: &DemoArgs, given: &[&str]) -> Result<crate::Status> {
     args.analysis.options().refuse_ignored(given, crate::args::flag)?;
-    // Without --out the logs go to a folder of this run's own, removed when `scratch` drops.
-    let scratch = match &args.out {
-        Some(_) => None,
-        None => Some(
-            tempfile::Builder::new()
-                .prefix("gsens-demo-")
-                .tempdir()
-                .context("cannot make a folder in the system's temporary directory for the demo's logs")?,
-        ),
-    };
-    let dir = args.out.as_deref().or(scratch.as_ref().map(|s| s.path())).expect("one of them");
-    crate::check_file("--json", args.json.as_deref(), Some(dir))?;
-    crate::check_dir("--out", dir)?;
-    if let Some(d) = &args.figures {
-        crate::check_dir("--figures", d)?;
-    }
+    // Without --out the logs go to a folder of this run's own, removed when `folder` drops.
+    let folder = DemoFolder::new(args.out.as_deref())?;
+    let dir = folder.path();
+    crate::check_files(&[("--json", args.json.as_deref())], Some(dir))?;
+    crate::check_dir("--out", Some(dir))?;
+    crate::check_dir("--figures", args.figures.as_deref())?;
     let scenario = args.scenario.load()?;
     let (named, seed) = (args.scenario.scenario.is_some(), args.scenario.seed);
-    crate::out(&render_demo_start(&scenario, named, seed, dir, scratch.is_some(), crate::args::flag))?;
-    let bar = progress_bar("simulating");
-    let demo =
-        simulate_demo(&scenario, seed, dir, &args.analysis.options(), |f| bar.set_position((f * 1000.0) as u64))?;
-    bar.finish_and_clear();
+    crate::out(&render_demo_start(&scenario, named, seed, dir, folder.is_scratch(), crate::args::flag))?;
+    let options = args.analysis.options();
+    let demo = with_fraction_bar("simulating", |progress| simulate_demo(&scenario, seed, dir, &options, progress))?;
     crate::out(&demo.estimate_line(&analysis_flags_given(), crate::args::flag))?;
     let outcome = observed(|| demo.calibrate())?;
     let doc = demo.document(&outcome);
     crate::out(&gsens_report::render_text(&doc))?;
     crate::write_json(args.json.as_deref(), &doc, "\n")?;
     if let Some(fig_dir) = &args.figures {
-        let bar = spinner();
-        let ids = write_demo_figures(fig_dir, &demo, &outcome, |id| bar.set_message(format!("drawing {id}")))?;
-        bar.finish_and_clear();
+        let ids = drawing(|on_figure| write_demo_figures(fig_dir, &demo, &outcome, on_figure))?;
         crate::out(&format!("figures: {} ({})\n", fig_dir.display(), ids.join(", ")))?;
     }
     Ok(crate::Status::of(&doc))

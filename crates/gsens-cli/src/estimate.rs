@@ -1,7 +1,7 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
 use crate::args::{CalibrationArgs, InputArgs};
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use clap::Args;
 use gsens_calib::PipelineSettings;
 use gsens_inputs::{Calibrated, Inputs, InputsError};
@@ -28,16 +28,11 @@ pub(crate) struct EstimateArgs {
 /// was made from when `keep_tracking`), printing what became of each track of
 /// a receiver's log and which receiver loop was modelled.
 pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
-    let calibrated =
-        observed(
-            || {
-                if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) }
-            },
-        )
-        .map_err(|e| match e {
-            InputsError::LoopStatedTwice { .. } => anyhow!(gsens_gnss_sdr::loop_stated_twice(crate::args::flag)),
-            e => e.into(),
-        })?;
+    let run = || if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) };
+    let calibrated = observed(run).map_err(|e| match e {
+        InputsError::LoopStatedTwice { .. } => anyhow!(gsens_gnss_sdr::loop_stated_twice(crate::args::flag)),
+        e => e.into(),
+    })?;
     let loop_note = calibrated.loop_note().map(|note| note + "\n");
     crate::out(&(calibrated.track_summary().unwrap_or_default() + &loop_note.unwrap_or_default()))?;
     Ok(calibrated)
@@ -45,17 +40,14 @@ pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracki
 
 pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> {
     let settings = args.calibration.settings(given)?;
-    crate::check_file("--json", args.json.as_deref(), None)?;
-    crate::check_file("--epochs-out", args.epochs_out.as_deref(), None)?;
+    crate::check_files(&[("--json", args.json.as_deref()), ("--epochs-out", args.epochs_out.as_deref())], None)?;
     let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
     crate::write_json(args.json.as_deref(), &doc, "\n")?;
     if let Some(path) = &args.epochs_out {
         let s = outcome.series();
-        std::fs::File::create(path)
-            .and_then(|f| gsens_io::write_epochs_csv(f, s.t_s, s.phase_err_rad, s.accel_mps2))
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        gsens_io::write_epochs_file(path, s.t_s, s.phase_err_rad, s.accel_mps2)?;
     }
     Ok(crate::Status::of(&doc))
 }

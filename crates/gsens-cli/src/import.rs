@@ -1,6 +1,6 @@
 //! `gsens import`: another receiver's logs as gsens's `tracking.csv`.
 
-use crate::args::{ConversionArgs, PocketSdrConversionArgs, conversion_error};
+use crate::args::{ConversionArgs, conversion_error};
 use anyhow::Result;
 use clap::{Args, Subcommand};
 use gsens_gnss_sdr::{ImportSettings, import_dir};
@@ -37,15 +37,14 @@ pub(crate) struct ImportPocketSdrArgs {
     #[arg(long)]
     pub tracks_json: Option<PathBuf>,
     #[command(flatten)]
-    pub conversion: PocketSdrConversionArgs,
+    pub conversion: gsens_pocketsdr::ImportOptions,
 }
 
 fn run_pocketsdr(a: &ImportPocketSdrArgs) -> Result<()> {
-    let settings = a.conversion.options().settings().map_err(|e| conversion_error(e.into()))?;
-    crate::check_file("--out", Some(&a.out), None)?;
-    crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
+    let settings = a.conversion.settings().map_err(|e| conversion_error(e.into()))?;
+    crate::check_files(&[("--out", Some(&a.out)), ("--tracks-json", a.tracks_json.as_deref())], None)?;
     let imported = with_spinner("reading the PocketSDR log", || gsens_pocketsdr::import_file(&a.log, &settings))?;
-    let conf = a.conversion.pocketsdr_conf.as_deref();
+    let conf = a.conversion.conf.as_deref();
     let export = gsens_pocketsdr::Export { log: &a.log, conf, csv: &a.out, tracks_json: a.tracks_json.as_deref() };
     Ok(export.write(&imported, &mut crate::say, crate::args::flag)?)
 }
@@ -84,10 +83,9 @@ pub(crate) fn run(args: &ImportArgs) -> Result<()> {
     // whatever the configuration says.
     gsens_gnss_sdr::find_dumps(&a.dump_dir, None)?;
     let c = &a.conversion;
-    let settings = ImportSettings::from_conf_with(a.conf.as_deref(), c.gnss_sdr_fs_hz, &c.overrides())
+    let settings = ImportSettings::from_conf_with(a.conf.as_deref(), c.gnss_sdr_fs_hz, &c.overrides)
         .map_err(|e| conversion_error(e.into()))?;
-    crate::check_file("--out", Some(&a.out), None)?;
-    crate::check_file("--tracks-json", a.tracks_json.as_deref(), None)?;
+    crate::check_files(&[("--out", Some(&a.out)), ("--tracks-json", a.tracks_json.as_deref())], None)?;
     let imported = with_spinner("reading the GNSS-SDR tracking dumps", || import_dir(&a.dump_dir, &settings))?;
     let export = gsens_gnss_sdr::Export {
         dump_dir: &a.dump_dir,

@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
 use gsens_live::{Display, InputChoice, InputChoiceError, Runtime, RuntimeConfig, SystemClock};
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -85,7 +85,7 @@ pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     choice(args).check().map_err(flagged)?;
     let mut settings = args.calibration.settings(given)?;
     let loop_note = gsens_inputs::truth_loop_note(&mut settings, args.truth.as_deref())?;
-    crate::check_dir("--out", &args.out)?;
+    crate::check_dir("--out", Some(&args.out))?;
     let (inputs, note) = choice(args).inputs(args.calibration.receiver_loop.stated()).map_err(flagged)?;
     crate::err(note.as_deref().unwrap_or_default());
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
@@ -103,7 +103,7 @@ pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     }
     crate::out(&runtime.opening())?;
     let ending = if args.plain || !std::io::stdout().is_terminal() {
-        runtime.run(Display::Plain(&mut Stdout))?
+        runtime.run(Display::Plain(&mut gsens_tui::process::Stdout))?
     } else {
         // The terminal is restored when the screen is dropped, before the final report.
         runtime.run(Display::Screen(&mut gsens_tui::Terminal::new()?))?
@@ -118,18 +118,4 @@ pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     let missed = finished.target_missed(args.target_sigma);
     crate::out(missed.as_deref().unwrap_or_default())?;
     Ok(if missed.is_some() && status == crate::Status::Done { crate::Status::TargetMissed } else { status })
-}
-
-/// Standard output as the plain screen writes it ([`crate::out`]: a closed pipe ends quietly).
-struct Stdout;
-
-impl Write for Stdout {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        crate::out_bytes(buf)?;
-        Ok(buf.len())
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        std::io::stdout().flush()
-    }
 }

@@ -21,7 +21,7 @@ mod validate;
 use anyhow::{Result, anyhow};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser, Subcommand};
-use std::io::Write;
+pub(crate) use gsens_tui::process::{Status, err, out, say};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -71,84 +71,25 @@ enum Command {
     Scenario,
 }
 
-/// How a command ended when it did not fail.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Status {
-    /// Done; any estimate is trustworthy.
-    Done,
-    /// An estimate was produced (and every file written) but it is not
-    /// trustworthy: exit status 3.
-    Untrustworthy,
-    /// `gsens live` ended (input ended, a key, the idle timeout) before every
-    /// axis met the target σ; the estimate is trustworthy: exit status 4.
-    TargetMissed,
-}
-
-impl Status {
-    /// The status of a result document.
-    pub fn of(doc: &gsens_calib::ResultDocument) -> Self {
-        if doc.trustworthy { Status::Done } else { Status::Untrustworthy }
+/// Checks before any work that the files of options `files` (flag, path) can
+/// be written (in `made`, a directory the command creates first, when one lies there).
+pub fn check_files(files: &[(&str, Option<&Path>)], made: Option<&Path>) -> Result<()> {
+    for &(flag, path) in files {
+        path.map_or(Ok(()), |p| gsens_io::check_output_file_in(p, made)).map_err(|e| anyhow!("{flag} {e}"))?;
     }
+    Ok(())
 }
 
-/// Writes `text` to standard output; a closed pipe (`gsens response | head`)
-/// ends the output quietly.
-pub fn out(text: &str) -> Result<()> {
-    Ok(out_bytes(text.as_bytes())?)
-}
-
-/// [`out`] for a library that tells as it goes.
-pub fn say(text: &str) -> std::io::Result<()> {
-    out_bytes(text.as_bytes())
-}
-
-/// [`out`] of bytes.
-pub fn out_bytes(bytes: &[u8]) -> std::io::Result<()> {
-    match std::io::stdout().lock().write_all(bytes) {
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
-        r => r,
-    }
-}
-
-/// Writes `text` to standard error; a closed pipe (`gsens live 2>&1 | head`)
-/// or any other failure to write is ignored (unlike `eprintln!`, which panics).
-pub fn err(text: &str) {
-    let _ = std::io::stderr().lock().write_all(text.as_bytes());
-}
-
-/// Checks before any work that the file of option `flag` can be written
-/// (in `made`, a directory the command creates first, when it lies there).
-pub fn check_file(flag: &str, path: Option<&Path>, made: Option<&Path>) -> Result<()> {
-    path.map_or(Ok(()), |p| gsens_io::check_output_file_in(p, made).map_err(|e| anyhow!("{flag} {e}")))
-}
-
-/// Checks before any work that the directory of option `flag` exists or can be made, and accepts files.
-pub fn check_dir(flag: &str, path: &Path) -> Result<()> {
-    gsens_io::check_output_dir(path).map_err(|e| anyhow!("{flag} {e}"))
+/// Checks before any work that the directory of option `flag`, when given, exists or can be made, and
+/// accepts files.
+pub fn check_dir(flag: &str, path: Option<&Path>) -> Result<()> {
+    path.map_or(Ok(()), gsens_io::check_output_dir).map_err(|e| anyhow!("{flag} {e}"))
 }
 
 /// Writes `value` as pretty JSON followed by `end` to the file `path`, when one is given.
 pub fn write_json(path: Option<&Path>, value: &impl serde::Serialize, end: &str) -> Result<()> {
     path.map_or(Ok(()), |p| Ok(gsens_io::write_file(p, serde_json::to_string_pretty(value)? + end)?))
 }
-
-/// glibc's malloc gives each thread that allocates an arena of its own and
-/// keeps what is freed in it for that thread: the estimate's stages allocate
-/// large buffers on several threads in turn, so with an arena per thread the
-/// freed buffers of one thread's stage are not reused by another's and the peak RSS
-/// of a 1-hour log grows by some 25 MB over its largest live heap (and every
-/// fresh page is a page fault). One arena for the process: its few large
-/// allocations do not contend for the lock (BENCHMARKS.md).
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn one_malloc_arena() {
-    // SAFETY: mallopt only sets a malloc parameter; called before any thread starts.
-    unsafe {
-        libc::mallopt(libc::M_ARENA_MAX, 1);
-    }
-}
-
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn one_malloc_arena() {}
 
 /// The options given on the subcommand's command line (not defaulted), by
 /// name: the calibration options of these names are refused where the loop
@@ -162,35 +103,24 @@ fn given(matches: &ArgMatches) -> Vec<String> {
 }
 
 fn main() -> ExitCode {
-    one_malloc_arena();
-    let matches = Cli::command().get_matches();
-    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut Cli::command()).exit());
-    let given = given(&matches);
-    let given: Vec<&str> = given.iter().map(String::as_str).collect();
-    let result = match cli.command {
-        Command::Demo(args) => demo::run(&args, &given),
-        Command::Estimate(args) => estimate::run(&args, &given),
-        Command::Simulate(args) => simulate::run(&args).map(|()| Status::Done),
-        Command::Response(args) => response::run(&args, &given).map(|()| Status::Done),
-        Command::Montecarlo(args) => montecarlo::run(&args, &given),
-        Command::Report(args) => report::run(&args, &given),
-        Command::Import(args) => import::run(&args).map(|()| Status::Done),
-        Command::Live(args) => live::run(&args, &given),
-        Command::Replay(args) => replay::run(&args).map(|()| Status::Done),
-        Command::Validate(args) => validate::run(&args),
-        Command::Predict(args) => predict::run(&args),
-        Command::Scenario => out(gsens_sim::scenario::Scenario::default_toml()).map(|()| Status::Done),
-    };
-    match result {
-        Ok(Status::Done) => ExitCode::SUCCESS,
-        Ok(Status::Untrustworthy) => ExitCode::from(3),
-        Ok(Status::TargetMissed) => ExitCode::from(4),
-        Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) => {
-            ExitCode::SUCCESS
+    gsens_tui::process::run(|| {
+        let matches = Cli::command().get_matches();
+        let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut Cli::command()).exit());
+        let given = given(&matches);
+        let given: Vec<&str> = given.iter().map(String::as_str).collect();
+        match cli.command {
+            Command::Demo(args) => demo::run(&args, &given),
+            Command::Estimate(args) => estimate::run(&args, &given),
+            Command::Simulate(args) => simulate::run(&args).map(|()| Status::Done),
+            Command::Response(args) => response::run(&args, &given).map(|()| Status::Done),
+            Command::Montecarlo(args) => montecarlo::run(&args, &given),
+            Command::Report(args) => report::run(&args, &given),
+            Command::Import(args) => import::run(&args).map(|()| Status::Done),
+            Command::Live(args) => live::run(&args, &given),
+            Command::Replay(args) => replay::run(&args).map(|()| Status::Done),
+            Command::Validate(args) => validate::run(&args),
+            Command::Predict(args) => predict::run(&args),
+            Command::Scenario => Ok(out(gsens_sim::scenario::Scenario::default_toml()).map(|()| Status::Done)?),
         }
-        Err(e) => {
-            err(&format!("error: {e:#}\n"));
-            ExitCode::from(2)
-        }
-    }
+    })
 }

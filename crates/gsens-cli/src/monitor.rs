@@ -35,8 +35,7 @@ pub(crate) struct ImportMonitorArgs {
 }
 
 pub(crate) fn run(a: &ImportMonitorArgs) -> Result<()> {
-    crate::check_file("--out", Some(&a.out), None)?;
-    crate::check_file("--raw", a.raw.as_deref(), None)?;
+    crate::check_files(&[("--out", Some(&a.out)), ("--raw", a.raw.as_deref())], None)?;
     let setup = monitor_setup(a.gnss_sdr_conf.as_deref(), a.fs_hz, a.settle_s)?;
     let recording = MonitorRecording {
         listen: &a.listen,

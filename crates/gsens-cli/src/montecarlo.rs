@@ -7,7 +7,7 @@ use clap::Args;
 use gsens_calib::option_values::positive;
 use gsens_calib::{CalibrationOptions, EstimatorOptions, MethodName, SelectionOptions, SystematicOptions};
 use gsens_montecarlo::{method_settings, monte_carlo};
-use gsens_tui::progress::count_bar;
+use gsens_tui::progress::with_count_bar;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -41,7 +41,7 @@ pub(crate) struct MonteCarloArgs {
 
 pub(crate) fn run(args: &MonteCarloArgs, given: &[&str]) -> Result<crate::Status> {
     args.estimator.refuse_unused(given, &args.methods, crate::args::flag)?;
-    crate::check_file("--json", args.json.as_deref(), None)?;
+    crate::check_files(&[("--json", args.json.as_deref())], None)?;
     let scenario = args.scenario.load()?;
     let options = CalibrationOptions {
         estimator: args.estimator.clone(),
@@ -51,10 +51,10 @@ pub(crate) fn run(args: &MonteCarloArgs, given: &[&str]) -> Result<crate::Status
     };
     let stated = (!args.loop_unstated).then_some(args.stated_bn_scale);
     let methods = method_settings(&scenario, &options, &args.methods, stated)?;
-    let bar = count_bar("monte carlo", args.runs, "runs");
     let name = args.scenario.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
-    let mc = monte_carlo(&scenario, &name, args.runs, args.scenario.seed, &methods, || bar.inc(1))?;
-    bar.finish_and_clear();
+    let (runs, seed) = (args.runs, args.scenario.seed);
+    let mc =
+        with_count_bar("monte carlo", runs, "runs", |tick| monte_carlo(&scenario, &name, runs, seed, &methods, tick))?;
     crate::out(&gsens_report::render_montecarlo_text(&mc))?;
     crate::write_json(args.json.as_deref(), &mc, "\n")?;
     Ok(crate::Status::Done)

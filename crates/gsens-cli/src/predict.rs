@@ -6,9 +6,9 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
-use gsens_calib::option_values::{finite_non_negative, positive};
+use gsens_calib::option_values::positive;
 use gsens_calib::predict::{
-    EstimateSource, FeedForward, PredictRequest, SweepContext, VibrationSource, render_sweep_text,
+    EstimateSource, PredictRequest, ReceiverConditions, SweepContext, VibrationSource, render_sweep_text,
 };
 use gsens_montecarlo::frequency_noise;
 use gsens_report::figures::Format;
@@ -42,31 +42,8 @@ pub(crate) struct PredictArgs {
     /// Carrier [Hz] (GPS L1 by default).
     #[arg(long, default_value_t = gsens_core::units::GPS_L1_HZ, allow_negative_numbers = true, value_parser = positive)]
     pub carrier_hz: f64,
-    /// C/N0 for the thermal noise [dB-Hz].
-    #[arg(long, default_value_t = 45.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub cn0_dbhz: f64,
-    /// The loop (2nd order): noise bandwidth [Hz].
-    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true, value_parser = positive)]
-    pub bn_hz: f64,
-    /// Damping ratio ζ.
-    #[arg(long, default_value_t = std::f64::consts::FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = positive)]
-    pub zeta: f64,
-    /// Loop update interval [s].
-    #[arg(long, default_value_t = 0.001, allow_negative_numbers = true, value_parser = positive)]
-    pub loop_interval_s: f64,
-    /// The feed-forward: IMU sample rate [Hz] (its hold delays by half a sample).
-    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true, value_parser = positive)]
-    pub imu_rate_hz: f64,
-    /// The feed-forward: latency on top of the hold [s].
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub latency_s: f64,
-    /// The IMU's white noise density [m/s²/√Hz].
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub imu_noise_mps2_per_rthz: f64,
-    /// The line-of-sight Doppler rate the loop must follow [Hz/s] (its dynamic stress
-    /// error enters the lock rule; a static receiver sees up to about 0.9 Hz/s at L1).
-    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true, value_parser = finite_non_negative)]
-    pub doppler_rate_hz_per_s: f64,
+    #[command(flatten)]
+    pub receiver: ReceiverConditions,
     /// Write the predictions as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -77,14 +54,12 @@ pub(crate) struct PredictArgs {
 }
 
 pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
-    crate::check_file("--json", args.json.as_deref(), None)?;
-    crate::check_file("--figure", args.figure.as_deref(), None)?;
+    crate::check_files(&[("--json", args.json.as_deref()), ("--figure", args.figure.as_deref())], None)?;
     let estimate = match (&args.from, &args.gamma, &args.sigma) {
         (Some(path), _, _) => EstimateSource::Document(path.clone()),
         (None, Some(gamma), Some(sigma)) => EstimateSource::Stated { gamma: gamma.clone(), sigma: sigma.clone() },
         _ => bail!("give --from report.json, or --gamma with --sigma"),
     };
-    let feed_forward = FeedForward { imu_rate_hz: args.imu_rate_hz, latency_s: args.latency_s };
     let request = PredictRequest {
         estimate,
         vibration: args
@@ -93,17 +68,11 @@ pub(crate) fn run(args: &PredictArgs) -> Result<crate::Status> {
             .map_or_else(|| VibrationSource::Tones(args.tone.clone()), VibrationSource::Spectrum),
         levels: args.levels.clone(),
         oscillator: args.oscillator.config().map(|o| frequency_noise(&o, args.carrier_hz)),
-        cn0_dbhz: Some(args.cn0_dbhz),
-        bn_hz: args.bn_hz,
-        zeta: args.zeta,
-        loop_interval_s: args.loop_interval_s,
-        feed_forward,
-        imu_noise_mps2_per_rthz: args.imu_noise_mps2_per_rthz,
-        doppler_rate_hz_per_s: args.doppler_rate_hz_per_s,
+        receiver: args.receiver.clone(),
     };
     let (settings, sweep) = request.sweep().map_err(|e| crate::args::flagged("", e.setting(), e))?;
     let oscillator = args.oscillator.to_string();
-    let context = SweepContext { oscillator: &oscillator, feed_forward };
+    let context = SweepContext { oscillator: &oscillator, feed_forward: args.receiver.feed_forward };
     crate::out(&render_sweep_text(&settings, &sweep, &context))?;
     if let (Some(path), Some(&level)) = (&args.figure, args.levels.last()) {
         let format = Format::of_path(path).unwrap_or(Format::Png);

@@ -22,9 +22,7 @@ pub(crate) struct ReplayArgs {
 
 pub(crate) fn run(args: &ReplayArgs) -> Result<()> {
     check_speed(args.speed).map_err(|e| crate::args::flagged("", Some("speed"), e))?;
-    if let Some(d) = &args.out {
-        crate::check_dir("--out", d)?;
-    }
+    crate::check_dir("--out", args.out.as_deref())?;
     let inputs = read_session_dir(&args.dir).map_err(anyhow::Error::msg)?;
     let mut sink = match &args.out {
         Some(dir) => ReplaySink::files_in(dir)?,

@@ -9,7 +9,7 @@ use clap::Args;
 use gsens_calib::Outcome;
 use gsens_io::TrackingLog;
 use gsens_report::write_calibration_report;
-use gsens_tui::progress::spinner;
+use gsens_tui::progress::drawing;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -45,7 +45,7 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
     let inputs = args.inputs.inputs()?;
     let mut settings = args.calibration.settings(given)?;
     let loop_note = inputs.truth_loop_note(&mut settings, args.truth.as_deref())?;
-    crate::check_dir("--out", &args.out)?;
+    crate::check_dir("--out", Some(&args.out))?;
     let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
     if let Some(note) = &loop_note {
         crate::out(&format!("{note}\n"))?;
@@ -71,12 +71,9 @@ pub(crate) fn write_report(
     title: &str,
     header: HeaderArgs,
 ) -> Result<crate::Status> {
-    let bar = spinner();
-    let untrusted = header.write_untrusted_header;
-    let (doc, files) = write_calibration_report(outcome, tracking, truth, out, title, untrusted, |id| {
-        bar.set_message(format!("drawing {id}"))
+    let (doc, files) = drawing(|on_figure| {
+        write_calibration_report(outcome, tracking, truth, out, title, header.write_untrusted_header, on_figure)
     })?;
-    bar.finish_and_clear();
     let (text, no_header) = files.render(&doc, crate::args::flag);
     crate::out(&text)?;
     crate::err(no_header.as_deref().unwrap_or_default());

@@ -32,8 +32,7 @@ pub(crate) struct ResponseArgs {
 pub(crate) fn run(args: &ResponseArgs, given: &[&str]) -> Result<()> {
     ResponseData::check_range(args.f_min_hz, args.f_max_hz, args.points, crate::args::flag)?;
     args.receiver_loop.refuse_other_shape(given, crate::args::flag)?;
-    crate::check_file("--json", args.json.as_deref(), None)?;
-    crate::check_file("--plot", args.plot.as_deref(), None)?;
+    crate::check_files(&[("--json", args.json.as_deref()), ("--plot", args.plot.as_deref())], None)?;
     let model = args.receiver_loop.loop_model();
     let table = ResponseData::from_loop(&model, args.f_min_hz, args.f_max_hz, args.points, model.to_string())
         .with_context(|| format!("the loop ({model})"))?;

@@ -8,7 +8,7 @@ use clap::Args;
 use gsens_calib::option_values::positive;
 use gsens_gnss_sdr::{IqConfOptions, write_iq_conf};
 use gsens_sim::iq::{IqConfig, IqFormat};
-use gsens_tui::progress::progress_bar;
+use gsens_tui::progress::with_fraction_bar;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -44,29 +44,29 @@ pub(crate) struct SimulateArgs {
 
 pub(crate) fn run(args: &SimulateArgs) -> Result<()> {
     let scenario = args.scenario.load()?;
-    crate::check_dir("--out", &args.out)?;
-    crate::check_file("--iq", args.iq.as_deref(), Some(&args.out))?;
+    crate::check_dir("--out", Some(&args.out))?;
+    crate::check_files(&[("--iq", args.iq.as_deref())], Some(&args.out))?;
     let (seed, out) = (args.scenario.seed, args.out.as_path());
-    let bar = progress_bar(if args.iq.is_some() { "generating" } else { "simulating" });
-    let progress = |f: f64| bar.set_position((f * 1000.0) as u64);
     let Some(iq) = &args.iq else {
-        let truth = gsens_sim::simulate_to_dir(&scenario, seed, out, progress)?;
-        bar.finish_and_clear();
-        return crate::out(&format!("{truth}\nlogs: imu.csv, tracking.csv, truth.json in {}\n", out.display()));
+        let truth =
+            with_fraction_bar("simulating", |progress| gsens_sim::simulate_to_dir(&scenario, seed, out, progress))?;
+        return Ok(crate::out(&format!("{truth}\nlogs: imu.csv, tracking.csv, truth.json in {}\n", out.display()))?);
     };
     let format = args.iq_format;
     let mut cfg = IqConfig::new(args.fs_hz, format, &scenario);
     cfg.navigation_data = !args.iq_no_data;
-    let session = gsens_sim::simulate_iq_to_dir(&scenario, seed, &cfg, iq, out, args.iq_carrier_truth, progress)?;
-    bar.finish_and_clear();
+    let carrier_truth = args.iq_carrier_truth;
+    let session = with_fraction_bar("generating", |progress| {
+        gsens_sim::simulate_iq_to_dir(&scenario, seed, &cfg, iq, out, carrier_truth, progress)
+    })?;
     let (l, sats) = (&scenario.tracking_loop, session.truth.satellites.len() as u32);
     let item = format.gnss_sdr_item_type();
     let options = IqConfOptions::for_iq_file(&iq.display().to_string(), item, args.fs_hz, sats, l.order, l.bn_hz);
     let conf_path = write_iq_conf(out, options)?;
-    crate::out(&format!(
+    Ok(crate::out(&format!(
         "{session}\nfiles: {} and imu.csv, truth.json, delta_f.csv, gnss-sdr.conf in {}\nrun: gnss-sdr --config_file={}\n",
         iq.display(),
         out.display(),
         conf_path.display()
-    ))
+    ))?)
 }

@@ -39,8 +39,7 @@ pub(crate) struct ValidateArgs {
 }
 
 pub(crate) fn run(args: &ValidateArgs) -> Result<crate::Status> {
-    crate::check_file("--json", args.json.as_deref(), None)?;
-    crate::check_file("--figure", args.figure.as_deref(), None)?;
+    crate::check_files(&[("--json", args.json.as_deref()), ("--figure", args.figure.as_deref())], None)?;
     let scenario = args.scenario.load()?;
     let gamma = match (&args.gamma, &args.from) {
         (Some(g), _) => GammaSource::Stated(g.clone()),

@@ -18,23 +18,78 @@ use crate::nco::{BLOCK_S, NcoBookkeeping, NcoRecord, replica_mid_cycles};
 /// What a caller sets instead of a configuration's lock detector and of
 /// the derived conversion settings ([`ImportSettings::override_with`]);
 /// `None` keeps the configuration's or the derived value.
+///
+/// With the `clap` feature these are a command line's options, named with
+/// the receiver before them (`gnss_sdr_min_cn0_dbhz`) as they sit beside
+/// other receivers'; the fields' doc comments are their help, where a unit
+/// reads `[dB-Hz]`, not a link.
 #[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", command(next_help_heading = "GNSS-SDR dumps"))]
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct ImportOverrides {
-    /// The lock detector's C/N0 threshold (`Tracking_1C.cn0_min`) \[dB-Hz\]; finite.
+    /// C/N0 threshold of GNSS-SDR's lock detector (Tracking_1C.cn0_min) [dB-Hz]: a record below
+    /// it counts as a code-lock failure [default: the conf's cn0_min, GNSS-SDR's 25 when absent].
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "gnss_sdr_min_cn0_dbhz",
+            long = "gnss-sdr-min-cn0-dbhz",
+            value_name = "GNSS_SDR_MIN_CN0_DBHZ",
+            allow_negative_numbers = true
+        )
+    )]
     pub min_cn0_dbhz: Option<f64>,
-    /// The lock detector's carrier lock test threshold
-    /// (`Tracking_1C.carrier_lock_th`), in \[−1, 1\]: the test is cos 2φ.
+    /// Carrier lock test threshold of GNSS-SDR's lock detector (Tracking_1C.carrier_lock_th): a
+    /// record below it counts as a carrier-lock failure [default: the conf's carrier_lock_th,
+    /// GNSS-SDR's 0.7 when absent].
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "gnss_sdr_min_lock_test",
+            long = "gnss-sdr-min-lock-test",
+            value_name = "GNSS_SDR_MIN_LOCK_TEST",
+            allow_negative_numbers = true
+        )
+    )]
     pub min_lock_test: Option<f64>,
-    /// Carrier-lock failures (net of passes) that declare a loss of lock
-    /// (`Tracking_1C.max_carrier_lock_fail`).
+    /// Carrier-lock failures (net of passes) after which GNSS-SDR's lock detector declares a loss
+    /// of lock (Tracking_1C.max_carrier_lock_fail) [default: the conf's, GNSS-SDR's 5000 when absent].
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "gnss_sdr_max_carrier_lock_fail",
+            long = "gnss-sdr-max-carrier-lock-fail",
+            value_name = "GNSS_SDR_MAX_CARRIER_LOCK_FAIL"
+        )
+    )]
     pub max_carrier_lock_fail: Option<u32>,
-    /// Code-lock (C/N0) failures (net of passes) that declare a loss of lock
-    /// (`Tracking_1C.max_lock_fail`).
+    /// Code-lock (C/N0) failures (net of passes) after which GNSS-SDR's lock detector declares a
+    /// loss of lock (Tracking_1C.max_lock_fail) [default: the conf's, GNSS-SDR's 50 when absent].
+    #[cfg_attr(
+        feature = "clap",
+        arg(id = "gnss_sdr_max_lock_fail", long = "gnss-sdr-max-lock-fail", value_name = "GNSS_SDR_MAX_LOCK_FAIL")
+    )]
     pub max_lock_fail: Option<u32>,
-    /// Seconds dropped after the switch to the narrow loop
-    /// ([`ImportSettings::settle_s`]); ≥ 0 and finite.
+    /// Seconds dropped after a channel switches to the narrow loop (default: derived from the
+    /// narrow loop's slowest mode).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "gnss_sdr_settle_s",
+            long = "gnss-sdr-settle-s",
+            value_name = "GNSS_SDR_SETTLE_S",
+            allow_negative_numbers = true
+        )
+    )]
     pub settle_s: Option<f64>,
-    /// The dumps' record layout as text ([`DumpLayout::parse_spec`]).
+    /// Record layout of the dumps: a known one's name (gnss-sdr-0.0.17, gnss-sdr-0.0.21,
+    /// gnss-sdr-kf-cc, gnss-sdr-legacy-88) to force it, or `name:type,...` for versions the
+    /// reader does not know (default: recognised from each file).
+    #[cfg_attr(
+        feature = "clap",
+        arg(id = "gnss_sdr_layout", long = "gnss-sdr-layout", value_name = "GNSS_SDR_LAYOUT")
+    )]
     pub layout: Option<String>,
 }
 

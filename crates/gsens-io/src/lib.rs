@@ -168,6 +168,6 @@ pub use tracking::{
 };
 pub use vibration::{VIBRATION_COLUMNS, read_vibration_psd, read_vibration_psd_file};
 pub use writers::{
-    EPOCH_COLUMNS, ImuWriter, TrackingRow, TrackingWriter, write_epochs_csv, write_imu_csv, write_tracking_csv,
-    write_tracking_csv_on,
+    EPOCH_COLUMNS, ImuWriter, TrackingRow, TrackingWriter, write_epochs_csv, write_epochs_file, write_imu_csv,
+    write_tracking_csv, write_tracking_csv_on,
 };

@@ -7,8 +7,10 @@
 //! [`std::io::ErrorKind::InvalidInput`] error.
 
 use std::io::{self, BufWriter, Write};
+use std::path::Path;
 
 use crate::imu::{IMU_COLUMNS, ImuSeries};
+use crate::output::FileError;
 use crate::row::TrackingRecord;
 use crate::signal::Carrier;
 use crate::tracking::{CARRIER_COLUMNS, TRACKING_COLUMNS};
@@ -337,9 +339,40 @@ pub fn write_epochs_csv<W: Write>(
     w.flush()
 }
 
+/// [`write_epochs_csv`] into the file `path`, made afresh: an error making
+/// or writing it is the file's ([`FileError`], `cannot write`).
+pub fn write_epochs_file(
+    path: &Path,
+    t_s: &[f64],
+    phase_err_rad: &[Option<f64>],
+    accel_mps2: &[[f64; 3]],
+) -> Result<(), FileError> {
+    std::fs::File::create(path)
+        .and_then(|f| write_epochs_csv(f, t_s, phase_err_rad, accel_mps2))
+        .map_err(|source| FileError { path: path.to_path_buf(), action: "write", source })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The file holds what [`write_epochs_csv`] writes; a series it refuses
+    /// and a path that is no file are the file's error, `cannot write`.
+    #[test]
+    fn an_epochs_file_is_the_csv_or_the_files_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("epochs.csv");
+        write_epochs_file(&path, &[0.02, 0.04], &[Some(0.5), None], &[[1.0, 2.0, 3.0]; 2]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text, "t_s,phase_err_rad,fx_mps2,fy_mps2,fz_mps2\n0.02,0.5,1,2,3\n0.04,,1,2,3\n");
+        let e = write_epochs_file(&path, &[0.02], &[], &[]).unwrap_err();
+        assert_eq!(
+            (e.to_string(), e.source.kind()),
+            (format!("{}: cannot write", path.display()), io::ErrorKind::InvalidInput)
+        );
+        let e = write_epochs_file(dir.path(), &[], &[], &[]).unwrap_err();
+        assert_eq!(e.to_string(), format!("{}: cannot write", dir.path().display()));
+    }
     use crate::imu::read_imu;
     use crate::tracking::read_tracking;
 

@@ -29,6 +29,45 @@ pub enum DemoError {
     /// The oscillator's Allan deviation could not be simulated.
     #[error(transparent)]
     Oscillator(#[from] ConfigError),
+    /// No folder of the demo's own could be made for its logs.
+    #[error("cannot make a folder in the system's temporary directory for the demo's logs")]
+    Scratch(#[source] std::io::Error),
+}
+
+/// Where a demo's logs go: the folder a caller names, kept, or a fresh
+/// folder of the run's own in the system's temporary directory
+/// (`gsens-demo-…`), removed with everything in it when this is dropped.
+#[derive(Debug)]
+pub enum DemoFolder {
+    /// The caller's folder.
+    Named(PathBuf),
+    /// The run's own, removed at the end.
+    Scratch(tempfile::TempDir),
+}
+
+impl DemoFolder {
+    /// `named`, or a fresh scratch folder when `None`.
+    pub fn new(named: Option<&Path>) -> Result<Self, DemoError> {
+        Ok(match named {
+            Some(dir) => DemoFolder::Named(dir.to_path_buf()),
+            None => DemoFolder::Scratch(
+                tempfile::Builder::new().prefix("gsens-demo-").tempdir().map_err(DemoError::Scratch)?,
+            ),
+        })
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        match self {
+            DemoFolder::Named(dir) => dir,
+            DemoFolder::Scratch(dir) => dir.path(),
+        }
+    }
+
+    /// Whether it is removed at the end.
+    pub fn is_scratch(&self) -> bool {
+        matches!(self, DemoFolder::Scratch(_))
+    }
 }
 
 /// A scenario's session simulated into a folder, ready to be estimated.
@@ -156,6 +195,24 @@ impl Demo {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A named folder is the caller's and kept; a scratch folder exists,
+    /// is the run's own and goes with everything in it when dropped.
+    #[test]
+    fn a_scratch_folder_is_removed_a_named_one_kept() {
+        let kept = tempfile::tempdir().unwrap();
+        let named = DemoFolder::new(Some(kept.path())).unwrap();
+        assert_eq!((named.path(), named.is_scratch()), (kept.path(), false));
+        drop(named);
+        assert!(kept.path().is_dir());
+        let scratch = DemoFolder::new(None).unwrap();
+        let dir = scratch.path().to_path_buf();
+        assert!(scratch.is_scratch() && dir.is_dir());
+        assert!(dir.file_name().unwrap().to_str().unwrap().starts_with("gsens-demo-"));
+        std::fs::write(dir.join("imu.csv"), "t_s\n").unwrap();
+        drop(scratch);
+        assert!(!dir.exists());
+    }
     use gsens_sim::scenario::OscillatorKind;
 
     fn demo_of(scenario: &Scenario, dir: &Path) -> Demo {

@@ -27,7 +27,7 @@ mod methods;
 mod predict;
 mod validate;
 mod validate_text;
-pub use demo::{Demo, DemoError, render_demo_start, simulate_demo};
+pub use demo::{Demo, DemoError, DemoFolder, render_demo_start, simulate_demo};
 pub use methods::method_settings;
 pub use predict::frequency_noise;
 pub use validate::{GammaSource, ValidateError, calibrate_scenario, default_bandwidths_hz, run_validation, validate};

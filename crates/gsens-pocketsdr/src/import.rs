@@ -17,15 +17,45 @@ use crate::options::{DEFAULT_EPOCH_S, PocketSdrOptions, Setting, SettingSource};
 pub(crate) const L1CA: &str = "L1CA";
 
 /// A log's conversion as a caller names it: the options file `pocket_trk`
-/// ran with and the values set instead of the derived ones; every field at
-/// its default names PocketSDR's defaults.
+/// ran with and the values set instead of the derived ones
+/// ([`ImportSettings::settle_s`], [`ImportSettings::toff_s`]); every field
+/// at its default names PocketSDR's defaults.
+///
+/// With the `clap` feature these are a command line's options, named with
+/// the receiver before them (`pocketsdr_settle_s`) as they sit beside other
+/// receivers'; the fields' doc comments are their help.
 #[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", command(next_help_heading = "PocketSDR logs"))]
 pub struct ImportOptions {
-    /// The `pocket_trk` options file (`-opt FILE`); `None`: PocketSDR's defaults.
+    /// The pocket_trk options file (-opt FILE) the log was made with: its b_pll (the PLL
+    /// bandwidth) and epoch (the $CH interval) [default: PocketSDR's defaults, b_pll = 5 Hz, and
+    /// the log's own interval].
+    #[cfg_attr(feature = "clap", arg(id = "pocketsdr_conf", long = "pocketsdr-conf", value_name = "POCKETSDR_CONF"))]
     pub conf: Option<PathBuf>,
-    /// [`ImportSettings::settle_s`] \[s\].
+    /// Seconds dropped after a track's 1 s FLL pull-in [default: five time constants of the
+    /// PLL's slowest mode, 5.2 s at 5 Hz].
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "pocketsdr_settle_s",
+            long = "pocketsdr-settle-s",
+            value_name = "POCKETSDR_SETTLE_S",
+            allow_negative_numbers = true
+        )
+    )]
     pub settle_s: Option<f64>,
-    /// [`ImportSettings::toff_s`] \[s\].
+    /// pocket_trk's -toff: seconds it skipped at the start of the IF file.
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "pocketsdr_toff_s",
+            long = "pocketsdr-toff-s",
+            value_name = "POCKETSDR_TOFF_S",
+            default_value_t = 0.0,
+            allow_negative_numbers = true
+        )
+    )]
     pub toff_s: f64,
 }
 

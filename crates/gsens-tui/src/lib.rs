@@ -15,9 +15,13 @@
 //!   (ratatui's `TestBackend`), for snapshot tests and documentation.
 //! - [`progress`]: the bars and spinners of the other commands' long steps,
 //!   the calibration pipeline's stages among them ([`progress::observed`]).
+//! - [`process`]: a command-line program's process: standard output that
+//!   ends quietly on a closed pipe, standard error that never panics, a
+//!   command's exit status, the allocator's setup.
 #![warn(missing_docs)]
 
 mod live_screen;
+pub mod process;
 pub mod progress;
 mod screen;
 mod terminal;

@@ -74,6 +74,33 @@ pub fn with_spinner<R>(what: &str, f: impl FnOnce() -> R) -> R {
     result
 }
 
+/// Runs `f` with a [`progress_bar`] saying `verb` that `f`'s callback sets
+/// to the fraction done, cleared when `f` returns.
+pub fn with_fraction_bar<R>(verb: &str, f: impl FnOnce(&mut dyn FnMut(f64)) -> R) -> R {
+    let bar = progress_bar(verb);
+    let result = f(&mut |fraction| bar.set_position((fraction * 1000.0) as u64));
+    bar.finish_and_clear();
+    result
+}
+
+/// Runs `f` with a [`count_bar`] of `len` `units` that `f`'s callback (called
+/// from any thread) advances by one, cleared when `f` returns.
+pub fn with_count_bar<R>(verb: &str, len: u64, units: &str, f: impl FnOnce(&(dyn Fn() + Sync)) -> R) -> R {
+    let bar = count_bar(verb, len, units);
+    let result = f(&|| bar.inc(1));
+    bar.finish_and_clear();
+    result
+}
+
+/// Runs `f`, which draws figures and tells each one's id as it starts it,
+/// with a spinner saying `drawing` and the id, cleared when `f` returns.
+pub fn drawing<R>(f: impl FnOnce(&mut dyn FnMut(&str)) -> R) -> R {
+    let bar = spinner();
+    let result = f(&mut |id| bar.set_message(format!("drawing {id}")));
+    bar.finish_and_clear();
+    result
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -100,6 +127,17 @@ mod tests {
     fn wrappers_return_the_closures_value() {
         assert_eq!(observed(|| 6 * 7), 42);
         assert_eq!(with_spinner("waiting", || "done"), "done");
+        assert_eq!(with_fraction_bar("simulating", |progress| (0..=4).map(|k| progress(k as f64 / 4.0)).count()), 5);
+        assert_eq!(with_count_bar("runs", 3, "runs", |tick| (0..3).map(|_| tick()).count()), 3);
+        let mut drawn = Vec::new();
+        let ids = drawing(|on_figure| {
+            ["fig3", "fig4"].map(|id| {
+                on_figure(id);
+                drawn.push(id);
+                id
+            })
+        });
+        assert_eq!((ids, drawn), (["fig3", "fig4"], vec!["fig3", "fig4"]));
         let bar = count_bar("monte carlo", 3, "runs");
         (0..3).for_each(|_| bar.inc(1));
         assert_eq!((bar.position(), bar.length()), (3, Some(3)));

@@ -7,7 +7,11 @@ use super::{
     FeedForward, FrequencyNoise, PredictionInput, StatedGammaError, Sweep, SweepError, SweepSettings, ToneError,
     Vibration, parse_tone, stated_gamma,
 };
+#[cfg(feature = "clap")]
+use crate::option_values::{finite_non_negative, positive};
 use crate::{DocumentError, ResultDocument};
+#[cfg(feature = "clap")]
+use core::f64::consts::FRAC_1_SQRT_2;
 use std::path::PathBuf;
 
 /// Where Γ̂ and its covariance come from.
@@ -45,19 +49,42 @@ pub struct PredictRequest {
     pub levels: Vec<f64>,
     /// The oscillator's frequency noise (`None`: none).
     pub oscillator: Option<FrequencyNoise>,
-    /// C/N0 for the thermal noise \[dB-Hz\] (`None`: none).
+    /// The signal, the loop and the feed-forward.
+    pub receiver: ReceiverConditions,
+}
+
+/// The receiver a prediction is made for: the signal's C/N0, the
+/// 2nd-order loop, the feed-forward, the IMU's noise and the Doppler rate
+/// the loop follows.
+///
+/// With the `clap` feature these are a command line's options, with a
+/// static GPS L1 receiver's values as their defaults; the fields' doc
+/// comments are their help, where a unit reads `[Hz]`, not a link.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[allow(rustdoc::broken_intra_doc_links)]
+pub struct ReceiverConditions {
+    /// C/N0 for the thermal noise [dB-Hz].
+    #[cfg_attr(feature = "clap", arg(long, default_value = "45", allow_negative_numbers = true, value_parser = finite_non_negative))]
     pub cn0_dbhz: Option<f64>,
-    /// The 2nd-order loop's noise bandwidth \[Hz\].
+    /// The loop (2nd order): noise bandwidth [Hz].
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 3.0, allow_negative_numbers = true, value_parser = positive))]
     pub bn_hz: f64,
-    /// Its damping ratio.
+    /// Damping ratio ζ.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = FRAC_1_SQRT_2, allow_negative_numbers = true, value_parser = positive))]
     pub zeta: f64,
-    /// Its update interval \[s\].
+    /// Loop update interval [s].
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.001, allow_negative_numbers = true, value_parser = positive))]
     pub loop_interval_s: f64,
     /// The feed-forward's timing.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub feed_forward: FeedForward,
-    /// The IMU's white noise density \[m/s²/√Hz\].
+    /// The IMU's white noise density [m/s²/√Hz].
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative))]
     pub imu_noise_mps2_per_rthz: f64,
-    /// The line-of-sight Doppler rate the loop must follow \[Hz/s\].
+    /// The line-of-sight Doppler rate the loop must follow [Hz/s] (its dynamic stress
+    /// error enters the lock rule; a static receiver sees up to about 0.9 Hz/s at L1).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.9, allow_negative_numbers = true, value_parser = finite_non_negative))]
     pub doppler_rate_hz_per_s: f64,
 }
 
@@ -121,21 +148,22 @@ impl PredictRequest {
                     .collect::<Result<_, _>>()?,
             ),
         };
+        let r = &self.receiver;
         let settings = SweepSettings {
             base: PredictionInput {
                 gamma_hz_per_mps2: gamma,
                 covariance,
                 vibration,
                 oscillator: self.oscillator,
-                cn0_dbhz: self.cn0_dbhz,
-                delay_s: self.feed_forward.delay_s(),
-                imu_noise_mps2_per_rthz: self.imu_noise_mps2_per_rthz,
-                doppler_rate_hz_per_s: self.doppler_rate_hz_per_s,
+                cn0_dbhz: r.cn0_dbhz,
+                delay_s: r.feed_forward.delay_s(),
+                imu_noise_mps2_per_rthz: r.imu_noise_mps2_per_rthz,
+                doppler_rate_hz_per_s: r.doppler_rate_hz_per_s,
             },
             levels: self.levels.clone(),
-            bn_hz: self.bn_hz,
-            zeta: self.zeta,
-            loop_interval_s: self.loop_interval_s,
+            bn_hz: r.bn_hz,
+            zeta: r.zeta,
+            loop_interval_s: r.loop_interval_s,
         };
         let sweep = settings.sweep().map_err(|e| match e {
             SweepError::Level(level) => PredictError::Level(level),
@@ -155,6 +183,12 @@ mod tests {
             vibration: VibrationSource::Tones(tones.iter().map(|t| t.to_string()).collect()),
             levels: levels.to_vec(),
             oscillator: None,
+            receiver: receiver(),
+        }
+    }
+
+    fn receiver() -> ReceiverConditions {
+        ReceiverConditions {
             cn0_dbhz: Some(45.0),
             bn_hz: 3.0,
             zeta: std::f64::consts::FRAC_1_SQRT_2,
@@ -194,7 +228,8 @@ mod tests {
         };
         assert!(matches!(stated.sweep(), Err(PredictError::Stated(StatedGammaError::Count))));
         // An unstable loop is said before any level is checked.
-        let unstable = PredictRequest { bn_hz: 20.0, loop_interval_s: 0.1, ..request(&["0.9:3,0,0"], &[-1.0]) };
+        let receiver = ReceiverConditions { bn_hz: 20.0, loop_interval_s: 0.1, ..receiver() };
+        let unstable = PredictRequest { receiver, ..request(&["0.9:3,0,0"], &[-1.0]) };
         let e = unstable.sweep().unwrap_err();
         assert!(matches!(e, PredictError::Sweep(SweepError::Loop { .. })) && e.setting().is_none(), "{e}");
     }

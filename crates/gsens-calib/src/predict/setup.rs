@@ -4,11 +4,19 @@
 //! which [`super::PredictionInput`]'s covariance, tones and delay follow.
 
 /// The feed-forward's timing.
+///
+/// With the `clap` feature these are a command line's options, a 40 Hz IMU
+/// and no latency by default; the fields' doc comments are their help,
+/// where a unit reads `[Hz]`, not a link.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct FeedForward {
-    /// The IMU's sample rate \[Hz\]: its sample-and-hold delays by half a sample.
+    /// The feed-forward: IMU sample rate [Hz] (its hold delays by half a sample).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 40.0, allow_negative_numbers = true, value_parser = crate::option_values::positive))]
     pub imu_rate_hz: f64,
-    /// The latency on top of the hold \[s\].
+    /// The feed-forward: latency on top of the hold [s].
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = crate::option_values::finite_non_negative))]
     pub latency_s: f64,
 }
 
