@@ -441,30 +441,9 @@ fn fit_rows_kept(
     settings: &LoopFreeSettings,
     slip_step: f64,
 ) -> Result<RowsFit, LoopFreeError> {
-    let epochs = phases.epoch_t_s.as_slice();
-    let log_interval_s = median_step(epochs);
-    let mut tracks: Vec<&TrackInputPhase> = phases.tracks.iter().collect();
-    if settings.channels > 0 {
-        tracks.sort_by(|a, b| b.mean_cn0_dbhz.total_cmp(&a.mean_cn0_dbhz));
-        tracks.truncate(settings.channels);
-    }
-    let (offsets, searched) = match settings.time_offset {
-        crate::TimeOffset::Fixed { imu_time_offset_s } => ([imu_time_offset_s; 2], false),
-        crate::TimeOffset::Auto { max_abs_s } => ([-max_abs_s, max_abs_s], true),
-    };
-    // An epoch is usable when the IMU covers every instant its regressor reads at every offset tried.
-    let usable: Vec<bool> = (0..epochs.len())
-        .map(|k| epochs[k] >= epochs[0] + settings.warmup_s && offsets.iter().all(|&tau| regressor.covers(k, tau)))
-        .collect();
-    let inputs: Vec<(&[Option<f64>], f64)> =
-        tracks.iter().map(|t| (t.input_phase_rad.as_slice(), t.scale_to_l1)).collect();
-    // The slip test compares means of a second of rows (at least 3).
-    let slip_window = ((1.0 / log_interval_s).round() as usize).max(3);
-    let m = CommonPhase::assemble(epochs, &usable, &inputs, settings.segment_s, slip_step, slip_window);
+    let log_interval_s = median_step(&phases.epoch_t_s);
+    let (m, offsets, searched) = assemble_rows(phases, regressor, settings, slip_step)?;
     let too_few = || LoopFreeError::TooFewEpochs { epochs: m.phase.len(), segment_s: settings.segment_s };
-    if m.phase.len() < 10 {
-        return Err(too_few());
-    }
     let tau = if searched { m.search_offset(regressor, offsets, log_interval_s) } else { offsets[0] };
     let x = m.regressors(regressor, tau);
     let excitation_rms = [0, 1, 2].map(|i| (x.iter().map(|r| r[i] * r[i]).sum::<f64>() / x.len() as f64).sqrt());
@@ -497,6 +476,41 @@ fn fit_rows_kept(
     Ok(RowsFit { estimate, rows: m, regressors: x, gls: fit })
 }
 
+/// The rows [`fit_rows`] fits: the channels chosen, the epochs the
+/// regressor covers at every offset tried, detrended and averaged
+/// ([`CommonPhase::assemble`]); with the offsets' range and whether it is searched.
+fn assemble_rows(
+    phases: &InputPhases,
+    regressor: &impl RowRegressor,
+    settings: &LoopFreeSettings,
+    slip_step: f64,
+) -> Result<(CommonPhase, [f64; 2], bool), LoopFreeError> {
+    let epochs = phases.epoch_t_s.as_slice();
+    let log_interval_s = median_step(epochs);
+    let mut tracks: Vec<&TrackInputPhase> = phases.tracks.iter().collect();
+    if settings.channels > 0 {
+        tracks.sort_by(|a, b| b.mean_cn0_dbhz.total_cmp(&a.mean_cn0_dbhz));
+        tracks.truncate(settings.channels);
+    }
+    let (offsets, searched) = match settings.time_offset {
+        crate::TimeOffset::Fixed { imu_time_offset_s } => ([imu_time_offset_s; 2], false),
+        crate::TimeOffset::Auto { max_abs_s } => ([-max_abs_s, max_abs_s], true),
+    };
+    // An epoch is usable when the IMU covers every instant its regressor reads at every offset tried.
+    let usable: Vec<bool> = (0..epochs.len())
+        .map(|k| epochs[k] >= epochs[0] + settings.warmup_s && offsets.iter().all(|&tau| regressor.covers(k, tau)))
+        .collect();
+    let inputs: Vec<(&[Option<f64>], f64)> =
+        tracks.iter().map(|t| (t.input_phase_rad.as_slice(), t.scale_to_l1)).collect();
+    // The slip test compares means of a second of rows (at least 3).
+    let slip_window = ((1.0 / log_interval_s).round() as usize).max(3);
+    let m = CommonPhase::assemble(epochs, &usable, &inputs, settings.segment_s, slip_step, slip_window);
+    if m.phase.len() < 10 {
+        return Err(LoopFreeError::TooFewEpochs { epochs: m.phase.len(), segment_s: settings.segment_s });
+    }
+    Ok((m, offsets, searched))
+}
+
 /// The AR noise model [`fit_rows`] fits to the rows' residuals under `regressor`.
 pub(crate) fn rows_noise(
     phases: &InputPhases,
@@ -517,7 +531,7 @@ pub(crate) fn rows_score(
     tau: f64,
     noise: &crate::gls::ArModel,
 ) -> Result<f64, LoopFreeError> {
-    let RowsFit { rows, .. } = fit_rows_kept(phases, regressor, settings, f64::INFINITY)?;
+    let (rows, _, _) = assemble_rows(phases, regressor, settings, f64::INFINITY)?;
     let x = rows.regressors(regressor, tau);
     let mut ne = gsens_core::NormalEquations::default();
     for r in rows.ranges() {
