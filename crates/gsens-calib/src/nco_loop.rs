@@ -9,8 +9,12 @@
 //! [`IDENTIFY_BN_RANGE_HZ`]'s low end to its high end, 25 % apart, and the
 //! grid point of least innovation variance σ² is refined by Gauss–Newton
 //! steps in θ = ln Bn ([`crate::loop_free`]'s scaled fit, which linearizes
-//! the regressor in θ). The shape of least σ² is kept (both have one
-//! parameter, so −2 ln L = N·ln σ² compares them as it is).
+//! the regressor in θ). H = 1 (a corrected carrier phase, or a loop wider
+//! than the search; [`estimate_nco_frequency_unity`]) competes as a
+//! candidate of its own. The candidates are compared under one noise model
+//! by N·ln σ² + ln N per fitted bandwidth (Schwarz's criterion), each
+//! weighted by exp(−Δ/2): the best is kept, the weighted spread of the
+//! others' Γ̂ joins its variance.
 //!
 //! Γ̂'s covariance carries the loop's uncertainty: the Γ block of the joint
 //! covariance of (Γ, θ), the conditional one plus g·gᵀ·var(θ̂) with
@@ -215,6 +219,25 @@ pub fn estimate_nco_frequency_identified_from(
         });
         candidates.push(candidate);
     }
+    // H = 1 (a carrier phase the receiver corrects, or a loop wider than
+    // the search) as a candidate of its own, without a bandwidth: a truth at
+    // the range's wide end is approached by the shapes from one side only
+    // (their |H| > 1 below ωn), so it must compete as itself.
+    if shapes.len() > 1
+        && let Some(unity_shape) = identification_shapes(log_interval_s).first()
+    {
+        let unity = model_at(unity_shape, bn_hi.ln())?;
+        let estimate = fit_rows(rows, &unity, settings, f64::INFINITY)?;
+        let bn0 = unity_shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+        candidates.push(Candidate {
+            shape: unity_shape.with_bn_scaled(bn_hi / bn0),
+            bn_hz: bn_hi,
+            sigma_ln_bn: f64::INFINITY,
+            resolution: LoopResolution::Wide,
+            estimate,
+            unity: true,
+        });
+    }
     let own_score = |c: &Candidate| c.estimate.residual_variance_rad2;
     let Some(k_first) =
         (0..candidates.len()).min_by(|&a, &b| own_score(&candidates[a]).total_cmp(&own_score(&candidates[b])))
@@ -223,18 +246,25 @@ pub fn estimate_nco_frequency_identified_from(
     };
     // The shapes compared under one noise model (the provisional best's):
     // each fit's own AR model would move its σ² by the choice of its order.
-    let regressor_of = |c: &Candidate| model_at(&c.shape, c.bn_hz.ln());
+    let regressor_of =
+        |c: &Candidate| if c.unity { model_at(&c.shape, bn_hi.ln()) } else { model_at(&c.shape, c.bn_hz.ln()) };
     let noise = rows_noise(rows, &regressor_of(&candidates[k_first])?, settings)?;
     let scores: Vec<f64> = candidates
         .par_iter()
         .map(|c| rows_score(rows, &regressor_of(c)?, settings, c.estimate.imu_time_offset_s, &noise))
         .collect::<Result<_, _>>()?;
-    let k_best = (0..candidates.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b])).unwrap_or(k_first);
-    // Each shape's weight exp(−Δ(−2 ln L)/2): the spread of the shapes' Γ̂
+    // −2 ln L + ln N per parameter (Schwarz's criterion, the marginal
+    // likelihood's approximation): a shape's bandwidth is one parameter more
+    // than H = 1 has. Akaike's 2 per parameter is too little against the
+    // best of ten shapes, each fitting the noise with its own bandwidth.
+    let n = candidates[k_first].estimate.epochs as f64;
+    let totals: Vec<f64> =
+        candidates.iter().zip(&scores).map(|(c, s)| n * s.ln() + if c.unity { 0.0 } else { n.ln() }).collect();
+    let k_best = (0..candidates.len()).min_by(|&a, &b| totals[a].total_cmp(&totals[b])).unwrap_or(k_first);
+    // Each candidate's weight exp(−Δ/2): the spread of the candidates' Γ̂
     // about the best one's, so weighted, joins Γ̂'s variance, and the order
-    // is resolved when the other order's shapes weigh under 5 %.
-    let n = candidates[k_best].estimate.epochs as f64;
-    let weights: Vec<f64> = scores.iter().map(|s| (-0.5 * n * (s / scores[k_best]).ln()).exp()).collect();
+    // is resolved when the other order's shapes (and H = 1) weigh under 5 %.
+    let weights: Vec<f64> = totals.iter().map(|t| (-0.5 * (t - totals[k_best])).exp()).collect();
     let total: f64 = weights.iter().sum();
     let g_best = candidates[k_best].estimate.gamma_hz_per_mps2;
     let spread: [f64; 3] = [0, 1, 2].map(|i| {
@@ -246,17 +276,33 @@ pub fn estimate_nco_frequency_identified_from(
             / total
     });
     let order_best = candidates[k_best].shape.order();
-    let other_order: f64 =
-        candidates.iter().zip(&weights).filter(|(c, _)| c.shape.order() != order_best).map(|(_, w)| w).sum::<f64>();
-    let order_resolved = other_order / total < 0.05;
+    let other_order: f64 = candidates
+        .iter()
+        .zip(&weights)
+        .filter(|(c, _)| c.shape.order() != order_best || c.unity)
+        .map(|(_, w)| w)
+        .sum::<f64>();
+    let order_resolved = !candidates[k_best].unity && other_order / total < 0.05;
+    // H = 1 best: the loop is at least as wide as the narrowest candidate of
+    // any weight (5 % of the total) says.
+    let wide_bound_hz = candidates
+        .iter()
+        .zip(&weights)
+        .filter(|(_, w)| **w / total >= 0.05)
+        .map(|(c, _)| c.bn_hz)
+        .fold(bn_hi, f64::min);
     // Bn trades with the update interval: the spread of ln Bn over the
     // shapes of the same order, so weighted, joins its variance.
     let ln_bn_best = candidates[k_best].bn_hz.ln();
-    let same_order = candidates.iter().zip(&weights).filter(|(c, _)| c.shape.order() == order_best);
+    let same_order = candidates.iter().zip(&weights).filter(|(c, _)| c.shape.order() == order_best && !c.unity);
     let (w_sum, w_spread) =
         same_order.fold((0.0, 0.0), |(ws, sp), (c, w)| (ws + w, sp + w * (c.bn_hz.ln() - ln_bn_best).powi(2)));
     let mut c = candidates.swap_remove(k_best);
-    c.sigma_ln_bn = (c.sigma_ln_bn.powi(2) + w_spread / w_sum).sqrt();
+    if c.unity {
+        c.bn_hz = wide_bound_hz;
+    } else {
+        c.sigma_ln_bn = (c.sigma_ln_bn.powi(2) + w_spread / w_sum).sqrt();
+    }
     for (i, s) in spread.iter().enumerate() {
         c.estimate.covariance[i][i] += s;
     }
@@ -267,7 +313,7 @@ pub fn estimate_nco_frequency_identified_from(
     Ok(IdentifiedNcoEstimate {
         estimate,
         identified: IdentifiedLoop {
-            model: Some(c.shape.with_bn_scaled(c.bn_hz / bn0)),
+            model: Some(if c.unity { c.shape } else { c.shape.with_bn_scaled(c.bn_hz / bn0) }),
             order: c.shape.order(),
             loop_interval_s,
             order_resolved,
@@ -372,6 +418,8 @@ struct Candidate {
     sigma_ln_bn: f64,
     resolution: LoopResolution,
     estimate: LoopFreeEstimate,
+    /// H = 1: no bandwidth fitted (`shape` is the widest loop searched).
+    unity: bool,
 }
 
 /// The shape's best Bn from its profile over `grid`: Gauss–Newton steps
@@ -417,6 +465,7 @@ fn refine<'a>(
                 sigma_ln_bn: fit.var_ln_scale.sqrt(),
                 resolution: LoopResolution::Resolved,
                 estimate: fit.estimate,
+                unity: false,
             });
         }
     }
@@ -436,5 +485,5 @@ fn refine<'a>(
     } else {
         (LoopResolution::Narrow, alike_bn.fold(grid[k_best], f64::max))
     };
-    Ok(Candidate { shape: *shape, bn_hz, sigma_ln_bn: f64::INFINITY, resolution, estimate })
+    Ok(Candidate { shape: *shape, bn_hz, sigma_ln_bn: f64::INFINITY, resolution, estimate, unity: false })
 }

@@ -151,6 +151,10 @@ pub fn observation_rows(
         r => r,
     };
     let source_name = log.source_name.clone();
+    let epochs = common_epochs(log);
+    if epochs.len() < 3 {
+        return Err(ObservationRowsError::TooFewEpochs { source_name, epochs: epochs.len() });
+    }
     match record {
         ObservationRecord::CarrierPhase if with_phase == 0 => {
             return Err(ObservationRowsError::Missing { source_name, what: "a carrier phase" });
@@ -159,10 +163,6 @@ pub fn observation_rows(
             return Err(ObservationRowsError::Missing { source_name, what: "a Doppler" });
         }
         _ => {}
-    }
-    let epochs = common_epochs(log);
-    if epochs.len() < 3 {
-        return Err(ObservationRowsError::TooFewEpochs { source_name, epochs: epochs.len() });
     }
     let mut values: Vec<Vec<Option<f64>>> = log
         .tracks
@@ -287,4 +287,122 @@ fn common_steps(values: &[Vec<Option<f64>>], scales: &[f64]) -> Vec<usize> {
             gsens_core::stats::median_in_place(&mut steps).abs() > CLOCK_STEP_HZ
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gsens_io::{Carrier, ClockEvent, Observation, ObservationLogBuilder, Signal};
+
+    /// A log of `tracks` satellites at 10 Hz for `n` epochs: track j's phase
+    /// L = N_j − ∫f dt with f = 1000·j + 2·t Hz (its Doppler D = f), exact.
+    fn log(tracks: usize, n: usize, edit: impl Fn(usize, usize, &mut Observation)) -> ObservationLog {
+        let mut b = ObservationLogBuilder::new("t.rnx", "RINEX 3.04");
+        for k in 0..n {
+            let t = b.start_epoch(2300, 1000.0 + k as f64 * 0.1, || format!("epoch {k}")).unwrap();
+            for j in 0..tracks {
+                let tk = k as f64 * 0.1;
+                let f0 = 1000.0 * (j + 1) as f64;
+                let mut obs = Observation {
+                    carrier_phase_cycles: 2.0e7 - (f0 * tk + tk * tk),
+                    doppler_hz: f0 + 2.0 * tk,
+                    cn0_dbhz: 40.0 + j as f64,
+                    ..Observation::default()
+                };
+                edit(j, k, &mut obs);
+                b.push(&format!("G{:02}", j + 1), "1C", Carrier::of(Signal::L1CA), t, &obs);
+            }
+        }
+        b.finish()
+    }
+
+    /// The carrier phase differenced is the mean frequency over the interval
+    /// with the NCO's sign (−ΔL/Δt), the Doppler the frequency itself; the
+    /// first epoch has no phase row.
+    #[test]
+    fn rows_are_the_nco_frequency_with_its_sign() {
+        let l = log(3, 20, |_, _, _| {});
+        let r = observation_rows(&l, ObservationRecord::Auto).unwrap();
+        assert_eq!(r.record, ObservationRecord::CarrierPhase);
+        assert_eq!(r.record.quantity(), RowQuantity::NcoFrequencyMean);
+        let t = &r.rows.epoch_t_s;
+        assert_eq!(t.len(), 20);
+        assert_eq!(r.rows.tracks[1].input_phase_rad[0], None);
+        for k in 1..20 {
+            // Mean of 2000 + 2t over [t_{k−1}, t_k].
+            let want = 2000.0 + (t[k] + t[k - 1]) - 2.0 * t[0];
+            let got = r.rows.tracks[1].input_phase_rad[k].unwrap();
+            assert!((got - want).abs() < 1e-6, "{k}: {got} against {want}");
+        }
+        let d = observation_rows(&l, ObservationRecord::Doppler).unwrap();
+        assert_eq!(d.record.quantity(), RowQuantity::NcoFrequency);
+        assert!((d.rows.tracks[2].input_phase_rad[5].unwrap() - (3000.0 + 2.0 * 0.5)).abs() < 1e-9);
+        assert_eq!((r.tracks[0].rows, r.tracks[0].rows_left_out, r.clock_jump_epochs), (19, 1, 0));
+        assert_eq!((r.tracks[2].mean_cn0_dbhz, r.rows.tracks[0].scale_to_l1), (42.0, 1.0));
+    }
+
+    /// A loss of lock, a half cycle subtracted at one end only and an
+    /// invalid phase break the row they end or start.
+    #[test]
+    fn slips_and_invalid_phases_leave_their_rows_out() {
+        let l = log(2, 30, |j, k, o| {
+            if j == 0 && k >= 10 {
+                o.flags |= if k == 10 { obs_flags::LOSS_OF_LOCK } else { 0 };
+                o.carrier_phase_cycles += 17.0;
+            }
+            if j == 0 && k >= 20 {
+                o.flags |= obs_flags::HALF_CYCLE_SUBTRACTED;
+                o.carrier_phase_cycles += 0.5;
+            }
+            if j == 1 && k == 5 {
+                o.flags |= obs_flags::PHASE_INVALID;
+                o.carrier_phase_cycles = f64::NAN;
+            }
+        });
+        let r = observation_rows(&l, ObservationRecord::CarrierPhase).unwrap();
+        let none =
+            |j: usize| -> Vec<usize> { (0..30).filter(|&k| r.rows.tracks[j].input_phase_rad[k].is_none()).collect() };
+        assert_eq!(none(0), [0, 10, 20]);
+        assert_eq!(none(1), [0, 5, 6]);
+        // Every row that is kept is the clean frequency.
+        assert!(r.rows.tracks[0].input_phase_rad.iter().flatten().all(|f| (f - 1000.0).abs() < 10.0));
+    }
+
+    /// A millisecond jump of the receiver clock moves every phase by
+    /// f_L1·1 ms: the common step leaves that epoch's rows out of every track
+    /// (and the one after, where the step comes back), reported or not; the
+    /// Doppler, a frequency, is kept.
+    #[test]
+    fn a_receiver_clock_jump_leaves_its_epoch_out() {
+        let jump = gsens_core::units::GPS_L1_HZ * 1e-3;
+        let l = log(4, 40, |_, k, o| {
+            if k >= 25 {
+                o.carrier_phase_cycles += jump;
+            }
+        });
+        let r = observation_rows(&l, ObservationRecord::CarrierPhase).unwrap();
+        assert_eq!(r.clock_jump_epochs, 2);
+        for tr in &r.rows.tracks {
+            assert!(tr.input_phase_rad[25].is_none() && tr.input_phase_rad[26].is_none());
+            assert!(tr.input_phase_rad.iter().flatten().all(|f| f.abs() < 5000.0));
+        }
+        let mut reported = l.clone();
+        reported.clock_events.push(ClockEvent { t_s: l.tracks[0].t_s[10], jump_s: None, what: "clkReset".into() });
+        let r = observation_rows(&reported, ObservationRecord::CarrierPhase).unwrap();
+        assert_eq!(r.clock_jump_epochs, 3);
+        assert!(r.rows.tracks.iter().all(|tr| tr.input_phase_rad[10].is_none()));
+        let d = observation_rows(&reported, ObservationRecord::Doppler).unwrap();
+        assert_eq!(d.clock_jump_epochs, 0);
+    }
+
+    /// A log without the record asked for, or with too few epochs, is refused by name.
+    #[test]
+    fn a_log_without_the_record_is_refused() {
+        let no_phase = log(2, 10, |_, _, o| o.carrier_phase_cycles = f64::NAN);
+        let e = observation_rows(&no_phase, ObservationRecord::CarrierPhase).unwrap_err();
+        assert_eq!(e.to_string(), "t.rnx: no track has a carrier phase");
+        assert_eq!(observation_rows(&no_phase, ObservationRecord::Auto).unwrap().record, ObservationRecord::Doppler);
+        let e = observation_rows(&log(2, 2, |_, _, _| {}), ObservationRecord::Auto).unwrap_err();
+        assert_eq!(e.to_string(), "t.rnx: 2 epoch(s): too few for an estimate");
+    }
 }

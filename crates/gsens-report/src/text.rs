@@ -104,7 +104,11 @@ fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentification) {
                 u.gamma_hz_per_mps2.iter().map(|g| g.map_or("—".into(), |g| format!("{g:+.5}"))).collect();
             format!("; with H = 1 Γ̂ would be [{}]", g.join(", "))
         });
-        let judged = if e > 0.01 { "H = 1 does not hold: the loop is narrow for this shaking" } else { "H ≈ 1" };
+        let judged = match l.resolution {
+            LoopResolution::Wide => "the loop is wide: H → 1 as Bn grows past the bound",
+            _ if e > 0.01 => "H = 1 does not hold: the loop is narrow for this shaking",
+            _ => "H ≈ 1",
+        };
         let _ = writeln!(
             s,
             "  |1 − |H|| up to {:.1} % at the shaking frequencies: {judged}{}",
