@@ -70,13 +70,16 @@ def _log(log: Log, names: tuple, role: str) -> Union[str, Dict[str, np.ndarray]]
 
 
 def estimate(
-    imu: Log,
+    imu: Optional[Log] = None,
     tracking: Optional[Log] = None,
     *,
     gnss_sdr: Optional[Union[str, "os.PathLike[str]"]] = None,
     gnss_sdr_conf: Optional[Union[str, "os.PathLike[str]"]] = None,
     pocketsdr: Optional[Union[str, "os.PathLike[str]"]] = None,
     pocketsdr_conf: Optional[Union[str, "os.PathLike[str]"]] = None,
+    rinex: Optional[Union[str, "os.PathLike[str]"]] = None,
+    ubx: Optional[Union[str, "os.PathLike[str]"]] = None,
+    observable: Optional[str] = None,
     **settings: Any,
 ) -> Estimate:
     """Estimate Γ from an IMU log and a tracking log, as ``gsens estimate`` does.
@@ -88,6 +91,11 @@ def estimate(
     order. Instead of ``tracking``: ``gnss_sdr`` (a directory of GNSS-SDR
     tracking dumps, with ``gnss_sdr_conf``) or ``pocketsdr`` (a pocket_trk
     log, optionally with ``pocketsdr_conf``); those take the IMU as a file.
+    A receiver that logs carrier phase or Doppler: ``rinex`` (a RINEX
+    observation file, with ``imu`` a file whose ``t_s`` is GPS seconds of the
+    week) or ``ubx`` (a u-blox log; its own accelerometer unless ``imu`` is
+    given), the receiver's loop identified from the session;
+    ``observable`` is ``"auto"``, ``"carrier_phase"`` or ``"doppler"``.
 
     The settings are the command line's options with ``_`` for ``-``
     (``order=2, bn_hz=3.0`` for ``--order 2 --bn-hz 3``,
@@ -98,6 +106,13 @@ def estimate(
     Returns an :class:`Estimate`; raises :class:`GsensError` with the
     command line's message (naming the file, line and column, or the setting).
     """
+    path = lambda p: None if p is None else os.fspath(p)  # noqa: E731
+    if rinex is not None or ubx is not None:
+        return _gsens.estimate(
+            path(imu), tracking, rinex=path(rinex), ubx=path(ubx), observable=observable, **settings
+        )
+    if imu is None:
+        raise GsensError("imu is required (except with ubx)")
     return _gsens.estimate(
         _log(imu, IMU_COLUMNS, "imu"),
         None if tracking is None else _log(tracking, TRACKING_COLUMNS, "tracking"),

@@ -133,13 +133,16 @@ class Calibrator:
     def estimate(self) -> Dict[str, Any]: ...
 
 def estimate(
-    imu: Union[_Path, _Columns],
+    imu: Optional[Union[_Path, _Columns]] = None,
     tracking: Optional[Union[_Path, _Columns]] = None,
     *,
     gnss_sdr: Optional[_Path] = None,
     gnss_sdr_conf: Optional[_Path] = None,
     pocketsdr: Optional[_Path] = None,
     pocketsdr_conf: Optional[_Path] = None,
+    rinex: Optional[_Path] = None,
+    ubx: Optional[_Path] = None,
+    observable: Optional[str] = None,
     **settings: Any,
 ) -> Estimate: ...
 def options_defaults() -> Dict[str, Any]: ...

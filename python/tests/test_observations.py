@@ -74,3 +74,18 @@ def test_a_ubx_log_with_its_own_accelerometer_gives_gamma_within_sigma(gsens_bin
 def test_a_rinex_file_without_an_imu_log_is_refused(gsens_bin, observation_logs):
     r = run_cli(gsens_bin, "estimate", "--rinex", str(observation_logs / "obs.rnx"))
     assert r.returncode != 0 and "--imu" in r.stderr, r.stderr
+
+
+def test_python_estimates_the_same_from_rinex_and_ubx(gsens_bin, observation_logs):
+    import gsens
+
+    out = observation_logs
+    truth = json.loads((out / "truth.json").read_text())
+    est = gsens.estimate(out / "imu_gps.csv", rinex=out / "obs.rnx")
+    doc = est.to_dict()
+    check(doc, truth)
+    cli = estimate(gsens_bin, out, "--imu", str(out / "imu_gps.csv"), "--rinex", str(out / "obs.rnx"))
+    assert doc["gamma_hz_per_mps2"] == cli["gamma_hz_per_mps2"]
+    check(gsens.estimate(ubx=out / "log.ubx", observable="carrier_phase").to_dict(), truth)
+    with pytest.raises(gsens.GsensError, match="observable"):
+        gsens.estimate(ubx=out / "log.ubx", observable="phase")

@@ -42,6 +42,30 @@ pub(crate) struct HeaderArgs {
 }
 
 pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
+    if let Some(observations) = args.inputs.observations() {
+        let settings = args.calibration.settings(given)?;
+        crate::check_dir("--out", Some(&args.out))?;
+        let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
+        let mut outcome =
+            gsens_tui::progress::observed(|| observations?.calibrate(&settings).map_err(anyhow::Error::from))?;
+        crate::out(&gsens_inputs::render_observation_summary(&outcome))?;
+        if let Some(t) = &args.truth {
+            outcome.inputs.push(("truth".into(), t.display().to_string()));
+        }
+        let doc = outcome.document(truth);
+        let files = gsens_report::write_report_dir(
+            &args.out,
+            &args.title,
+            &doc,
+            &[],
+            args.header.write_untrusted_header,
+            |_| {},
+        )?;
+        let (text, no_header) = files.render(&doc, crate::args::flag);
+        crate::out(&text)?;
+        crate::err(no_header.as_deref().unwrap_or_default());
+        return Ok(crate::Status::of(&doc));
+    }
     let inputs = args.inputs.inputs()?;
     let mut settings = args.calibration.settings(given)?;
     let loop_note = inputs.truth_loop_note(&mut settings, args.truth.as_deref())?;

@@ -10,8 +10,8 @@ use pyo3::types::PyDict;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-/// Estimates Γ from an IMU log and a tracking log (or GNSS-SDR dumps, or a
-/// PocketSDR log), as `gsens estimate` does.
+/// Estimates Γ from an IMU log and a tracking log (or GNSS-SDR dumps, a
+/// PocketSDR log, a RINEX file or a UBX log), as `gsens estimate` does.
 ///
 /// `imu` and `tracking` are file paths or dicts of 1-D float arrays named as
 /// the CSV columns (`t_s, fx_mps2, fy_mps2, fz_mps2`;
@@ -21,19 +21,50 @@ use std::path::PathBuf;
 // One argument per Python keyword: the signature is the Python API.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (imu, tracking=None, *, gnss_sdr=None, gnss_sdr_conf=None, pocketsdr=None, pocketsdr_conf=None, **settings))]
+#[pyo3(signature = (imu=None, tracking=None, *, gnss_sdr=None, gnss_sdr_conf=None, pocketsdr=None, pocketsdr_conf=None, rinex=None, ubx=None, observable=None, **settings))]
 pub(crate) fn estimate(
     py: Python<'_>,
-    imu: &Bound<'_, PyAny>,
+    imu: Option<&Bound<'_, PyAny>>,
     tracking: Option<&Bound<'_, PyAny>>,
     gnss_sdr: Option<PathBuf>,
     gnss_sdr_conf: Option<PathBuf>,
     pocketsdr: Option<PathBuf>,
     pocketsdr_conf: Option<PathBuf>,
+    rinex: Option<PathBuf>,
+    ubx: Option<PathBuf>,
+    observable: Option<String>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Estimate> {
     let options = options(settings)?;
     let pipeline = options.pipeline_settings().map_err(error)?;
+    if rinex.is_some() || ubx.is_some() {
+        if tracking.is_some() || gnss_sdr.is_some() || pocketsdr.is_some() {
+            return Err(GsensError::new_err("give one of tracking, gnss_sdr, pocketsdr, rinex and ubx"));
+        }
+        let imu = match imu.map(|i| LogSource::extract(i, "imu")).transpose()? {
+            Some(LogSource::Path(p)) => p,
+            Some(LogSource::Columns(_)) => {
+                return Err(GsensError::new_err("imu: give the IMU log as a file with rinex or ubx"));
+            }
+            None => PathBuf::new(),
+        };
+        let record = match observable.as_deref() {
+            None | Some("auto") => gsens_calib::ObservationRecord::Auto,
+            Some("carrier_phase") => gsens_calib::ObservationRecord::CarrierPhase,
+            Some("doppler") => gsens_calib::ObservationRecord::Doppler,
+            Some(other) => {
+                return Err(GsensError::new_err(format!(
+                    "observable: {other:?} is not auto, carrier_phase or doppler"
+                )));
+            }
+        };
+        let choice = gsens_inputs::InputChoice { imu, rinex, ubx, observation_record: record, ..Default::default() };
+        let Some(inputs) = choice.observations(|n| n.to_string()) else { unreachable!("rinex or ubx is given") };
+        let inputs = inputs.map_err(error)?;
+        let outcome = py.detach(|| inputs.calibrate(&pipeline)).map_err(error)?;
+        return Ok(Estimate::of_document(outcome.document(None)));
+    }
+    let Some(imu) = imu else { return Err(GsensError::new_err("imu is required (except with ubx)")) };
     let imu = LogSource::extract(imu, "imu")?;
     let imu_path = |why: &str| match &imu {
         LogSource::Path(p) => Ok(p.clone()),
@@ -115,6 +146,14 @@ pub(crate) struct Estimate {
 }
 
 impl Estimate {
+    /// A document without an epoch series of the tracking error (a carrier
+    /// phase and Doppler log): the series are empty.
+    fn of_document(doc: ResultDocument) -> Self {
+        let json = doc.to_json_string().unwrap_or_default();
+        let text = gsens_report::render_text(&doc);
+        Estimate { t_s: Vec::new(), phase_err_rad: Vec::new(), accel_mps2: Vec::new(), doc, json, text }
+    }
+
     fn of(outcome: Outcome) -> Self {
         let doc = outcome.document(None);
         let json = doc.to_json_string().unwrap_or_default();
