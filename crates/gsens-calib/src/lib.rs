@@ -105,7 +105,8 @@ pub use nco_loop::{
 };
 pub use observation_pipeline::{LoopIdentification, ObservationOutcome, calibrate_observations};
 pub use observation_rows::{
-    CLOCK_STEP_HZ, ObservationRecord, ObservationRows, ObservationRowsError, ObservationTrack, observation_rows,
+    CLOCK_STEP_HZ, ObservationRecord, ObservationRows, ObservationRowsError, ObservationTrack, SLIPPING_TRACK_SHARE,
+    SLIPPING_TRACK_SLIPS, observation_rows,
 };
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,

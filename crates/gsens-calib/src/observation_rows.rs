@@ -92,9 +92,23 @@ pub struct ObservationTrack {
     /// Rows it gives (on the common epochs).
     pub rows: usize,
     /// Rows left out: an observable invalid or absent, a loss of lock or a
-    /// half-cycle change, a clock jump.
+    /// half-cycle change, a clock jump, a slip no flag marked.
     pub rows_left_out: usize,
+    /// Rows at which the track alone stepped by a half cycle or more with
+    /// no flag set ([`half_cycle_slips`]'s test).
+    pub half_cycle_slips: usize,
+    /// Whether the whole track was left out for slipping again and again
+    /// (more than [`SLIPPING_TRACK_SLIPS`] slips and
+    /// [`SLIPPING_TRACK_SHARE`] of its rows): a false lock or a carrier too
+    /// weak to hold.
+    pub left_out: bool,
 }
+
+/// A track with more slips than this (and more than
+/// [`SLIPPING_TRACK_SHARE`] of its rows) is left out whole.
+pub const SLIPPING_TRACK_SLIPS: usize = 3;
+/// See [`SLIPPING_TRACK_SLIPS`].
+pub const SLIPPING_TRACK_SHARE: f64 = 0.01;
 
 /// The rows of a log and how they were made.
 #[derive(Debug, Clone, PartialEq)]
@@ -189,11 +203,29 @@ pub fn observation_rows(
             }
         }
     }
+    let mut slips = vec![0usize; values.len()];
+    let mut slipping = vec![false; values.len()];
+    if record == ObservationRecord::CarrierPhase {
+        let scales: Vec<f64> = log.tracks.iter().map(|t| t.carrier.scale_to_l1()).collect();
+        for (j, flagged) in half_cycle_slips(&values, &scales, &epochs).into_iter().enumerate() {
+            slips[j] = flagged.len();
+            for k in flagged {
+                values[j][k] = None;
+            }
+            let rows = values[j].iter().filter(|v| v.is_some()).count();
+            // A track that slips again and again (a false lock, a weak carrier) is no single slip.
+            slipping[j] = slips[j] > SLIPPING_TRACK_SLIPS && slips[j] as f64 > SLIPPING_TRACK_SHARE * rows as f64;
+            if slipping[j] {
+                values[j].iter_mut().for_each(|v| *v = None);
+            }
+        }
+    }
     let tracks = log
         .tracks
         .iter()
         .zip(&values)
-        .map(|(t, v)| {
+        .enumerate()
+        .map(|(j, (t, v))| {
             let rows = v.iter().filter(|v| v.is_some()).count();
             ObservationTrack {
                 label: t.label(),
@@ -202,6 +234,8 @@ pub fn observation_rows(
                 epochs: t.len(),
                 rows,
                 rows_left_out: t.len().saturating_sub(rows),
+                half_cycle_slips: slips[j],
+                left_out: slipping[j],
             }
         })
         .collect::<Vec<_>>();
@@ -273,6 +307,40 @@ fn phase_rows(track: &SatelliteSeries, epochs: &[f64]) -> Vec<Option<f64>> {
             })
         })
         .collect()
+}
+
+/// Each track's rows at which its phase alone stepped by a half cycle or
+/// more with no flag set: a slip of the carrier phase is a one-row spike of
+/// 1/(2Δt) Hz on the track's own carrier in its differenced phase. The
+/// test takes each row less the mean of its two neighbours (the
+/// satellite's Doppler is smooth), scaled to L1, less the median of that
+/// over the tracks present (the oscillator's common mode), and flags it
+/// beyond 0.7 of the slip's spike (a spike's neighbours show half of it).
+/// Needs three tracks at the epoch.
+fn half_cycle_slips(values: &[Vec<Option<f64>>], scales: &[f64], epochs: &[f64]) -> Vec<Vec<usize>> {
+    let n = epochs.len();
+    let mut flagged = vec![Vec::new(); values.len()];
+    let mut d = vec![None; values.len()];
+    for k in 1..n.saturating_sub(1) {
+        for (j, v) in values.iter().enumerate() {
+            d[j] = match (v[k - 1], v[k], v[k + 1]) {
+                (Some(a), Some(b), Some(c)) => Some((b - 0.5 * (a + c)) * scales[j]),
+                _ => None,
+            };
+        }
+        let mut present: Vec<f64> = d.iter().flatten().copied().collect();
+        if present.len() < 3 {
+            continue;
+        }
+        let common = gsens_core::stats::median_in_place(&mut present);
+        let step_s = 0.5 * (epochs[k + 1] - epochs[k - 1]);
+        for (j, dj) in d.iter().enumerate() {
+            if dj.is_some_and(|dj| (dj - common).abs() > 0.7 * 0.5 / step_s * scales[j]) {
+                flagged[j].push(k);
+            }
+        }
+    }
+    flagged
 }
 
 /// The epochs at which the tracks' common mode steps by more than
@@ -366,6 +434,27 @@ mod tests {
         assert_eq!(none(1), [0, 5, 6]);
         // Every row that is kept is the clean frequency.
         assert!(r.rows.tracks[0].input_phase_rad.iter().flatten().all(|f| (f - 1000.0).abs() < 10.0));
+    }
+
+    /// A half-cycle slip no flag marks is found against the other tracks
+    /// and its row left out; a track that slips every few seconds (a false
+    /// lock) is left out whole.
+    #[test]
+    fn unflagged_slips_and_slipping_tracks_are_found() {
+        let l = log(4, 300, |j, k, o| {
+            if j == 1 && k >= 110 {
+                o.carrier_phase_cycles += 0.5;
+            }
+            if j == 3 {
+                o.carrier_phase_cycles += 0.5 * (k / 20) as f64;
+            }
+        });
+        let r = observation_rows(&l, ObservationRecord::CarrierPhase).unwrap();
+        let slips: Vec<(usize, bool)> = r.tracks.iter().map(|t| (t.half_cycle_slips, t.left_out)).collect();
+        assert_eq!(slips, [(0, false), (1, false), (0, false), (14, true)]);
+        assert!(r.rows.tracks[1].input_phase_rad[110].is_none() && r.rows.tracks[1].input_phase_rad[111].is_some());
+        assert!(r.rows.tracks[3].input_phase_rad.iter().all(Option::is_none));
+        assert_eq!(r.tracks[0].rows, 299);
     }
 
     /// A millisecond jump of the receiver clock moves every phase by

@@ -90,8 +90,13 @@ pub fn render_observation_summary(outcome: &ObservationOutcome) -> String {
         }
     );
     for t in &outcome.rows.tracks {
+        let slips = match (t.half_cycle_slips, t.left_out) {
+            (n, true) => format!("  left out: {n} unflagged half-cycle slips (false lock or a weak carrier)"),
+            (0, false) => String::new(),
+            (n, false) => format!("  {n} unflagged half-cycle slip(s)"),
+        };
         out += &format!(
-            "  {:<24} C/N0 {:5.1} dB-Hz  {:6} epochs  {:6} rows  {:5} left out\n",
+            "  {:<24} C/N0 {:5.1} dB-Hz  {:6} epochs  {:6} rows  {:5} left out{slips}\n",
             t.label, t.mean_cn0_dbhz, t.epochs, t.rows, t.rows_left_out
         );
     }
