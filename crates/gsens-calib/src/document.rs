@@ -223,6 +223,10 @@ pub struct ResultDocument {
     /// is made from another measurement: the cross-check's other side.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tracking_error: Option<CrossEstimate>,
+    /// The receiver's loop identified from its NCO frequency, for logs of
+    /// carrier phase and Doppler (RINEX, UBX).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identified_loop: Option<crate::LoopIdentification>,
 }
 
 /// Another measurement's estimate beside the document's: Γ̂ and its total
@@ -433,6 +437,7 @@ impl ResultDocument {
             loop_free: None,
             nco_frequency: None,
             tracking_error: None,
+            identified_loop: None,
         };
         doc.judge();
         doc

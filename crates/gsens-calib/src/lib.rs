@@ -64,6 +64,8 @@ mod loop_free;
 mod measurement;
 mod nco_frequency;
 mod nco_loop;
+mod observation_pipeline;
+mod observation_rows;
 pub mod option_values;
 mod options;
 mod pipeline;
@@ -98,7 +100,12 @@ pub use measurement::{Measurement, MeasurementChoice};
 pub use nco_frequency::estimate_nco_frequency;
 pub use nco_loop::{
     IDENTIFY_BN_RANGE_HZ, IDENTIFY_INTERVALS_S, IdentifiedLoop, IdentifiedNcoEstimate, LoopResolution, NcoRecord,
-    ShapeFit, estimate_nco_frequency_identified, estimate_nco_frequency_identified_from, identification_shapes,
+    ShapeFit, estimate_nco_frequency_identified, estimate_nco_frequency_identified_from, estimate_nco_frequency_unity,
+    identification_shapes,
+};
+pub use observation_pipeline::{LoopIdentification, ObservationOutcome, calibrate_observations};
+pub use observation_rows::{
+    CLOCK_STEP_HZ, ObservationRecord, ObservationRows, ObservationRowsError, ObservationTrack, observation_rows,
 };
 pub use options::{
     CalibrationOptions, EstimatorOptions, LoopOptions, MethodName, SelectionOptions, SystematicOptions,

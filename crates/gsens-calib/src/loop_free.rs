@@ -541,6 +541,66 @@ pub(crate) fn rows_score(
     Ok(ne.solve().residual_variance_rad2)
 }
 
+/// The common mode of frequency rows \[Hz\] integrated to carrier phase
+/// \[rad\], 2π·Σ f·Δt over each segment with its linear trend removed:
+/// RMS before compensation, after it (the rows less x·`gamma`) and of the
+/// g-induced part x·`gamma` alone, on the rows [`fit_rows`] fits at the IMU
+/// offset `tau`. What compensating with Γ̂ removes from the receiver's
+/// carrier phase.
+pub(crate) fn integrated_phase_rms_rad(
+    phases: &InputPhases,
+    regressor: &impl RowRegressor,
+    settings: &LoopFreeSettings,
+    tau: f64,
+    gamma: &[f64; 3],
+) -> Result<[f64; 3], LoopFreeError> {
+    let (rows, _, _) = assemble_rows(phases, regressor, settings, f64::INFINITY)?;
+    let x = rows.regressors(regressor, tau);
+    let step_rad = TAU * median_step(&phases.epoch_t_s);
+    let mut sum_sq = [0.0; 3];
+    let mut n = 0usize;
+    for r in rows.ranges() {
+        let mut acc = [0.0; 3];
+        let integrated: Vec<[f64; 3]> = r
+            .map(|k| {
+                let g = x[k][0] * gamma[0] + x[k][1] * gamma[1] + x[k][2] * gamma[2];
+                let f = [rows.phase[k], rows.phase[k] - g, g];
+                for i in 0..3 {
+                    acc[i] += step_rad * f[i];
+                }
+                acc
+            })
+            .collect();
+        for (i, s) in sum_sq.iter_mut().enumerate() {
+            let y: Vec<f64> = integrated.iter().map(|v| v[i]).collect();
+            *s += detrended_sum_of_squares(&y);
+        }
+        n += integrated.len();
+    }
+    if n == 0 {
+        return Err(LoopFreeError::TooFewEpochs { epochs: 0, segment_s: settings.segment_s });
+    }
+    Ok(sum_sq.map(|s| (s / n as f64).sqrt()))
+}
+
+/// Σ (yₖ − a − b·k)² for the least-squares line a + b·k.
+fn detrended_sum_of_squares(y: &[f64]) -> f64 {
+    let n = y.len() as f64;
+    if y.len() < 3 {
+        return 0.0;
+    }
+    let k_mean = (n - 1.0) / 2.0;
+    let y_mean = y.iter().sum::<f64>() / n;
+    let (mut sky, mut skk) = (0.0, 0.0);
+    for (k, v) in y.iter().enumerate() {
+        let dk = k as f64 - k_mean;
+        sky += dk * (v - y_mean);
+        skk += dk * dk;
+    }
+    let b = sky / skk;
+    y.iter().enumerate().map(|(k, v)| (v - y_mean - b * (k as f64 - k_mean)).powi(2)).sum()
+}
+
 /// A fit of Γ with the regressor's loop scaled by s = e^θ as one more
 /// parameter (and the IMU offset τ where it is searched).
 pub(crate) struct ScaledFit {

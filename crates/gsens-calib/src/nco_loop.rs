@@ -20,9 +20,10 @@
 //! bandwidth is then reported as a bound, and the spread of Γ̂ over the grid
 //! points within Δ(−2 ln L) ≤ 1 of the best is added to its variance.
 
+use crate::loop_free::RowRegressor;
 use crate::loop_free::{
     InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, check_settings, fit_rows, fit_rows_scaled,
-    median_step, rows_noise, rows_score,
+    integrated_phase_rms_rad, median_step, rows_noise, rows_score,
 };
 use crate::nco_frequency::{ModelRegressor, frequency_on_epochs, mean_frequency_on_epochs};
 use gsens_core::{LoopModel, LoopSpec, RegressorModel, RowQuantity};
@@ -189,21 +190,10 @@ pub fn estimate_nco_frequency_identified_from(
     check_settings(settings)?;
     let epochs = rows.epoch_t_s.as_slice();
     let log_interval_s = median_step(epochs);
-    // Every candidate's model starts this long before the first epoch, so
-    // that all are fitted on the same epochs: the narrowest's settling
-    // (2nd order: 5τ = 5/(ζωn) ≈ 3.75/Bn).
-    let lead_s = settings.warmup_s.max(4.0 / IDENTIFY_BN_RANGE_HZ[0]);
+    let lead_s = identification_lead_s(settings);
     let (bn_lo, bn_hi) = (IDENTIFY_BN_RANGE_HZ[0], IDENTIFY_BN_RANGE_HZ[1]);
     let grid: Vec<f64> = (0..).map(|k| bn_lo * 1.25f64.powi(k)).take_while(|bn| *bn <= bn_hi * 1.0001).collect();
-    let model_at = |shape: &LoopModel, ln_bn: f64| -> Result<ModelRegressor<'_>, LoopFreeError> {
-        let loop_interval_s = shape.interval_s().unwrap_or(log_interval_s);
-        let bn0 = shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
-        let scaled = shape.with_bn_scaled(ln_bn.exp() / bn0);
-        let runnable = scaled.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
-        let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, quantity)
-            .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
-        Ok(ModelRegressor::new(epochs, log_interval_s, imu, model, lead_s))
-    };
+    let model_at = |shape: &LoopModel, ln_bn: f64| model_regressor(epochs, imu, shape, ln_bn, quantity, lead_s);
     let mut candidates = Vec::new();
     let mut shape_fits = Vec::new();
     for shape in shapes {
@@ -286,6 +276,92 @@ pub fn estimate_nco_frequency_identified_from(
             resolution: c.resolution,
             shapes: shape_fits,
         },
+    })
+}
+
+/// How long before the first epoch every candidate's model starts \[s\], so
+/// that all are fitted on the same epochs: the narrowest's settling (2nd
+/// order: 5τ = 5/(ζωn) ≈ 3.75/Bn).
+fn identification_lead_s(settings: &LoopFreeSettings) -> f64 {
+    settings.warmup_s.max(4.0 / IDENTIFY_BN_RANGE_HZ[0])
+}
+
+/// The regressor of `quantity` on `epochs` through `shape` scaled to the
+/// noise bandwidth e^`ln_bn`, its model started `lead_s` before each epoch
+/// it is read at.
+fn model_regressor<'a>(
+    epochs: &[f64],
+    imu: &'a ImuSeries,
+    shape: &LoopModel,
+    ln_bn: f64,
+    quantity: RowQuantity,
+    lead_s: f64,
+) -> Result<ModelRegressor<'a>, LoopFreeError> {
+    let log_interval_s = median_step(epochs);
+    let loop_interval_s = shape.interval_s().unwrap_or(log_interval_s);
+    let bn0 = shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+    let scaled = shape.with_bn_scaled(ln_bn.exp() / bn0);
+    let runnable = scaled.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
+    let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, quantity)
+        .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
+    Ok(ModelRegressor::new(epochs, log_interval_s, imu, model, lead_s))
+}
+
+/// The estimate from frequency rows with H = 1 in the shaking's band: the
+/// fit under the widest loop of the identification's range
+/// ([`IDENTIFY_BN_RANGE_HZ`]'s high end, 2nd order, at the shortest update
+/// interval of [`identification_shapes`]), whose |H| departs from 1 by
+/// under 0.1 % up to a few hertz. What a receiver's log gives when its
+/// carrier phase is corrected by the discriminator, or its loop is wide.
+pub fn estimate_nco_frequency_unity(
+    rows: &InputPhases,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    quantity: RowQuantity,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
+    check_settings(settings)?;
+    let epochs = rows.epoch_t_s.as_slice();
+    let shapes = identification_shapes(median_step(epochs));
+    let Some(shape) = shapes.first() else {
+        return Err(LoopFreeError::Loop { why: "no update interval divides the log interval".into() });
+    };
+    let regressor =
+        model_regressor(epochs, imu, shape, IDENTIFY_BN_RANGE_HZ[1].ln(), quantity, identification_lead_s(settings))?;
+    fit_rows(rows, &regressor, settings, f64::INFINITY)
+}
+
+/// What compensating with `estimate`'s Γ̂ does, through the `identified`
+/// loop: the common mode of the rows integrated to carrier phase before and
+/// after ([`crate::loop_free`]'s integrated RMS), and the largest tracking
+/// error |φ_aᵀΓ̂| the loop predicts on the rows' epochs, φ_a the regressor
+/// of the discriminator output ([`RowQuantity::PhaseError`]).
+pub(crate) fn identified_figures(
+    rows: &InputPhases,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    identified: &LoopModel,
+    estimate: &LoopFreeEstimate,
+    quantity: RowQuantity,
+) -> Result<crate::estimate::ResidualFigures, LoopFreeError> {
+    let epochs = rows.epoch_t_s.as_slice();
+    let (tau, gamma) = (estimate.imu_time_offset_s, estimate.gamma_hz_per_mps2);
+    let ln_bn = identified.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ).ln();
+    let lead_s = identification_lead_s(settings);
+    let rows_regressor = model_regressor(epochs, imu, identified, ln_bn, quantity, lead_s)?;
+    let [before, after, g_induced] = integrated_phase_rms_rad(rows, &rows_regressor, settings, tau, &gamma)?;
+    let tracking_error = RowQuantity::PhaseError(gsens_core::LoggedPhase::Last);
+    let regressor = model_regressor(epochs, imu, identified, ln_bn, tracking_error, lead_s)?;
+    let at: Vec<usize> = (0..epochs.len()).filter(|&k| regressor.covers(k, tau)).collect();
+    let peak = regressor
+        .values(&at, tau)
+        .iter()
+        .map(|x| (x[0] * gamma[0] + x[1] * gamma[1] + x[2] * gamma[2]).abs())
+        .fold(0.0, f64::max);
+    Ok(crate::estimate::ResidualFigures {
+        rms_before_rad: before,
+        rms_after_rad: after,
+        rms_g_induced_rad: g_induced,
+        peak_phase_err_rad: peak,
     })
 }
 

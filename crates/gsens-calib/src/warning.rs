@@ -63,11 +63,19 @@ pub enum WarningCode {
     ImuStuck,
     /// Runs of identical IMU samples at the axis's extreme (clipped).
     ImuClipped,
+    /// The receiver's loop identified from its NCO frequency lies at the
+    /// narrow end of the range searched: H is extrapolated.
+    LoopAtNarrowEnd,
+    /// Rows of a carrier phase log were left out at receiver clock jumps.
+    ClockJumps,
+    /// A receiver's log had records its reader skipped (corrupt, cut off,
+    /// event epochs).
+    RecordsSkipped,
 }
 
 impl WarningCode {
     /// Every code, in the order of the enum.
-    pub const ALL: [WarningCode; 21] = [
+    pub const ALL: [WarningCode; 24] = [
         WarningCode::ImuUnits,
         WarningCode::TimeUnits,
         WarningCode::PhaseUnits,
@@ -89,6 +97,9 @@ impl WarningCode {
         WarningCode::ImuSpikes,
         WarningCode::ImuStuck,
         WarningCode::ImuClipped,
+        WarningCode::LoopAtNarrowEnd,
+        WarningCode::ClockJumps,
+        WarningCode::RecordsSkipped,
     ];
 
     /// The code as the document writes it.
@@ -115,17 +126,25 @@ impl WarningCode {
             WarningCode::ImuSpikes => "imu_spikes",
             WarningCode::ImuStuck => "imu_stuck",
             WarningCode::ImuClipped => "imu_clipped",
+            WarningCode::LoopAtNarrowEnd => "loop_at_narrow_end",
+            WarningCode::ClockJumps => "clock_jumps",
+            WarningCode::RecordsSkipped => "records_skipped",
         }
     }
 
     /// Whether a warning of this code makes the estimate untrustworthy: every
     /// code but those reporting something gsens already corrected for
-    /// (spikes replaced, stuck or clipped epochs left out) or could not
-    /// check.
+    /// (spikes replaced, stuck or clipped epochs left out, rows at clock
+    /// jumps and records a reader skipped left out) or could not check.
     pub const fn affects_trust(self) -> bool {
         !matches!(
             self,
-            WarningCode::ImuSpikes | WarningCode::ImuStuck | WarningCode::ImuClipped | WarningCode::ResponseUnchecked
+            WarningCode::ImuSpikes
+                | WarningCode::ImuStuck
+                | WarningCode::ImuClipped
+                | WarningCode::ResponseUnchecked
+                | WarningCode::ClockJumps
+                | WarningCode::RecordsSkipped
         )
     }
 
@@ -166,7 +185,7 @@ impl WarningCode {
             DiscriminatorRange if units_flagged => 1,
             LogRate | ImuRate | Highpass | TimeOffsetAtLimit => 2,
             ResponseUnchecked | LoopNotStated | LoopRejected | LoopResponse | LoopOffsetUnresolved
-            | LoopFreeDisagrees => 3,
+            | LoopFreeDisagrees | LoopAtNarrowEnd => 3,
             c if !c.affects_trust() => 5,
             _ => 4,
         }

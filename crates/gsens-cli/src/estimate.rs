@@ -41,6 +41,17 @@ pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracki
 pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> {
     let settings = args.calibration.settings(given)?;
     crate::check_files(&[("--json", args.json.as_deref()), ("--epochs-out", args.epochs_out.as_deref())], None)?;
+    if let Some(observations) = args.inputs.observations() {
+        if args.epochs_out.is_some() {
+            return Err(anyhow!("--epochs-out needs a tracking error, which --rinex and --ubx logs do not hold"));
+        }
+        let outcome = observed(|| observations?.calibrate(&settings).map_err(anyhow::Error::from))?;
+        crate::out(&gsens_inputs::render_observation_summary(&outcome))?;
+        let doc = outcome.document(None);
+        crate::out(&gsens_report::render_text(&doc))?;
+        crate::write_json(args.json.as_deref(), &doc, "\n")?;
+        return Ok(crate::Status::of(&doc));
+    }
     let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
     let doc = outcome.document(None);
     crate::out(&gsens_report::render_text(&doc))?;

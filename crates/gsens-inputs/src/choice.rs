@@ -3,7 +3,7 @@
 //! receiver's files are converted — and the one rule that turns them into
 //! a route ([`Inputs`]).
 
-use crate::{Inputs, InputsError, Log};
+use crate::{Inputs, InputsError, Log, ObservationFile, ObservationInputs};
 use gsens_gnss_sdr::{ImportOverrides, ImportSettings};
 use std::path::{Path, PathBuf};
 
@@ -27,9 +27,41 @@ pub struct InputChoice {
     pub pocketsdr: Option<PathBuf>,
     /// How the PocketSDR log is converted.
     pub pocketsdr_options: gsens_pocketsdr::ImportOptions,
+    /// A RINEX observation file.
+    pub rinex: Option<PathBuf>,
+    /// A u-blox UBX log (RXM-RAWX; its ESF accelerometer where `imu` is empty).
+    pub ubx: Option<PathBuf>,
+    /// How the UBX log is read.
+    pub ubx_settings: gsens_ublox::UbxSettings,
+    /// Which observable of a RINEX or UBX log the estimate is made from.
+    pub observation_record: gsens_calib::ObservationRecord,
 }
 
 impl InputChoice {
+    /// The route of a carrier phase and Doppler log, where a RINEX file or
+    /// a UBX log is named (`None` otherwise): the IMU log named, or with an
+    /// empty `imu` the UBX log's own accelerometer. Both named, or a RINEX
+    /// file without an IMU log, is refused, naming the options by `name`.
+    pub fn observations(&self, name: impl Fn(&str) -> String) -> Option<Result<ObservationInputs, InputsError>> {
+        let imu = (!self.imu.as_os_str().is_empty()).then(|| self.imu.clone());
+        let log = match (&self.rinex, &self.ubx) {
+            (None, None) => return None,
+            (Some(_), Some(_)) => {
+                return Some(Err(InputsError::Choice(format!(
+                    "{} and {} exclude each other",
+                    name("rinex"),
+                    name("ubx")
+                ))));
+            }
+            (Some(_), None) if imu.is_none() => {
+                return Some(Err(InputsError::Choice(format!("{} needs {}", name("rinex"), name("imu")))));
+            }
+            (Some(path), None) => ObservationFile::Rinex(path.clone()),
+            (None, Some(path)) => ObservationFile::Ubx(path.clone(), self.ubx_settings),
+        };
+        Some(Ok(ObservationInputs { log, imu, record: self.observation_record }))
+    }
+
     /// The route the inputs name, its conversion settings checked: a
     /// PocketSDR log; else GNSS-SDR dumps; else a tracking log, as rows of
     /// the GNSS-SDR run of `gnss_sdr_conf` when one is named. A PocketSDR

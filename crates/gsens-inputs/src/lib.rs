@@ -22,9 +22,11 @@
 //! so the routes cannot all live there).
 
 mod choice;
+mod observations;
 mod truth;
 
 pub use choice::InputChoice;
+pub use observations::{ObservationFile, ObservationInputs, render_observation_summary};
 pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop, truth_loop_note};
 
 use gsens_calib::{Outcome, PipelineError, PipelineSettings};
@@ -146,6 +148,10 @@ pub enum InputsError {
     /// The PocketSDR log or its conversion failed.
     #[error(transparent)]
     PocketSdr(#[from] PocketSdrError),
+    /// A carrier phase and Doppler log (RINEX, UBX) could not be read: the
+    /// reader's message, naming the file.
+    #[error("{0}")]
+    Observations(String),
     /// The inputs named are incomplete or name a conversion without its
     /// log ([`InputChoice::inputs`]; the message names the options).
     #[error("{0}")]

@@ -1,7 +1,7 @@
 //! The calibration as text: what the CLI prints, rendered from the result document.
 
 use crate::AXES;
-use gsens_calib::{Measurement, ResultDocument};
+use gsens_calib::{LoopResolution, Measurement, ResultDocument};
 use gsens_core::LoggedPhase;
 use gsens_core::units::Decimal;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
@@ -54,16 +54,20 @@ fn log_and_loop(s: &mut String, doc: &ResultDocument) {
         c.epochs_used,
         c.settings.warmup_s
     );
-    let _ = writeln!(
-        s,
-        "loop model: {} ({} per log epoch, logged: {})",
-        c.loop_used,
-        c.model_substeps,
-        match c.settings.logged_phase {
-            LoggedPhase::Last => "the last discriminator output",
-            LoggedPhase::Mean => "the mean of the discriminator outputs",
-        }
-    );
+    if let Some(id) = &doc.identified_loop {
+        identified_loop(s, id);
+    } else {
+        let _ = writeln!(
+            s,
+            "loop model: {} ({} per log epoch, logged: {})",
+            c.loop_used,
+            c.model_substeps,
+            match c.settings.logged_phase {
+                LoggedPhase::Last => "the last discriminator output",
+                LoggedPhase::Mean => "the mean of the discriminator outputs",
+            }
+        );
+    }
     if let (Some(p), Some([lo, hi])) = (doc.loop_summary.peak_hz, doc.loop_summary.half_power_band_hz) {
         let _ = writeln!(
             s,
@@ -73,9 +77,59 @@ fn log_and_loop(s: &mut String, doc: &ResultDocument) {
     }
 }
 
+/// The receiver's loop as the session identified it: order, update
+/// interval and bandwidth with its σ (or the bound), how far H is from 1 at
+/// the shaking, and the estimate H = 1 would give.
+fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentification) {
+    let l = &id.identified;
+    let order =
+        if l.order_resolved { format!("order {}", l.order) } else { format!("order {} (not resolved)", l.order) };
+    let bn = match l.resolution {
+        LoopResolution::Resolved => format!("Bn {:.3} Hz ± {:.1} %", l.bn_hz, 100.0 * l.sigma_ln_bn),
+        LoopResolution::Wide => format!("Bn ≥ {:.1} Hz (wide: H ≈ 1 in the shaking's band)", l.bn_hz),
+        _ => format!("Bn ≤ {:.2} Hz (at the narrow end of the search)", l.bn_hz),
+    };
+    let _ = writeln!(
+        s,
+        "receiver loop identified from the {}: {order}, updated every {} s, {bn}",
+        match id.record {
+            gsens_calib::ObservationRecord::Doppler => "Doppler",
+            _ => "carrier phase differenced",
+        },
+        l.loop_interval_s
+    );
+    if let Some(e) = id.h_unity_error {
+        let unity = id.h_unity_estimate.as_ref().map(|u| {
+            let g: Vec<String> =
+                u.gamma_hz_per_mps2.iter().map(|g| g.map_or("—".into(), |g| format!("{g:+.5}"))).collect();
+            format!("; with H = 1 Γ̂ would be [{}]", g.join(", "))
+        });
+        let judged = if e > 0.01 { "H = 1 does not hold: the loop is narrow for this shaking" } else { "H ≈ 1" };
+        let _ = writeln!(
+            s,
+            "  |1 − |H|| up to {:.1} % at the shaking frequencies: {judged}{}",
+            100.0 * e,
+            unity.unwrap_or_default()
+        );
+    }
+}
+
+/// The tracks of a carrier phase and Doppler log: how many gave rows.
+fn observation_tracks(s: &mut String, doc: &ResultDocument) {
+    let Some(source) = &doc.source else { return };
+    let rows = |t: &serde_json::Value| t.get("rows").and_then(serde_json::Value::as_u64).unwrap_or(0);
+    let used = source.tracks.iter().filter(|t| rows(t) > 0).count();
+    let _ =
+        writeln!(s, "tracks: {used} of {} with rows ({}), all averaged on L1", source.tracks.len(), source.receiver);
+}
+
 /// The channels: how many used and how, the signals when other than GPS
 /// L1 C/A, and every track's line.
 fn channels(s: &mut String, doc: &ResultDocument) {
+    if doc.identified_loop.is_some() {
+        observation_tracks(s, doc);
+        return;
+    }
     let used: Vec<_> = doc.channels.iter().filter(|ch| ch.used).collect();
     let _ = writeln!(
         s,
@@ -391,9 +445,10 @@ fn shaking(s: &mut String, doc: &ResultDocument) {
 /// matrix's condition number and the Cramér–Rao bound.
 fn compensation(s: &mut String, doc: &ResultDocument) {
     let c = &doc.calibration;
+    let what = if doc.identified_loop.is_some() { "carrier phase (common mode)" } else { "phase error" };
     let _ = writeln!(
         s,
-        "\nphase error RMS: {:.4} rad before compensation, {:.4} rad after (g-induced part {:.4} rad)",
+        "\n{what} RMS: {:.4} rad before compensation, {:.4} rad after (g-induced part {:.4} rad)",
         c.rms_before_rad, c.rms_after_rad, c.rms_g_induced_rad
     );
     let _ = writeln!(

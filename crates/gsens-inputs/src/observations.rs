@@ -1,0 +1,99 @@
+//! The route of a receiver that logs carrier phase and Doppler but no
+//! tracking error: a RINEX observation file with an IMU log, or a UBX log
+//! (RXM-RAWX) with the module's own accelerometer (ESF-RAW / ESF-MEAS) or
+//! an IMU log, calibrated with the receiver's loop identified
+//! ([`gsens_calib::calibrate_observations`]).
+
+use crate::InputsError;
+use gsens_calib::{ObservationOutcome, ObservationRecord, PipelineSettings};
+use gsens_io::ImuSeries;
+use std::path::PathBuf;
+
+/// The receiver's log of carrier phase and Doppler.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ObservationFile {
+    /// A RINEX observation file (RINEX 3 or 2.11, Hatanaka-compressed or not).
+    Rinex(PathBuf),
+    /// A u-blox UBX log, read under its settings (how the sensor time tags
+    /// map to GPS time).
+    Ubx(PathBuf, gsens_ublox::UbxSettings),
+}
+
+/// The inputs of a calibration from a carrier phase and Doppler log.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct ObservationInputs {
+    /// The log.
+    pub log: ObservationFile,
+    /// An IMU log on the log's time (`t_s`: GPS seconds of the week of the
+    /// log's first epoch); `None`: the UBX log's own accelerometer.
+    pub imu: Option<PathBuf>,
+    /// Which observable the rows are made of.
+    pub record: ObservationRecord,
+}
+
+impl ObservationInputs {
+    /// Reads the log and the IMU and calibrates under `settings`, the inputs
+    /// list filled in.
+    pub fn calibrate(&self, settings: &PipelineSettings) -> Result<ObservationOutcome, InputsError> {
+        let read_imu = |path: &PathBuf| gsens_io::read_imu_file(path);
+        let (log, imu, role, path): (gsens_io::ObservationLog, ImuSeries, &str, &PathBuf) = match &self.log {
+            ObservationFile::Rinex(path) => {
+                let Some(imu_path) = &self.imu else {
+                    return Err(InputsError::Choice(format!(
+                        "{}: a RINEX file holds no IMU data: name the IMU log",
+                        path.display()
+                    )));
+                };
+                let (log, imu) = rayon::join(|| gsens_rinex::read_rinex_file(path), || read_imu(imu_path));
+                (log.map_err(|e| InputsError::Observations(e.to_string()))?, imu?, "rinex", path)
+            }
+            ObservationFile::Ubx(path, ubx_settings) => {
+                let ubx = gsens_ublox::read_ubx_file(path, ubx_settings)
+                    .map_err(|e| InputsError::Observations(e.to_string()))?;
+                let imu = match &self.imu {
+                    Some(imu_path) => read_imu(imu_path)?,
+                    None if ubx.imu.is_empty() => {
+                        return Err(InputsError::Choice(format!(
+                            "{}: the UBX log holds no accelerometer sample (ESF-RAW or ESF-MEAS): name an IMU log",
+                            path.display()
+                        )));
+                    }
+                    None => ubx.imu,
+                };
+                (ubx.observations, imu, "ubx", path)
+            }
+        };
+        let mut outcome = gsens_calib::calibrate_observations(&log, &imu, settings, self.record)?;
+        outcome.inputs.push((role.to_string(), path.display().to_string()));
+        outcome.inputs.push(match &self.imu {
+            Some(p) => ("imu".to_string(), p.display().to_string()),
+            None => ("imu".to_string(), format!("{} (ESF)", path.display())),
+        });
+        Ok(outcome)
+    }
+}
+
+/// What became of each track of the log and which loop was identified, as
+/// text.
+pub fn render_observation_summary(outcome: &ObservationOutcome) -> String {
+    let mut out = format!(
+        "{}: {} track(s), {} epoch(s) at {:.3} s; rows from the {}\n",
+        outcome.format,
+        outcome.rows.tracks.len(),
+        outcome.rows.rows.epoch_t_s.len(),
+        outcome.calibration.log_interval_s,
+        match outcome.rows.record {
+            ObservationRecord::Doppler => "Doppler",
+            _ => "carrier phase, differenced",
+        }
+    );
+    for t in &outcome.rows.tracks {
+        out += &format!(
+            "  {:<24} C/N0 {:5.1} dB-Hz  {:6} epochs  {:6} rows  {:5} left out\n",
+            t.label, t.mean_cn0_dbhz, t.epochs, t.rows, t.rows_left_out
+        );
+    }
+    out
+}
