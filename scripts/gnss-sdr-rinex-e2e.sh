@@ -23,7 +23,8 @@
 #    offset of each; fails when one of these does not hold;
 # 6. with FIXTURE_DIR set, writes the trimmed fixture there: gnss-sdr.24O, the RINEX
 #    file's header and its epochs from the first shake's start − 1 s to the last rest's
-#    end, imu.csv trimmed to the same span, truth.json
+#    end, imu.csv trimmed to the same span with t_s on GPS time of week (the RINEX file's
+#    time, as gsens estimate --rinex takes it), truth.json
 #    (crates/gsens-rinex/tests/fixtures/gnss-sdr/README.md).
 #
 # Usage: scripts/gnss-sdr-rinex-e2e.sh [OUT_DIR]   (default target/gnss-sdr-rinex-e2e; needs ~1 GB there)
@@ -231,8 +232,13 @@ if fixture:
             kept.append(l)
     name = "gnss-sdr.24O"
     open(f"{fixture}/{name}", "w").write("".join(kept))
+    # The IMU log on the RINEX file's time: t_s the GPS time of week (the first sample's + t_s).
     imu = open(f"{out}/imu.csv").read().splitlines(keepends=True)
-    sel = [imu[0]] + [l for l in imu[1:] if t0 - tow0 <= float(l.split(",")[0]) <= t1 - tow0]
+    sel = [imu[0]]
+    for l in imu[1:]:
+        t, rest = l.split(",", 1)
+        if t0 - tow0 <= float(t) <= t1 - tow0:
+            sel.append(f"{round(tow0 + float(t), 9)!r},{rest}")
     open(f"{fixture}/imu.csv", "w").write("".join(sel))
     shutil.copy(f"{out}/truth.json", f"{fixture}/truth.json")
     print(f"fixture: {fixture}/{name} ({sum(map(len, kept)) / 1024:.0f} KB), imu.csv ({len(sel) - 1} rows), truth.json")

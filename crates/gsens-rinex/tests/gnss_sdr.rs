@@ -48,10 +48,10 @@ fn header_epochs_and_satellites_are_the_runs() {
     let first = |sv: &str| log.tracks.iter().find(|t| t.sv == sv).unwrap().t_s[0] - TOW0_S;
     assert!(SATELLITES.iter().filter(|s| **s != "G01").all(|s| (first(s) - 59.0).abs() < 1e-6));
     assert!((first("G01") - 83.9).abs() < 1e-6);
-    // The IMU log trimmed to the same span, at the simulator's 40 Hz.
+    // The IMU log trimmed to the same span on the same time, at the simulator's 40 Hz.
     let imu = std::fs::read_to_string(format!("{DIR}/imu.csv")).unwrap();
     let t_imu: Vec<f64> = imu.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
-    assert_eq!((t_imu[0], *t_imu.last().unwrap(), t_imu.len()), (59.0, 120.0, 2441));
+    assert_eq!((t_imu[0], *t_imu.last().unwrap(), t_imu.len()), (TOW0_S + 59.0, TOW0_S + 120.0, 2441));
 }
 
 /// Per interval k of one track: r = −(L[k+1] − L[k])/Δt − (D[k] + D[k+1])/2 \[Hz\] and
