@@ -34,7 +34,8 @@
 # FIXTURE_DIR (write the trimmed fixture there).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-OUT=${1:-target/gnss-sdr-rinex-e2e}
+. scripts/lib/common.sh
+OUT=$(made_dir "${1:-target/gnss-sdr-rinex-e2e}")
 FS_HZ=${FS_HZ:-4000000}
 SEED=${SEED:-7}
 GAMMA=${GAMMA:-[0.09, 0.08, -0.08]}
@@ -42,14 +43,7 @@ RINEX_RATE_MS=${RINEX_RATE_MS:-100}
 FIRST_REST_S=${FIRST_REST_S:-60}
 SHAKE_S=${SHAKE_S:-15}
 REST_S=${REST_S:-5}
-mkdir -p "$OUT"
-OUT=$(cd "$OUT" && pwd)
-. scripts/lib/common.sh
-
-ensure_gnss_sdr
-
-gsens_binary
-. scripts/lib/scenario.sh
+gnss_sdr_prelude
 
 {
     paper_session 2 "$GAMMA"
