@@ -482,6 +482,25 @@ mod tests {
     }
 
     #[test]
+    fn an_orbit_beyond_the_fields_is_refused_by_name() {
+        let c = crate::satellites::Constellation::builtin();
+        let sat = &c.satellites()[0];
+        let toe = sat.toa_gps_s();
+        let wild = AlmanacEntry { eccentricity: 1.5, ..sat.clone() };
+        let e = Ephemeris::of_orbit(&wild, toe).unwrap_err();
+        assert_eq!(e, EphemerisError::OutOfRange { prn: sat.prn, field: "e", value: 1.5 });
+        assert_eq!(e.to_string(), format!("PRN {}: e = 1.5 does not fit the broadcast ephemeris's field", sat.prn));
+        // Ω̇ has 24 bits of 2⁻⁴³ semicircles/s: ±3.7e-6 rad/s.
+        let spinning = AlmanacEntry { raan_rate_radps: 4e-6, ..sat.clone() };
+        assert!(matches!(
+            Ephemeris::of_orbit(&spinning, toe),
+            Err(EphemerisError::OutOfRange { field: "omega_dot", .. })
+        ));
+        let far = AlmanacEntry { sqrt_a_sqrtm: 9000.0, ..sat.clone() };
+        assert!(matches!(Ephemeris::of_orbit(&far, toe), Err(EphemerisError::OutOfRange { field: "sqrt_a", .. })));
+    }
+
+    #[test]
     fn subframes_parse_back() {
         // 2024-02-08T12:00:00 GPS ≈ week 2300, TOW 388 800 s: subframe index.
         let start = 2300 * SUBFRAMES_PER_WEEK + 388_800 / 6;
