@@ -51,7 +51,12 @@
 //! message's scale factors, a few cm from it): a receiver that solves
 //! for its position from the message finds the antenna's, to the noise
 //! (no ionosphere or troposphere is simulated: switch a receiver's
-//! corrections off).
+//! corrections off). The pseudorange's light time, Earth rotation and
+//! relativistic terms are what makes the fix: with the geometric range at
+//! the receive instant in their place (up to 73 m from the pseudorange)
+//! GNSS-SDR 0.0.17's RTKLIB solver refuses every epoch of
+//! `scripts/gnss-sdr-rinex-e2e.sh`'s session (chi-square test: vv ≈ 200
+//! against 16.3 for 10 observations).
 //!
 //! The motion and the satellite geometry are evaluated at receiver time (the
 //! clock's time error, below a microsecond over a session, is neglected there).
