@@ -102,7 +102,7 @@ for order in (2, 3):
         c2, e2 = cell(s)
         worst = max(worst, abs(e1)) if e1 == e1 else float("inf")
         print(f"{name if i == 0 else '':34} {ax:>4} {g[i]:+9.5f} {c1:>22} {e1:+7.2f} {c2:>22} {e2:+7.2f}")
-    tracks = e["gnss_sdr"]["tracks"]
+    tracks = e["source"]["tracks"]
     used = [t for t in tracks if t["used"]]
     print(f"{'':34} GNSS-SDR: {len(used)} of {len(tracks)} tracks kept, {e['epochs_used']} epochs, "
           f"RMS {e['rms_before_rad']:.4f} → {e['rms_after_rad']:.4f} rad")

@@ -26,3 +26,14 @@ ensure_gnss_sdr() {
     fi
     gnss-sdr --version
 }
+
+# made_dir DIR: creates DIR when missing and prints its absolute path.
+made_dir() { mkdir -p "$1" && (cd "$1" && pwd); }
+
+# gnss_sdr_prelude: gnss-sdr installed (ensure_gnss_sdr), the gsens to run in G
+# (gsens_binary) and the scenario pieces loaded (scripts/lib/scenario.sh).
+gnss_sdr_prelude() {
+    ensure_gnss_sdr
+    gsens_binary
+    . scripts/lib/scenario.sh
+}

@@ -34,7 +34,8 @@
 //! The antenna is fixed on the Earth (static in ECEF). Range is the geometric
 //! distance at the same instant t (no light-time, Sagnac, atmosphere or
 //! satellite-clock terms: they change the Doppler by well under 1 Hz and are
-//! irrelevant to a g-sensitivity session), range rate ρ̇ = û·v_sat, range
+//! irrelevant to a g-sensitivity session; the IF generator, whose pseudoranges
+//! a receiver solves its position from, uses them: [`ReceivedSignal`]), range rate ρ̇ = û·v_sat, range
 //! acceleration ρ̈ = û·a_sat + (|v_sat|² − ρ̇²)/ρ, and the L1 Doppler
 //! f_D = −ρ̇/λ with λ = c/f_L1 (positive for an approaching satellite),
 //! Doppler rate −ρ̈/λ. The values are smooth: a session running at 1 ms may
@@ -408,6 +409,114 @@ fn line_of_sight_from(prn: u32, ant_m: &[f64; 3], enu: &[[f64; 3]; 3], s: &SatSt
         range_accel_mps2: rho_ddot,
         doppler_hz: -rho_dot / lambda,
         doppler_rate_hz_per_s: -rho_ddot / lambda,
+    }
+}
+
+/// A satellite's signal as it reaches a fixed antenna at GPS time t (the
+/// receive instant), for a receiver that locates the satellite at the
+/// transmit instant and rotates it into the ECEF frame of the receive
+/// instant (IS-GPS-200 §20.3.3.4.3.4, §20.3.3.3.3.1):
+///
+/// ```text
+/// τ = |R₃(Ω̇ₑτ)·r_sat(t − τ) − r_ant| / c        (light time, Sagnac by the exact rotation)
+/// Δt_r = F·e·√A·sin E = −2·r_sat·v_sat/c²       (the satellite clock's relativistic term at t − τ)
+/// ρ = c·(τ − Δt_r)                              (the pseudorange of a receiver clock on GPS time)
+/// ```
+///
+/// with R₃(θ) = [[cos θ, sin θ, 0], [−sin θ, cos θ, 0], [0, 0, 1]] and
+/// r·v of the ECEF vectors (equal to the inertial r·v: r·(ω × r) = 0). A
+/// satellite clock that keeps GPS time but for the relativistic term (the
+/// a_f0 = a_f1 = a_f2 = 0 of a broadcast ephemeris) stamps the signal
+/// t_sv = t − τ + Δt_r, so the code and carrier phases a receiver measures
+/// follow ρ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReceivedSignal {
+    /// Light time τ \[s\].
+    pub light_time_s: f64,
+    /// dτ/dt \[s/s\].
+    pub light_time_rate: f64,
+    /// The satellite clock's relativistic term Δt_r at the transmit instant \[s\].
+    pub relativistic_s: f64,
+    /// ρ = c·(τ − Δt_r) \[m\].
+    pub pseudorange_m: f64,
+    /// dρ/dt [m/s] (receive time).
+    pub pseudorange_rate_mps: f64,
+    /// The satellite at the transmit instant, in the ECEF frame of the receive instant \[m\].
+    pub sat_pos_m: [f64; 3],
+}
+
+impl AlmanacEntry {
+    /// The signal received at the ECEF point `ant_m` at GPS time `t_rx_gps_s`
+    /// ([`ReceivedSignal`]): τ by fixed-point iteration (each step gains the
+    /// factor |v_sat|/c ≈ 1e-5), and
+    ///
+    /// ```text
+    /// dτ/dt = û·R·v / (c + û·R·v − Ω̇ₑ·û·R′·r)
+    /// dρ/dt = c·dτ/dt − c·(dΔt_r/dt)·(1 − dτ/dt),   dΔt_r/dt = −2·(|v|² + r·a)/c²
+    /// ```
+    ///
+    /// (û the unit vector antenna → satellite, R = R₃(Ω̇ₑτ), R′ its
+    /// derivative by the angle, r, v, a the ECEF state at t − τ).
+    pub fn received_at(&self, ant_m: &[f64; 3], t_rx_gps_s: f64) -> ReceivedSignal {
+        let c = SPEED_OF_LIGHT_MPS;
+        let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let rot = |th: f64, p: &[f64; 3]| {
+            let (s, co) = th.sin_cos();
+            [co * p[0] + s * p[1], -s * p[0] + co * p[1], p[2]]
+        };
+        // From τ = 0 (the geometric range): 0.07 s → 1e-6 → 1e-11 → 1e-16 s.
+        let mut tau = 0.0;
+        let (mut st, mut x);
+        let mut steps = 0;
+        loop {
+            st = self.state_ecef(t_rx_gps_s - tau);
+            x = rot(EARTH_ROTATION_RADPS * tau, &st.pos_m);
+            let d = [x[0] - ant_m[0], x[1] - ant_m[1], x[2] - ant_m[2]];
+            let next = dot(&d, &d).sqrt() / c;
+            let change = (next - tau).abs();
+            tau = next;
+            steps += 1;
+            if change < 1e-15 || steps == 8 {
+                break;
+            }
+        }
+        let d = [x[0] - ant_m[0], x[1] - ant_m[1], x[2] - ant_m[2]];
+        let dist = dot(&d, &d).sqrt();
+        let u = [d[0] / dist, d[1] / dist, d[2] / dist];
+        let th = EARTH_ROTATION_RADPS * tau;
+        let rv = rot(th, &st.vel_mps);
+        let (s, co) = th.sin_cos();
+        let p = st.pos_m;
+        let r_prime_p = [-s * p[0] + co * p[1], -co * p[0] - s * p[1], 0.0];
+        let urv = dot(&u, &rv);
+        let tau_dot = urv / (c + urv - EARTH_ROTATION_RADPS * dot(&u, &r_prime_p));
+        let rel_s = -2.0 * dot(&st.pos_m, &st.vel_mps) / (c * c);
+        let rel_rate = -2.0 * (dot(&st.vel_mps, &st.vel_mps) + dot(&st.pos_m, &st.accel_mps2)) / (c * c);
+        ReceivedSignal {
+            light_time_s: tau,
+            light_time_rate: tau_dot,
+            relativistic_s: rel_s,
+            pseudorange_m: c * (tau - rel_s),
+            pseudorange_rate_mps: c * tau_dot - c * rel_rate * (1.0 - tau_dot),
+            sat_pos_m: x,
+        }
+    }
+}
+
+impl AlmanacEntry {
+    /// The line of sight from `site` at GPS time `t_rx_gps_s` as the signal
+    /// arrives: elevation, azimuth, range acceleration and Doppler rate the
+    /// geometric ones at that instant, range the pseudorange ρ of
+    /// [`ReceivedSignal`], range rate dρ/dt and Doppler −(dρ/dt)/λ_L1.
+    pub fn received_line_of_sight(&self, site: &Site, t_rx_gps_s: f64) -> LineOfSight {
+        let geometric = line_of_sight_from(self.prn, &site.ecef_m, &site.enu, &self.state_ecef(t_rx_gps_s));
+        let r = self.received_at(&site.ecef_m, t_rx_gps_s);
+        LineOfSight {
+            range_m: r.pseudorange_m,
+            range_rate_mps: r.pseudorange_rate_mps,
+            doppler_hz: -r.pseudorange_rate_mps / l1_wavelength_m(),
+            ..geometric
+        }
     }
 }
 
@@ -801,6 +910,71 @@ mod tests {
             let accel_num = (rp.range_rate_mps - rm.range_rate_mps) / (2.0 * h);
             assert!((accel_num - l.range_accel_mps2).abs() < 1e-5);
         }
+    }
+
+    #[test]
+    fn sat_received_signal_matches_an_inertial_frame_solution() {
+        // The same pseudorange solved independently: in an inertial frame that turns with the
+        // Earth's angle Ω̇ₑ·t, the antenna at the receive instant and the satellite at the
+        // transmit instant, τ found by bisection of |p(t − τ) − a| − cτ; the relativistic term
+        // F·e·√A·sin E from the orbit's own eccentric anomaly (IS-GPS-200 §20.3.3.3.3.1).
+        let c = Constellation::builtin();
+        let site = Site::new(&moscow());
+        let light = SPEED_OF_LIGHT_MPS;
+        let to_inertial = |p: [f64; 3], t: f64| {
+            let (s, co) = (EARTH_ROTATION_RADPS * t).sin_cos();
+            [co * p[0] - s * p[1], s * p[0] + co * p[1], p[2]]
+        };
+        let dist =
+            |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+        let mut largest_sagnac_m: f64 = 0.0;
+        for prn in c.visible(&moscow(), t0(), 0.0) {
+            let sat = c.get(prn).unwrap();
+            for dt in [0.0, 600.0, 3000.0] {
+                let t = t0() + dt;
+                let r = sat.received_at(&site.ecef_m, t);
+                let ant = to_inertial(site.ecef_m, t);
+                let f = |tau: f64| dist(to_inertial(sat.state_ecef(t - tau).pos_m, t - tau), ant) - light * tau;
+                let (mut lo, mut hi) = (0.05, 0.1);
+                assert!(f(lo) > 0.0 && f(hi) < 0.0);
+                for _ in 0..80 {
+                    let mid = 0.5 * (lo + hi);
+                    if f(mid) > 0.0 { lo = mid } else { hi = mid }
+                }
+                let tau = 0.5 * (lo + hi);
+                assert!(((r.light_time_s - tau) * light).abs() < 1e-3, "PRN {prn}: τ {} vs {tau}", r.light_time_s);
+                // F·e·√A·sin E at the transmit instant.
+                let n = sat.mean_motion_radps();
+                let m = sat.mean_anomaly_rad + n * (t - tau - sat.toa_gps_s());
+                let mut e_anom = m;
+                for _ in 0..40 {
+                    e_anom = m + sat.eccentricity * e_anom.sin();
+                }
+                let rel = -4.442_807_633e-10 * sat.eccentricity * sat.sqrt_a_sqrtm * e_anom.sin();
+                assert!(((r.relativistic_s - rel) * light).abs() < 1e-4, "PRN {prn}: {} vs {rel}", r.relativistic_s);
+                assert!((r.pseudorange_m - light * (tau - rel)).abs() < 1e-3);
+                // RTKLIB's linearized Sagnac term (geodist): the same range to a mm.
+                let p = sat.state_ecef(t - tau).pos_m;
+                let a = site.ecef_m;
+                let rtklib = dist(p, a) + EARTH_ROTATION_RADPS * (p[0] * a[1] - p[1] * a[0]) / light;
+                assert!((rtklib - light * tau).abs() < 1e-3, "PRN {prn}: {rtklib} vs {}", light * tau);
+                largest_sagnac_m = largest_sagnac_m.max((dist(p, a) - light * tau).abs());
+                // The rate: a central difference of ρ over ±2 s (the third derivative's part is
+                // ~1e-5 m/s; GPS seconds near 1.4e9 s resolve 2.4e-7 s, ~1e-4 m of range).
+                let h = 2.0;
+                let num = (sat.received_at(&site.ecef_m, t + h).pseudorange_m
+                    - sat.received_at(&site.ecef_m, t - h).pseudorange_m)
+                    / (2.0 * h);
+                assert!((num - r.pseudorange_rate_mps).abs() < 2e-4, "PRN {prn}: {num} vs {}", r.pseudorange_rate_mps);
+                // What the light time and Earth rotation change: tens of metres against the
+                // geometric range at the receive instant.
+                let geometric = c.line_of_sight(prn, &moscow(), t).unwrap();
+                let los = sat.received_line_of_sight(&site, t);
+                assert_eq!((los.range_m, los.elevation_deg), (r.pseudorange_m, geometric.elevation_deg));
+                assert!((los.range_m - geometric.range_m).abs() < 200.0);
+            }
+        }
+        assert!((5.0..50.0).contains(&largest_sagnac_m), "{largest_sagnac_m}");
     }
 
     #[test]
