@@ -7,12 +7,12 @@
 //! command logged at 10 Hz. Prints one Markdown row per case (the table of
 //! docs/trust.md, "The two-rate protocol with the loop identified").
 //!
-//! Usage: `identified_loop [--runs N] [--seed S] [--case K] [--json PATH]`
+//! Usage: `identified_loop [--runs N] [--seed S] [--case K] [--interval-known] [--json PATH]`
 
 use clap::Parser;
 use gsens_calib::{LoopFreeSettings, NcoRecord, TimeOffset};
 use gsens_core::LoggedPhase;
-use gsens_montecarlo::{IdentifiedMonteCarlo, identified_monte_carlo};
+use gsens_montecarlo::{IdentifiedMonteCarlo, identified_monte_carlo, scenario_shapes};
 use gsens_sim::scenario::Scenario;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,6 +29,11 @@ struct Args {
     /// Run only this case (1–8, in the table's order).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
     case: Option<u8>,
+    /// Try only the loop shapes updated at the scenario loop's interval (the
+    /// order and Bn still identified), as for a receiver whose update
+    /// interval is known.
+    #[arg(long)]
+    interval_known: bool,
     /// Write every case's statistics and runs as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -89,15 +94,17 @@ fn row(case: &Case, mc: &IdentifiedMonteCarlo) -> String {
     let bn_error = s.bn_relative_error_rms.map_or("–".into(), |e| format!("{:.2} %", 100.0 * e));
     let bn_z = s.bn_z_rms.map_or("–".into(), |z| format!("{z:.2}"));
     format!(
-        "| {} | {} | {} | {} | {} | {} of {n} | {bn_error} (z RMS {bn_z}) | {} ({} right) of {n} | {} | {} |",
+        "| {} | {} | {} | {} | {} | {} | {} of {n} | {bn_error} (z RMS {bn_z}) | {} ({} right) of {n} | {} of {n} | {} | {} |",
         case.protocol,
         case.loop_name,
         record_name(case.record),
         triple(s.rmse_over_known_crlb, 2),
         triple(s.z_rms, 2),
+        triple(s.bias.map(|v| 1e4 * v), 2),
         s.bn_resolved,
         s.order_resolved,
         s.order_right,
+        s.interval_right,
         triple(s.known_rmse_over_known_crlb, 2),
         triple(s.known_crlb.map(|v| 1e4 * v), 2),
     )
@@ -116,14 +123,15 @@ fn main() -> ExitCode {
 
 fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     println!(
-        "| protocol | loop | NCO record | RMSE/CRLB x / y / z | z RMS | Bn resolved | Bn RMS error | order resolved | known loop: RMSE/CRLB | CRLB [10⁻⁴ Hz/(m/s²)] |"
+        "| protocol | loop | NCO record | RMSE/CRLB x / y / z | z RMS | bias [10⁻⁴ Hz/(m/s²)] | Bn resolved | Bn RMS error | order resolved | interval right | known loop: RMSE/CRLB | CRLB [10⁻⁴ Hz/(m/s²)] |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut all = Vec::new();
     for (k, case) in cases().iter().enumerate().filter(|(k, _)| args.case.is_none_or(|c| usize::from(c) == k + 1)) {
         let scenario = Scenario::from_toml_str(&case.toml)?;
         let start = std::time::Instant::now();
-        let mc = identified_monte_carlo(&scenario, args.runs, args.seed, case.record, &settings(), || {})?;
+        let shapes = scenario_shapes(&scenario, args.interval_known);
+        let mc = identified_monte_carlo(&scenario, args.runs, args.seed, case.record, &shapes, &settings(), || {})?;
         eprintln!(
             "case {}: {:.1} s wall, {} failed {:?}",
             k + 1,

@@ -4,7 +4,9 @@
 //!
 //! Run i simulates the scenario with seed S + i, makes the rows of the NCO
 //! record asked for ([`gsens_calib::nco_rows`]) and fits them twice: with the
-//! loop identified among [`gsens_calib::identification_shapes`], and through
+//! loop identified among the shapes given (all of
+//! [`gsens_calib::identification_shapes`], or those at an update interval
+//! known), and through
 //! the scenario's own loop stated exactly
 //! ([`gsens_calib::estimate_nco_frequency_from`]). The second fit's
 //! Cramér–Rao bound (at its fitted AR noise model, τ and loop held) is the
@@ -17,7 +19,8 @@
 //! each estimate's own σ (1 for an honest σ). Of the loop: how often Bn was
 //! resolved inside the searched range, the RMS of its relative error and
 //! of its z (ln(B̂n/Bn)/σ_ln Bn) over those runs, and how often the order
-//! was resolved, and resolved right.
+//! was resolved, and resolved right, and how often the kept shape's update
+//! interval was the scenario's.
 
 use crate::MonteCarloError;
 use gsens_calib::{
@@ -25,7 +28,7 @@ use gsens_calib::{
     estimate_nco_frequency_identified_from, identification_shapes, nco_rows,
 };
 use gsens_core::LoopModel;
-use gsens_sim::scenario::Scenario;
+use gsens_sim::scenario::{LoopSection, Scenario};
 use gsens_sim::simulate_logs;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -56,6 +59,8 @@ pub struct IdentifiedRun {
 pub struct IdentifiedStats {
     /// Runs where both estimates were made.
     pub runs: usize,
+    /// Mean of Γ̂ − Γ_imu with the loop identified \[Hz/(m/s²)\].
+    pub bias: [f64; 3],
     /// RMS of Γ̂ − Γ_imu with the loop identified \[Hz/(m/s²)\].
     pub rmse: [f64; 3],
     /// RMS over the runs of the known-loop Cramér–Rao bound \[Hz/(m/s²)\].
@@ -78,6 +83,8 @@ pub struct IdentifiedStats {
     pub order_resolved: usize,
     /// Runs whose order was resolved and is the scenario's.
     pub order_right: usize,
+    /// Runs whose kept shape is updated at the scenario loop's interval.
+    pub interval_right: usize,
 }
 
 /// The whole trial.
@@ -89,6 +96,8 @@ pub struct IdentifiedMonteCarlo {
     pub seed: u64,
     /// The record the rows were made of.
     pub record: NcoRecord,
+    /// The update intervals of the shapes tried \[s\].
+    pub shape_intervals_s: Vec<f64>,
     /// The scenario loop's order.
     pub true_order: u8,
     /// The scenario loop's noise bandwidth \[Hz\].
@@ -101,20 +110,35 @@ pub struct IdentifiedMonteCarlo {
     pub failed: Vec<(u64, String)>,
 }
 
+/// The shapes the identification tries on `scenario`'s log
+/// ([`gsens_calib::identification_shapes`] of its log interval): all of
+/// them, or with `interval_known` only those updated at the scenario loop's
+/// interval (the order and Bn still identified).
+pub fn scenario_shapes(scenario: &Scenario, interval_known: bool) -> Vec<LoopModel> {
+    let interval_s = scenario.tracking_loop.interval_s;
+    let at_interval = |m: &LoopModel| m.interval_s().is_some_and(|t| same_interval(t, interval_s));
+    identification_shapes(scenario.log.interval_s).into_iter().filter(|m| !interval_known || at_interval(m)).collect()
+}
+
+/// Whether two update intervals are the same (within rounding).
+fn same_interval(a_s: f64, b_s: f64) -> bool {
+    (a_s - b_s).abs() <= 1e-9 * b_s
+}
+
 /// One run: `scenario` simulated with `seed`, its `record` fitted with the
-/// loop identified and with the scenario's loop stated, under `settings`.
-/// `Ok(Err(why))` where an estimate failed.
+/// loop identified among `shapes` and with the scenario's loop stated, under
+/// `settings`. `Ok(Err(why))` where an estimate failed.
 pub fn identified_run(
     scenario: &Scenario,
     seed: u64,
     record: NcoRecord,
+    shapes: &[LoopModel],
     settings: &LoopFreeSettings,
 ) -> Result<Result<IdentifiedRun, String>, MonteCarloError> {
     let logs = simulate_logs(scenario, seed).map_err(|source| MonteCarloError::Simulation { seed, source })?;
     let known_loop = LoopModel::kaplan(scenario.tracking_loop.spec(), Some(scenario.tracking_loop.interval_s));
-    let shapes = identification_shapes(scenario.log.interval_s);
     let fits = nco_rows(&logs.tracking, settings, record).and_then(|(rows, quantity)| {
-        let identified = estimate_nco_frequency_identified_from(&rows, &logs.imu, settings, &shapes, quantity)?;
+        let identified = estimate_nco_frequency_identified_from(&rows, &logs.imu, settings, shapes, quantity)?;
         let known = estimate_nco_frequency_from(&rows, &logs.imu, settings, &known_loop, quantity)?;
         Ok((identified, known))
     });
@@ -138,6 +162,7 @@ pub fn identified_monte_carlo(
     runs: u64,
     seed: u64,
     record: NcoRecord,
+    shapes: &[LoopModel],
     settings: &LoopFreeSettings,
     progress: impl Fn() + Sync,
 ) -> Result<IdentifiedMonteCarlo, MonteCarloError> {
@@ -147,7 +172,7 @@ pub fn identified_monte_carlo(
     let outcomes: Vec<Result<IdentifiedRun, String>> = (0..runs)
         .into_par_iter()
         .map(|i| {
-            let r = identified_run(scenario, seed + i, record, settings);
+            let r = identified_run(scenario, seed + i, record, shapes, settings);
             progress();
             r
         })
@@ -159,9 +184,12 @@ pub fn identified_monte_carlo(
             Err(why) => failed.push((seed + i, why)),
         }
     }
+    let stats = identified_stats(&per_run, &scenario.tracking_loop);
+    let mut shape_intervals_s: Vec<f64> = shapes.iter().filter_map(LoopModel::interval_s).collect();
+    shape_intervals_s.sort_by(f64::total_cmp);
+    shape_intervals_s.dedup();
     let (true_order, true_bn_hz) = (scenario.tracking_loop.order, scenario.tracking_loop.bn_hz);
-    let stats = identified_stats(&per_run, true_order, true_bn_hz);
-    Ok(IdentifiedMonteCarlo { runs, seed, record, true_order, true_bn_hz, stats, per_run, failed })
+    Ok(IdentifiedMonteCarlo { runs, seed, record, shape_intervals_s, true_order, true_bn_hz, stats, per_run, failed })
 }
 
 /// RMS of a sample (`None`: empty).
@@ -170,9 +198,9 @@ fn rms(x: impl Iterator<Item = f64>) -> Option<f64> {
     (n > 0).then(|| (sum / n as f64).sqrt())
 }
 
-/// The statistics of `runs` against a loop of order `true_order` and noise
-/// bandwidth `true_bn_hz`.
-pub fn identified_stats(runs: &[IdentifiedRun], true_order: u8, true_bn_hz: f64) -> IdentifiedStats {
+/// The statistics of `runs` against the scenario's loop `truth`.
+pub fn identified_stats(runs: &[IdentifiedRun], truth: &LoopSection) -> IdentifiedStats {
+    let (true_order, true_bn_hz) = (truth.order, truth.bn_hz);
     let per_axis = |f: &dyn Fn(&IdentifiedRun, usize) -> f64| {
         [0, 1, 2].map(|i| rms(runs.iter().map(|r| f(r, i))).unwrap_or(f64::NAN))
     };
@@ -183,8 +211,10 @@ pub fn identified_stats(runs: &[IdentifiedRun], true_order: u8, true_bn_hz: f64)
     let known_crlb = per_axis(&|r, i| r.known_crlb_hz_per_mps2[i]);
     let resolved: Vec<&IdentifiedLoop> =
         runs.iter().map(|r| &r.identified).filter(|id| id.resolution == LoopResolution::Resolved).collect();
+    let n = runs.len() as f64;
     IdentifiedStats {
         runs: runs.len(),
+        bias: [0, 1, 2].map(|i| runs.iter().map(|r| err(r, i)).sum::<f64>() / n),
         rmse,
         known_crlb,
         rmse_over_known_crlb: [0, 1, 2].map(|i| rmse[i] / known_crlb[i]),
@@ -196,5 +226,6 @@ pub fn identified_stats(runs: &[IdentifiedRun], true_order: u8, true_bn_hz: f64)
         bn_z_rms: rms(resolved.iter().map(|id| (id.bn_hz / true_bn_hz).ln() / id.sigma_ln_bn)),
         order_resolved: runs.iter().filter(|r| r.identified.order_resolved).count(),
         order_right: runs.iter().filter(|r| r.identified.order_resolved && r.identified.order == true_order).count(),
+        interval_right: runs.iter().filter(|r| same_interval(r.identified.loop_interval_s, truth.interval_s)).count(),
     }
 }

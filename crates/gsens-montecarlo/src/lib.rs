@@ -31,6 +31,7 @@ mod validate_text;
 pub use demo::{Demo, DemoError, DemoFolder, render_demo_start, simulate_demo};
 pub use identified::{
     IdentifiedMonteCarlo, IdentifiedRun, IdentifiedStats, identified_monte_carlo, identified_run, identified_stats,
+    scenario_shapes,
 };
 pub use methods::method_settings;
 pub use predict::frequency_noise;
