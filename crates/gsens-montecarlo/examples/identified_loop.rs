@@ -94,7 +94,7 @@ fn row(case: &Case, mc: &IdentifiedMonteCarlo) -> String {
     let bn_error = s.bn_relative_error_rms.map_or("–".into(), |e| format!("{:.2} %", 100.0 * e));
     let bn_z = s.bn_z_rms.map_or("–".into(), |z| format!("{z:.2}"));
     format!(
-        "| {} | {} | {} | {} | {} | {} | {} of {n} | {bn_error} (z RMS {bn_z}) | {} ({} right) of {n} | {} of {n} | {} | {} |",
+        "| {} | {} | {} | {} | {} | {} | {} of {n} | {bn_error} (z RMS {bn_z}; {} runs) | {} ({} right) of {n} | {} of {n} | {} | {} |",
         case.protocol,
         case.loop_name,
         record_name(case.record),
@@ -102,6 +102,7 @@ fn row(case: &Case, mc: &IdentifiedMonteCarlo) -> String {
         triple(s.z_rms, 2),
         triple(s.bias.map(|v| 1e4 * v), 2),
         s.bn_resolved,
+        s.bn_compared,
         s.order_resolved,
         s.order_right,
         s.interval_right,
@@ -123,7 +124,7 @@ fn main() -> ExitCode {
 
 fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     println!(
-        "| protocol | loop | NCO record | RMSE/CRLB x / y / z | z RMS | bias [10⁻⁴ Hz/(m/s²)] | Bn resolved | Bn RMS error | order resolved | interval right | known loop: RMSE/CRLB | CRLB [10⁻⁴ Hz/(m/s²)] |"
+        "| protocol | loop | NCO record | RMSE/CRLB x / y / z | z RMS | bias [10⁻⁴ Hz/(m/s²)] | Bn resolved | Bn RMS error (right order) | order resolved | interval right | known loop: RMSE/CRLB | CRLB [10⁻⁴ Hz/(m/s²)] |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut all = Vec::new();

@@ -18,7 +18,8 @@
 //! over the runs of the known-loop bound, and the RMS of (Γ̂ − Γ_imu)/σ with
 //! each estimate's own σ (1 for an honest σ). Of the loop: how often Bn was
 //! resolved inside the searched range, the RMS of its relative error and
-//! of its z (ln(B̂n/Bn)/σ_ln Bn) over those runs, and how often the order
+//! of its z (ln(B̂n/Bn)/σ_ln Bn) over those of them with the right order
+//! kept, and how often the order
 //! was resolved, and resolved right, and how often the kept shape's update
 //! interval was the scenario's.
 
@@ -75,9 +76,13 @@ pub struct IdentifiedStats {
     pub known_z_rms: [f64; 3],
     /// Runs whose Bn was resolved inside the searched range.
     pub bn_resolved: usize,
-    /// RMS of B̂n/Bn − 1 over the runs with Bn resolved (`None`: none).
+    /// Of those, the runs whose kept shape has the scenario's order, where
+    /// B̂n is compared with Bn (a loop of the other order has another Bn
+    /// for the same response).
+    pub bn_compared: usize,
+    /// RMS of B̂n/Bn − 1 over the runs compared (`None`: none).
     pub bn_relative_error_rms: Option<f64>,
-    /// RMS of ln(B̂n/Bn)/σ_ln Bn over the runs with Bn resolved (1: its σ honest).
+    /// RMS of ln(B̂n/Bn)/σ_ln Bn over the runs compared (1: its σ honest).
     pub bn_z_rms: Option<f64>,
     /// Runs whose order was resolved (the other order's shapes weigh under 5 %).
     pub order_resolved: usize,
@@ -209,8 +214,12 @@ pub fn identified_stats(runs: &[IdentifiedRun], truth: &LoopSection) -> Identifi
     let rmse = per_axis(&err);
     let known_rmse = per_axis(&known_err);
     let known_crlb = per_axis(&|r, i| r.known_crlb_hz_per_mps2[i]);
-    let resolved: Vec<&IdentifiedLoop> =
-        runs.iter().map(|r| &r.identified).filter(|id| id.resolution == LoopResolution::Resolved).collect();
+    let resolved = runs.iter().filter(|r| r.identified.resolution == LoopResolution::Resolved).count();
+    let compared: Vec<&IdentifiedLoop> = runs
+        .iter()
+        .map(|r| &r.identified)
+        .filter(|id| id.resolution == LoopResolution::Resolved && id.order == true_order)
+        .collect();
     let n = runs.len() as f64;
     IdentifiedStats {
         runs: runs.len(),
@@ -221,9 +230,10 @@ pub fn identified_stats(runs: &[IdentifiedRun], truth: &LoopSection) -> Identifi
         z_rms: per_axis(&|r, i| err(r, i) / r.sigma_hz_per_mps2[i]),
         known_rmse_over_known_crlb: [0, 1, 2].map(|i| known_rmse[i] / known_crlb[i]),
         known_z_rms: per_axis(&|r, i| known_err(r, i) / r.known_sigma_hz_per_mps2[i]),
-        bn_resolved: resolved.len(),
-        bn_relative_error_rms: rms(resolved.iter().map(|id| id.bn_hz / true_bn_hz - 1.0)),
-        bn_z_rms: rms(resolved.iter().map(|id| (id.bn_hz / true_bn_hz).ln() / id.sigma_ln_bn)),
+        bn_resolved: resolved,
+        bn_compared: compared.len(),
+        bn_relative_error_rms: rms(compared.iter().map(|id| id.bn_hz / true_bn_hz - 1.0)),
+        bn_z_rms: rms(compared.iter().map(|id| (id.bn_hz / true_bn_hz).ln() / id.sigma_ln_bn)),
         order_resolved: runs.iter().filter(|r| r.identified.order_resolved).count(),
         order_right: runs.iter().filter(|r| r.identified.order_resolved && r.identified.order == true_order).count(),
         interval_right: runs.iter().filter(|r| same_interval(r.identified.loop_interval_s, truth.interval_s)).count(),
