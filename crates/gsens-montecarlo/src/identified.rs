@@ -6,22 +6,20 @@
 //! record asked for ([`gsens_calib::nco_rows`]) and fits them twice: with the
 //! loop identified among the shapes given (all of
 //! [`gsens_calib::identification_shapes`], or those at an update interval
-//! known), and through
-//! the scenario's own loop stated exactly
-//! ([`gsens_calib::estimate_nco_frequency_from`]). The second fit's
+//! known: [`scenario_shapes`]), and through the scenario's own loop stated
+//! exactly ([`gsens_calib::estimate_nco_frequency_from`]). The second fit's
 //! Cramér–Rao bound (at its fitted AR noise model, τ and loop held) is the
 //! bound the identified estimate is measured against: what the same rows
 //! give when the loop is known. Errors are Γ̂ − Γ_imu, as in
 //! [`crate::monte_carlo`].
 //!
-//! Per axis: the RMSE of each estimate over the runs, its ratio to the RMS
-//! over the runs of the known-loop bound, and the RMS of (Γ̂ − Γ_imu)/σ with
-//! each estimate's own σ (1 for an honest σ). Of the loop: how often Bn was
-//! resolved inside the searched range, the RMS of its relative error and
-//! of its z (ln(B̂n/Bn)/σ_ln Bn) over those of them with the right order
-//! kept, and how often the order
-//! was resolved, and resolved right, and how often the kept shape's update
-//! interval was the scenario's.
+//! Per axis: the bias and RMSE of each estimate over the runs, the RMSE's
+//! ratio to the RMS over the runs of the known-loop bound, and the RMS of
+//! (Γ̂ − Γ_imu)/σ with each estimate's own σ (1 for an honest σ). Of the
+//! loop: how often Bn was resolved inside the searched range, the RMS of its
+//! relative error and of its z (ln(B̂n/Bn)/σ_ln Bn) over those of them that
+//! kept the right order, how often the order was resolved, and resolved
+//! right, and how often the kept shape's update interval was the scenario's.
 
 use crate::MonteCarloError;
 use gsens_calib::{

@@ -53,8 +53,9 @@ fn mean(x: &[f64]) -> f64 {
 /// loop adds to the error away.
 ///
 /// σ: mean z² within 3 standard errors of 1. The three axes of a run share
-/// its loop's error (their errors correlate by 0.9 at one rate), so each run
-/// counts once: the standard error is √(2/n) for n runs.
+/// its loop's error (what identifying adds correlates by 0.9 across them at
+/// one rate), so each run counts once: the standard error is √(2/n) for n
+/// runs.
 ///
 /// What identifying adds: the Monte Carlo of docs/trust.md (100 runs each)
 /// has its mean square over the bound at 1.42 at one rate and 0.096 at two;
