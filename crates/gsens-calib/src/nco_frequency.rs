@@ -45,21 +45,36 @@ pub fn estimate_nco_frequency(
     settings: &LoopFreeSettings,
     receiver_loop: &LoopModel,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
+    let (rows, quantity) = crate::nco_rows(tracking, settings, crate::NcoRecord::Command)?;
+    estimate_nco_frequency_from(&rows, imu, settings, receiver_loop, quantity)
+}
+
+/// [`estimate_nco_frequency`] from frequency rows a receiver's adapter made
+/// (each track's NCO frequency on the common epochs \[Hz\], the common mode
+/// −H\[aᵀΓ\]; [`crate::nco_rows`] makes them from a tracking log):
+/// `quantity` says what a row holds, [`RowQuantity::NcoFrequency`] (the
+/// command of the row's latest update) or [`RowQuantity::NcoFrequencyMean`]
+/// (the mean command over the log interval, a phase differenced). With the
+/// true loop stated its `crlb_hz_per_mps2` is the bound with the loop known
+/// that an estimate identifying the loop from the same rows
+/// ([`crate::estimate_nco_frequency_identified_from`]) is measured against.
+pub fn estimate_nco_frequency_from(
+    rows: &InputPhases,
+    imu: &ImuSeries,
+    settings: &LoopFreeSettings,
+    receiver_loop: &LoopModel,
+    quantity: RowQuantity,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
     check_settings(settings)?;
-    let epochs = tracking.epoch_t_s();
+    let epochs = rows.epoch_t_s.as_slice();
     let log_interval_s = median_step(epochs);
     let receiver_loop = receiver_loop.with_default_interval(log_interval_s);
     let loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
     let runnable = receiver_loop.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
-    let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, RowQuantity::NcoFrequency)
+    let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, quantity)
         .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
-    let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_freq_hz.is_empty()).collect();
-    if tracks.is_empty() {
-        return Err(LoopFreeError::NoNcoFrequency { source_name: tracking.source_name().to_owned() });
-    }
-    let rows = InputPhases::of_tracks(epochs, &tracks, |tr| frequency_on_epochs(tr, epochs, settings));
     let regressor = ModelRegressor::new(epochs, log_interval_s, imu, model, settings.warmup_s);
-    let mut estimate = fit_rows(&rows, &regressor, settings, f64::INFINITY)?;
+    let mut estimate = fit_rows(rows, &regressor, settings, f64::INFINITY)?;
     estimate.loop_interval_s = loop_interval_s;
     Ok(estimate)
 }

@@ -143,6 +143,47 @@ pub enum NcoRecord {
     PhaseDifference,
 }
 
+impl NcoRecord {
+    /// What a row made of this record holds.
+    pub fn quantity(self) -> RowQuantity {
+        match self {
+            NcoRecord::Command => RowQuantity::NcoFrequency,
+            NcoRecord::PhaseDifference => RowQuantity::NcoFrequencyMean,
+        }
+    }
+}
+
+/// Each track's NCO frequency on the log's epochs \[Hz\] from the record
+/// `record` names (tracks without it left out; rows in the warm-up or with
+/// |φ| past the settings' limit `None`), with what a row holds
+/// ([`NcoRecord::quantity`]): the rows [`estimate_nco_frequency_identified_from`]
+/// and [`crate::estimate_nco_frequency_from`] fit.
+pub fn nco_rows(
+    tracking: &TrackingLog,
+    settings: &LoopFreeSettings,
+    record: NcoRecord,
+) -> Result<(InputPhases, RowQuantity), LoopFreeError> {
+    check_settings(settings)?;
+    let epochs = tracking.epoch_t_s();
+    let source_name = tracking.source_name().to_owned();
+    let has_record = |t: &&gsens_io::ChannelTrack| match record {
+        NcoRecord::Command => !t.nco_freq_hz.is_empty(),
+        NcoRecord::PhaseDifference => !t.nco_phase_cycles.is_empty(),
+    };
+    let tracks: Vec<_> = tracking.tracks().iter().filter(has_record).collect();
+    if tracks.is_empty() {
+        return Err(match record {
+            NcoRecord::Command => LoopFreeError::NoNcoFrequency { source_name },
+            NcoRecord::PhaseDifference => LoopFreeError::NoNcoPhase { source_name },
+        });
+    }
+    let rows = InputPhases::of_tracks(epochs, &tracks, |tr| match record {
+        NcoRecord::Command => frequency_on_epochs(tr, epochs, settings),
+        NcoRecord::PhaseDifference => mean_frequency_on_epochs(tr, epochs, settings),
+    });
+    Ok((rows, record.quantity()))
+}
+
 /// Estimates Γ from the NCO's frequency with the loop identified (see the
 /// module documentation) among `shapes` (their Bn is searched), from the
 /// rows `record` says.
@@ -153,29 +194,7 @@ pub fn estimate_nco_frequency_identified(
     shapes: &[LoopModel],
     record: NcoRecord,
 ) -> Result<IdentifiedNcoEstimate, LoopFreeError> {
-    check_settings(settings)?;
-    let epochs = tracking.epoch_t_s();
-    let source_name = tracking.source_name().to_owned();
-    let (tracks, quantity): (Vec<_>, _) = match record {
-        NcoRecord::Command => {
-            let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_freq_hz.is_empty()).collect();
-            if tracks.is_empty() {
-                return Err(LoopFreeError::NoNcoFrequency { source_name });
-            }
-            (tracks, RowQuantity::NcoFrequency)
-        }
-        NcoRecord::PhaseDifference => {
-            let tracks: Vec<_> = tracking.tracks().iter().filter(|t| !t.nco_phase_cycles.is_empty()).collect();
-            if tracks.is_empty() {
-                return Err(LoopFreeError::NoNcoPhase { source_name });
-            }
-            (tracks, RowQuantity::NcoFrequencyMean)
-        }
-    };
-    let rows = InputPhases::of_tracks(epochs, &tracks, |tr| match record {
-        NcoRecord::Command => frequency_on_epochs(tr, epochs, settings),
-        NcoRecord::PhaseDifference => mean_frequency_on_epochs(tr, epochs, settings),
-    });
+    let (rows, quantity) = nco_rows(tracking, settings, record)?;
     estimate_nco_frequency_identified_from(&rows, imu, settings, shapes, quantity)
 }
 

@@ -23,11 +23,16 @@
 //! over that σ.
 
 mod demo;
+mod identified;
 mod methods;
 mod predict;
 mod validate;
 mod validate_text;
 pub use demo::{Demo, DemoError, DemoFolder, render_demo_start, simulate_demo};
+pub use identified::{
+    IdentifiedMonteCarlo, IdentifiedRun, IdentifiedStats, identified_monte_carlo, identified_run, identified_stats,
+    scenario_shapes,
+};
 pub use methods::method_settings;
 pub use predict::frequency_noise;
 pub use validate::{GammaSource, ValidateError, calibrate_scenario, default_bandwidths_hz, run_validation, validate};
