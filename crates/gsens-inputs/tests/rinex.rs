@@ -1,0 +1,44 @@
+//! GNSS-SDR's own RINEX observation file of a simulated shaken session with a
+//! known Γ (crates/gsens-rinex/tests/fixtures/gnss-sdr), calibrated as
+//! `gsens estimate --rinex gnss-sdr.24O --imu imu.csv` calibrates it: the
+//! receiver's loop identified, not stated.
+
+use gsens_calib::{CalibrationOptions, LoopResolution, ObservationRecord};
+use gsens_inputs::{InputChoice, ObservationFile};
+use std::path::PathBuf;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../gsens-rinex/tests/fixtures/gnss-sdr").join(name)
+}
+
+/// Γ̂ within 3σ of the truth on every axis with σ useful (under 3 % of
+/// |Γ|), trustworthy, and GNSS-SDR's loop (2nd order, 3 Hz, 20 ms updates)
+/// identified: the order and the update interval, Bn within 3σ of 3 Hz.
+#[test]
+fn gnss_sdr_rinex_gives_gamma_within_sigma_with_its_loop_identified() {
+    let choice = InputChoice {
+        imu: fixture("imu.csv"),
+        rinex: Some(fixture("gnss-sdr.24O")),
+        observation_record: ObservationRecord::CarrierPhase,
+        ..InputChoice::default()
+    };
+    let inputs = choice.observations(str::to_string).expect("a RINEX route").unwrap();
+    assert_eq!(inputs.log, ObservationFile::Rinex(fixture("gnss-sdr.24O")));
+    let settings = CalibrationOptions::default().pipeline_settings().unwrap();
+    let doc = inputs.calibrate(&settings).expect("the fixture calibrates").document(None);
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture("truth.json")).unwrap()).unwrap();
+    let want: Vec<f64> =
+        truth["gamma_imu_axes_hz_per_mps2"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let c = &doc.calibration;
+    for i in 0..3 {
+        let (g, s) = (c.gamma_hz_per_mps2[i].unwrap(), c.sigma_hz_per_mps2[i].unwrap());
+        eprintln!("axis {i}: {g:+.5} ± {s:.5} against {:+.5} ({:+.2}σ)", want[i], (g - want[i]) / s);
+        assert!((g - want[i]).abs() < 3.0 * s && s < 0.03 * want[i].abs(), "axis {i}: {g} ± {s} against {}", want[i]);
+    }
+    assert!(doc.trustworthy, "{:?}", doc.warnings);
+    let id = &doc.identified_loop.as_ref().unwrap().identified;
+    eprintln!("{} order, {} s, Bn {} ± {}", id.order, id.loop_interval_s, id.bn_hz, id.sigma_ln_bn);
+    assert_eq!((id.order, id.loop_interval_s, id.resolution), (2, 0.02, LoopResolution::Resolved), "{id:?}");
+    assert!(((id.bn_hz / 3.0).ln() / id.sigma_ln_bn).abs() < 3.0, "{id:?}");
+}
