@@ -285,6 +285,13 @@ fn estimate_table(h: &mut String, d: &ReportData) {
 
 /// |Γ̂ − Γ| against the truth when known, and what the 1σ are.
 fn estimate_notes(h: &mut String, d: &ReportData) {
+    if let Some(id) = &d.document.identified_loop {
+        // The text report's lines on the identified loop, one paragraph.
+        let mut lines = String::new();
+        crate::text::identified_loop(&mut lines, id);
+        let lines: Vec<String> = lines.lines().map(|l| escape(l.trim())).collect();
+        let _ = writeln!(h, "<p id=\"identified-loop\">{}</p>", lines.join("<br>"));
+    }
     let c = &d.document.calibration;
     let truth = d.document.truth_gamma_hz_per_mps2;
     if let Some(t) = truth {

@@ -80,7 +80,7 @@ fn log_and_loop(s: &mut String, doc: &ResultDocument) {
 /// The receiver's loop as the session identified it: order, update
 /// interval and bandwidth with its σ (or the bound), how far H is from 1 at
 /// the shaking, and the estimate H = 1 would give.
-fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentification) {
+pub(crate) fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentification) {
     let l = &id.identified;
     let order =
         if l.order_resolved { format!("order {}", l.order) } else { format!("order {} (not resolved)", l.order) };
