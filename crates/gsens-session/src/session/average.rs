@@ -233,7 +233,10 @@ pub(super) fn average(
 /// of the average (`1_g·u ≠ 0` for the indicator `u` of the gauge slots keeps
 /// `M + λ·u uᵀ` regular, and `1_gᵀb = 0` again gives `uᵀc = 0` exactly).
 pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)], gauge: &[bool]) -> Vec<f64> {
-    let mut m = DMatrix::<f64>::zeros(n, n);
+    // M row-major in a plain array: the sums run epoch after epoch, one
+    // update per entry per epoch, the operations of the formula above in
+    // its order.
+    let mut sums = vec![0.0; n * n];
     let mut b = DVector::<f64>::zeros(n);
     let mut parent: Vec<usize> = (0..n).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
@@ -243,29 +246,28 @@ pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64,
         }
         i
     }
-    let (mut phases, mut weights) = (Vec::new(), Vec::new());
     for e in 0..start.len() - 1 {
         let rows = &entries[start[e]..start[e + 1]];
-        phases.clear();
-        weights.clear();
-        phases.extend(rows.iter().map(|&(_, _, p)| p));
-        weights.extend(rows.iter().map(|&(_, w, _)| w));
-        let Some(mean) = average_phase_rad(&phases, &weights) else {
+        let Some(mean) = weighted_mean(rows) else {
             continue;
         };
-        let sw = weights.iter().fold(0.0, |sw, w| sw + w);
+        let sw = rows.iter().fold(0.0, |sw, &(_, w, _)| sw + w);
+        let first = rows[0].0;
         for (r, &(i, wi, pi)) in rows.iter().enumerate() {
             b[i] += wi * (pi - mean);
-            m[(i, i)] += wi - wi * wi / sw;
+            sums[i * n + i] += wi - wi * wi / sw;
             for &(j, wj, _) in &rows[r + 1..] {
                 let x = wi * wj / sw;
-                m[(i, j)] -= x;
-                m[(j, i)] -= x;
+                sums[i * n + j] -= x;
+                sums[j * n + i] -= x;
             }
-            let (ri, r0) = (root(&mut parent, i), root(&mut parent, rows[0].0));
-            parent[ri] = r0;
+            if i != first {
+                let (ri, r0) = (root(&mut parent, i), root(&mut parent, first));
+                parent[ri] = r0;
+            }
         }
     }
+    let mut m = DMatrix::<f64>::from_row_slice(n, n, &sums);
     let trace: f64 = m.trace();
     let lambda = if trace > 0.0 { trace / n as f64 } else { 1.0 };
     let groups: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
@@ -282,6 +284,20 @@ pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64,
         Some(ch) => ch.solve(&b).iter().copied().collect(),
         None => m.lu().solve(&b).map(|x| x.iter().copied().collect()).unwrap_or_else(|| vec![0.0; n]),
     }
+}
+
+/// [`average_phase_rad`] of an epoch's entries (slot, weight, phase), read
+/// in place: the same sums in the same order, so the same mean to the bit.
+#[inline]
+fn weighted_mean(rows: &[(usize, f64, f64)]) -> Option<f64> {
+    let (mut sum, mut wsum) = (0.0, 0.0);
+    for &(_, w, p) in rows {
+        if p.is_finite() {
+            sum += w * p;
+            wsum += w;
+        }
+    }
+    if wsum > 0.0 { Some(sum / wsum) } else { None }
 }
 
 #[cfg(test)]
