@@ -464,6 +464,8 @@ fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], s
             part.push(head);
             rest = tail;
         }
+        // Rows at or beyond `n_epochs`, if any, have no others to compare with.
+        rest.fill(f64::NAN);
     }
     let spans: Vec<_> = bounds.windows(2).zip(&firsts).zip(parts).collect();
     spans.into_par_iter().for_each(|((e, first), mut part)| {
@@ -899,7 +901,8 @@ fn deviations_and_slips(
     // tracks does not change), over a regular subsample of the epochs.
     let mut dev = Deviation {
         c: initial_offsets(rows, n_epochs, &out.flags),
-        d: vec![f64::NAN; rows.len()],
+        // Zeroed pages, filled with NaN by `deviations` span by span.
+        d: vec![0.0; rows.len()],
         level: vec![0.0; rows.len()],
         sigma: vec![f64::NAN; n_tracks],
     };

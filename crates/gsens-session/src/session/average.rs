@@ -176,46 +176,42 @@ pub(super) fn average(
     imu_time_offset_s: f64,
 ) -> Averaged {
     let k_first = span.k_first;
-    let average_block = |epochs: Range<usize>| {
-        let n = epochs.len();
-        let (mut t_s, mut phase_err_rad, mut accel_mps2) =
-            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
-        let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first + epochs.start as u64);
-        // The IMU sample at or before the first read time (the cursor a
-        // pass from the first epoch would have reached).
-        let first_read = grid.time(stamps, k_first + epochs.start as u64) + imu_time_offset_s;
-        let mut cursor = imu.t_s.partition_point(|&x| x <= first_read).saturating_sub(1);
-        let (mut phases, mut weights) = (Vec::new(), Vec::new());
-        for e in epochs {
-            let k = k_first + e as u64;
-            let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
-                stamp_idx += 1;
-                stamps[stamp_idx - 1]
-            } else {
-                grid.t0_s + k as f64 * grid.log_interval_s
-            };
-            t_s.push(t);
-            let rows = &g.entries[g.start[e]..g.start[e + 1]];
-            phases.clear();
-            weights.clear();
-            for &(slot, w, p) in rows {
-                phases.push(p - offsets_rad[slot]);
-                weights.push(w);
-            }
-            phase_err_rad.push(average_phase_rad(&phases, &weights));
-            accel_mps2.push(imu.interpolate_at(t + imu_time_offset_s, &mut cursor));
-        }
-        (t_s, phase_err_rad, accel_mps2)
-    };
     let n_epochs = g.epochs();
-    let averaged: Vec<_> = epoch_blocks(n_epochs).into_par_iter().map(average_block).collect();
+    // The outputs made whole at once, each block writing its own parts of
+    // them (no block's vectors joined on the caller's thread afterwards).
     let (mut t_s, mut phase_err_rad, mut accel_mps2) =
-        (Vec::with_capacity(n_epochs), Vec::with_capacity(n_epochs), Vec::with_capacity(n_epochs));
-    for (t, phase, accel) in averaged {
-        t_s.extend(t);
-        phase_err_rad.extend(phase);
-        accel_mps2.extend(accel);
-    }
+        (vec![0.0; n_epochs], vec![None; n_epochs], vec![[0.0; 3]; n_epochs]);
+    let blocks = epoch_blocks(n_epochs);
+    let parts = t_s.par_chunks_mut(EPOCH_BLOCK).zip(phase_err_rad.par_chunks_mut(EPOCH_BLOCK));
+    parts.zip(accel_mps2.par_chunks_mut(EPOCH_BLOCK)).zip(&blocks).for_each(
+        |(((t_out, phase_out), accel_out), epochs)| {
+            let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first + epochs.start as u64);
+            // The IMU sample at or before the first read time (the cursor a
+            // pass from the first epoch would have reached).
+            let first_read = grid.time(stamps, k_first + epochs.start as u64) + imu_time_offset_s;
+            let mut cursor = imu.t_s.partition_point(|&x| x <= first_read).saturating_sub(1);
+            let (mut phases, mut weights) = (Vec::new(), Vec::new());
+            for (j, e) in epochs.clone().enumerate() {
+                let k = k_first + e as u64;
+                let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
+                    stamp_idx += 1;
+                    stamps[stamp_idx - 1]
+                } else {
+                    grid.t0_s + k as f64 * grid.log_interval_s
+                };
+                t_out[j] = t;
+                let rows = &g.entries[g.start[e]..g.start[e + 1]];
+                phases.clear();
+                weights.clear();
+                for &(slot, w, p) in rows {
+                    phases.push(p - offsets_rad[slot]);
+                    weights.push(w);
+                }
+                phase_out[j] = average_phase_rad(&phases, &weights);
+                accel_out[j] = imu.interpolate_at(t + imu_time_offset_s, &mut cursor);
+            }
+        },
+    );
     Averaged { t_s, phase_err_rad, accel_mps2 }
 }
 
