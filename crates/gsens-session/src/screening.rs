@@ -464,6 +464,8 @@ fn deviations(rows: &Rows, n_epochs: usize, flags: &[u8], mask: u8, c: &[f64], s
             part.push(head);
             rest = tail;
         }
+        // Rows at or beyond `n_epochs`, if any, have no others to compare with.
+        rest.fill(f64::NAN);
     }
     let spans: Vec<_> = bounds.windows(2).zip(&firsts).zip(parts).collect();
     spans.into_par_iter().for_each(|((e, first), mut part)| {
@@ -579,30 +581,83 @@ impl MedianScratch {
         for a in 0..m {
             keys[a] = (order_key(vals[a]) & !63) | a as i32;
         }
+        rank_keys(&keys[..m], &mut rank_of[..m]);
         for a in 0..m {
-            let ka = keys[a];
-            let n_below = keys[..m].iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
-            rank_of[a] = n_below;
-            sorted[n_below] = vals[a];
+            sorted[rank_of[a]] = vals[a];
         }
+        // The median of the others is one of four values: of all m (a track
+        // without a value among them), or of the m − 1 left without the
+        // track's own value of rank r, whose middle positions j_lo, j_hi
+        // then read sorted[j + (j ≥ r)]: both shifted (r ≤ j_lo), the upper
+        // one only (j_lo < r ≤ j_hi) or neither.
+        let median = |lo: usize, hi: usize| 0.5 * (sorted[lo] + sorted[hi]);
+        let outside = if m >= 2 { median((m - 1) / 2, m / 2) } else { f64::NAN };
+        let (j_lo, j_hi) = (m.saturating_sub(2) / 2, m.saturating_sub(1) / 2);
+        let [below, between, above] = if m >= 3 {
+            [median(j_lo + 1, j_hi + 1), median(j_lo, j_hi + 1), median(j_lo, j_hi)]
+        } else {
+            [f64::NAN; 3]
+        };
         for i in 0..p_row.len() {
             if !p_row[i].is_finite() {
                 continue;
             }
-            // The median of the others: of `sorted` without the track's own
-            // value (rank `own`, or past the end when not among them).
-            let inside = slot[i] != usize::MAX;
-            let own = if inside { rank_of[slot[i]] } else { usize::MAX };
-            let others = m - usize::from(inside);
-            if others < 2 {
-                d_row[i] = f64::NAN;
-                continue;
-            }
-            let get = |j: usize| sorted[j + usize::from(j >= own)];
-            let (lo, hi) = (get((others - 1) / 2), get(others / 2));
-            let md = 0.5 * (lo + hi);
+            let md = match slot[i] {
+                usize::MAX => outside,
+                a if rank_of[a] <= j_lo => below,
+                a if rank_of[a] <= j_hi => between,
+                _ => above,
+            };
             d_row[i] = p_row[i] - md;
         }
+    }
+}
+
+/// The rank of each of `keys` (distinct) among them, the number of keys
+/// below it, into `rank_of`.
+///
+/// Up to 16 keys on x86-64 are compared four at a time in SSE2 registers
+/// (part of every x86-64 CPU): each key against all four lanes' keys at once,
+/// the lanes' counts summed, instead of one comparison per pair.
+#[inline]
+fn rank_keys(keys: &[i32], rank_of: &mut [usize]) {
+    #[cfg(target_arch = "x86_64")]
+    if keys.len() <= 16 {
+        use std::arch::x86_64::{_mm_cmpgt_epi32, _mm_set1_epi32, _mm_setr_epi32, _mm_setzero_si128};
+        use std::arch::x86_64::{_mm_storeu_si128, _mm_sub_epi32};
+        // Beyond the keys, the largest value: never below a key.
+        let mut padded = [i32::MAX; 16];
+        padded[..keys.len()].copy_from_slice(keys);
+        let mut ranks = [0i32; 16];
+        // SAFETY: SSE2 is part of the x86-64 baseline; each store writes four
+        // i32 into four of `ranks`' sixteen.
+        unsafe {
+            let lanes = [0, 4, 8, 12].map(|g| _mm_setr_epi32(padded[g], padded[g + 1], padded[g + 2], padded[g + 3]));
+            let mut counts = [_mm_setzero_si128(); 4];
+            for &kb in keys {
+                let b = _mm_set1_epi32(kb);
+                for g in 0..4 {
+                    // A lane whose key is above kb has one more key below it (the mask is −1).
+                    counts[g] = _mm_sub_epi32(counts[g], _mm_cmpgt_epi32(lanes[g], b));
+                }
+            }
+            for (g, c) in counts.iter().enumerate() {
+                _mm_storeu_si128(ranks[4 * g..].as_mut_ptr().cast(), *c);
+            }
+        }
+        for (r, &n) in rank_of.iter_mut().zip(&ranks[..keys.len()]) {
+            *r = n as usize;
+        }
+        return;
+    }
+    rank_keys_pairwise(keys, rank_of);
+}
+
+/// [`rank_keys`] one pair at a time: for more than 16 keys, other targets,
+/// and the reference its tests hold the registers' version to.
+fn rank_keys_pairwise(keys: &[i32], rank_of: &mut [usize]) {
+    for (&ka, r) in keys.iter().zip(rank_of.iter_mut()) {
+        *r = keys.iter().map(|&kb| usize::from(kb < ka)).sum::<usize>();
     }
 }
 
@@ -846,7 +901,8 @@ fn deviations_and_slips(
     // tracks does not change), over a regular subsample of the epochs.
     let mut dev = Deviation {
         c: initial_offsets(rows, n_epochs, &out.flags),
-        d: vec![f64::NAN; rows.len()],
+        // Zeroed pages, filled with NaN by `deviations` span by span.
+        d: vec![0.0; rows.len()],
         level: vec![0.0; rows.len()],
         sigma: vec![f64::NAN; n_tracks],
     };

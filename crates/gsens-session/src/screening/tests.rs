@@ -450,3 +450,78 @@ fn lone_tail_rows_are_not_slips() {
     assert_eq!((ch(4).screening.slips, ch(4).screening.rows_slip), (0, 0), "{:?}", ch(4).screening);
     assert_eq!(ch(0).screening.slips, 1, "{:?}", ch(0).screening);
 }
+
+/// The ranks of up to 16 keys compared in registers are the pairwise
+/// counts, for every count of keys from none to beyond the registers' 16
+/// (distinct keys of either sign, in any order, the extremes included).
+#[test]
+fn ranks_in_registers_are_the_pairwise_ranks() {
+    let mut noise = Noise(0x9E37_79B9_7F4A_7C15);
+    for m in 0..=20 {
+        for _ in 0..200 {
+            let mut keys: Vec<i32> = Vec::with_capacity(m);
+            while keys.len() < m {
+                let k = match noise.uniform() {
+                    u if u < 0.05 => i32::MIN,
+                    u if u < 0.10 => i32::MAX - 1,
+                    u => ((u - 0.5) * 2.0 * i32::MAX as f64) as i32,
+                };
+                if !keys.contains(&k) {
+                    keys.push(k);
+                }
+            }
+            let (mut fast, mut pairwise) = (vec![usize::MAX; m], vec![usize::MAX; m]);
+            rank_keys(&keys, &mut fast);
+            rank_keys_pairwise(&keys, &mut pairwise);
+            assert_eq!(fast, pairwise, "{keys:?}");
+            let mut seen = pairwise.clone();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..m).collect::<Vec<_>>(), "ranks are a permutation");
+        }
+    }
+}
+
+/// Each present track's deviation is its value less the median of the other
+/// tracks' values, sorted plainly (values far enough apart that the keys'
+/// single precision orders them exactly), NaN with fewer than two others:
+/// for 1 to 20 tracks, values and presence drawn at random.
+#[test]
+fn medians_of_the_others_are_their_definition() {
+    let mut noise = Noise(0x2545_F491_4F6C_DD1D);
+    for n_tracks in 1..=20 {
+        let mut scratch = MedianScratch::new(n_tracks);
+        for _ in 0..300 {
+            // Distinct values on a grid of 0.0137 rad between −3 and +3.
+            let mut grid: Vec<f64> = (0..438).map(|k| -3.0 + 0.0137 * k as f64).collect();
+            let mut draw = |noise: &mut Noise| grid.swap_remove((noise.uniform() * grid.len() as f64) as usize);
+            let v_row: Vec<f64> =
+                (0..n_tracks).map(|_| if noise.uniform() < 0.2 { f64::NAN } else { draw(&mut noise) }).collect();
+            let p_row: Vec<f64> = v_row
+                .iter()
+                .map(|&v| match noise.uniform() {
+                    u if u < 0.1 => f64::NAN,
+                    u if u < 0.3 || v.is_nan() => draw(&mut noise),
+                    _ => v,
+                })
+                .collect();
+            let mut d_row = vec![0.25; n_tracks];
+            scratch.deviations(&p_row, &v_row, &mut d_row);
+            for i in 0..n_tracks {
+                let mut others: Vec<f64> =
+                    (0..n_tracks).filter(|&j| j != i && v_row[j].is_finite()).map(|j| v_row[j]).collect();
+                others.sort_by(f64::total_cmp);
+                let n = others.len();
+                let expected = match (p_row[i].is_finite(), n >= 2) {
+                    (false, _) => 0.25,
+                    (true, false) => f64::NAN,
+                    (true, true) => p_row[i] - 0.5 * (others[(n - 1) / 2] + others[n / 2]),
+                };
+                assert!(
+                    d_row[i].to_bits() == expected.to_bits() || (d_row[i].is_nan() && expected.is_nan()),
+                    "track {i} of {v_row:?} / {p_row:?}: {} against {expected}",
+                    d_row[i]
+                );
+            }
+        }
+    }
+}

@@ -176,46 +176,42 @@ pub(super) fn average(
     imu_time_offset_s: f64,
 ) -> Averaged {
     let k_first = span.k_first;
-    let average_block = |epochs: Range<usize>| {
-        let n = epochs.len();
-        let (mut t_s, mut phase_err_rad, mut accel_mps2) =
-            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
-        let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first + epochs.start as u64);
-        // The IMU sample at or before the first read time (the cursor a
-        // pass from the first epoch would have reached).
-        let first_read = grid.time(stamps, k_first + epochs.start as u64) + imu_time_offset_s;
-        let mut cursor = imu.t_s.partition_point(|&x| x <= first_read).saturating_sub(1);
-        let (mut phases, mut weights) = (Vec::new(), Vec::new());
-        for e in epochs {
-            let k = k_first + e as u64;
-            let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
-                stamp_idx += 1;
-                stamps[stamp_idx - 1]
-            } else {
-                grid.t0_s + k as f64 * grid.log_interval_s
-            };
-            t_s.push(t);
-            let rows = &g.entries[g.start[e]..g.start[e + 1]];
-            phases.clear();
-            weights.clear();
-            for &(slot, w, p) in rows {
-                phases.push(p - offsets_rad[slot]);
-                weights.push(w);
-            }
-            phase_err_rad.push(average_phase_rad(&phases, &weights));
-            accel_mps2.push(imu.interpolate_at(t + imu_time_offset_s, &mut cursor));
-        }
-        (t_s, phase_err_rad, accel_mps2)
-    };
     let n_epochs = g.epochs();
-    let averaged: Vec<_> = epoch_blocks(n_epochs).into_par_iter().map(average_block).collect();
+    // The outputs made whole at once, each block writing its own parts of
+    // them (no block's vectors joined on the caller's thread afterwards).
     let (mut t_s, mut phase_err_rad, mut accel_mps2) =
-        (Vec::with_capacity(n_epochs), Vec::with_capacity(n_epochs), Vec::with_capacity(n_epochs));
-    for (t, phase, accel) in averaged {
-        t_s.extend(t);
-        phase_err_rad.extend(phase);
-        accel_mps2.extend(accel);
-    }
+        (vec![0.0; n_epochs], vec![None; n_epochs], vec![[0.0; 3]; n_epochs]);
+    let blocks = epoch_blocks(n_epochs);
+    let parts = t_s.par_chunks_mut(EPOCH_BLOCK).zip(phase_err_rad.par_chunks_mut(EPOCH_BLOCK));
+    parts.zip(accel_mps2.par_chunks_mut(EPOCH_BLOCK)).zip(&blocks).for_each(
+        |(((t_out, phase_out), accel_out), epochs)| {
+            let mut stamp_idx = grid.k_of_stamp.partition_point(|&k| k < k_first + epochs.start as u64);
+            // The IMU sample at or before the first read time (the cursor a
+            // pass from the first epoch would have reached).
+            let first_read = grid.time(stamps, k_first + epochs.start as u64) + imu_time_offset_s;
+            let mut cursor = imu.t_s.partition_point(|&x| x <= first_read).saturating_sub(1);
+            let (mut phases, mut weights) = (Vec::new(), Vec::new());
+            for (j, e) in epochs.clone().enumerate() {
+                let k = k_first + e as u64;
+                let t = if grid.k_of_stamp.get(stamp_idx) == Some(&k) {
+                    stamp_idx += 1;
+                    stamps[stamp_idx - 1]
+                } else {
+                    grid.t0_s + k as f64 * grid.log_interval_s
+                };
+                t_out[j] = t;
+                let rows = &g.entries[g.start[e]..g.start[e + 1]];
+                phases.clear();
+                weights.clear();
+                for &(slot, w, p) in rows {
+                    phases.push(p - offsets_rad[slot]);
+                    weights.push(w);
+                }
+                phase_out[j] = average_phase_rad(&phases, &weights);
+                accel_out[j] = imu.interpolate_at(t + imu_time_offset_s, &mut cursor);
+            }
+        },
+    );
     Averaged { t_s, phase_err_rad, accel_mps2 }
 }
 
@@ -233,7 +229,10 @@ pub(super) fn average(
 /// of the average (`1_g·u ≠ 0` for the indicator `u` of the gauge slots keeps
 /// `M + λ·u uᵀ` regular, and `1_gᵀb = 0` again gives `uᵀc = 0` exactly).
 pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64, f64)], gauge: &[bool]) -> Vec<f64> {
-    let mut m = DMatrix::<f64>::zeros(n, n);
+    // M row-major in a plain array: the sums run epoch after epoch, one
+    // update per entry per epoch, the operations of the formula above in
+    // its order.
+    let mut sums = vec![0.0; n * n];
     let mut b = DVector::<f64>::zeros(n);
     let mut parent: Vec<usize> = (0..n).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
@@ -243,29 +242,28 @@ pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64,
         }
         i
     }
-    let (mut phases, mut weights) = (Vec::new(), Vec::new());
     for e in 0..start.len() - 1 {
         let rows = &entries[start[e]..start[e + 1]];
-        phases.clear();
-        weights.clear();
-        phases.extend(rows.iter().map(|&(_, _, p)| p));
-        weights.extend(rows.iter().map(|&(_, w, _)| w));
-        let Some(mean) = average_phase_rad(&phases, &weights) else {
+        let Some(mean) = weighted_mean(rows) else {
             continue;
         };
-        let sw = weights.iter().fold(0.0, |sw, w| sw + w);
+        let sw = rows.iter().fold(0.0, |sw, &(_, w, _)| sw + w);
+        let first = rows[0].0;
         for (r, &(i, wi, pi)) in rows.iter().enumerate() {
             b[i] += wi * (pi - mean);
-            m[(i, i)] += wi - wi * wi / sw;
+            sums[i * n + i] += wi - wi * wi / sw;
             for &(j, wj, _) in &rows[r + 1..] {
                 let x = wi * wj / sw;
-                m[(i, j)] -= x;
-                m[(j, i)] -= x;
+                sums[i * n + j] -= x;
+                sums[j * n + i] -= x;
             }
-            let (ri, r0) = (root(&mut parent, i), root(&mut parent, rows[0].0));
-            parent[ri] = r0;
+            if i != first {
+                let (ri, r0) = (root(&mut parent, i), root(&mut parent, first));
+                parent[ri] = r0;
+            }
         }
     }
+    let mut m = DMatrix::<f64>::from_row_slice(n, n, &sums);
     let trace: f64 = m.trace();
     let lambda = if trace > 0.0 { trace / n as f64 } else { 1.0 };
     let groups: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
@@ -282,6 +280,20 @@ pub(crate) fn channel_offsets(n: usize, start: &[usize], entries: &[(usize, f64,
         Some(ch) => ch.solve(&b).iter().copied().collect(),
         None => m.lu().solve(&b).map(|x| x.iter().copied().collect()).unwrap_or_else(|| vec![0.0; n]),
     }
+}
+
+/// [`average_phase_rad`] of an epoch's entries (slot, weight, phase), read
+/// in place: the same sums in the same order, so the same mean to the bit.
+#[inline]
+fn weighted_mean(rows: &[(usize, f64, f64)]) -> Option<f64> {
+    let (mut sum, mut wsum) = (0.0, 0.0);
+    for &(_, w, p) in rows {
+        if p.is_finite() {
+            sum += w * p;
+            wsum += w;
+        }
+    }
+    if wsum > 0.0 { Some(sum / wsum) } else { None }
 }
 
 #[cfg(test)]
