@@ -95,7 +95,8 @@ pub struct ObservationTrack {
     /// half-cycle change, a clock jump, a slip no flag marked.
     pub rows_left_out: usize,
     /// Rows at which the track alone stepped by a half cycle or more with
-    /// no flag set ([`half_cycle_slips`]'s test).
+    /// no flag set (a one-row spike of half a cycle against the other
+    /// tracks; docs/conventions.md, "Carrier phase and Doppler logs").
     pub half_cycle_slips: usize,
     /// Whether the whole track was left out for slipping again and again
     /// (more than [`SLIPPING_TRACK_SLIPS`] slips and
