@@ -68,7 +68,7 @@ def test_a_ubx_log_with_its_own_accelerometer_gives_gamma_within_sigma(gsens_bin
     out = observation_logs
     doc = estimate(gsens_bin, out, "--ubx", str(out / "log.ubx"))
     check(doc, json.loads((out / "truth.json").read_text()))
-    assert doc["source"]["receiver"] == "UBX" and doc["inputs"]["imu"].endswith("(ESF)")
+    assert doc["source"]["receiver"] == "UBX" and "(ESF; sensor time: free-running, tied" in doc["inputs"]["imu"]
 
 
 def test_a_rinex_file_without_an_imu_log_is_refused(gsens_bin, observation_logs):
@@ -89,3 +89,10 @@ def test_python_estimates_the_same_from_rinex_and_ubx(gsens_bin, observation_log
     check(gsens.estimate(ubx=out / "log.ubx", observable="carrier_phase").to_dict(), truth)
     with pytest.raises(gsens.GsensError, match="observable"):
         gsens.estimate(ubx=out / "log.ubx", observable="phase")
+
+
+def test_an_imu_on_another_time_base_is_refused_by_name(gsens_bin, observation_logs):
+    """The fixture's ESF tags are a free-running sensor clock: read as GPS time of week, the IMU
+    misses the log, and the error says how to fix it."""
+    r = run_cli(gsens_bin, "estimate", "--ubx", str(observation_logs / "log.ubx"), "--ubx-sensor-time", "gps-tow-ms")
+    assert r.returncode != 0 and "overlap by less than half" in r.stderr and "--ubx-sensor-time" in r.stderr, r.stderr

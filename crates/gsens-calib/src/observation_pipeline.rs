@@ -87,8 +87,25 @@ pub fn calibrate_observations(
     record: ObservationRecord,
 ) -> Result<ObservationOutcome, PipelineError> {
     settings.estimate.validate()?;
-    let why = |e: &dyn std::fmt::Display| PipelineError::Measurement { why: e.to_string() };
-    let rows = observation_rows(log, record).map_err(|e| why(&e))?;
+    let source_name = log.source_name.clone();
+    let why = |e: &dyn std::fmt::Display| PipelineError::Observations {
+        source_name: source_name.clone(),
+        why: e.to_string(),
+    };
+    let rows = observation_rows(log, record)?;
+    // The IMU must cover the log's epochs on the same time base (GPS seconds of the week).
+    let (Some(&t0), Some(&t1)) = (rows.rows.epoch_t_s.first(), rows.rows.epoch_t_s.last()) else {
+        return Err(why(&"no epoch"));
+    };
+    let (i0, i1) = (imu.t_s.first().copied().unwrap_or(f64::NAN), imu.t_s.last().copied().unwrap_or(f64::NAN));
+    let overlap_s = i1.min(t1) - i0.max(t0);
+    if !(overlap_s > 0.5 * (t1 - t0)) {
+        return Err(why(&format!(
+            "the IMU log covers t = {i0:.3} … {i1:.3} s and the observations t = {t0:.3} … {t1:.3} s \
+             (GPS seconds of the week of the first epoch): they overlap by less than half the log; give the \
+             IMU's t_s in GPS seconds of the week (a UBX log's sensor time: --ubx-sensor-time)"
+        )));
+    }
     let log_interval_s = median_step(&rows.rows.epoch_t_s);
     let mut free = settings.loop_free(log_interval_s);
     free.channels = 0;

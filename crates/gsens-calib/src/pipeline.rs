@@ -193,6 +193,17 @@ pub enum PipelineError {
     /// The estimation failed.
     #[error(transparent)]
     Calib(#[from] CalibError),
+    /// A carrier phase and Doppler log gives no rows.
+    #[error(transparent)]
+    ObservationRows(#[from] crate::ObservationRowsError),
+    /// A carrier phase and Doppler log (RINEX, UBX) could not be calibrated.
+    #[error("{source_name}: {why}")]
+    Observations {
+        /// The log's name.
+        source_name: String,
+        /// Why not.
+        why: String,
+    },
     /// The measurement asked for cannot be made from the log.
     #[error("measurement input_phase: {why}")]
     Measurement {

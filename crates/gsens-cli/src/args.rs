@@ -181,6 +181,11 @@ pub(crate) struct InputArgs {
     /// Doppler, or auto (the carrier phase where most tracks have one).
     #[arg(long, value_enum, default_value_t, help_heading = "Carrier phase and Doppler logs")]
     pub observable: gsens_calib::ObservationRecord,
+    /// How the UBX log's ESF sensor time tags map to GPS time: free-running-ms (a millisecond sensor
+    /// clock, tied once to an RXM-RAWX epoch; the rest is the IMU offset searched) or gps-tow-ms
+    /// (the tags count GPS time of week in ms, as rcvTow).
+    #[arg(long, value_enum, default_value = "free-running-ms", help_heading = "Carrier phase and Doppler logs")]
+    pub ubx_sensor_time: gsens_ublox::SensorTime,
 }
 
 impl InputArgs {
@@ -206,7 +211,7 @@ impl InputArgs {
             pocketsdr_options: self.pocketsdr_conversion.clone(),
             rinex: self.rinex.clone(),
             ubx: self.ubx.clone(),
-            ubx_settings: Default::default(),
+            ubx_settings: gsens_ublox::UbxSettings { sensor_time: self.ubx_sensor_time },
             observation_record: self.observable,
         }
     }

@@ -38,6 +38,7 @@ impl ObservationInputs {
     /// list filled in.
     pub fn calibrate(&self, settings: &PipelineSettings) -> Result<ObservationOutcome, InputsError> {
         let read_imu = |path: &PathBuf| gsens_io::read_imu_file(path);
+        let mut esf_time = String::new();
         let (log, imu, role, path): (gsens_io::ObservationLog, ImuSeries, &str, &PathBuf) = match &self.log {
             ObservationFile::Rinex(path) => {
                 let Some(imu_path) = &self.imu else {
@@ -60,7 +61,18 @@ impl ObservationInputs {
                             path.display()
                         )));
                     }
-                    None => ubx.imu,
+                    None => {
+                        esf_time = match (ubx.sensor_time, ubx.imu_anchor) {
+                            (gsens_ublox::SensorTime::GpsTowMs, _) => "sensor time: GPS time of week".into(),
+                            (_, Some(a)) => format!(
+                                "sensor time: free-running, tied to the RXM-RAWX epoch at t = {} s, GPS − sensor = \
+                                 {} s",
+                                a.at_t_s, a.gps_minus_sensor_s
+                            ),
+                            (_, None) => "sensor time: free-running, not tied".into(),
+                        };
+                        ubx.imu
+                    }
                 };
                 (ubx.observations, imu, "ubx", path)
             }
@@ -69,7 +81,7 @@ impl ObservationInputs {
         outcome.inputs.push((role.to_string(), path.display().to_string()));
         outcome.inputs.push(match &self.imu {
             Some(p) => ("imu".to_string(), p.display().to_string()),
-            None => ("imu".to_string(), format!("{} (ESF)", path.display())),
+            None => ("imu".to_string(), format!("{} (ESF; {esf_time})", path.display())),
         });
         Ok(outcome)
     }

@@ -10,6 +10,7 @@ pub const ACCEL_DATA_TYPES: [u8; 3] = [16, 17, 18];
 pub const ACCEL_MPS2_PER_LSB: f64 = 1.0 / 1024.0;
 
 /// How the sensor time tags (ESF-RAW `sTtag`, ESF-MEAS `timeTag`) map to GPS time.
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum SensorTime {
     /// The tag is a free-running millisecond counter of the sensor clock
