@@ -65,7 +65,8 @@ class Estimate:
     @property
     def trustworthy(self) -> bool:
         """The verdict: False when a warning other than the informational ones
-        (imu_spikes, imu_stuck, imu_clipped, response_unchecked) was raised or no
+        (imu_spikes, imu_stuck, imu_clipped, response_unchecked, clock_jumps,
+        records_skipped) was raised or no
         axis is observable; ``repr`` names the codes that decide it."""
     @property
     def warnings(self) -> List[Dict[str, str]]:

@@ -346,7 +346,8 @@ mod tests {
         }
         let informational: Vec<_> =
             WarningCode::ALL.iter().filter(|c| !c.affects_trust()).map(|c| c.as_str()).collect();
-        assert_eq!(informational, ["response_unchecked", "imu_spikes", "imu_stuck", "imu_clipped"]);
+        let want = ["response_unchecked", "imu_spikes", "imu_stuck", "imu_clipped", "clock_jumps", "records_skipped"];
+        assert_eq!(informational, want);
     }
 
     /// Under a unit warning, `loop_offset_unresolved` keeps its finding and
