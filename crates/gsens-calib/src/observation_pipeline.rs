@@ -103,7 +103,7 @@ pub fn calibrate_observations(
         return Err(why(&format!(
             "the IMU log covers t = {i0:.3} … {i1:.3} s and the observations t = {t0:.3} … {t1:.3} s \
              (GPS seconds of the week of the first epoch): they overlap by less than half the log; give the \
-             IMU's t_s in GPS seconds of the week (a UBX log's sensor time: --ubx-sensor-time)"
+             IMU's t_s in GPS seconds of the week (for a UBX log's own IMU: the rule its sensor time tags follow)"
         )));
     }
     let log_interval_s = median_step(&rows.rows.epoch_t_s);
