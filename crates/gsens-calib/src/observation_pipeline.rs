@@ -99,7 +99,7 @@ pub fn calibrate_observations(
     };
     let (i0, i1) = (imu.t_s.first().copied().unwrap_or(f64::NAN), imu.t_s.last().copied().unwrap_or(f64::NAN));
     let overlap_s = i1.min(t1) - i0.max(t0);
-    if !(overlap_s > 0.5 * (t1 - t0)) {
+    if overlap_s.is_nan() || overlap_s <= 0.5 * (t1 - t0) {
         return Err(why(&format!(
             "the IMU log covers t = {i0:.3} … {i1:.3} s and the observations t = {t0:.3} … {t1:.3} s \
              (GPS seconds of the week of the first epoch): they overlap by less than half the log; give the \
