@@ -342,18 +342,16 @@ impl InputPhases {
     }
 }
 
-/// The (row, epoch) index pairs of a track's rows that fall on an epoch of
-/// `epochs` (rows of an epoch share its stamp exactly), in order.
-pub(crate) fn rows_on_epochs<'a>(
-    tr: &'a gsens_io::ChannelTrack,
-    epochs: &'a [f64],
-) -> impl Iterator<Item = (usize, usize)> + 'a {
+/// The (row, epoch) index pairs of a track's rows, stamped `t_s`, that fall
+/// on an epoch of `epochs` (rows of an epoch share its stamp exactly), in
+/// order; both ascending.
+pub(crate) fn rows_on_epochs<'a>(t_s: &'a [f64], epochs: &'a [f64]) -> impl Iterator<Item = (usize, usize)> + 'a {
     let mut e = 0usize;
-    (0..tr.len()).filter_map(move |k| {
-        while e < epochs.len() && epochs[e] < tr.t_s[k] {
+    (0..t_s.len()).filter_map(move |k| {
+        while e < epochs.len() && epochs[e] < t_s[k] {
             e += 1;
         }
-        (e < epochs.len() && epochs[e] == tr.t_s[k]).then_some((k, e))
+        (e < epochs.len() && epochs[e] == t_s[k]).then_some((k, e))
     })
 }
 
@@ -962,7 +960,7 @@ fn input_phase_on_epochs(
     // Rows j and j + 1 are one log interval apart (no gap between them).
     let next_is_adjacent =
         |j: usize| j + 1 < tr.len() && ((tr.t_s[j + 1] - tr.t_s[j]) - log_interval_s).abs() < 0.1 * log_interval_s;
-    for (k, e) in rows_on_epochs(tr, epochs) {
+    for (k, e) in rows_on_epochs(&tr.t_s, epochs) {
         if tr.t_s[k] < tr.t_s[0] + settings.warmup_s || tr.phase_err_rad[k].abs() > settings.max_abs_phase_rad {
             continue;
         }

@@ -88,7 +88,7 @@ pub(crate) fn frequency_on_epochs(
     settings: &LoopFreeSettings,
 ) -> Vec<Option<f64>> {
     let mut out = vec![None; epochs.len()];
-    for (k, e) in rows_on_epochs(tr, epochs) {
+    for (k, e) in rows_on_epochs(&tr.t_s, epochs) {
         if usable_row(tr, k, settings) {
             out[e] = Some(tr.nco_freq_hz[k]);
         }
@@ -107,7 +107,7 @@ pub(crate) fn mean_frequency_on_epochs(
 ) -> Vec<Option<f64>> {
     let mut out = vec![None; epochs.len()];
     let mut previous: Option<(usize, usize)> = None;
-    for (k, e) in rows_on_epochs(tr, epochs) {
+    for (k, e) in rows_on_epochs(&tr.t_s, epochs) {
         if let Some((k0, e0)) = previous.filter(|&(k0, e0)| e0 + 1 == e && usable_row(tr, k0, settings))
             && usable_row(tr, k, settings)
         {

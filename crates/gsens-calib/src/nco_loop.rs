@@ -109,6 +109,9 @@ pub struct IdentifiedNcoEstimate {
     pub estimate: LoopFreeEstimate,
     /// The loop.
     pub identified: IdentifiedLoop,
+    /// The fit with H = 1 ([`estimate_nco_frequency_unity`]), where it
+    /// competed (not when a single shape was given).
+    pub unity: Option<LoopFreeEstimate>,
 }
 
 /// The loop shapes the identification tries for a log every
@@ -242,14 +245,14 @@ pub fn estimate_nco_frequency_identified_from(
     // the search) as a candidate of its own, without a bandwidth: a truth at
     // the range's wide end is approached by the shapes from one side only
     // (their |H| > 1 below ωn), so it must compete as itself.
+    let mut unity = None;
     if shapes.len() > 1
-        && let Some(unity_shape) = identification_shapes(log_interval_s).first()
+        && let Some(shape) = unity_shape(log_interval_s)
     {
-        let unity = model_at(unity_shape, bn_hi.ln())?;
-        let estimate = fit_rows(rows, &unity, settings, f64::INFINITY)?;
-        let bn0 = unity_shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+        let estimate = estimate_nco_frequency_unity(rows, imu, settings, quantity)?;
+        unity = Some(estimate.clone());
         candidates.push(Candidate {
-            shape: unity_shape.with_bn_scaled(bn_hi / bn0),
+            shape,
             bn_hz: bn_hi,
             sigma_ln_bn: f64::INFINITY,
             resolution: LoopResolution::Wide,
@@ -265,8 +268,7 @@ pub fn estimate_nco_frequency_identified_from(
     };
     // The shapes compared under one noise model (the provisional best's):
     // each fit's own AR model would move its σ² by the choice of its order.
-    let regressor_of =
-        |c: &Candidate| if c.unity { model_at(&c.shape, bn_hi.ln()) } else { model_at(&c.shape, c.bn_hz.ln()) };
+    let regressor_of = |c: &Candidate| model_at(&c.shape, c.bn_hz.ln());
     let noise = rows_noise(rows, &regressor_of(&candidates[k_first])?, settings)?;
     let scores: Vec<f64> = candidates
         .par_iter()
@@ -341,6 +343,7 @@ pub fn estimate_nco_frequency_identified_from(
             resolution: c.resolution,
             shapes: shape_fits,
         },
+        unity,
     })
 }
 
@@ -386,13 +389,21 @@ pub fn estimate_nco_frequency_unity(
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
     check_settings(settings)?;
     let epochs = rows.epoch_t_s.as_slice();
-    let shapes = identification_shapes(median_step(epochs));
-    let Some(shape) = shapes.first() else {
+    let Some(shape) = unity_shape(median_step(epochs)) else {
         return Err(LoopFreeError::Loop { why: "no update interval divides the log interval".into() });
     };
     let regressor =
-        model_regressor(epochs, imu, shape, IDENTIFY_BN_RANGE_HZ[1].ln(), quantity, identification_lead_s(settings))?;
+        model_regressor(epochs, imu, &shape, IDENTIFY_BN_RANGE_HZ[1].ln(), quantity, identification_lead_s(settings))?;
     fit_rows(rows, &regressor, settings, f64::INFINITY)
+}
+
+/// The loop whose H stands for 1 ([`estimate_nco_frequency_unity`]): the
+/// first shape of [`identification_shapes`] (2nd order, the shortest update
+/// interval) at the top of [`IDENTIFY_BN_RANGE_HZ`].
+fn unity_shape(log_interval_s: f64) -> Option<LoopModel> {
+    let shape = *identification_shapes(log_interval_s).first()?;
+    let bn0 = shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
+    Some(shape.with_bn_scaled(IDENTIFY_BN_RANGE_HZ[1] / bn0))
 }
 
 /// What compensating with `estimate`'s Γ̂ does, through the `identified`

@@ -15,11 +15,10 @@
 //! discriminator's linear range at the weakest track's C/N0.
 
 use crate::document::{CrossEstimate, PipelineSummary, SourceConversion};
-use crate::estimate::ResidualFigures;
 use crate::loop_free::{LoopFreeError, LoopFreeEstimate, median_step};
 use crate::nco_loop::{identification_shapes, identified_figures};
 use crate::observation_rows::{ObservationRecord, ObservationRows, observation_rows};
-use crate::verdict::axis_verdicts;
+use crate::verdict::weakest_linear_range_rad;
 use crate::{
     Calibration, IdentifiedLoop, IdentifiedNcoEstimate, LoopResolution, Measurement, PipelineError, PipelineSettings,
     ResultDocument, Warning, WarningCode, estimate_nco_frequency_identified_from, estimate_nco_frequency_unity,
@@ -118,7 +117,10 @@ pub fn calibrate_observations(
     crate::progress::stage("identifying the receiver's loop from its NCO frequency", None);
     let identified =
         estimate_nco_frequency_identified_from(&rows.rows, imu, &free, &shapes, quantity).map_err(|e| why(&e))?;
-    let unity = estimate_nco_frequency_unity(&rows.rows, imu, &free, quantity);
+    let unity = match &identified.unity {
+        Some(fit) => Ok(fit.clone()),
+        None => estimate_nco_frequency_unity(&rows.rows, imu, &free, quantity),
+    };
     let model = identified.identified.model.ok_or_else(|| why(&"the identification kept no loop"))?;
     let figures =
         identified_figures(&rows.rows, imu, &free, &model, &identified.estimate, quantity).map_err(|e| why(&e))?;
@@ -132,18 +134,12 @@ pub fn calibrate_observations(
         figures,
         (log_interval_s / loop_interval_s).round() as u32,
     );
-    calibration.discriminator_linear_range_rad = rows
-        .tracks
-        .iter()
-        .filter(|t| t.rows > 0)
-        .map(|t| {
-            let cn0 = gsens_core::units::cn0_dbhz_to_ratio_hz(t.mean_cn0_dbhz);
-            settings.estimate.discriminator.linear_range_rad(cn0, loop_interval_s) * gsens_core::units::GPS_L1_HZ
-                / t.carrier_hz
-        })
-        .filter(|r| r.is_finite())
-        .reduce(f64::min)
-        .unwrap_or(settings.estimate.discriminator.unambiguous_range_rad());
+    let with_rows = rows.tracks.iter().filter(|t| t.rows > 0);
+    calibration.discriminator_linear_range_rad = weakest_linear_range_rad(
+        with_rows.map(|t| (t.mean_cn0_dbhz, t.carrier_hz)),
+        settings.estimate.discriminator,
+        loop_interval_s,
+    );
     Ok(ObservationOutcome {
         rows,
         identified,
@@ -255,81 +251,4 @@ impl ObservationOutcome {
         }
         w
     }
-}
-
-impl Calibration {
-    /// The calibration of an estimate made without a tracking error (from a
-    /// receiver's NCO frequency): `estimate`'s Γ̂ and covariance with the
-    /// IMU's systematic σ, each axis's verdict from the specific force on
-    /// `epoch_t_s` (at the estimate's IMU offset) and `settings`' loop, the
-    /// compensation figures `figures`.
-    pub(crate) fn of_direct(
-        settings: crate::EstimateSettings,
-        epoch_t_s: &[f64],
-        imu: &ImuSeries,
-        estimate: &LoopFreeEstimate,
-        figures: ResidualFigures,
-        model_substeps: u32,
-    ) -> Calibration {
-        let log_interval_s = median_step(epoch_t_s);
-        let mut cursor = 0;
-        let accel: Vec<[f64; 3]> =
-            epoch_t_s.iter().map(|t| imu.interpolate_at(t + estimate.imu_time_offset_s, &mut cursor)).collect();
-        let observable = [true; 3];
-        let min_excitation = settings.criteria.min_excitation_rms;
-        let axes = axis_verdicts(
-            &accel,
-            log_interval_s,
-            &settings.receiver_loop,
-            observable,
-            estimate.excitation_rms,
-            min_excitation,
-        );
-        let mut c = Calibration {
-            gamma_hz_per_mps2: [None; 3],
-            sigma_hz_per_mps2: [None; 3],
-            sigma_statistical_hz_per_mps2: [None; 3],
-            sigma_imu_hz_per_mps2: [None; 3],
-            gamma_ppb_per_g: [None; 3],
-            sigma_ppb_per_g: [None; 3],
-            observable,
-            excitation_rms: estimate.excitation_rms,
-            covariance_hz_per_mps2_sq: [[None; 3]; 3],
-            condition_number: condition_number(&estimate.covariance),
-            gamma_raw_hz_per_mps2: estimate.gamma_hz_per_mps2,
-            sigma_white_hz_per_mps2: [None; 3],
-            crlb_hz_per_mps2: [None; 3],
-            noise_ar_order: estimate.noise_ar_order,
-            imu_time_offset_s: estimate.imu_time_offset_s,
-            imu_time_offset_estimated: estimate.time_offset_searched,
-            imu_time_offset_sigma_s: None,
-            joint_fit: None,
-            huber: None,
-            axes,
-            predicted_peak_phase_err_rad: 0.0,
-            discriminator_linear_range_rad: settings.discriminator.unambiguous_range_rad(),
-            rms_before_rad: 0.0,
-            rms_after_rad: 0.0,
-            rms_g_induced_rad: 0.0,
-            residual_sigma_rad: figures.rms_after_rad,
-            epochs_used: estimate.epochs as u64,
-            epochs_total: epoch_t_s.len(),
-            log_interval_s,
-            history: Vec::new(),
-            model_substeps,
-            loop_used: settings.receiver_loop,
-            settings,
-        };
-        c.adopt_direct(Measurement::NcoFrequency, estimate, figures);
-        c
-    }
-}
-
-/// The condition number of a covariance (the information's is the same):
-/// the ratio of its largest to its smallest eigenvalue; `None` where singular.
-fn condition_number(covariance: &[[f64; 3]; 3]) -> Option<f64> {
-    let m = nalgebra::Matrix3::from_fn(|i, j| covariance[i][j]);
-    let e = m.symmetric_eigenvalues();
-    let (lo, hi) = (e.min(), e.max());
-    (lo > 0.0 && hi.is_finite()).then(|| hi / lo)
 }

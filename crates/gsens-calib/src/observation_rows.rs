@@ -27,7 +27,7 @@
 //! the tracks' common mode no oscillator makes (a millisecond clock jump
 //! moves every phase by about 1.6·10⁶ cycles).
 
-use crate::loop_free::{InputPhases, TrackInputPhase};
+use crate::loop_free::{InputPhases, TrackInputPhase, rows_on_epochs};
 use gsens_core::RowQuantity;
 use gsens_io::{ObservationLog, SatelliteSeries, obs_flags};
 use serde::{Deserialize, Serialize};
@@ -187,6 +187,7 @@ pub fn observation_rows(
             _ => phase_rows(t, &epochs),
         })
         .collect();
+    let scales: Vec<f64> = log.tracks.iter().map(|t| t.carrier.scale_to_l1()).collect();
     let mut jumps = vec![false; epochs.len()];
     if record == ObservationRecord::CarrierPhase {
         for event in &log.clock_events {
@@ -194,7 +195,6 @@ pub fn observation_rows(
                 jumps[k] = true;
             }
         }
-        let scales: Vec<f64> = log.tracks.iter().map(|t| t.carrier.scale_to_l1()).collect();
         for k in common_steps(&values, &scales) {
             jumps[k] = true;
         }
@@ -207,7 +207,6 @@ pub fn observation_rows(
     let mut slips = vec![0usize; values.len()];
     let mut slipping = vec![false; values.len()];
     if record == ObservationRecord::CarrierPhase {
-        let scales: Vec<f64> = log.tracks.iter().map(|t| t.carrier.scale_to_l1()).collect();
         for (j, flagged) in half_cycle_slips(&values, &scales, &epochs).into_iter().enumerate() {
             slips[j] = flagged.len();
             for k in flagged {
@@ -275,14 +274,8 @@ fn mean_finite(x: &[f64]) -> f64 {
 /// The track's index at each epoch (`None` where it has no observation).
 fn on_epochs(track: &SatelliteSeries, epochs: &[f64]) -> Vec<Option<usize>> {
     let mut at = vec![None; epochs.len()];
-    let mut e = 0;
-    for (i, &t) in track.t_s.iter().enumerate() {
-        while e < epochs.len() && epochs[e] < t {
-            e += 1;
-        }
-        if e < epochs.len() && epochs[e] == t {
-            at[e] = Some(i);
-        }
+    for (i, e) in rows_on_epochs(&track.t_s, epochs) {
+        at[e] = Some(i);
     }
     at
 }

@@ -289,6 +289,83 @@ impl Calibration {
     }
 }
 
+impl Calibration {
+    /// The calibration of an estimate made without a tracking error (from a
+    /// receiver's NCO frequency): `estimate`'s Γ̂ and covariance with the
+    /// IMU's systematic σ, each axis's verdict from the specific force on
+    /// `epoch_t_s` (at the estimate's IMU offset) and `settings`' loop, the
+    /// compensation figures `figures`.
+    pub(crate) fn of_direct(
+        settings: crate::EstimateSettings,
+        epoch_t_s: &[f64],
+        imu: &gsens_io::ImuSeries,
+        estimate: &crate::LoopFreeEstimate,
+        figures: crate::estimate::ResidualFigures,
+        model_substeps: u32,
+    ) -> Calibration {
+        let log_interval_s = crate::loop_free::median_step(epoch_t_s);
+        let mut cursor = 0;
+        let accel: Vec<[f64; 3]> =
+            epoch_t_s.iter().map(|t| imu.interpolate_at(t + estimate.imu_time_offset_s, &mut cursor)).collect();
+        let observable = [true; 3];
+        let min_excitation = settings.criteria.min_excitation_rms;
+        let axes = crate::verdict::axis_verdicts(
+            &accel,
+            log_interval_s,
+            &settings.receiver_loop,
+            observable,
+            estimate.excitation_rms,
+            min_excitation,
+        );
+        let mut c = Calibration {
+            gamma_hz_per_mps2: [None; 3],
+            sigma_hz_per_mps2: [None; 3],
+            sigma_statistical_hz_per_mps2: [None; 3],
+            sigma_imu_hz_per_mps2: [None; 3],
+            gamma_ppb_per_g: [None; 3],
+            sigma_ppb_per_g: [None; 3],
+            observable,
+            excitation_rms: estimate.excitation_rms,
+            covariance_hz_per_mps2_sq: [[None; 3]; 3],
+            condition_number: condition_number(&estimate.covariance),
+            gamma_raw_hz_per_mps2: estimate.gamma_hz_per_mps2,
+            sigma_white_hz_per_mps2: [None; 3],
+            crlb_hz_per_mps2: [None; 3],
+            noise_ar_order: estimate.noise_ar_order,
+            imu_time_offset_s: estimate.imu_time_offset_s,
+            imu_time_offset_estimated: estimate.time_offset_searched,
+            imu_time_offset_sigma_s: None,
+            joint_fit: None,
+            huber: None,
+            axes,
+            predicted_peak_phase_err_rad: 0.0,
+            discriminator_linear_range_rad: settings.discriminator.unambiguous_range_rad(),
+            rms_before_rad: 0.0,
+            rms_after_rad: 0.0,
+            rms_g_induced_rad: 0.0,
+            residual_sigma_rad: figures.rms_after_rad,
+            epochs_used: estimate.epochs as u64,
+            epochs_total: epoch_t_s.len(),
+            log_interval_s,
+            history: Vec::new(),
+            model_substeps,
+            loop_used: settings.receiver_loop,
+            settings,
+        };
+        c.adopt_direct(crate::Measurement::NcoFrequency, estimate, figures);
+        c
+    }
+}
+
+/// The condition number of a covariance (the information's is the same):
+/// the ratio of its largest to its smallest eigenvalue; `None` where singular.
+fn condition_number(covariance: &[[f64; 3]; 3]) -> Option<f64> {
+    let m = nalgebra::Matrix3::from_fn(|i, j| covariance[i][j]);
+    let e = m.symmetric_eigenvalues();
+    let (lo, hi) = (e.min(), e.max());
+    (lo > 0.0 && hi.is_finite()).then(|| hi / lo)
+}
+
 #[cfg(test)]
 mod tests {
     use crate::{EpochSeries, EstimateSettings, JointSpec, calibrate, joint_fit};

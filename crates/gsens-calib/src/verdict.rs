@@ -23,12 +23,25 @@ use serde::{Deserialize, Serialize};
 /// above L1, which logs f_c/f_L1 times L1's phase error, meet the limit
 /// first. Without a used channel: the noise-free range R.
 pub fn session_linear_range_rad(channels: &[ChannelSummary], discriminator: Discriminator, interval_s: f64) -> f64 {
-    channels
-        .iter()
-        .filter(|c| c.used)
-        .map(|c| {
-            let cn0_dbhz = c.screening.median_cn0_dbhz.unwrap_or(c.mean_cn0_dbhz);
-            let to_l1 = gsens_core::units::GPS_L1_HZ / c.carrier_hz;
+    let used = channels.iter().filter(|c| c.used);
+    weakest_linear_range_rad(
+        used.map(|c| (c.screening.median_cn0_dbhz.unwrap_or(c.mean_cn0_dbhz), c.carrier_hz)),
+        discriminator,
+        interval_s,
+    )
+}
+
+/// [`session_linear_range_rad`] over tracks given as (C/N0 \[dB-Hz\],
+/// carrier \[Hz\]): the smallest R_lin·f_L1/f_c, or the noise-free range
+/// without a track.
+pub(crate) fn weakest_linear_range_rad(
+    tracks: impl Iterator<Item = (f64, f64)>,
+    discriminator: Discriminator,
+    interval_s: f64,
+) -> f64 {
+    tracks
+        .map(|(cn0_dbhz, carrier_hz)| {
+            let to_l1 = gsens_core::units::GPS_L1_HZ / carrier_hz;
             discriminator.linear_range_rad(gsens_core::units::cn0_dbhz_to_ratio_hz(cn0_dbhz), interval_s) * to_l1
         })
         .filter(|r| r.is_finite())

@@ -3,8 +3,8 @@
 use crate::args::{CalibrationArgs, InputArgs};
 use anyhow::{Result, anyhow};
 use clap::Args;
-use gsens_calib::PipelineSettings;
-use gsens_inputs::{Calibrated, Inputs, InputsError};
+use gsens_calib::{ObservationOutcome, PipelineSettings};
+use gsens_inputs::{Calibrated, Inputs, InputsError, ObservationInputs};
 use gsens_tui::progress::observed;
 use std::path::PathBuf;
 
@@ -38,6 +38,17 @@ pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracki
     Ok(calibrated)
 }
 
+/// Runs the calibration of a RINEX or UBX log, printing what became of its
+/// tracks.
+pub(crate) fn calibrate_observations(
+    inputs: ObservationInputs,
+    settings: &PipelineSettings,
+) -> Result<ObservationOutcome> {
+    let outcome = observed(|| inputs.calibrate(settings))?;
+    crate::out(&gsens_inputs::render_observation_summary(&outcome))?;
+    Ok(outcome)
+}
+
 pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> {
     let settings = args.calibration.settings(given)?;
     crate::check_files(&[("--json", args.json.as_deref()), ("--epochs-out", args.epochs_out.as_deref())], None)?;
@@ -45,8 +56,7 @@ pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> 
         if args.epochs_out.is_some() {
             return Err(anyhow!("--epochs-out needs a tracking error, which --rinex and --ubx logs do not hold"));
         }
-        let outcome = observed(|| observations?.calibrate(&settings).map_err(anyhow::Error::from))?;
-        crate::out(&gsens_inputs::render_observation_summary(&outcome))?;
+        let outcome = calibrate_observations(observations?, &settings)?;
         let doc = outcome.document(None);
         crate::out(&gsens_report::render_text(&doc))?;
         crate::write_json(args.json.as_deref(), &doc, "\n")?;

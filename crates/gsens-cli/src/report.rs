@@ -46,9 +46,7 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
         let settings = args.calibration.settings(given)?;
         crate::check_dir("--out", Some(&args.out))?;
         let truth = args.truth.as_deref().map(gsens_sim::read_truth_gamma).transpose()?;
-        let mut outcome =
-            gsens_tui::progress::observed(|| observations?.calibrate(&settings).map_err(anyhow::Error::from))?;
-        crate::out(&gsens_inputs::render_observation_summary(&outcome))?;
+        let mut outcome = crate::estimate::calibrate_observations(observations?, &settings)?;
         if let Some(t) = &args.truth {
             outcome.inputs.push(("truth".into(), t.display().to_string()));
         }

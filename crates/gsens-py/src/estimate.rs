@@ -48,15 +48,11 @@ pub(crate) fn estimate(
             }
             None => PathBuf::new(),
         };
-        let record = match observable.as_deref() {
-            None | Some("auto") => gsens_calib::ObservationRecord::Auto,
-            Some("carrier_phase") => gsens_calib::ObservationRecord::CarrierPhase,
-            Some("doppler") => gsens_calib::ObservationRecord::Doppler,
-            Some(other) => {
-                return Err(GsensError::new_err(format!(
-                    "observable: {other:?} is not auto, carrier_phase or doppler"
-                )));
-            }
+        // The names are the record's serde names, as the command line's.
+        let record = match observable {
+            None => gsens_calib::ObservationRecord::Auto,
+            Some(name) => serde_json::from_value(serde_json::Value::String(name))
+                .map_err(|e| GsensError::new_err(format!("observable: {e}")))?,
         };
         let choice = gsens_inputs::InputChoice { imu, rinex, ubx, observation_record: record, ..Default::default() };
         let Some(inputs) = choice.observations(|n| n.to_string()) else { unreachable!("rinex or ubx is given") };

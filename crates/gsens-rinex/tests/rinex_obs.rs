@@ -113,6 +113,18 @@ fn header_line(content: &str, label: &str) -> String {
     format!("{content:<60}{label:<20}\n")
 }
 
+/// The header lines that name the station, the same in every file written here.
+fn station_lines() -> String {
+    let mut s = String::new();
+    s += &header_line("test", "MARKER NAME");
+    s += &header_line(&format!("{:<20}{:<40}", "t", "t"), "OBSERVER / AGENCY");
+    s += &header_line(&format!("{:<20}{:<20}{:<20}", "1", "R", "1"), "REC # / TYPE / VERS");
+    s += &header_line(&format!("{:<20}{:<20}", "1", "A"), "ANT # / TYPE");
+    s += &header_line(&format!("{:14.4}{:14.4}{:14.4}", 1.0, 2.0, 3.0), "APPROX POSITION XYZ");
+    s += &header_line(&format!("{:14.4}{:14.4}{:14.4}", 0.0, 0.0, 0.0), "ANTENNA: DELTA H/E/N");
+    s
+}
+
 /// A mixed GPS + GLONASS RINEX 3.04 file written here column by column: R12 at k = −4 in the
 /// header, R07 not listed; receiver clock offsets with a 1 ms jump at the second epoch.
 fn mixed_file() -> String {
@@ -121,12 +133,7 @@ fn mixed_file() -> String {
         &format!("{:>9}{:11}{:<20}{:<20}", "3.04", "", "OBSERVATION DATA", "M: MIXED"),
         "RINEX VERSION / TYPE",
     );
-    s += &header_line("test", "MARKER NAME");
-    s += &header_line(&format!("{:<20}{:<40}", "t", "t"), "OBSERVER / AGENCY");
-    s += &header_line(&format!("{:<20}{:<20}{:<20}", "1", "R", "1"), "REC # / TYPE / VERS");
-    s += &header_line(&format!("{:<20}{:<20}", "1", "A"), "ANT # / TYPE");
-    s += &header_line(&format!("{:14.4}{:14.4}{:14.4}", 1.0, 2.0, 3.0), "APPROX POSITION XYZ");
-    s += &header_line(&format!("{:14.4}{:14.4}{:14.4}", 0.0, 0.0, 0.0), "ANTENNA: DELTA H/E/N");
+    s += &station_lines();
     s += &header_line("G    2 L1C D1C", "SYS / # / OBS TYPES");
     s += &header_line("R    3 C1C L1C D1C", "SYS / # / OBS TYPES");
     s += &header_line(&format!("{:6}{:6}{:6}{:6}{:6}{:13.7}     GPS", 2024, 2, 8, 12, 0, 18.0), "TIME OF FIRST OBS");
@@ -171,12 +178,7 @@ fn v2_file() -> String {
         &format!("{:>9}{:11}{:<20}{:<20}", "2.11", "", "OBSERVATION DATA", "G (GPS)"),
         "RINEX VERSION / TYPE",
     );
-    s += &header_line("test", "MARKER NAME");
-    s += &header_line(&format!("{:<20}{:<40}", "t", "t"), "OBSERVER / AGENCY");
-    s += &header_line(&format!("{:<20}{:<20}{:<20}", "1", "R", "1"), "REC # / TYPE / VERS");
-    s += &header_line(&format!("{:<20}{:<20}", "1", "A"), "ANT # / TYPE");
-    s += &header_line(&format!("{:14.4}{:14.4}{:14.4}", 1.0, 2.0, 3.0), "APPROX POSITION XYZ");
-    s += &header_line(&format!("{:14.4}{:14.4}{:14.4}", 0.0, 0.0, 0.0), "ANTENNA: DELTA H/E/N");
+    s += &station_lines();
     s += &header_line(&format!("{:6}{:6}", 1, 1), "WAVELENGTH FACT L1/2");
     s += &header_line("     5    L1    C1    P1    D1    S1", "# / TYPES OF OBSERV");
     s += &header_line(&format!("{:6}{:6}{:6}{:6}{:6}{:13.7}     GPS", 2024, 2, 8, 12, 0, 18.0), "TIME OF FIRST OBS");
