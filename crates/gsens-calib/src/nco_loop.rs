@@ -32,7 +32,7 @@
 use crate::loop_free::RowRegressor;
 use crate::loop_free::{
     InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, check_settings, fit_rows, fit_rows_scaled,
-    integrated_phase_rms_rad, median_step, rows_noise, rows_score,
+    integrated_phase_rad, median_step, rows_noise, rows_score,
 };
 use crate::nco_frequency::{ModelRegressor, frequency_on_epochs, mean_frequency_on_epochs};
 use gsens_core::{LoopModel, LoopSpec, RegressorModel, RowQuantity};
@@ -443,9 +443,10 @@ fn unity_shape(log_interval_s: f64) -> Option<LoopModel> {
 
 /// What compensating with `estimate`'s Γ̂ does, through the `identified`
 /// loop: the common mode of the rows integrated to carrier phase before and
-/// after ([`crate::loop_free`]'s integrated RMS), and the largest tracking
-/// error |φ_aᵀΓ̂| the loop predicts on the rows' epochs, φ_a the regressor
-/// of the discriminator output ([`RowQuantity::PhaseError`]).
+/// after ([`crate::loop_free`]'s integrated phase: its RMS, and the series
+/// on the rows' epochs), and the largest tracking error |φ_aᵀΓ̂| the loop
+/// predicts on the rows' epochs, φ_a the regressor of the discriminator
+/// output ([`RowQuantity::PhaseError`]).
 pub(crate) fn identified_figures(
     rows: &InputPhases,
     imu: &ImuSeries,
@@ -453,13 +454,25 @@ pub(crate) fn identified_figures(
     identified: &LoopModel,
     estimate: &LoopFreeEstimate,
     quantity: RowQuantity,
-) -> Result<crate::estimate::ResidualFigures, LoopFreeError> {
+) -> Result<(crate::estimate::ResidualFigures, CompensatedCarrierPhase), LoopFreeError> {
     let epochs = rows.epoch_t_s.as_slice();
     let (tau, gamma) = (estimate.imu_time_offset_s, estimate.gamma_hz_per_mps2);
     let ln_bn = identified.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ).ln();
     let lead_s = identification_lead_s(settings);
     let rows_regressor = model_regressor(epochs, imu, identified, ln_bn, quantity, lead_s)?;
-    let [before, after, g_induced] = integrated_phase_rms_rad(rows, &rows_regressor, settings, tau, &gamma)?;
+    let series = integrated_phase_rad(rows, &rows_regressor, settings, tau, &gamma)?;
+    if series.is_empty() {
+        return Err(LoopFreeError::TooFewEpochs { epochs: 0, segment_s: settings.segment_s });
+    }
+    let rms = |i: usize| (series.iter().map(|(_, v)| v[i] * v[i]).sum::<f64>() / series.len() as f64).sqrt();
+    let mut carrier_phase = CompensatedCarrierPhase {
+        t_s: epochs.to_vec(),
+        before_rad: vec![None; epochs.len()],
+        after_rad: vec![None; epochs.len()],
+    };
+    for (k, v) in &series {
+        (carrier_phase.before_rad[*k], carrier_phase.after_rad[*k]) = (Some(v[0]), Some(v[1]));
+    }
     let tracking_error = RowQuantity::PhaseError(gsens_core::LoggedPhase::Last);
     let regressor = model_regressor(epochs, imu, identified, ln_bn, tracking_error, lead_s)?;
     let at: Vec<usize> = (0..epochs.len()).filter(|&k| regressor.covers(k, tau)).collect();
@@ -468,12 +481,28 @@ pub(crate) fn identified_figures(
         .iter()
         .map(|x| (x[0] * gamma[0] + x[1] * gamma[1] + x[2] * gamma[2]).abs())
         .fold(0.0, f64::max);
-    Ok(crate::estimate::ResidualFigures {
-        rms_before_rad: before,
-        rms_after_rad: after,
-        rms_g_induced_rad: g_induced,
+    let figures = crate::estimate::ResidualFigures {
+        rms_before_rad: rms(0),
+        rms_after_rad: rms(1),
+        rms_g_induced_rad: rms(2),
         peak_phase_err_rad: peak,
-    })
+    };
+    Ok((figures, carrier_phase))
+}
+
+/// The receiver's carrier phase as compensation changes it: the common mode
+/// of the tracks' rows integrated, 2π·Σ f·Δt, with each segment's linear
+/// trend removed, before and after Γ̂'s part is taken out \[rad\], on the
+/// rows' epochs (`None` where no row entered the fit).
+#[derive(Debug, Clone, PartialEq, Default)]
+#[non_exhaustive]
+pub struct CompensatedCarrierPhase {
+    /// The rows' epochs \[s\] (GPS seconds of the week of the first).
+    pub t_s: Vec<f64>,
+    /// Before compensation \[rad\].
+    pub before_rad: Vec<Option<f64>>,
+    /// After it \[rad\].
+    pub after_rad: Vec<Option<f64>>,
 }
 
 /// One shape's identified loop and estimate.

@@ -51,14 +51,16 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
             outcome.inputs.push(("truth".into(), t.display().to_string()));
         }
         let doc = outcome.document(truth);
-        let files = gsens_report::write_report_dir(
-            &args.out,
-            &args.title,
-            &doc,
-            &[],
-            args.header.write_untrusted_header,
-            |_| {},
-        )?;
+        let files = drawing(|on_figure| {
+            gsens_report::write_report_dir(
+                &args.out,
+                &args.title,
+                &doc,
+                &gsens_report::observation_figures(&outcome),
+                args.header.write_untrusted_header,
+                on_figure,
+            )
+        })?;
         let (text, no_header) = files.render(&doc, crate::args::flag);
         crate::out(&text)?;
         crate::err(no_header.as_deref().unwrap_or_default());

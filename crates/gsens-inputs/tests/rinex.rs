@@ -14,6 +14,12 @@ fn fixture(name: &str) -> PathBuf {
 /// The fixture calibrated from `record`'s rows with the loop identified,
 /// and the truth (Γ in the IMU's axes).
 fn calibrated(record: ObservationRecord) -> (gsens_calib::ResultDocument, Vec<f64>) {
+    let (outcome, want) = outcome(record);
+    (outcome.document(None), want)
+}
+
+/// The fixture's calibration from `record`'s rows, and the truth.
+fn outcome(record: ObservationRecord) -> (gsens_calib::ObservationOutcome, Vec<f64>) {
     let choice = InputChoice {
         imu: fixture("imu.csv"),
         rinex: Some(fixture("gnss-sdr.24O")),
@@ -23,11 +29,11 @@ fn calibrated(record: ObservationRecord) -> (gsens_calib::ResultDocument, Vec<f6
     let inputs = choice.observations(str::to_string).expect("a RINEX route").unwrap();
     assert_eq!(inputs.log, ObservationFile::Rinex(fixture("gnss-sdr.24O")));
     let settings = CalibrationOptions::default().pipeline_settings().unwrap();
-    let doc = inputs.calibrate(&settings).expect("the fixture calibrates").document(None);
+    let outcome = inputs.calibrate(&settings).expect("the fixture calibrates");
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(fixture("truth.json")).unwrap()).unwrap();
     let want = truth["gamma_imu_axes_hz_per_mps2"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    (doc, want)
+    (outcome, want)
 }
 
 /// Γ̂ within 3σ of the truth on every axis, σ under `sigma_share` of |Γ|,
@@ -80,4 +86,23 @@ fn gnss_sdr_doppler_gives_gamma_within_sigma() {
         id.order, id.loop_interval_s, id.bn_hz, id.sigma_ln_bn, id.alike_intervals_s
     );
     assert!(id.alike_intervals_s.contains(&0.02), "{id:?}");
+}
+
+/// The carrier phase before and after compensation (the report's figure)
+/// is the series whose RMS the document gives, and compensating lowers it.
+#[test]
+fn the_compensated_carrier_phase_is_the_documents() {
+    let (outcome, _) = outcome(ObservationRecord::CarrierPhase);
+    let p = &outcome.carrier_phase;
+    assert_eq!((p.before_rad.len(), p.after_rad.len()), (p.t_s.len(), p.t_s.len()));
+    let rms = |v: &[Option<f64>]| {
+        let x: Vec<f64> = v.iter().flatten().copied().collect();
+        (x.iter().map(|x| x * x).sum::<f64>() / x.len() as f64).sqrt()
+    };
+    let c = &outcome.calibration;
+    let (before, after) = (rms(&p.before_rad), rms(&p.after_rad));
+    eprintln!("carrier phase RMS {before:.4} rad before, {after:.4} rad after");
+    assert!((before - c.rms_before_rad).abs() < 1e-12 * before, "{before} against {}", c.rms_before_rad);
+    assert!((after - c.rms_after_rad).abs() < 1e-12 * after, "{after} against {}", c.rms_after_rad);
+    assert!(after < before);
 }
