@@ -19,7 +19,9 @@
 //! interval trades with the bandwidth and the time offset: a 3 Hz loop
 //! updated every 20 ms and every 1 ms fit a session alike (Δ of a few
 //! tenths) with Γ̂ 3–4 % apart, and only the second rule covers the truth
-//! when it lies at the far end of the intervals tried.
+//! when it lies at the far end of the intervals tried. The kept shape's Γ̂
+//! at its bandwidth's ±1σ is covered the same way, where Γ̂ bends over that
+//! range more than the linear term below says.
 //!
 //! Γ̂'s covariance carries the loop's uncertainty: the Γ block of the joint
 //! covariance of (Γ, θ), the conditional one plus g·gᵀ·var(θ̂) with
@@ -351,6 +353,18 @@ pub fn estimate_nco_frequency_identified_from(
     alike_intervals_s.sort_by(f64::total_cmp);
     alike_intervals_s.dedup();
     let mut c = candidates.swap_remove(k_best);
+    // The bandwidth's 1σ ends (Δ(−2 ln L) = 1 on its profile): Γ̂ there
+    // covered too. The linear term g·gᵀ·var(θ̂) falls short where Γ̂ bends
+    // over ±σ of ln Bn, as it does when the rows are the loop's command
+    // sampled once per row and Bn is known to 20–30 % only.
+    if !c.unity && c.resolution == LoopResolution::Resolved && c.sigma_ln_bn.is_finite() {
+        let ln_bn = c.bn_hz.ln();
+        let ends: Vec<Option<LoopFreeEstimate>> = [ln_bn - c.sigma_ln_bn, ln_bn + c.sigma_ln_bn]
+            .par_iter()
+            .map(|&t| model_at(&c.shape, t).and_then(|m| fit_rows(rows, &m, settings, f64::INFINITY)).ok())
+            .collect();
+        cover_alike(&mut c.estimate, ends.iter().flatten().map(|e| (e.gamma_hz_per_mps2, e.covariance)));
+    }
     let own_covariance = c.estimate.covariance;
     if c.unity {
         c.bn_hz = wide_bound_hz;
@@ -360,7 +374,7 @@ pub fn estimate_nco_frequency_identified_from(
     for (i, s) in spread.iter().enumerate() {
         c.estimate.covariance[i][i] += s;
     }
-    cover_alike(&mut c.estimate, &own_covariance, &alike);
+    cover_alike(&mut c.estimate, alike.iter().map(|g| (*g, own_covariance)));
     let bn0 = c.shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
     let loop_interval_s = c.shape.interval_s().unwrap_or(log_interval_s);
     let mut estimate = c.estimate;
@@ -566,8 +580,7 @@ fn refine<'a>(
     // Not resolved: Γ̂ of the best point, its variance widened by the spread
     // of the estimates the data cannot tell from it.
     let mut estimate = best.clone();
-    let alike_gamma: Vec<[f64; 3]> = alike.iter().map(|&k| profile[k].gamma_hz_per_mps2).collect();
-    cover_alike(&mut estimate, &best.covariance, &alike_gamma);
+    cover_alike(&mut estimate, alike.iter().map(|&k| (profile[k].gamma_hz_per_mps2, best.covariance)));
     // The bound: the Bn farthest from the end the data cannot tell apart from the best.
     let alike_bn = alike.iter().map(|&k| grid[k]);
     let (resolution, bn_hz) = if alike.contains(&(grid.len() - 1)) || 2 * k_best >= grid.len() {
@@ -579,16 +592,16 @@ fn refine<'a>(
 }
 
 /// Widens `estimate`'s variances so that each covers the Γ̂ of every fit in
-/// `alike` (those the data cannot tell from it, Δ(−2 ln L) ≤ 1):
-/// var_i ≥ own_i + (Γ̂_k,i − Γ̂_i)², `own` the estimate's covariance before
-/// any widening. The set of such fits is the profile likelihood's 1σ
-/// region of the nuisance (the bandwidth, or the loop's shape); Γ̂'s 1σ
-/// then reaches every estimate in it.
-fn cover_alike(estimate: &mut LoopFreeEstimate, own: &[[f64; 3]; 3], alike: &[[f64; 3]]) {
-    for g in alike {
+/// `alike` (those the data cannot tell from it, Δ(−2 ln L) ≤ 1), each given
+/// as its Γ̂_k and the covariance V_k it is known to within when the
+/// nuisance is fixed: var_i ≥ V_k,ii + (Γ̂_k,i − Γ̂_i)². The set of such fits
+/// is the profile likelihood's 1σ region of the nuisance (the bandwidth, or
+/// the loop's shape); Γ̂'s 1σ then reaches every estimate in it.
+fn cover_alike(estimate: &mut LoopFreeEstimate, alike: impl IntoIterator<Item = ([f64; 3], [[f64; 3]; 3])>) {
+    for (g, v) in alike {
         for i in 0..3 {
             let spread = (g[i] - estimate.gamma_hz_per_mps2[i]).powi(2);
-            estimate.covariance[i][i] = estimate.covariance[i][i].max(own[i][i] + spread);
+            estimate.covariance[i][i] = estimate.covariance[i][i].max(v[i][i] + spread);
         }
     }
 }
