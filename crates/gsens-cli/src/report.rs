@@ -6,7 +6,7 @@ use crate::args::{CalibrationArgs, InputArgs};
 use crate::estimate::calibrate;
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::Outcome;
+use gsens_calib::{ObservationOutcome, Outcome};
 use gsens_io::TrackingLog;
 use gsens_report::write_calibration_report;
 use gsens_tui::progress::drawing;
@@ -50,19 +50,7 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
         if let Some(t) = &args.truth {
             outcome.inputs.push(("truth".into(), t.display().to_string()));
         }
-        let doc = outcome.document(truth);
-        let files = gsens_report::write_report_dir(
-            &args.out,
-            &args.title,
-            &doc,
-            &[],
-            args.header.write_untrusted_header,
-            |_| {},
-        )?;
-        let (text, no_header) = files.render(&doc, crate::args::flag);
-        crate::out(&text)?;
-        crate::err(no_header.as_deref().unwrap_or_default());
-        return Ok(crate::Status::of(&doc));
+        return write_observation_report(&outcome, truth, &args.out, &args.title, args.header);
     }
     let inputs = args.inputs.inputs()?;
     let mut settings = args.calibration.settings(given)?;
@@ -79,6 +67,23 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
     }
     let tracking = calibrated.tracking.context("the calibration kept no tracking log")?;
     write_report(&outcome, &tracking, truth, &args.out, &args.title, args.header)
+}
+
+/// Writes the report of a RINEX or UBX log's `outcome` into `out` and prints
+/// its text, as [`write_report`] (no figures of tracking rows).
+pub(crate) fn write_observation_report(
+    outcome: &ObservationOutcome,
+    truth: Option<[f64; 3]>,
+    out: &Path,
+    title: &str,
+    header: HeaderArgs,
+) -> Result<crate::Status> {
+    let doc = outcome.document(truth);
+    let files = gsens_report::write_report_dir(out, title, &doc, &[], header.write_untrusted_header, |_| {})?;
+    let (text, no_header) = files.render(&doc, crate::args::flag);
+    crate::out(&text)?;
+    crate::err(no_header.as_deref().unwrap_or_default());
+    Ok(crate::Status::of(&doc))
 }
 
 /// Writes the report of `outcome` (estimated from `tracking`) into `out` and

@@ -111,6 +111,7 @@ fn waiting() -> LiveView {
         batch_error: None,
         notices: (Vec::new(), 0),
         received: (0, 0),
+        ubx: None,
     };
     view.instruction = instruct(&situation(&view, 5.0), &band);
     view
@@ -136,6 +137,7 @@ fn mid_session() -> LiveView {
         batch: Some(BatchVerdict::new(45.0, Measurement::TrackingError, Vec::new())),
         notices: (vec![notice(17, "garbage line: expected 6 fields, found 2")], 1),
         received: (1920, 11_232),
+        ubx: None,
         ..waiting()
     };
     view.instruction = instruct(&situation(&view, 0.0), &band);
@@ -188,6 +190,7 @@ fn done() -> LiveView {
             2,
         ),
         received: (3860, 22_584),
+        ubx: None,
         ..waiting()
     };
     view.instruction = instruct(&situation(&view, 0.0), &band);
@@ -377,6 +380,7 @@ fn odd_values_do_not_panic() {
             )),
             notices: (vec![long.clone(); 5], u64::MAX),
             received: (u64::MAX, u64::MAX),
+        ubx: None,
             ..mid_session()
         },
         LiveView {

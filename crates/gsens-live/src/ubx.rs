@@ -1,0 +1,190 @@
+//! A u-blox module's UBX stream as a live input: a log file being written,
+//! followed as it grows (`tail -f`), or the module's serial port (USB CDC-ACM
+//! such as `/dev/ttyACM0`, or a UART) read as a byte stream. The bytes go to
+//! the event loop in the pieces they arrive in ([`SourceEvent::Bytes`]);
+//! [`gsens_ublox::UbxStream`] reads the complete frames among them.
+
+use std::fs::File;
+use std::io::{ErrorKind, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::Sender;
+use std::time::Duration;
+
+use gsens_calib::ObservationRecord;
+use gsens_ublox::UbxSettings;
+
+use crate::clock::Clock;
+use crate::sources::{FOLLOW_POLL_MS, SourceEvent};
+
+/// How a UBX stream is read and calibrated: the reader's settings (how the
+/// ESF sensor time maps to GPS time) and the observable the estimate is made
+/// from, as `gsens estimate --ubx` takes them.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct UbxOptions {
+    /// The reader's settings.
+    pub settings: UbxSettings,
+    /// What the estimate is made from.
+    pub record: ObservationRecord,
+}
+
+/// Bytes read at most at once.
+const READ_CHUNK: usize = 64 * 1024;
+
+/// A serial port's read returns after this long without a byte (termios
+/// VTIME, in tenths of a second), so that the idle timeout is looked at.
+#[cfg(unix)]
+const SERIAL_READ_TIMEOUT_DS: u8 = 1;
+
+/// Whether `path` is a character device (a serial port) rather than a file.
+pub(crate) fn is_device(path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(path).is_ok_and(|m| m.file_type().is_char_device())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        false
+    }
+}
+
+/// Puts the serial port `file` in raw mode (no line editing, no character
+/// translation, 8 data bits, receiver on, modem lines ignored), at
+/// `baud` where given, its reads returning after
+/// [`SERIAL_READ_TIMEOUT_DS`] without a byte. POSIX termios, "Non-canonical
+/// mode input processing" (VMIN = 0, VTIME > 0).
+#[cfg(unix)]
+fn raw_serial(file: &File, baud: Option<u32>) -> std::io::Result<()> {
+    use rustix::termios::{ControlModes, OptionalActions, SpecialCodeIndex, tcgetattr, tcsetattr};
+    let mut t = tcgetattr(file)?;
+    t.make_raw();
+    t.control_modes |= ControlModes::CREAD | ControlModes::CLOCAL;
+    t.special_codes[SpecialCodeIndex::VMIN] = 0;
+    t.special_codes[SpecialCodeIndex::VTIME] = SERIAL_READ_TIMEOUT_DS;
+    if let Some(baud) = baud {
+        t.set_speed(baud)?;
+    }
+    tcsetattr(file, OptionalActions::Now, &t)?;
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn raw_serial(_file: &File, _baud: Option<u32>) -> std::io::Result<()> {
+    Err(std::io::Error::new(ErrorKind::Unsupported, "serial ports are read on Unix only"))
+}
+
+/// Reads the UBX stream at `path` in its own thread: a serial port (put in
+/// raw mode at `baud`) until it fails, or a file followed as it grows until
+/// it shrinks (a logger that restarted writes another log); either ends when
+/// nothing came for `idle_timeout_s` (never when 0).
+pub(crate) fn spawn_bytes(
+    tx: Sender<SourceEvent>,
+    source: usize,
+    path: PathBuf,
+    baud: Option<u32>,
+    idle_timeout_s: f64,
+    clock: Arc<dyn Clock>,
+) {
+    std::thread::spawn(move || {
+        let why = read_bytes(&tx, source, &path, baud, idle_timeout_s, &*clock);
+        let _ = tx.send(SourceEvent::Ended { source, why });
+    });
+}
+
+/// The loop of [`spawn_bytes`]; why it ended (`None`: the receiver hung up).
+fn read_bytes(
+    tx: &Sender<SourceEvent>,
+    source: usize,
+    path: &Path,
+    baud: Option<u32>,
+    idle_timeout_s: f64,
+    clock: &dyn Clock,
+) -> Option<String> {
+    let named = |e: std::io::Error| Some(format!("{}: {e}", path.display()));
+    let device = is_device(path);
+    let mut file = match File::open(path) {
+        Ok(f) => f,
+        Err(e) => return named(e),
+    };
+    if device && let Err(e) = raw_serial(&file, baud) {
+        return Some(format!("{}: cannot set the serial port up: {e}", path.display()));
+    }
+    let mut buf = vec![0u8; READ_CHUNK];
+    let mut offset = 0u64;
+    let mut last_data = clock.now();
+    loop {
+        match file.read(&mut buf) {
+            Ok(0) => {
+                if !device {
+                    match file.metadata() {
+                        Ok(m) if m.len() < offset => {
+                            return Some(format!(
+                                "{}: the file became shorter (a logger restarted?): its new log needs a new `gsens \
+                                 live`",
+                                path.display()
+                            ));
+                        }
+                        Ok(_) => {}
+                        Err(e) => return named(e),
+                    }
+                    // At the end of what was written: read on from here at the next poll.
+                    if let Err(e) = file.seek(SeekFrom::Start(offset)) {
+                        return named(e);
+                    }
+                }
+                if idle_timeout_s > 0.0 && (clock.now() - last_data).as_secs_f64() > idle_timeout_s {
+                    return Some(format!("no new byte for {idle_timeout_s} s"));
+                }
+                if !device {
+                    clock.sleep(Duration::from_millis(FOLLOW_POLL_MS));
+                }
+            }
+            Ok(n) => {
+                offset += n as u64;
+                last_data = clock.now();
+                if tx.send(SourceEvent::Bytes { source, bytes: buf[..n].to_vec() }).is_err() {
+                    return None;
+                }
+            }
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return named(e),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::ManualClock;
+    use std::io::Write;
+
+    /// A file arrives whole, in order, in pieces of at most a read's size,
+    /// and its follower ends at the idle timeout, on a clock moved by the
+    /// follower's own sleeps.
+    #[test]
+    fn a_file_arrives_whole_and_ends_at_its_idle_timeout() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("log.ubx");
+        let bytes: Vec<u8> = (0..=255u8).cycle().take(200_000).collect();
+        File::create(&path).unwrap().write_all(&bytes).unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let clock = Arc::new(ManualClock::default());
+        spawn_bytes(tx, 3, path.clone(), None, 2.0, clock);
+        let mut got = Vec::new();
+        let why = loop {
+            match rx.recv().unwrap() {
+                SourceEvent::Bytes { source: 3, bytes: b } => {
+                    assert!(!b.is_empty() && b.len() <= READ_CHUNK);
+                    got.extend_from_slice(&b);
+                }
+                SourceEvent::Ended { source: 3, why } => break why,
+                other => panic!("{other:?}"),
+            }
+        };
+        assert_eq!(got, bytes);
+        assert_eq!(why.as_deref(), Some("no new byte for 2 s"));
+        assert!(!is_device(&path));
+    }
+}
