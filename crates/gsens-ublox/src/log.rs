@@ -116,8 +116,10 @@ pub struct UbxStream {
     received: usize,
     /// Frames dropped for their checksum.
     checksum_failures: usize,
-    /// Accelerometer samples (of the list in use) already handed out by [`UbxStream::take_imu`].
+    /// Accelerometer samples on the log's time already handed out by [`UbxStream::take_imu`].
     imu_taken: usize,
+    /// Samples on the sensor clock (of the list in use) when they were last mapped.
+    imu_seen: usize,
 }
 
 impl core::fmt::Debug for UbxStream {
@@ -139,6 +141,7 @@ impl UbxStream {
             received: 0,
             checksum_failures: 0,
             imu_taken: 0,
+            imu_seen: 0,
         }
     }
 
@@ -217,14 +220,17 @@ impl UbxStream {
     pub fn take_imu(&mut self, settings: &UbxSettings) -> ImuSeries {
         let r = &self.reader;
         let (samples, anchor) = if r.raw.is_empty() { (&r.meas, r.meas_anchor) } else { (&r.raw, r.raw_anchor) };
-        if self.imu_taken > samples.len()
-            || (settings.sensor_time == SensorTime::FreeRunningMs && anchor.is_none())
-        {
+        let untied = settings.sensor_time == SensorTime::FreeRunningMs && anchor.is_none();
+        if untied || samples.len() == self.imu_seen {
             return ImuSeries::default();
         }
-        let (imu, _, _) = map_samples(&samples[self.imu_taken..], settings.sensor_time, anchor);
-        self.imu_taken = samples.len();
-        imu
+        self.imu_seen = samples.len();
+        // Mapped from the first sample on, as the whole log is: a week's rollover of
+        // GPS-time tags and the samples left out follow the log's order.
+        let (imu, _, _) = map_samples(samples, settings.sensor_time, anchor);
+        let from = self.imu_taken.min(imu.len());
+        self.imu_taken = imu.len();
+        ImuSeries { t_s: imu.t_s[from..].to_vec(), accel_mps2: imu.accel_mps2[from..].to_vec() }
     }
 
     /// The log of the complete frames received so far, as [`read_ubx_bytes`]
