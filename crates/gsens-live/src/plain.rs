@@ -3,9 +3,7 @@
 use std::io::Write;
 
 use crate::guidance::{Instruction, more_text};
-use gsens_calib::LoopResolution;
-
-use crate::session::{LiveSession, LiveView, UbxStatus};
+use crate::session::{LiveSession, LiveView};
 
 /// A line when the instruction changes, one per batch estimate (with its
 /// verdict and the codes that decide it), each warning with its message the
@@ -76,28 +74,8 @@ fn batch(v: &LiveView, out: &mut dyn Write) -> std::io::Result<()> {
         (None, None) => String::new(),
     };
     let receiver = match &v.ubx {
-        Some(u) => ubx_text(u),
+        Some(u) => u.summary(),
         None => format!("{} channels", v.channels.iter().filter(|c| c.tracking).count()),
     };
     writeln!(out, "[{:7.2} s] Γ̂ [Hz/(m/s²)] {} | {receiver} | {trust}", v.data_t_s, axes.join(" · "))
-}
-
-/// A UBX stream's part of a batch line: the tracks with a carrier phase at
-/// its latest epoch, the frames read and dropped, and the loop identified.
-pub(crate) fn ubx_text(u: &UbxStatus) -> String {
-    let identified = match &u.identified_loop {
-        Some(l) => {
-            let bn = match l.resolution {
-                LoopResolution::Resolved => format!("Bn {:.2} Hz ± {:.0} %", l.bn_hz, 100.0 * l.sigma_ln_bn),
-                LoopResolution::Wide => format!("Bn ≥ {:.1} Hz", l.bn_hz),
-                _ => format!("Bn ≤ {:.2} Hz", l.bn_hz),
-            };
-            format!(" | loop: order {}, {bn}", l.order)
-        }
-        None => String::new(),
-    };
-    format!(
-        "{} tracks, {} frames, {} bad checksums, {} skipped{identified}",
-        u.tracks, u.frames, u.checksum_failures, u.skipped
-    )
 }

@@ -17,8 +17,8 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use gsens_calib::{ObservationOutcome, Outcome, PipelineSettings};
-use gsens_inputs::{ObservationFile, ObservationInputs};
 use gsens_gnss_sdr::monitor::{LiveGrid, MonitorReceiver, MonitorStream};
+use gsens_inputs::{ObservationFile, ObservationInputs};
 use gsens_io::TrackingLog;
 
 use crate::clock::Clock;

@@ -4,8 +4,8 @@
 use std::collections::{BTreeMap, VecDeque};
 
 use gsens_calib::{
-    Calibration, IdentifiedLoop, Measurement, ObservationOutcome, Outcome, PipelineSettings, ResultDocument, Warning,
-    calibrate_logs,
+    Calibration, IdentifiedLoop, LoopResolution, Measurement, ObservationOutcome, Outcome, PipelineSettings,
+    ResultDocument, Warning, calibrate_logs,
 };
 use gsens_io::{Carrier, ImuSeries, TrackingLog, TrackingRecord, TrackingRow};
 use gsens_ublox::{UbxLog, UbxStream};
@@ -329,6 +329,29 @@ pub struct UbxStatus {
     pub tracks: u64,
     /// The loop the latest batch estimate identified.
     pub identified_loop: Option<IdentifiedLoop>,
+}
+
+impl UbxStatus {
+    /// One line of it: the tracks with a carrier phase at the latest
+    /// epoch, the frames read, dropped for their checksum and skipped, and
+    /// the loop identified (its order and Bn ± its relative σ, or the bound).
+    pub fn summary(&self) -> String {
+        let identified = match &self.identified_loop {
+            Some(l) => {
+                let bn = match l.resolution {
+                    LoopResolution::Resolved => format!("Bn {:.2} Hz ± {:.0} %", l.bn_hz, 100.0 * l.sigma_ln_bn),
+                    LoopResolution::Wide => format!("Bn ≥ {:.1} Hz", l.bn_hz),
+                    _ => format!("Bn ≤ {:.2} Hz", l.bn_hz),
+                };
+                format!(" | loop: order {}, {bn}", l.order)
+            }
+            None => String::new(),
+        };
+        format!(
+            "{} tracks, {} frames, {} bad checksums, {} skipped{identified}",
+            self.tracks, self.frames, self.checksum_failures, self.skipped
+        )
+    }
 }
 
 /// A UBX stream a session reads: the stream, how it is calibrated, and

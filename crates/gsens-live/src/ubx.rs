@@ -187,4 +187,47 @@ mod tests {
         assert_eq!(why.as_deref(), Some("no new byte for 2 s"));
         assert!(!is_device(&path));
     }
+
+    /// A pseudo-terminal on this machine stands in for a module's serial
+    /// port: the follower sets it raw, so bytes a terminal would act on (CR,
+    /// LF, Ctrl-C, Ctrl-D, XON/XOFF, DEL) arrive as sent, in order; the port
+    /// closing ends the source with its error.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_serial_port_is_read_raw() {
+        use rustix::pty::{OpenptFlags, grantpt, openpt, ptsname, unlockpt};
+        use rustix::termios::{LocalModes, tcgetattr};
+        let master = openpt(OpenptFlags::RDWR | OpenptFlags::NOCTTY).unwrap();
+        grantpt(&master).unwrap();
+        unlockpt(&master).unwrap();
+        let port = PathBuf::from(ptsname(&master, Vec::new()).unwrap().into_string().unwrap());
+        assert!(is_device(&port));
+        let (tx, rx) = std::sync::mpsc::channel();
+        spawn_bytes(tx, 0, port, Some(115_200), 0.0, Arc::new(ManualClock::default()));
+        // Sent once the follower has put the port in raw mode (no canonical input).
+        while tcgetattr(&master).unwrap().local_modes.contains(LocalModes::ICANON) {
+            std::thread::yield_now();
+        }
+        let bytes: Vec<u8> = [0xB5, 0x62, b'\r', b'\n', 0x03, 0x04, 0x11, 0x13, 0x7F, 0x1A, 0xFF]
+            .iter()
+            .copied()
+            .cycle()
+            .take(3000)
+            .collect();
+        let mut master = File::from(master);
+        master.write_all(&bytes).unwrap();
+        let mut got = Vec::new();
+        while got.len() < bytes.len() {
+            match rx.recv().unwrap() {
+                SourceEvent::Bytes { source: 0, bytes: b } => got.extend_from_slice(&b),
+                other => panic!("{other:?} after {} bytes", got.len()),
+            }
+        }
+        assert_eq!(got, bytes);
+        drop(master);
+        match rx.recv().unwrap() {
+            SourceEvent::Ended { source: 0, why: Some(why) } => assert!(why.starts_with("/dev/pts/"), "{why}"),
+            other => panic!("{other:?}"),
+        }
+    }
 }

@@ -101,15 +101,15 @@ fn a_stream_in_pieces_ends_with_the_estimate_of_the_whole_log() {
     let read = gsens_ublox::read_ubx_file(&damaged, &Default::default()).unwrap();
     assert_eq!(view.received.0, read.imu.len() as u64);
 
-
     let finished = runtime.finish().unwrap();
     assert_eq!(std::fs::read(out.join("received.ubx")).unwrap(), bytes);
     let kept = gsens_io::read_imu_file(out.join("imu.csv")).unwrap();
     assert_eq!(kept.len(), read.imu.len());
     let FinalEstimate::Observations(live) = &finished.estimate else { panic!("an estimate of the UBX log") };
-    let whole = ObservationInputs::new(ObservationFile::Ubx(damaged, Default::default()), None, ObservationRecord::Auto)
-        .calibrate(&PipelineSettings::default())
-        .unwrap();
+    let whole =
+        ObservationInputs::new(ObservationFile::Ubx(damaged, Default::default()), None, ObservationRecord::Auto)
+            .calibrate(&PipelineSettings::default())
+            .unwrap();
     let (a, b) = (&live.calibration, &whole.calibration);
     assert_eq!(a.gamma_hz_per_mps2, b.gamma_hz_per_mps2);
     assert_eq!(a.sigma_hz_per_mps2, b.sigma_hz_per_mps2);
