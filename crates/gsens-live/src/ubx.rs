@@ -70,6 +70,18 @@ fn raw_serial(file: &File, baud: Option<u32>) -> std::io::Result<()> {
     Ok(())
 }
 
+/// Whether the serial port `file` is still there: a port hung up fails
+/// its terminal attributes (EIO), where a read only returns nothing.
+#[cfg(unix)]
+fn port_open(file: &File) -> std::io::Result<()> {
+    rustix::termios::tcgetattr(file).map(drop).map_err(std::io::Error::from)
+}
+
+#[cfg(not(unix))]
+fn port_open(_file: &File) -> std::io::Result<()> {
+    Ok(())
+}
+
 #[cfg(not(unix))]
 fn raw_serial(_file: &File, _baud: Option<u32>) -> std::io::Result<()> {
     Err(std::io::Error::new(ErrorKind::Unsupported, "serial ports are read on Unix only"))
@@ -139,6 +151,9 @@ fn read_bytes(
                 }
                 if !device {
                     clock.sleep(Duration::from_millis(FOLLOW_POLL_MS));
+                } else if let Err(e) = port_open(&file) {
+                    // A port hung up (unplugged, its other end closed) reads nothing at once, for ever.
+                    return Some(format!("{}: the port closed: {e}", path.display()));
                 }
             }
             Ok(n) => {
@@ -226,6 +241,7 @@ mod tests {
         assert_eq!(got, bytes);
         drop(master);
         match rx.recv().unwrap() {
+            // EIO, from the read or from the port's attributes, whichever sees the hang-up first.
             SourceEvent::Ended { source: 0, why: Some(why) } => assert!(why.starts_with("/dev/pts/"), "{why}"),
             other => panic!("{other:?}"),
         }
