@@ -356,7 +356,7 @@ impl UbxStatus {
 
 /// A UBX stream a session reads: the stream, how it is calibrated, and
 /// whether its ESF messages are the IMU.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 struct Observed {
     stream: UbxStream,
     options: UbxOptions,
@@ -395,7 +395,7 @@ impl BatchVerdict {
 type BatchSummary = (Option<BatchVerdict>, Option<String>);
 
 /// The data received so far and what is made of it.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct LiveSession {
     config: LiveConfig,
     band: LoopBand,

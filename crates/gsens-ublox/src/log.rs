@@ -112,6 +112,9 @@ pub fn read_ubx_bytes(bytes: &[u8], source_name: &str, settings: &UbxSettings) -
 pub struct UbxStream {
     reader: Reader,
     parser: Parser<Vec<u8>, Proto23>,
+    /// The bytes waiting in the parser (its buffer is always the stream's
+    /// last bytes): what a clone's parser starts from.
+    waiting: Vec<u8>,
     /// Bytes received.
     received: usize,
     /// Frames dropped for their checksum.
@@ -132,12 +135,33 @@ impl core::fmt::Debug for UbxStream {
     }
 }
 
+impl Clone for UbxStream {
+    /// The stream as it is, its waiting bytes given to a new parser.
+    fn clone(&self) -> Self {
+        let mut parser = ParserBuilder::new().with_protocol::<Proto23>().with_vec_buffer();
+        let mut it = parser.consume_ubx(&self.waiting);
+        // The bytes of a frame not yet complete: they stay in the buffer.
+        while it.next().is_some() {}
+        drop(it);
+        UbxStream {
+            reader: self.reader.clone(),
+            parser,
+            waiting: self.waiting.clone(),
+            received: self.received,
+            checksum_failures: self.checksum_failures,
+            imu_taken: self.imu_taken,
+            imu_seen: self.imu_seen,
+        }
+    }
+}
+
 impl UbxStream {
     /// A stream with nothing received yet; `source_name` names it in messages.
     pub fn new(source_name: &str) -> UbxStream {
         UbxStream {
             reader: Reader::new(source_name),
             parser: ParserBuilder::new().with_protocol::<Proto23>().with_vec_buffer(),
+            waiting: Vec::new(),
             received: 0,
             checksum_failures: 0,
             imu_taken: 0,
@@ -173,6 +197,11 @@ impl UbxStream {
                 Err(ParserError::OutOfMemory { .. }) => r.b.skip("frame longer than the parser's buffer", at),
             }
         }
+        drop(it);
+        let n = self.parser.buffer_len();
+        let keep = self.waiting.len().min(n.saturating_sub(bytes.len()));
+        self.waiting.drain(..self.waiting.len() - keep);
+        self.waiting.extend_from_slice(&bytes[bytes.len() - (n - keep)..]);
     }
 
     /// Bytes received.

@@ -223,7 +223,8 @@ fn corrupted() -> Vec<u8> {
 /// A stream fed in pieces of every size from 1 to 97 bytes (cut inside
 /// frames, inside the sync and the length) reads the log
 /// `read_ubx_bytes` reads from the whole: every value, every count. Its
-/// snapshot part way is the log of the complete frames so far.
+/// snapshot part way is the log of the complete frames so far, and a clone
+/// made there, fed the rest, reads the same log.
 #[test]
 fn a_stream_read_in_pieces_is_the_log_read_whole() {
     let bytes = corrupted();
@@ -232,6 +233,7 @@ fn a_stream_read_in_pieces_is_the_log_read_whole() {
     assert_eq!(whole.observations.skipped.iter().map(|s| s.count).sum::<usize>(), 1);
     for (sizes, cut) in [(1..=97usize, 40_001usize), (7..=7, 20_003), (4096..=4096, 60_000)] {
         let mut stream = UbxStream::new("s.ubx");
+        let mut clone: Option<UbxStream> = None;
         let (mut at, mut snapshot_checked) = (0, false);
         for size in sizes.cycle() {
             if at >= bytes.len() {
@@ -239,6 +241,9 @@ fn a_stream_read_in_pieces_is_the_log_read_whole() {
             }
             let end = (at + size).min(bytes.len());
             stream.push(&bytes[at..end]);
+            if let Some(c) = clone.as_mut() {
+                c.push(&bytes[at..end]);
+            }
             at = end;
             if !snapshot_checked && at >= cut {
                 snapshot_checked = true;
@@ -247,12 +252,14 @@ fn a_stream_read_in_pieces_is_the_log_read_whole() {
                 let part = stream.snapshot(&settings).unwrap();
                 let read = read_ubx_bytes(&bytes[..complete], "s.ubx", &settings).unwrap();
                 assert_eq!(part, read);
+                clone = Some(stream.clone());
             }
         }
         assert_eq!(stream.received_bytes(), bytes.len());
         assert_eq!((stream.checksum_failures(), stream.skipped()), (1, 1));
         assert_eq!((stream.frames(), stream.epochs()), (whole.frames, whole.observations.epochs));
         assert_eq!(stream.finish(&settings).unwrap(), whole);
+        assert_eq!(clone.unwrap().finish(&settings).unwrap(), whole);
     }
 }
 
