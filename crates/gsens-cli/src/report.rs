@@ -80,10 +80,16 @@ pub(crate) fn write_observation_report(
 ) -> Result<crate::Status> {
     let doc = outcome.document(truth);
     let files = gsens_report::write_report_dir(out, title, &doc, &[], header.write_untrusted_header, |_| {})?;
-    let (text, no_header) = files.render(&doc, crate::args::flag);
+    say_written(&doc, &files)
+}
+
+/// Prints the text of a written report (stderr: why no C header was
+/// written, if none was); the exit status of its document.
+fn say_written(doc: &gsens_calib::ResultDocument, files: &gsens_report::ReportFiles) -> Result<crate::Status> {
+    let (text, no_header) = files.render(doc, crate::args::flag);
     crate::out(&text)?;
     crate::err(no_header.as_deref().unwrap_or_default());
-    Ok(crate::Status::of(&doc))
+    Ok(crate::Status::of(doc))
 }
 
 /// Writes the report of `outcome` (estimated from `tracking`) into `out` and
@@ -101,8 +107,5 @@ pub(crate) fn write_report(
     let (doc, files) = drawing(|on_figure| {
         write_calibration_report(outcome, tracking, truth, out, title, header.write_untrusted_header, on_figure)
     })?;
-    let (text, no_header) = files.render(&doc, crate::args::flag);
-    crate::out(&text)?;
-    crate::err(no_header.as_deref().unwrap_or_default());
-    Ok(crate::Status::of(&doc))
+    say_written(&doc, &files)
 }
