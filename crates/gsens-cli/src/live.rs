@@ -48,17 +48,18 @@ pub(crate) struct LiveArgs {
     #[arg(long, requires = "ubx", value_parser = clap::value_parser!(u32).range(1..), help_heading = "u-blox UBX stream")]
     pub ubx_baud: Option<u32>,
     /// How the ESF sensor time tags map to GPS time, as for `gsens estimate --ubx`.
-    #[arg(long, value_enum, default_value = "free-running-ms", help_heading = "u-blox UBX stream")]
+    #[arg(long, value_enum, default_value = "free-running-ms", requires = "ubx", help_heading = "u-blox UBX stream")]
     pub ubx_sensor_time: gsens_ublox::SensorTime,
     /// What the estimate is made from, as for `gsens estimate --ubx`.
-    #[arg(long, value_enum, default_value_t, help_heading = "u-blox UBX stream")]
+    #[arg(long, value_enum, default_value_t, requires = "ubx", help_heading = "u-blox UBX stream")]
     pub observable: gsens_calib::ObservationRecord,
     /// With --follow-*, --gnss-sdr-monitor and --ubx: end when no input has grown for this long [s]
     /// (0: only on a key or the target).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
-    /// received in received/), and at the end the report of `gsens report`
+    /// received in received/; a UBX stream's bytes as received.ubx), and at the end the report
+    /// of `gsens report`
     /// (report.html, report.json, gsens_gamma.h as `gsens report` writes it, figures/).
     #[arg(long)]
     pub out: PathBuf,

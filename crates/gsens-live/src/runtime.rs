@@ -114,7 +114,8 @@ pub enum Inputs {
 pub struct RuntimeConfig {
     /// Its inputs.
     pub inputs: Inputs,
-    /// The directory of the kept files (`received/`, `imu.csv`, `tracking.csv`).
+    /// The directory of the kept files (`received/`, `imu.csv`,
+    /// `tracking.csv`; a UBX stream's bytes as `received.ubx`).
     pub out_dir: PathBuf,
     /// The batch pipeline's settings. With the monitor, its loop is the run's own.
     pub settings: PipelineSettings,
