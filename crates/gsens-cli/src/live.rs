@@ -33,8 +33,8 @@ pub(crate) struct LiveArgs {
     /// Follow a growing tracking.csv, with --follow-imu.
     #[arg(long, requires = "follow_imu")]
     pub follow_tracking: Option<PathBuf>,
-    /// A u-blox module's UBX stream: a log being written (followed as it grows) or its serial port
-    /// (/dev/ttyACM0, a UART), RXM-RAWX with the module's accelerometer (ESF-RAW / ESF-MEAS) unless
+    /// A u-blox module's UBX stream: a log being written (followed as it grows), its serial port
+    /// (/dev/ttyACM0, a UART), a named pipe or - for standard input (read until closed), RXM-RAWX with the module's accelerometer (ESF-RAW / ESF-MEAS) unless
     /// --follow-imu is given; its loop is identified from the session. The bytes are kept as
     /// received.ubx in --out.
     #[arg(

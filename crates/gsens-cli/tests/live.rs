@@ -239,7 +239,8 @@ fn a_missed_target_exits_4() {
 /// (crates/gsens-live/tests/fixtures), complete from the start: the idle
 /// timeout ends it (its length decides nothing but when), the batch lines
 /// name the loop identified, and the report's Γ̂ and σ are those of
-/// `gsens estimate --ubx` on the same log. A missing log is refused.
+/// `gsens estimate --ubx` on the same log; so are they with the log on
+/// standard input. A missing log is refused.
 #[test]
 fn live_follows_a_ubx_log_and_reports_as_estimate() {
     let dir = temp_dir("live-ubx");
@@ -266,6 +267,17 @@ fn live_follows_a_ubx_log_and_reports_as_estimate() {
     }
     assert_eq!(report["identified_loop"]["bn_hz"], estimate["identified_loop"]["bn_hz"]);
     assert!(out.join("report.html").exists());
+    // The same bytes on standard input (`--ubx -`), read until it closes.
+    let piped = dir.join("piped");
+    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["live", "--plain", "--ubx", "-", "--out", &s(&piped)])
+        .stdin(std::fs::File::open(log).unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(live.status.code(), Some(4), "{}", String::from_utf8_lossy(&live.stderr));
+    let report = json(&piped.join("report.json"));
+    assert_eq!(report["gamma_hz_per_mps2"], estimate["gamma_hz_per_mps2"]);
+    assert_eq!(report["sigma_hz_per_mps2"], estimate["sigma_hz_per_mps2"]);
     let missing = dir.join("nothing.ubx");
     let e = fails(&["live", "--plain", "--ubx", &s(&missing), "--out", &s(&dir.join("b"))]);
     assert!(e.contains(&format!("--ubx {}: no such file", missing.display())), "{e}");

@@ -23,8 +23,9 @@ pub struct InputChoice {
     /// GNSS-SDR's tracking monitor: the address it sends to and the
     /// configuration of its run (with [`InputChoice::follow_imu`]).
     pub gnss_sdr_monitor: Option<(String, PathBuf)>,
-    /// A u-blox module's UBX stream: a log being written or its serial port
-    /// (with [`InputChoice::follow_imu`]: that IMU log instead of its ESF
+    /// A u-blox module's UBX stream: a log being written, its serial port,
+    /// a named pipe, or `-` for standard input (with
+    /// [`InputChoice::follow_imu`]: that IMU log instead of its ESF
     /// messages).
     pub ubx: Option<PathBuf>,
     /// The serial port's baud rate (`None`: as the port is set).
@@ -99,7 +100,8 @@ impl InputChoice {
         if !(self.stdin || follows || self.ubx.is_some()) {
             return Err(InputChoiceError::NoInput);
         }
-        if let Some(p) = self.ubx.as_ref().filter(|p| !p.is_file() && !crate::ubx::is_device(p)) {
+        let stream = |p: &PathBuf| p.is_file() || crate::ubx::is_device(p) || crate::ubx::is_pipe(p);
+        if let Some(p) = self.ubx.as_ref().filter(|p| !stream(p)) {
             return Err(InputChoiceError::NotAFile { option: "ubx", path: p.clone(), exists: p.exists() });
         }
         for (option, path) in [("follow_imu", &self.follow_imu), ("follow_tracking", &self.follow_tracking)] {

@@ -30,7 +30,7 @@ use crate::monitor::{MonitorInput, RECEIVE_WAIT_MS, receive_monitor};
 use crate::plain::Plain;
 use crate::session::{BatchResult, LiveConfig, LiveSession, LiveView};
 use crate::sources::{Source, SourceEvent, spawn_follow, spawn_lines};
-use crate::ubx::{UbxOptions, spawn_bytes};
+use crate::ubx::{UbxOptions, spawn_bytes, stream_name};
 
 /// The screen is redrawn at most this often [ms]: with the followers' 20 ms
 /// polls a record reaches the screen within 70 ms, inside a 100 ms budget.
@@ -76,7 +76,8 @@ pub enum Inputs {
     /// grows, or its serial port; its RXM-RAWX calibrated with the loop
     /// identified, its IMU the stream's ESF messages or a growing IMU log.
     Ubx {
-        /// The log or the serial device (a character device: read as a serial port).
+        /// The log, the serial device (a character device: read as a serial
+        /// port), a named pipe, or `-`: standard input.
         log: PathBuf,
         /// The serial port's baud rate; `None`: as the port is set (a USB
         /// port ignores it).
@@ -316,7 +317,7 @@ impl Runtime {
         live.batch_every_s = batch_every_s;
         let session = match &inputs {
             Inputs::Ubx { log, imu, options, .. } => {
-                LiveSession::with_ubx(live, &log.display().to_string(), *options, imu.is_none())
+                LiveSession::with_ubx(live, &stream_name(log), *options, imu.is_none())
             }
             Inputs::UbxEvents { sources, options, .. } => {
                 let name = sources.first().map_or(String::new(), |s| s.name.clone());
@@ -360,7 +361,7 @@ impl Runtime {
                 (sources, rx)
             }
             Inputs::Ubx { log, baud, imu, .. } => {
-                let mut sources = vec![Source { name: log.display().to_string(), format: None }];
+                let mut sources = vec![Source { name: stream_name(&log), format: None }];
                 spawn_bytes(tx.clone(), 0, log, baud, idle_timeout_s, clock.clone());
                 if let Some(imu) = imu {
                     sources.push(line_source(imu.display().to_string(), LineFormat::Imu));

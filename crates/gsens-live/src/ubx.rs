@@ -1,6 +1,7 @@
 //! A u-blox module's UBX stream as a live input: a log file being written,
-//! followed as it grows (`tail -f`), or the module's serial port (USB CDC-ACM
-//! such as `/dev/ttyACM0`, or a UART) read as a byte stream. The bytes go to
+//! followed as it grows (`tail -f`), the module's serial port (USB CDC-ACM
+//! such as `/dev/ttyACM0`, or a UART) read as a byte stream, or a pipe
+//! (standard input, a named pipe) read until its writer closes it. The bytes go to
 //! the event loop in the pieces they arrive in ([`SourceEvent::Bytes`]);
 //! [`gsens_ublox::UbxStream`] reads the complete frames among them.
 
@@ -50,6 +51,29 @@ pub(crate) fn is_device(path: &Path) -> bool {
     }
 }
 
+/// The path that names standard input as a UBX stream.
+pub(crate) const STDIN: &str = "-";
+
+/// The stream's name in notices and messages: its path, `stdin` for [`STDIN`].
+pub(crate) fn stream_name(path: &Path) -> String {
+    if path == Path::new(STDIN) { "stdin".into() } else { path.display().to_string() }
+}
+
+/// Whether `path` is a pipe: standard input ([`STDIN`]) or a named pipe (a
+/// FIFO another program writes into, such as `socat` or `str2str` relaying
+/// a module), read until its writer closes it.
+pub(crate) fn is_pipe(path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        path == Path::new(STDIN) || std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+    }
+    #[cfg(not(unix))]
+    {
+        path == Path::new(STDIN)
+    }
+}
+
 /// Puts the serial port `file` in raw mode (no line editing, no character
 /// translation, 8 data bits, receiver on, modem lines ignored), at
 /// `baud` where given, its reads returning after
@@ -89,8 +113,9 @@ fn raw_serial(_file: &File, _baud: Option<u32>) -> std::io::Result<()> {
 
 /// Reads the UBX stream at `path` in its own thread: a serial port (put in
 /// raw mode at `baud`) until it fails, or a file followed as it grows until
-/// it shrinks (a logger that restarted writes another log); either ends when
-/// nothing came for `idle_timeout_s` (never when 0).
+/// it shrinks (a logger that restarted writes another log), either until
+/// nothing came for `idle_timeout_s` (never when 0); or a pipe ([`is_pipe`])
+/// until its writer closes it.
 pub(crate) fn spawn_bytes(
     tx: Sender<SourceEvent>,
     source: usize,
@@ -100,9 +125,39 @@ pub(crate) fn spawn_bytes(
     clock: Arc<dyn Clock>,
 ) {
     std::thread::spawn(move || {
-        let why = read_bytes(&tx, source, &path, baud, idle_timeout_s, &*clock);
+        let why = if is_pipe(&path) {
+            read_pipe(&tx, source, &path)
+        } else {
+            read_bytes(&tx, source, &path, baud, idle_timeout_s, &*clock)
+        };
         let _ = tx.send(SourceEvent::Ended { source, why });
     });
+}
+
+/// Reads the pipe `path` (standard input for [`STDIN`]) until its writer
+/// closes it; why it ended, when not so.
+fn read_pipe(tx: &Sender<SourceEvent>, source: usize, path: &Path) -> Option<String> {
+    let mut pipe: Box<dyn Read> = if path == Path::new(STDIN) {
+        Box::new(std::io::stdin().lock())
+    } else {
+        match File::open(path) {
+            Ok(f) => Box::new(f),
+            Err(e) => return Some(format!("{}: {e}", path.display())),
+        }
+    };
+    let mut buf = vec![0u8; READ_CHUNK];
+    loop {
+        match pipe.read(&mut buf) {
+            Ok(0) => return None,
+            Ok(n) => {
+                if tx.send(SourceEvent::Bytes { source, bytes: buf[..n].to_vec() }).is_err() {
+                    return None;
+                }
+            }
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Some(format!("{}: {e}", path.display())),
+        }
+    }
 }
 
 /// The loop of [`spawn_bytes`]; why it ended (`None`: the receiver hung up).
@@ -245,5 +300,29 @@ mod tests {
             SourceEvent::Ended { source: 0, why: Some(why) } => assert!(why.starts_with("/dev/pts/"), "{why}"),
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A named pipe is read until its writer closes it, every byte in order.
+    #[cfg(unix)]
+    #[test]
+    fn a_named_pipe_is_read_until_its_writer_closes_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("ubx.fifo");
+        rustix::fs::mkfifoat(rustix::fs::CWD, &fifo, rustix::fs::Mode::RUSR | rustix::fs::Mode::WUSR).unwrap();
+        assert!(is_pipe(&fifo) && !is_device(&fifo) && is_pipe(Path::new(STDIN)));
+        let (tx, rx) = std::sync::mpsc::channel();
+        spawn_bytes(tx, 1, fifo.clone(), None, 0.0, Arc::new(ManualClock::default()));
+        let bytes: Vec<u8> = (0..=255u8).cycle().take(300_000).collect();
+        // Opening for writing waits for the reader: the follower has opened it.
+        File::options().write(true).open(&fifo).unwrap().write_all(&bytes).unwrap();
+        let mut got = Vec::new();
+        loop {
+            match rx.recv().unwrap() {
+                SourceEvent::Bytes { source: 1, bytes: b } => got.extend_from_slice(&b),
+                SourceEvent::Ended { source: 1, why: None } => break,
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(got, bytes);
     }
 }
