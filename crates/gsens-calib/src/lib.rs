@@ -99,9 +99,9 @@ pub use loop_free::{
 pub use measurement::{Measurement, MeasurementChoice};
 pub use nco_frequency::{estimate_nco_frequency, estimate_nco_frequency_from};
 pub use nco_loop::{
-    IDENTIFY_BN_RANGE_HZ, IDENTIFY_INTERVALS_S, IdentifiedLoop, IdentifiedNcoEstimate, LoopResolution, NcoRecord,
-    ShapeFit, estimate_nco_frequency_identified, estimate_nco_frequency_identified_from, estimate_nco_frequency_unity,
-    identification_shapes, nco_rows,
+    CompensatedCarrierPhase, IDENTIFY_BN_RANGE_HZ, IDENTIFY_INTERVALS_S, IdentifiedLoop, IdentifiedNcoEstimate,
+    LoopResolution, NcoRecord, ShapeFit, estimate_nco_frequency_identified, estimate_nco_frequency_identified_from,
+    estimate_nco_frequency_unity, identification_shapes, nco_rows,
 };
 pub use observation_pipeline::{LoopIdentification, ObservationOutcome, calibrate_observations};
 pub use observation_rows::{

@@ -540,24 +540,23 @@ pub(crate) fn rows_score(
 }
 
 /// The common mode of frequency rows \[Hz\] integrated to carrier phase
-/// \[rad\], 2π·Σ f·Δt over each segment with its linear trend removed:
-/// RMS before compensation, after it (the rows less x·`gamma`) and of the
-/// g-induced part x·`gamma` alone, on the rows [`fit_rows`] fits at the IMU
-/// offset `tau`. What compensating with Γ̂ removes from the receiver's
-/// carrier phase.
-pub(crate) fn integrated_phase_rms_rad(
+/// \[rad\], 2π·Σ f·Δt over each segment with its linear trend removed, on
+/// the rows [`fit_rows`] fits at the IMU offset `tau`: per row its epoch's
+/// index and the phase before compensation, after it (the rows less
+/// x·`gamma`) and of the g-induced part x·`gamma` alone. What compensating
+/// with Γ̂ removes from the receiver's carrier phase.
+pub(crate) fn integrated_phase_rad(
     phases: &InputPhases,
     regressor: &impl RowRegressor,
     settings: &LoopFreeSettings,
     tau: f64,
     gamma: &[f64; 3],
-) -> Result<[f64; 3], LoopFreeError> {
+) -> Result<Vec<(usize, [f64; 3])>, LoopFreeError> {
     let (rows, _, _) = assemble_rows(phases, regressor, settings, f64::INFINITY)?;
     let x = rows.regressors(regressor, tau);
     let step_rad = TAU * median_step(&phases.epoch_t_s);
-    let mut sum_sq = [0.0; 3];
-    let mut n = 0usize;
-    for r in rows.ranges() {
+    let mut out = Vec::with_capacity(x.len());
+    for (r, (at, _)) in rows.ranges().into_iter().zip(&rows.segments) {
         let mut acc = [0.0; 3];
         let integrated: Vec<[f64; 3]> = r
             .map(|k| {
@@ -569,23 +568,19 @@ pub(crate) fn integrated_phase_rms_rad(
                 acc
             })
             .collect();
-        for (i, s) in sum_sq.iter_mut().enumerate() {
-            let y: Vec<f64> = integrated.iter().map(|v| v[i]).collect();
-            *s += detrended_sum_of_squares(&y);
-        }
-        n += integrated.len();
+        let detrended: [Vec<f64>; 3] =
+            [0, 1, 2].map(|i| detrended(&integrated.iter().map(|v| v[i]).collect::<Vec<_>>()));
+        out.extend(at.iter().enumerate().map(|(j, &k)| (k, [detrended[0][j], detrended[1][j], detrended[2][j]])));
     }
-    if n == 0 {
-        return Err(LoopFreeError::TooFewEpochs { epochs: 0, segment_s: settings.segment_s });
-    }
-    Ok(sum_sq.map(|s| (s / n as f64).sqrt()))
+    Ok(out)
 }
 
-/// Σ (yₖ − a − b·k)² for the least-squares line a + b·k.
-fn detrended_sum_of_squares(y: &[f64]) -> f64 {
+/// y less its least-squares line a + b·k (a segment under 3 values: zeros,
+/// as no trend can be told from its values).
+fn detrended(y: &[f64]) -> Vec<f64> {
     let n = y.len() as f64;
     if y.len() < 3 {
-        return 0.0;
+        return vec![0.0; y.len()];
     }
     let k_mean = (n - 1.0) / 2.0;
     let y_mean = y.iter().sum::<f64>() / n;
@@ -596,7 +591,7 @@ fn detrended_sum_of_squares(y: &[f64]) -> f64 {
         skk += dk * dk;
     }
     let b = sky / skk;
-    y.iter().enumerate().map(|(k, v)| (v - y_mean - b * (k as f64 - k_mean)).powi(2)).sum()
+    y.iter().enumerate().map(|(k, v)| v - y_mean - b * (k as f64 - k_mean)).collect()
 }
 
 /// A fit of Γ with the regressor's loop scaled by s = e^θ as one more

@@ -14,7 +14,12 @@
 //! candidate of its own. The candidates are compared under one noise model
 //! by N·ln σ² + ln N per fitted bandwidth (Schwarz's criterion), each
 //! weighted by exp(−Δ/2): the best is kept, the weighted spread of the
-//! others' Γ̂ joins its variance.
+//! others' Γ̂ joins its variance, and that variance reaches the Γ̂ of every
+//! candidate within Δ ≤ 1 of the best. At one shaking rate the update
+//! interval trades with the bandwidth and the time offset: a 3 Hz loop
+//! updated every 20 ms and every 1 ms fit a session alike (Δ of a few
+//! tenths) with Γ̂ 3–4 % apart, and only the second rule covers the truth
+//! when it lies at the far end of the intervals tried.
 //!
 //! Γ̂'s covariance carries the loop's uncertainty: the Γ block of the joint
 //! covariance of (Γ, θ), the conditional one plus g·gᵀ·var(θ̂) with
@@ -27,7 +32,7 @@
 use crate::loop_free::RowRegressor;
 use crate::loop_free::{
     InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, check_settings, fit_rows, fit_rows_scaled,
-    integrated_phase_rms_rad, median_step, rows_noise, rows_score,
+    integrated_phase_rad, median_step, rows_noise, rows_score,
 };
 use crate::nco_frequency::{ModelRegressor, frequency_on_epochs, mean_frequency_on_epochs};
 use gsens_core::{LoopModel, LoopSpec, RegressorModel, RowQuantity};
@@ -97,6 +102,12 @@ pub struct IdentifiedLoop {
     pub sigma_ln_bn: f64,
     /// Where it lies in the searched range.
     pub resolution: LoopResolution,
+    /// The update intervals \[s\] of the shapes that fit as well as the kept
+    /// one (Δ(−2 ln L) ≤ 1), the kept one's among them, shortest first: more
+    /// than one where the session cannot tell the receiver's update interval,
+    /// whose Γ̂ are then all within Γ̂'s 1σ.
+    #[serde(default)]
+    pub alike_intervals_s: Vec<f64>,
     /// Every shape's best fit.
     pub shapes: Vec<ShapeFit>,
 }
@@ -318,7 +329,29 @@ pub fn estimate_nco_frequency_identified_from(
     let same_order = candidates.iter().zip(&weights).filter(|(c, _)| c.shape.order() == order_best && !c.unity);
     let (w_sum, w_spread) =
         same_order.fold((0.0, 0.0), |(ws, sp), (c, w)| (ws + w, sp + w * (c.bn_hz.ln() - ln_bn_best).powi(2)));
+    // The candidates the data cannot tell from the best (Δ ≤ 1), each
+    // covered by Γ̂'s variance as the grid's points are within a shape
+    // ([`cover_alike`]): their weighted spread alone leaves an end of the
+    // candidates' range uncovered when the best lies at the other end and
+    // the candidates between share their weight (a loop's update interval
+    // trades with its bandwidth and the time offset at one shaking rate).
+    let is_alike = |t: &f64| *t - totals[k_best] <= 1.0;
+    let alike: Vec<[f64; 3]> = candidates
+        .iter()
+        .zip(&totals)
+        .filter(|(_, t)| is_alike(t))
+        .map(|(c, _)| c.estimate.gamma_hz_per_mps2)
+        .collect();
+    let mut alike_intervals_s: Vec<f64> = candidates
+        .iter()
+        .zip(&totals)
+        .filter(|(c, t)| !c.unity && is_alike(t))
+        .map(|(c, _)| c.shape.interval_s().unwrap_or(log_interval_s))
+        .collect();
+    alike_intervals_s.sort_by(f64::total_cmp);
+    alike_intervals_s.dedup();
     let mut c = candidates.swap_remove(k_best);
+    let own_covariance = c.estimate.covariance;
     if c.unity {
         c.bn_hz = wide_bound_hz;
     } else {
@@ -327,6 +360,7 @@ pub fn estimate_nco_frequency_identified_from(
     for (i, s) in spread.iter().enumerate() {
         c.estimate.covariance[i][i] += s;
     }
+    cover_alike(&mut c.estimate, &own_covariance, &alike);
     let bn0 = c.shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
     let loop_interval_s = c.shape.interval_s().unwrap_or(log_interval_s);
     let mut estimate = c.estimate;
@@ -341,6 +375,7 @@ pub fn estimate_nco_frequency_identified_from(
             bn_hz: c.bn_hz,
             sigma_ln_bn: c.sigma_ln_bn,
             resolution: c.resolution,
+            alike_intervals_s,
             shapes: shape_fits,
         },
         unity,
@@ -408,9 +443,10 @@ fn unity_shape(log_interval_s: f64) -> Option<LoopModel> {
 
 /// What compensating with `estimate`'s Γ̂ does, through the `identified`
 /// loop: the common mode of the rows integrated to carrier phase before and
-/// after ([`crate::loop_free`]'s integrated RMS), and the largest tracking
-/// error |φ_aᵀΓ̂| the loop predicts on the rows' epochs, φ_a the regressor
-/// of the discriminator output ([`RowQuantity::PhaseError`]).
+/// after ([`crate::loop_free`]'s integrated phase: its RMS, and the series
+/// on the rows' epochs), and the largest tracking error |φ_aᵀΓ̂| the loop
+/// predicts on the rows' epochs, φ_a the regressor of the discriminator
+/// output ([`RowQuantity::PhaseError`]).
 pub(crate) fn identified_figures(
     rows: &InputPhases,
     imu: &ImuSeries,
@@ -418,13 +454,25 @@ pub(crate) fn identified_figures(
     identified: &LoopModel,
     estimate: &LoopFreeEstimate,
     quantity: RowQuantity,
-) -> Result<crate::estimate::ResidualFigures, LoopFreeError> {
+) -> Result<(crate::estimate::ResidualFigures, CompensatedCarrierPhase), LoopFreeError> {
     let epochs = rows.epoch_t_s.as_slice();
     let (tau, gamma) = (estimate.imu_time_offset_s, estimate.gamma_hz_per_mps2);
     let ln_bn = identified.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ).ln();
     let lead_s = identification_lead_s(settings);
     let rows_regressor = model_regressor(epochs, imu, identified, ln_bn, quantity, lead_s)?;
-    let [before, after, g_induced] = integrated_phase_rms_rad(rows, &rows_regressor, settings, tau, &gamma)?;
+    let series = integrated_phase_rad(rows, &rows_regressor, settings, tau, &gamma)?;
+    if series.is_empty() {
+        return Err(LoopFreeError::TooFewEpochs { epochs: 0, segment_s: settings.segment_s });
+    }
+    let rms = |i: usize| (series.iter().map(|(_, v)| v[i] * v[i]).sum::<f64>() / series.len() as f64).sqrt();
+    let mut carrier_phase = CompensatedCarrierPhase {
+        t_s: epochs.to_vec(),
+        before_rad: vec![None; epochs.len()],
+        after_rad: vec![None; epochs.len()],
+    };
+    for (k, v) in &series {
+        (carrier_phase.before_rad[*k], carrier_phase.after_rad[*k]) = (Some(v[0]), Some(v[1]));
+    }
     let tracking_error = RowQuantity::PhaseError(gsens_core::LoggedPhase::Last);
     let regressor = model_regressor(epochs, imu, identified, ln_bn, tracking_error, lead_s)?;
     let at: Vec<usize> = (0..epochs.len()).filter(|&k| regressor.covers(k, tau)).collect();
@@ -433,12 +481,28 @@ pub(crate) fn identified_figures(
         .iter()
         .map(|x| (x[0] * gamma[0] + x[1] * gamma[1] + x[2] * gamma[2]).abs())
         .fold(0.0, f64::max);
-    Ok(crate::estimate::ResidualFigures {
-        rms_before_rad: before,
-        rms_after_rad: after,
-        rms_g_induced_rad: g_induced,
+    let figures = crate::estimate::ResidualFigures {
+        rms_before_rad: rms(0),
+        rms_after_rad: rms(1),
+        rms_g_induced_rad: rms(2),
         peak_phase_err_rad: peak,
-    })
+    };
+    Ok((figures, carrier_phase))
+}
+
+/// The receiver's carrier phase as compensation changes it: the common mode
+/// of the tracks' rows integrated, 2π·Σ f·Δt, with each segment's linear
+/// trend removed, before and after Γ̂'s part is taken out \[rad\], on the
+/// rows' epochs (`None` where no row entered the fit).
+#[derive(Debug, Clone, PartialEq, Default)]
+#[non_exhaustive]
+pub struct CompensatedCarrierPhase {
+    /// The rows' epochs \[s\] (GPS seconds of the week of the first).
+    pub t_s: Vec<f64>,
+    /// Before compensation \[rad\].
+    pub before_rad: Vec<Option<f64>>,
+    /// After it \[rad\].
+    pub after_rad: Vec<Option<f64>>,
 }
 
 /// One shape's identified loop and estimate.
@@ -502,12 +566,8 @@ fn refine<'a>(
     // Not resolved: Γ̂ of the best point, its variance widened by the spread
     // of the estimates the data cannot tell from it.
     let mut estimate = best.clone();
-    for e in alike.iter().map(|&k| &profile[k]) {
-        for i in 0..3 {
-            let spread = (e.gamma_hz_per_mps2[i] - best.gamma_hz_per_mps2[i]).powi(2);
-            estimate.covariance[i][i] = estimate.covariance[i][i].max(best.covariance[i][i] + spread);
-        }
-    }
+    let alike_gamma: Vec<[f64; 3]> = alike.iter().map(|&k| profile[k].gamma_hz_per_mps2).collect();
+    cover_alike(&mut estimate, &best.covariance, &alike_gamma);
     // The bound: the Bn farthest from the end the data cannot tell apart from the best.
     let alike_bn = alike.iter().map(|&k| grid[k]);
     let (resolution, bn_hz) = if alike.contains(&(grid.len() - 1)) || 2 * k_best >= grid.len() {
@@ -516,4 +576,19 @@ fn refine<'a>(
         (LoopResolution::Narrow, alike_bn.fold(grid[k_best], f64::max))
     };
     Ok(Candidate { shape: *shape, bn_hz, sigma_ln_bn: f64::INFINITY, resolution, estimate, unity: false })
+}
+
+/// Widens `estimate`'s variances so that each covers the Γ̂ of every fit in
+/// `alike` (those the data cannot tell from it, Δ(−2 ln L) ≤ 1):
+/// var_i ≥ own_i + (Γ̂_k,i − Γ̂_i)², `own` the estimate's covariance before
+/// any widening. The set of such fits is the profile likelihood's 1σ
+/// region of the nuisance (the bandwidth, or the loop's shape); Γ̂'s 1σ
+/// then reaches every estimate in it.
+fn cover_alike(estimate: &mut LoopFreeEstimate, own: &[[f64; 3]; 3], alike: &[[f64; 3]]) {
+    for g in alike {
+        for i in 0..3 {
+            let spread = (g[i] - estimate.gamma_hz_per_mps2[i]).powi(2);
+            estimate.covariance[i][i] = estimate.covariance[i][i].max(own[i][i] + spread);
+        }
+    }
 }

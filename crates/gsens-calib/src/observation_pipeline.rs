@@ -16,7 +16,7 @@
 
 use crate::document::{CrossEstimate, PipelineSummary, SourceConversion};
 use crate::loop_free::{LoopFreeError, LoopFreeEstimate, median_step};
-use crate::nco_loop::{identification_shapes, identified_figures};
+use crate::nco_loop::{CompensatedCarrierPhase, identification_shapes, identified_figures};
 use crate::observation_rows::{ObservationRecord, ObservationRows, observation_rows};
 use crate::verdict::weakest_linear_range_rad;
 use crate::{
@@ -40,6 +40,9 @@ pub struct ObservationOutcome {
     /// The document's estimate: `identified`'s, with the IMU's systematic
     /// σ, the verdicts per axis and the compensation figures.
     pub calibration: Calibration,
+    /// The carrier phase before and after compensation, whose RMS the
+    /// compensation figures give.
+    pub carrier_phase: CompensatedCarrierPhase,
     /// The settings it ran with.
     pub settings: PipelineSettings,
     /// The log's format (`RINEX 3.04`, `UBX`).
@@ -122,7 +125,7 @@ pub fn calibrate_observations(
         None => estimate_nco_frequency_unity(&rows.rows, imu, &free, quantity),
     };
     let model = identified.identified.model.ok_or_else(|| why(&"the identification kept no loop"))?;
-    let figures =
+    let (figures, carrier_phase) =
         identified_figures(&rows.rows, imu, &free, &model, &identified.estimate, quantity).map_err(|e| why(&e))?;
     let estimate_settings = settings.estimate.with_loop(model);
     let loop_interval_s = identified.identified.loop_interval_s;
@@ -145,6 +148,7 @@ pub fn calibrate_observations(
         identified,
         unity,
         calibration,
+        carrier_phase,
         settings: settings.clone(),
         format: log.format.clone(),
         skipped: log.skipped.iter().map(|s| (s.reason.clone(), s.count)).collect(),

@@ -70,7 +70,9 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
 }
 
 /// Writes the report of a RINEX or UBX log's `outcome` into `out` and prints
-/// its text, as [`write_report`] (no figures of tracking rows).
+/// its text, as [`write_report`], with the figures of such a log (the
+/// identified loop's response, the carrier phase before and after
+/// compensation).
 pub(crate) fn write_observation_report(
     outcome: &ObservationOutcome,
     truth: Option<[f64; 3]>,
@@ -79,7 +81,10 @@ pub(crate) fn write_observation_report(
     header: HeaderArgs,
 ) -> Result<crate::Status> {
     let doc = outcome.document(truth);
-    let files = gsens_report::write_report_dir(out, title, &doc, &[], header.write_untrusted_header, |_| {})?;
+    let figures = gsens_report::observation_figures(outcome);
+    let files = drawing(|on_figure| {
+        gsens_report::write_report_dir(out, title, &doc, &figures, header.write_untrusted_header, on_figure)
+    })?;
     say_written(&doc, &files)
 }
 

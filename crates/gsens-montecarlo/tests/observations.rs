@@ -127,6 +127,25 @@ fn a_narrow_loop_is_identified_and_h_unity_flagged() {
     }
 }
 
+/// A 3rd-order 10 Hz loop updated every 5 ms, seen through its Doppler at
+/// 10 Hz (the command at the epoch's latest update): Γ̂ within its σ, every
+/// document trustworthy, and where the order and Bn are resolved, Bn within
+/// 3σ of 10 Hz.
+#[test]
+fn a_10_hz_loop_is_identified_from_its_doppler() {
+    let toml = "[loop]\norder = 3\nbn_hz = 10.0\ninterval_s = 0.005\n[log]\nnco = true\ninterval_s = 0.1\n";
+    let docs = documents(toml, 10.0, Phase::Nco, ObservationRecord::Doppler, 8);
+    for d in &docs {
+        let id = d.identified_loop.as_ref().unwrap();
+        assert_eq!(id.record, ObservationRecord::Doppler);
+        let l = &id.identified;
+        if l.order_resolved && l.resolution == LoopResolution::Resolved {
+            assert_eq!(l.order, 3, "{l:?}");
+            assert!(((l.bn_hz / 10.0).ln() / l.sigma_ln_bn).abs() < 3.0, "{l:?}");
+        }
+    }
+}
+
 /// A carrier phase corrected by the discriminator (θ_NCO + φ/2π, φ the
 /// latest output: no loop in the way) at 10 Hz: seen as a wide loop (a
 /// bound on Bn only), H ≈ 1 within 1 % at the shaking, Γ̂ within its σ. The satellites are strong

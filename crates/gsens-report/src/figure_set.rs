@@ -8,7 +8,7 @@ use crate::figures::{
     MeasuredResponseData, RenderError, ResponseData, SpectrumData, fig_allan, fig_cn0, fig_compensation,
     fig_estimation, fig_measured_response, fig_residual_spectrum, fig_response,
 };
-use gsens_calib::{CalibError, Calibration, Outcome, compensation_series};
+use gsens_calib::{CalibError, Calibration, ObservationOutcome, Outcome, compensation_series};
 use gsens_io::TrackingLog;
 use gsens_session::PreparedSession;
 use std::path::Path;
@@ -167,20 +167,7 @@ impl<'a> FigureInputs<'a> {
 
     /// Fig. 3: the modelled loop's response, when it has one.
     fn response_figure(&self) -> Option<Figure<'_>> {
-        let desc = self.calibration.loop_used.to_string();
-        let r = ResponseData::from_loop(&self.calibration.loop_used, 0.05, 20.0, 300, desc.clone()).ok()?;
-        let period = 1.0 / r.peak_hz;
-        Some(Figure {
-            id: "fig3_response",
-            title: "Fig. 3: the loop's frequency response".into(),
-            caption: format!(
-                "|L(j2πf)| = |φ/Δf| and its phase for the receiver loop modelled ({desc}). A frequency bias \
-                 Δf = aᵀΓ leaves the largest phase error when the specific force varies near the peak, \
-                 {:.3} Hz: shake with a period of about {period:.2} s (shaded: the half-power band).",
-                r.peak_hz
-            ),
-            render: Box::new(move |f| fig_response(&r, f, DEFAULT_SIZE)),
-        })
+        response_figure(&self.calibration.loop_used, "modelled")
     }
 
     /// The loop's response measured from the session, when it was.
@@ -404,4 +391,55 @@ pub fn write_report_dir(
         },
     }
     Ok(ReportFiles { html: dir.join("report.html"), header: data.c_header.is_some().then_some(header_path) })
+}
+
+/// Fig. 3 for `loop_model` (`how`: "modelled", "identified from the
+/// session"), when it has a response.
+fn response_figure(loop_model: &gsens_core::LoopModel, how: &str) -> Option<Figure<'static>> {
+    let desc = loop_model.to_string();
+    let r = ResponseData::from_loop(loop_model, 0.05, 20.0, 300, desc.clone()).ok()?;
+    let period = 1.0 / r.peak_hz;
+    Some(Figure {
+        id: "fig3_response",
+        title: "Fig. 3: the loop's frequency response".into(),
+        caption: format!(
+            "|L(j2πf)| = |φ/Δf| and its phase for the receiver loop {how} ({desc}). A frequency bias \
+             Δf = aᵀΓ leaves the largest phase error when the specific force varies near the peak, \
+             {:.3} Hz: shake with a period of about {period:.2} s (shaded: the half-power band).",
+            r.peak_hz
+        ),
+        render: Box::new(move |f| fig_response(&r, f, DEFAULT_SIZE)),
+    })
+}
+
+/// The figures of a carrier phase and Doppler log's calibration: the
+/// identified loop's response (Fig. 3) and the receiver's carrier phase
+/// before and after compensation, its time from the first epoch.
+pub fn observation_figures(outcome: &ObservationOutcome) -> Vec<Figure<'_>> {
+    let phase = &outcome.carrier_phase;
+    let t0 = phase.t_s.first().copied().unwrap_or(0.0);
+    let t_s: Vec<f64> = phase.t_s.iter().map(|t| t - t0).collect();
+    let c = &outcome.calibration;
+    let compensation = Figure {
+        id: "fig5_compensation",
+        title: "Fig. 5: the carrier phase before and after compensation".into(),
+        caption: format!(
+            "The common mode of the tracks' carrier phase, integrated from the rows (2π·Σ f·Δt over each \
+             segment, its linear trend removed), and the same less Γ̂'s part through the identified loop, over \
+             the log from its first epoch (legend RMS over every plotted epoch; over the {} epochs used: {:.4} rad \
+             before, {:.4} rad after). At rest the two coincide; while shaking, compensation brings the phase back \
+             to its at-rest wander.",
+            c.epochs_used, c.rms_before_rad, c.rms_after_rad
+        ),
+        render: Box::new(move |f| {
+            let d = CompensationData {
+                t_s: &t_s,
+                before_rad: &phase.before_rad,
+                after_rad: &phase.after_rad,
+                kind: CompensationKind::CarrierPhase,
+            };
+            fig_compensation(&d, f, (DEFAULT_SIZE.0, 520))
+        }),
+    };
+    response_figure(&c.loop_used, "identified from the session").into_iter().chain([compensation]).collect()
 }

@@ -1110,6 +1110,9 @@ pub enum CompensationKind {
     /// In the loop: the g-induced phase error of a receiver without and with
     /// −aᵀΓ̂ fed into its NCOs (`gsens validate`).
     InTheLoop,
+    /// A carrier phase and Doppler log: the tracks' common-mode carrier
+    /// phase integrated from the rows, and the same less Γ̂'s part.
+    CarrierPhase,
 }
 
 fn rms(v: impl Iterator<Item = f64>) -> f64 {
@@ -1130,6 +1133,15 @@ impl Plot for CompensationData<'_> {
                 "without compensation",
                 "with the IMU's a·Γ estimate fed out of the NCO",
             ),
+            CompensationKind::CarrierPhase => (
+                "Effect of g-sensitivity compensation on the receiver's carrier phase",
+                "before compensation: the tracks' common mode",
+                "after compensation: less the modelled g-induced part",
+            ),
+        };
+        let y_label = match self.kind {
+            CompensationKind::CarrierPhase => "carrier phase, common mode [rad]",
+            _ => "phase tracking error [rad]",
         };
         let area = titled(root, title, st)?;
         let y_area = st.i(78.0);
@@ -1146,7 +1158,7 @@ impl Plot for CompensationData<'_> {
         let xr = t[0]..if t[t.len() - 1] > t[0] { t[t.len() - 1] } else { t[0] + 1.0 };
         let yr =
             padded_range(self.before_rad.iter().chain(self.after_rad).flatten().cloned(), 0.05).unwrap_or(-1.0..1.0);
-        let mut chart = time_chart(&area, st, y_area, "phase tracking error [rad]", xr, yr)?;
+        let mut chart = time_chart(&area, st, y_area, y_label, xr, yr)?;
         let buckets = (area.dim_in_pixel().0 as usize).max(200);
         for (data, color, _) in series {
             let style = color.stroke_width(st.i(1.3).max(1) as u32);

@@ -45,7 +45,9 @@ mod time;
 
 pub use calibration_report::{ReportError, write_calibration_report};
 pub use demo_figures::{DemoFiguresError, write_demo_figures};
-pub use figure_set::{Figure, FigureInputs, ReportFiles, WriteError, write_figures, write_report_dir};
+pub use figure_set::{
+    Figure, FigureInputs, ReportFiles, WriteError, observation_figures, write_figures, write_report_dir,
+};
 pub use montecarlo_text::render_montecarlo_text;
 pub use text::{render_response_text, render_text};
 pub use time::{utc_date_string, utc_now_string, utc_timestamp_string};

@@ -98,6 +98,9 @@ pub(crate) fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentificati
         },
         l.loop_interval_s
     );
+    if let [first, .., last] = l.alike_intervals_s.as_slice() {
+        let _ = writeln!(s, "  update intervals {first}–{last} s fit alike: σ covers the Γ̂ of each");
+    }
     if let Some(e) = id.h_unity_error {
         let unity = id.h_unity_estimate.as_ref().map(|u| {
             let g: Vec<String> =
@@ -191,7 +194,11 @@ fn method(s: &mut String, doc: &ResultDocument) {
         let what = if doc.measurement == Measurement::InputPhase { "loop-free" } else { "NCO frequency through H" };
         let _ = writeln!(s, "method: generalized least squares, an AR noise model per segment ({what})");
         let how = if c.imu_time_offset_estimated { "searched" } else { "given" };
-        let _ = writeln!(s, "IMU time offset: {:+.4} s, {how}", c.imu_time_offset_s);
+        // A receiver's measurement latency delays its rows as an IMU offset
+        // of the opposite sign would: the fitted offset is their sum.
+        let with_latency =
+            if doc.identified_loop.is_some() { " (with the receiver's measurement latency)" } else { "" };
+        let _ = writeln!(s, "IMU time offset{with_latency}: {:+.4} s, {how}", c.imu_time_offset_s);
         return;
     }
     let _ = writeln!(s, "method: {}", c.settings.method);
