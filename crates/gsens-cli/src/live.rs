@@ -7,7 +7,7 @@ use crate::args::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
-use gsens_live::{Display, InputChoice, InputChoiceError, Runtime, RuntimeConfig, SystemClock};
+use gsens_live::{Display, FinalEstimate, InputChoice, InputChoiceError, Runtime, RuntimeConfig, SystemClock};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -26,18 +26,40 @@ pub(crate) struct LiveArgs {
     /// sampling rate, TrackingMonitor.decimation_factor and settling time.
     #[arg(long, requires = "gnss_sdr_monitor")]
     pub gnss_sdr_conf: Option<PathBuf>,
-    /// Follow a growing imu.csv (as `tail -f`), with --follow-tracking or --gnss-sdr-monitor.
+    /// Follow a growing imu.csv (as `tail -f`), with --follow-tracking or --gnss-sdr-monitor, or
+    /// with --ubx instead of the module's own accelerometer.
     #[arg(long)]
     pub follow_imu: Option<PathBuf>,
     /// Follow a growing tracking.csv, with --follow-imu.
     #[arg(long, requires = "follow_imu")]
     pub follow_tracking: Option<PathBuf>,
-    /// With --follow-* and --gnss-sdr-monitor: end when no input has grown for this long [s]
+    /// A u-blox module's UBX stream: a log being written (followed as it grows), its serial port
+    /// (/dev/ttyACM0, a UART), a named pipe or - for standard input (read until closed), RXM-RAWX with the module's accelerometer (ESF-RAW / ESF-MEAS) unless
+    /// --follow-imu is given; its loop is identified from the session. The bytes are kept as
+    /// received.ubx in --out.
+    #[arg(
+        long,
+        conflicts_with_all = ["stdin", "follow_tracking", "gnss_sdr_monitor"],
+        help_heading = "u-blox UBX stream"
+    )]
+    pub ubx: Option<PathBuf>,
+    /// The serial port's baud rate (a UART: the module's, e.g. 38400 or 115200; a USB port ignores
+    /// it); by default the port is left at its rate.
+    #[arg(long, requires = "ubx", value_parser = clap::value_parser!(u32).range(1..), help_heading = "u-blox UBX stream")]
+    pub ubx_baud: Option<u32>,
+    /// How the ESF sensor time tags map to GPS time, as for `gsens estimate --ubx`.
+    #[arg(long, value_enum, default_value = "free-running-ms", requires = "ubx", help_heading = "u-blox UBX stream")]
+    pub ubx_sensor_time: gsens_ublox::SensorTime,
+    /// What the estimate is made from, as for `gsens estimate --ubx`.
+    #[arg(long, value_enum, default_value_t, requires = "ubx", help_heading = "u-blox UBX stream")]
+    pub observable: gsens_calib::ObservationRecord,
+    /// With --follow-*, --gnss-sdr-monitor and --ubx: end when no input has grown for this long [s]
     /// (0: only on a key or the target).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_non_negative)]
     pub idle_timeout_s: f64,
     /// Output directory: the records received (imu.csv, tracking.csv; every line as
-    /// received in received/), and at the end the report of `gsens report`
+    /// received in received/; a UBX stream's bytes as received.ubx), and at the end the report
+    /// of `gsens report`
     /// (report.html, report.json, gsens_gamma.h as `gsens report` writes it, figures/).
     #[arg(long)]
     pub out: PathBuf,
@@ -70,6 +92,12 @@ fn choice(args: &LiveArgs) -> InputChoice {
         follow_imu: args.follow_imu.clone(),
         follow_tracking: args.follow_tracking.clone(),
         gnss_sdr_monitor: args.gnss_sdr_monitor.clone().zip(args.gnss_sdr_conf.clone()),
+        ubx: args.ubx.clone(),
+        ubx_baud: args.ubx_baud,
+        ubx_options: gsens_live::UbxOptions {
+            settings: gsens_ublox::UbxSettings { sensor_time: args.ubx_sensor_time },
+            record: args.observable,
+        },
     }
 }
 
@@ -111,10 +139,17 @@ pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     crate::out(&ending.heading())?;
     let mut finished = runtime.finish()?;
     if let Some(t) = &args.truth {
-        finished.outcome.inputs.push(("truth".into(), t.display().to_string()));
+        finished.estimate.inputs_mut().push(("truth".into(), t.display().to_string()));
     }
-    let status =
-        crate::report::write_report(&finished.outcome, &finished.tracking, truth, &args.out, &args.title, args.header)?;
+    let status = match &finished.estimate {
+        FinalEstimate::Tracking { outcome, tracking } => {
+            crate::report::write_report(outcome, tracking, truth, &args.out, &args.title, args.header)?
+        }
+        FinalEstimate::Observations(outcome) => {
+            crate::out(&gsens_inputs::render_observation_summary(outcome))?;
+            crate::report::write_observation_report(outcome, truth, &args.out, &args.title, args.header)?
+        }
+    };
     let missed = finished.target_missed(args.target_sigma);
     crate::out(missed.as_deref().unwrap_or_default())?;
     Ok(if missed.is_some() && status == crate::Status::Done { crate::Status::TargetMissed } else { status })

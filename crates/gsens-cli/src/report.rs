@@ -6,7 +6,7 @@ use crate::args::{CalibrationArgs, InputArgs};
 use crate::estimate::calibrate;
 use anyhow::{Context, Result};
 use clap::Args;
-use gsens_calib::Outcome;
+use gsens_calib::{ObservationOutcome, Outcome};
 use gsens_io::TrackingLog;
 use gsens_report::write_calibration_report;
 use gsens_tui::progress::drawing;
@@ -50,21 +50,7 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
         if let Some(t) = &args.truth {
             outcome.inputs.push(("truth".into(), t.display().to_string()));
         }
-        let doc = outcome.document(truth);
-        let files = drawing(|on_figure| {
-            gsens_report::write_report_dir(
-                &args.out,
-                &args.title,
-                &doc,
-                &gsens_report::observation_figures(&outcome),
-                args.header.write_untrusted_header,
-                on_figure,
-            )
-        })?;
-        let (text, no_header) = files.render(&doc, crate::args::flag);
-        crate::out(&text)?;
-        crate::err(no_header.as_deref().unwrap_or_default());
-        return Ok(crate::Status::of(&doc));
+        return write_observation_report(&outcome, truth, &args.out, &args.title, args.header);
     }
     let inputs = args.inputs.inputs()?;
     let mut settings = args.calibration.settings(given)?;
@@ -83,6 +69,34 @@ pub(crate) fn run(args: &ReportArgs, given: &[&str]) -> Result<crate::Status> {
     write_report(&outcome, &tracking, truth, &args.out, &args.title, args.header)
 }
 
+/// Writes the report of a RINEX or UBX log's `outcome` into `out` and prints
+/// its text, as [`write_report`], with the figures of such a log (the
+/// identified loop's response, the carrier phase before and after
+/// compensation).
+pub(crate) fn write_observation_report(
+    outcome: &ObservationOutcome,
+    truth: Option<[f64; 3]>,
+    out: &Path,
+    title: &str,
+    header: HeaderArgs,
+) -> Result<crate::Status> {
+    let doc = outcome.document(truth);
+    let figures = gsens_report::observation_figures(outcome);
+    let files = drawing(|on_figure| {
+        gsens_report::write_report_dir(out, title, &doc, &figures, header.write_untrusted_header, on_figure)
+    })?;
+    say_written(&doc, &files)
+}
+
+/// Prints the text of a written report (stderr: why no C header was
+/// written, if none was); the exit status of its document.
+fn say_written(doc: &gsens_calib::ResultDocument, files: &gsens_report::ReportFiles) -> Result<crate::Status> {
+    let (text, no_header) = files.render(doc, crate::args::flag);
+    crate::out(&text)?;
+    crate::err(no_header.as_deref().unwrap_or_default());
+    Ok(crate::Status::of(doc))
+}
+
 /// Writes the report of `outcome` (estimated from `tracking`) into `out` and
 /// prints its text: report.html, report.json, gsens_gamma.h (for an
 /// untrustworthy estimate only as `header` asks; stderr says when it is not
@@ -98,8 +112,5 @@ pub(crate) fn write_report(
     let (doc, files) = drawing(|on_figure| {
         write_calibration_report(outcome, tracking, truth, out, title, header.write_untrusted_header, on_figure)
     })?;
-    let (text, no_header) = files.render(&doc, crate::args::flag);
-    crate::out(&text)?;
-    crate::err(no_header.as_deref().unwrap_or_default());
-    Ok(crate::Status::of(&doc))
+    say_written(&doc, &files)
 }

@@ -234,3 +234,51 @@ fn a_missed_target_exits_4() {
     assert_eq!(piped.status.code(), Some(4), "{text}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `gsens live --ubx` following the fixture script's UBX log
+/// (crates/gsens-live/tests/fixtures), complete from the start: the idle
+/// timeout ends it (its length decides nothing but when), the batch lines
+/// name the loop identified, and the report's Γ̂ and σ are those of
+/// `gsens estimate --ubx` on the same log; so are they with the log on
+/// standard input. A missing log is refused.
+#[test]
+fn live_follows_a_ubx_log_and_reports_as_estimate() {
+    let dir = temp_dir("live-ubx");
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/../gsens-live/tests/fixtures/shaken.ubx");
+    let out = dir.join("live");
+    let args = ["live", "--plain", "--ubx", log, "--idle-timeout-s", "0.5", "--out", &s(&out)];
+    let live = run(&args);
+    let text = String::from_utf8_lossy(&live.stdout);
+    // 40 s with x shaken alone: the target is missed, the estimate trustworthy.
+    assert_eq!(live.status.code(), Some(4), "{text}\n{}", String::from_utf8_lossy(&live.stderr));
+    assert!(text.contains("the receiver's loop is identified from the module's carrier phase"), "{text}");
+    assert!(text.lines().any(|l| l.contains("Γ̂ [Hz/(m/s²)] x +0.08") && l.contains("| loop: order 2")), "{text}");
+    assert!(text.contains("no new byte for 0.5 s") && text.contains("ended: the input ended"), "{text}");
+    // The line the README shows of this log.
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let shown = readme.lines().find(|l| l.starts_with("[388851.90 s] Γ̂")).expect("the README shows a UBX batch line");
+    assert!(text.lines().any(|l| l == shown), "{shown}\n---\n{text}");
+    assert_eq!(std::fs::read(out.join("received.ubx")).unwrap(), std::fs::read(log).unwrap());
+    let doc_path = dir.join("estimate.json");
+    gsens(&["estimate", "--ubx", log, "--json", &s(&doc_path)]);
+    let (report, estimate) = (json(&out.join("report.json")), json(&doc_path));
+    for key in ["gamma_hz_per_mps2", "sigma_hz_per_mps2"] {
+        assert_eq!(report[key], estimate[key], "{key}");
+    }
+    assert_eq!(report["identified_loop"]["bn_hz"], estimate["identified_loop"]["bn_hz"]);
+    assert!(out.join("report.html").exists());
+    // The same bytes on standard input (`--ubx -`), read until it closes.
+    let piped = dir.join("piped");
+    let live = Command::new(env!("CARGO_BIN_EXE_gsens"))
+        .args(["live", "--plain", "--ubx", "-", "--out", &s(&piped)])
+        .stdin(std::fs::File::open(log).unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(live.status.code(), Some(4), "{}", String::from_utf8_lossy(&live.stderr));
+    let report = json(&piped.join("report.json"));
+    assert_eq!(report["gamma_hz_per_mps2"], estimate["gamma_hz_per_mps2"]);
+    assert_eq!(report["sigma_hz_per_mps2"], estimate["sigma_hz_per_mps2"]);
+    let missing = dir.join("nothing.ubx");
+    let e = fails(&["live", "--plain", "--ubx", &s(&missing), "--out", &s(&dir.join("b"))]);
+    assert!(e.contains(&format!("--ubx {}: no such file", missing.display())), "{e}");
+}

@@ -34,6 +34,12 @@ pub struct ObservationInputs {
 }
 
 impl ObservationInputs {
+    /// The inputs of `log` with the IMU log `imu` (`None`: a UBX log's own
+    /// accelerometer), the rows made of `record`.
+    pub fn new(log: ObservationFile, imu: Option<PathBuf>, record: ObservationRecord) -> Self {
+        ObservationInputs { log, imu, record }
+    }
+
     /// Reads the log and the IMU and calibrates under `settings`, the inputs
     /// list filled in.
     pub fn calibrate(&self, settings: &PipelineSettings) -> Result<ObservationOutcome, InputsError> {

@@ -240,8 +240,9 @@ impl ObservationLog {
 
 /// Builds an [`ObservationLog`] epoch by epoch: turns GPS week and time of week
 /// into `t_s`, keeps one series per (satellite, signal) and counts what is
-/// skipped by reason. The readers of the formats share it.
-#[derive(Debug, Default)]
+/// skipped by reason. The readers of the formats share it; a clone finished
+/// is the log read so far (a stream read as it arrives).
+#[derive(Debug, Clone, Default)]
 pub struct ObservationLogBuilder {
     log: ObservationLog,
     week0: Option<u32>,
@@ -328,6 +329,11 @@ impl ObservationLogBuilder {
     /// Number of epochs started so far.
     pub fn epochs(&self) -> usize {
         self.log.epochs
+    }
+
+    /// How many records were skipped so far, over all reasons.
+    pub fn skipped_count(&self) -> usize {
+        self.log.skipped_count()
     }
 
     /// The log.

@@ -1,7 +1,7 @@
 //! A live session's input as a front end names it: a merged stream on
-//! standard input, growing files followed, or GNSS-SDR's tracking monitor
-//! with a growing IMU log; checked, and turned into the runtime's
-//! [`Inputs`].
+//! standard input, growing files followed, GNSS-SDR's tracking monitor
+//! with a growing IMU log, or a u-blox module's UBX stream; checked, and
+//! turned into the runtime's [`Inputs`].
 
 use std::path::PathBuf;
 
@@ -9,6 +9,7 @@ use gsens_gnss_sdr::GnssSdrError;
 
 use crate::monitor_setup::monitor_setup;
 use crate::runtime::Inputs;
+use crate::ubx::UbxOptions;
 
 /// The inputs a caller names (every field unset: none).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -22,6 +23,15 @@ pub struct InputChoice {
     /// GNSS-SDR's tracking monitor: the address it sends to and the
     /// configuration of its run (with [`InputChoice::follow_imu`]).
     pub gnss_sdr_monitor: Option<(String, PathBuf)>,
+    /// A u-blox module's UBX stream: a log being written, its serial port,
+    /// a named pipe, or `-` for standard input (with
+    /// [`InputChoice::follow_imu`]: that IMU log instead of its ESF
+    /// messages).
+    pub ubx: Option<PathBuf>,
+    /// The serial port's baud rate (`None`: as the port is set).
+    pub ubx_baud: Option<u32>,
+    /// How the UBX stream is read and calibrated.
+    pub ubx_options: UbxOptions,
 }
 
 /// Why the inputs named cannot start a session.
@@ -30,14 +40,15 @@ pub struct InputChoice {
 pub enum InputChoiceError {
     /// No complete input is named.
     #[error(
-        "no input: a merged stream on standard input, a growing IMU log with a growing tracking log, or a growing \
-         IMU log with GNSS-SDR's tracking monitor"
+        "no input: a merged stream on standard input, a growing IMU log with a growing tracking log, a growing IMU \
+         log with GNSS-SDR's tracking monitor, or a UBX stream"
     )]
     NoInput,
-    /// A file to follow is missing or not a file.
+    /// A file to follow is missing or not a file (a UBX stream's: nor a
+    /// serial device).
     #[error("{option} {}: {}", path.display(), if *exists { "not a file" } else { "no such file (start the logger first)" })]
     NotAFile {
-        /// The [`InputChoice`] field that names it (`follow_imu`, `follow_tracking`).
+        /// The [`InputChoice`] field that names it (`follow_imu`, `follow_tracking`, `ubx`).
         option: &'static str,
         /// The path.
         path: PathBuf,
@@ -67,8 +78,9 @@ impl InputChoiceError {
                 let (monitor, conf) = (name("gnss_sdr_monitor"), name("gnss_sdr_conf"));
                 Some(format!(
                     "no input: give {stdin} (the merged stream `gsens replay` writes), {imu} IMU.CSV with {tracking} \
-                     TRACKING.CSV (growing files), or {imu} IMU.CSV with {monitor} ADDR and {conf} CONF (GNSS-SDR's \
-                     tracking monitor)"
+                     TRACKING.CSV (growing files), {imu} IMU.CSV with {monitor} ADDR and {conf} CONF (GNSS-SDR's \
+                     tracking monitor), or {ubx} LOG.UBX|/dev/ttyACM0 (a u-blox module's UBX stream)",
+                    ubx = name("ubx")
                 ))
             }
             InputChoiceError::NotAFile { option, .. } => {
@@ -85,8 +97,12 @@ impl InputChoice {
     /// follow exist.
     pub fn check(&self) -> Result<(), InputChoiceError> {
         let follows = self.follow_imu.is_some() && (self.follow_tracking.is_some() || self.gnss_sdr_monitor.is_some());
-        if !(self.stdin || follows) {
+        if !(self.stdin || follows || self.ubx.is_some()) {
             return Err(InputChoiceError::NoInput);
+        }
+        let stream = |p: &PathBuf| p.is_file() || crate::ubx::is_device(p) || crate::ubx::is_pipe(p);
+        if let Some(p) = self.ubx.as_ref().filter(|p| !stream(p)) {
+            return Err(InputChoiceError::NotAFile { option: "ubx", path: p.clone(), exists: p.exists() });
         }
         for (option, path) in [("follow_imu", &self.follow_imu), ("follow_tracking", &self.follow_tracking)] {
             if let Some(p) = path.as_ref().filter(|p| !p.is_file()) {
@@ -104,6 +120,10 @@ impl InputChoice {
         if self.stdin {
             let reader = Box::new(std::io::BufReader::new(std::io::stdin()));
             return Ok((Inputs::Merged { name: "stdin".into(), reader }, None));
+        }
+        if let Some(log) = self.ubx {
+            let (baud, options) = (self.ubx_baud, self.ubx_options);
+            return Ok((Inputs::Ubx { log, baud, imu: self.follow_imu, options }, None));
         }
         let (Some(imu), tracking, monitor) = (self.follow_imu, self.follow_tracking, self.gnss_sdr_monitor) else {
             return Err(InputChoiceError::NoInput);
@@ -155,7 +175,7 @@ mod tests {
         let no_input = InputChoiceError::NoInput.named(flag).unwrap();
         assert!(
             no_input.starts_with("no input: give <stdin> (")
-                && no_input.ends_with("<gnss_sdr_conf> CONF (GNSS-SDR's tracking monitor)"),
+                && no_input.ends_with("<ubx> LOG.UBX|/dev/ttyACM0 (a u-blox module's UBX stream)"),
             "{no_input}"
         );
         let tracking = dir.path().join("tracking.csv");

@@ -6,6 +6,12 @@
 //!   order, a logger restarting), never dropped silently;
 //! - a growing file read as it grows ([`Follower`], `tail -f`), surviving a
 //!   partial last line and a file truncated by a restarting logger;
+//! - a u-blox module's UBX stream, from a log being written or its serial
+//!   port ([`Inputs::Ubx`], [`UbxOptions`]): its complete frames read as
+//!   bytes arrive (`gsens_ublox::UbxStream`), the IMU its ESF messages or a
+//!   growing IMU log, the batch estimate the loop-identifying
+//!   `gsens_calib::calibrate_observations` and the final one that of the
+//!   kept log (`received.ubx`) as `gsens report --ubx` makes it;
 //! - the shaking seen by the IMU over the last seconds ([`MotionWindow`]:
 //!   which axis, how hard, how fast);
 //! - the one plain instruction for the person holding the board ([`instruct`]);
@@ -46,6 +52,7 @@ mod runtime;
 mod session;
 mod sources;
 mod stream;
+mod ubx;
 
 pub use choice::{InputChoice, InputChoiceError, LOOP_NOT_STATED};
 pub use clock::{Clock, ManualClock, SystemClock};
@@ -60,9 +67,11 @@ pub use motion::{MotionWindow, Shaking};
 pub use pacing::{CreateError, ReplaySink, SpeedError, check_speed, replay};
 pub use recording::{MonitorRecording, RecordingError};
 pub use replay::read_session_dir;
-pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
+pub use runtime::{Display, Ending, FinalEstimate, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
 pub use session::{
-    AxisProgress, BatchJob, BatchResult, BatchVerdict, ChannelStatus, LiveConfig, LiveSession, LiveView, Pushed,
+    AxisProgress, BatchJob, BatchOutcome, BatchResult, BatchVerdict, ChannelStatus, LiveConfig, LiveSession, LiveView,
+    Pushed, UbxStatus,
 };
 pub use sources::{Source, SourceEvent};
 pub use stream::{Epoch, EpochAverager, StreamEstimate};
+pub use ubx::UbxOptions;

@@ -73,6 +73,9 @@ fn batch(v: &LiveView, out: &mut dyn Write) -> std::io::Result<()> {
         (None, Some(e)) => format!("no estimate: {e}"),
         (None, None) => String::new(),
     };
-    let tracking = v.channels.iter().filter(|c| c.tracking).count();
-    writeln!(out, "[{:7.2} s] Γ̂ [Hz/(m/s²)] {} | {tracking} channels | {trust}", v.data_t_s, axes.join(" · "))
+    let receiver = match &v.ubx {
+        Some(u) => u.summary(),
+        None => format!("{} channels", v.channels.iter().filter(|c| c.tracking).count()),
+    };
+    writeln!(out, "[{:7.2} s] Γ̂ [Hz/(m/s²)] {} | {receiver} | {trust}", v.data_t_s, axes.join(" · "))
 }

@@ -8,6 +8,7 @@
 //! channel ([`Inputs::Events`]), so a whole session runs in a test without
 //! waiting.
 
+use std::fs::File;
 use std::io::{BufRead, BufWriter, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -15,8 +16,9 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use gsens_calib::{Outcome, PipelineSettings};
+use gsens_calib::{ObservationOutcome, Outcome, PipelineSettings};
 use gsens_gnss_sdr::monitor::{LiveGrid, MonitorReceiver, MonitorStream};
+use gsens_inputs::{ObservationFile, ObservationInputs};
 use gsens_io::TrackingLog;
 
 use crate::clock::Clock;
@@ -28,6 +30,7 @@ use crate::monitor::{MonitorInput, RECEIVE_WAIT_MS, receive_monitor};
 use crate::plain::Plain;
 use crate::session::{BatchResult, LiveConfig, LiveSession, LiveView};
 use crate::sources::{Source, SourceEvent, spawn_follow, spawn_lines};
+use crate::ubx::{UbxOptions, spawn_bytes, stream_name};
 
 /// The screen is redrawn at most this often [ms]: with the followers' 20 ms
 /// polls a record reaches the screen within 70 ms, inside a 100 ms budget.
@@ -69,6 +72,34 @@ pub enum Inputs {
         /// The monitor (boxed: its settings are large beside the other inputs).
         monitor: Box<MonitorInput>,
     },
+    /// A u-blox module's UBX stream: a log being written, followed as it
+    /// grows, or its serial port; its RXM-RAWX calibrated with the loop
+    /// identified, its IMU the stream's ESF messages or a growing IMU log.
+    Ubx {
+        /// The log, the serial device (a character device: read as a serial
+        /// port), a named pipe, or `-`: standard input.
+        log: PathBuf,
+        /// The serial port's baud rate; `None`: as the port is set (a USB
+        /// port ignores it).
+        baud: Option<u32>,
+        /// A growing IMU log instead of the stream's ESF messages (`t_s`
+        /// on the log's time, as `gsens estimate --ubx` reads it).
+        imu: Option<PathBuf>,
+        /// How the stream is read and calibrated.
+        options: UbxOptions,
+    },
+    /// A UBX stream whose events are sent on a channel by the caller, as
+    /// [`Inputs::Events`]: source 0 sends the stream's bytes
+    /// ([`SourceEvent::Bytes`]), a source 1 (with the format of IMU lines),
+    /// if any, the IMU instead of the stream's ESF messages.
+    UbxEvents {
+        /// The sources the events' `source` indexes.
+        sources: Vec<Source>,
+        /// The events.
+        events: Receiver<SourceEvent>,
+        /// How the stream is read and calibrated.
+        options: UbxOptions,
+    },
     /// Sources whose events are sent on a channel by the caller (a test,
     /// another front end); the session ends when every source has ended or
     /// the channel closes.
@@ -84,7 +115,8 @@ pub enum Inputs {
 pub struct RuntimeConfig {
     /// Its inputs.
     pub inputs: Inputs,
-    /// The directory of the kept files (`received/`, `imu.csv`, `tracking.csv`).
+    /// The directory of the kept files (`received/`, `imu.csv`,
+    /// `tracking.csv`; a UBX stream's bytes as `received.ubx`).
     pub out_dir: PathBuf,
     /// The batch pipeline's settings. With the monitor, its loop is the run's own.
     pub settings: PipelineSettings,
@@ -188,16 +220,50 @@ pub enum RuntimeError {
     /// The final estimate failed.
     #[error(transparent)]
     Estimate(#[from] gsens_calib::PipelineError),
+    /// The final estimate of the kept UBX log failed.
+    #[error(transparent)]
+    Observations(#[from] gsens_inputs::InputsError),
 }
 
 /// The end of a session: the final estimate, the batch estimate of the logs kept.
 pub struct Finished {
     /// The final estimate, its inputs the kept logs.
-    pub outcome: Outcome,
-    /// The kept tracking log, read back.
-    pub tracking: TrackingLog,
+    pub estimate: FinalEstimate,
     /// Whether every axis met the target σ.
     pub target_met: bool,
+}
+
+/// The final estimate of a session, as `gsens report` makes it from the kept logs.
+pub enum FinalEstimate {
+    /// From the kept `imu.csv` and `tracking.csv`.
+    Tracking {
+        /// The estimate.
+        outcome: Box<Outcome>,
+        /// The kept tracking log, read back.
+        tracking: TrackingLog,
+    },
+    /// From the kept UBX log (`received.ubx`) with its loop identified, as
+    /// `gsens report --ubx` makes it.
+    Observations(Box<ObservationOutcome>),
+}
+
+impl FinalEstimate {
+    /// The estimate from tracking records, with its log, if it is one.
+    pub fn tracking(&self) -> Option<(&Outcome, &TrackingLog)> {
+        match self {
+            FinalEstimate::Tracking { outcome, tracking } => Some((outcome, tracking)),
+            FinalEstimate::Observations(_) => None,
+        }
+    }
+
+    /// The inputs named in the result document, as role → path (a caller
+    /// adds its own, as `truth`).
+    pub fn inputs_mut(&mut self) -> &mut Vec<(String, String)> {
+        match self {
+            FinalEstimate::Tracking { outcome, .. } => &mut outcome.inputs,
+            FinalEstimate::Observations(o) => &mut o.inputs,
+        }
+    }
 }
 
 impl Finished {
@@ -226,7 +292,16 @@ pub struct Runtime {
     /// Records of several line sources (files followed) are given in time order.
     merger: Option<Merger>,
     clock: Arc<dyn Clock>,
+    /// The UBX stream's bytes as received (`received.ubx`), and its path.
+    ubx_log: Option<(File, PathBuf)>,
 }
+
+/// The opening's line for a UBX stream.
+const UBX_LOOP_IDENTIFIED: &str = "the receiver's loop is identified from the module's carrier phase as data arrive \
+     (a stated loop narrows it to its order and update interval)\n";
+
+/// The kept UBX log's name in the output directory.
+const KEPT_UBX: &str = "received.ubx";
 
 impl Runtime {
     /// Starts the session: its inputs opened and read by one thread each, the
@@ -240,7 +315,17 @@ impl Runtime {
         }
         let mut live = LiveConfig::new(settings, target_sigma_hz_per_mps2);
         live.batch_every_s = batch_every_s;
-        let session = LiveSession::new(live).map_err(RuntimeError::Loop)?;
+        let session = match &inputs {
+            Inputs::Ubx { log, imu, options, .. } => {
+                LiveSession::with_ubx(live, &stream_name(log), *options, imu.is_none())
+            }
+            Inputs::UbxEvents { sources, options, .. } => {
+                let name = sources.first().map_or(String::new(), |s| s.name.clone());
+                LiveSession::with_ubx(live, &name, *options, sources.len() < 2)
+            }
+            _ => LiveSession::new(live),
+        }
+        .map_err(RuntimeError::Loop)?;
         let (tx, rx) = mpsc::channel();
         let line_source = |name: String, format| Source { name, format: Some(format) };
         let (sources, events) = match inputs {
@@ -275,14 +360,40 @@ impl Runtime {
                 });
                 (sources, rx)
             }
-            Inputs::Events { sources, events } => (sources, events),
+            Inputs::Ubx { log, baud, imu, .. } => {
+                let mut sources = vec![Source { name: stream_name(&log), format: None }];
+                spawn_bytes(tx.clone(), 0, log, baud, idle_timeout_s, clock.clone());
+                if let Some(imu) = imu {
+                    sources.push(line_source(imu.display().to_string(), LineFormat::Imu));
+                    spawn_follow(tx.clone(), 1, imu, idle_timeout_s, clock.clone());
+                }
+                (sources, rx)
+            }
+            Inputs::UbxEvents { sources, events, .. } | Inputs::Events { sources, events } => (sources, events),
         };
         drop(tx);
         let kept = Kept::create(&out_dir, &sources)?;
+        let ubx_log = match session.ubx_stream() {
+            Some(_) => {
+                let path = out_dir.join(KEPT_UBX);
+                Some((create(&path)?, path))
+            }
+            None => None,
+        };
         let merger =
             (sources.len() > 1 && sources.iter().all(|s| s.format.is_some())).then(|| Merger::new(sources.len()));
         let parsers = sources.iter().map(|s| s.format.map(LineFormat::parser)).collect();
-        Ok(Runtime { session, kept, ended: vec![false; sources.len()], sources, parsers, events, merger, clock })
+        Ok(Runtime {
+            session,
+            kept,
+            ended: vec![false; sources.len()],
+            sources,
+            parsers,
+            events,
+            merger,
+            clock,
+            ubx_log,
+        })
     }
 
     /// The session.
@@ -314,9 +425,15 @@ impl Runtime {
 
     /// The lines that open the session: the shaking advice
     /// ([`Runtime::shaking_advice`]), and the warning of settings that state
-    /// no receiver loop ([`crate::LOOP_NOT_STATED`]).
+    /// no receiver loop ([`crate::LOOP_NOT_STATED`]), or for a UBX stream
+    /// that its loop is identified.
     pub fn opening(&self) -> String {
-        let unstated = if self.session.config().settings.loop_stated { "" } else { crate::LOOP_NOT_STATED };
+        let unstated = match (self.session.ubx_stream(), self.session.config().settings.loop_stated) {
+            // A UBX stream's loop is identified from the session, stated or not.
+            (Some(_), _) => UBX_LOOP_IDENTIFIED,
+            (None, true) => "",
+            (None, false) => crate::LOOP_NOT_STATED,
+        };
         format!("gsens live: {}\n{unstated}", self.shaking_advice())
     }
 
@@ -431,6 +548,20 @@ impl Runtime {
                     self.kept.record(&input)?;
                 }
             }
+            SourceEvent::Bytes { source, bytes } => {
+                if let Some((file, _)) = self.ubx_log.as_mut() {
+                    file.write_all(&bytes)?;
+                }
+                let failures = self.session.ubx_stream().map_or(0, |s| s.checksum_failures());
+                for x in self.session.push_ubx(&bytes) {
+                    self.push_line_record(source, 0, x, &mut out)?;
+                }
+                if failures == 0 && self.session.ubx_stream().is_some_and(|s| s.checksum_failures() > 0) {
+                    let text = "a UBX frame with a bad checksum was dropped (the screen counts them; a serial port \
+                                at the wrong baud rate drops most)";
+                    self.notice(source, 0, text.into(), &mut out)?;
+                }
+            }
             SourceEvent::Notice { source, text } => self.notice(source, 0, text, &mut out)?,
             SourceEvent::Restarted { source } => {
                 // Read again from its start: its header comes again.
@@ -498,6 +629,14 @@ impl Runtime {
     /// as `gsens report` would read them.
     pub fn finish(self) -> Result<Finished, RuntimeError> {
         let target_met = self.session.target_met();
+        if let (Some((file, ubx_path)), Some((options, esf_imu))) = (&self.ubx_log, self.session.ubx_options()) {
+            file.sync_all()?;
+            let (imu_path, _) = self.kept.finish()?;
+            let log = ObservationFile::Ubx(ubx_path.clone(), options.settings);
+            let inputs = ObservationInputs::new(log, (!esf_imu).then_some(imu_path), options.record);
+            let outcome = inputs.calibrate(&self.session.config().settings)?;
+            return Ok(Finished { estimate: FinalEstimate::Observations(Box::new(outcome)), target_met });
+        }
         let (imu_samples, tracking_rows) = self.session.view().received;
         if imu_samples == 0 || tracking_rows == 0 {
             return Err(RuntimeError::NothingReceived { imu_samples, tracking_rows });
@@ -508,7 +647,7 @@ impl Runtime {
         let imu_name = imu_path.display().to_string();
         let mut outcome = gsens_calib::calibrate_logs(&tracking, &imu, &imu_name, &self.session.config().settings)?;
         outcome.inputs = vec![("imu".into(), imu_name), ("tracking".into(), tracking_path.display().to_string())];
-        Ok(Finished { outcome, tracking, target_met })
+        Ok(Finished { estimate: FinalEstimate::Tracking { outcome: Box::new(outcome), tracking }, target_met })
     }
 }
 

@@ -3,13 +3,18 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use gsens_calib::{Measurement, Outcome, PipelineSettings, ResultDocument, Warning, calibrate_logs};
+use gsens_calib::{
+    Calibration, IdentifiedLoop, LoopResolution, Measurement, ObservationOutcome, Outcome, PipelineSettings,
+    ResultDocument, Warning, calibrate_logs,
+};
 use gsens_io::{Carrier, ImuSeries, TrackingLog, TrackingRecord, TrackingRow};
+use gsens_ublox::{UbxLog, UbxStream};
 
 use crate::guidance::{Instruction, LoopBand, Protocol, Situation, instruct};
 use crate::input::{Input, Notice};
 use crate::motion::{MotionWindow, Shaking};
 use crate::stream::{Epoch, EpochAverager, StreamEstimate};
+use crate::ubx::UbxOptions;
 
 /// The IMU's index in a session's per-stream counts.
 const IMU_STREAM: usize = 0;
@@ -106,6 +111,9 @@ impl Records {
 /// thread: the session goes on receiving meanwhile).
 #[derive(Debug, Clone)]
 pub struct BatchJob {
+    /// A UBX stream's log so far (or why none), with how it is calibrated;
+    /// `None` for tracking records.
+    observed: Option<(Result<Box<UbxLog>, String>, UbxOptions, bool)>,
     records: Records,
     imu: ImuSeries,
     settings: PipelineSettings,
@@ -125,14 +133,24 @@ impl BatchJob {
     /// estimate settled on (the session catches that stream up to its
     /// newest epoch in [`LiveSession::apply`]).
     pub fn run(self) -> BatchResult {
+        if let Some((log, options, esf_imu)) = self.observed {
+            // The loop identified from the log, as `gsens estimate --ubx` calibrates it.
+            let outcome = log.and_then(|log| {
+                let imu = if esf_imu { &log.imu } else { &self.imu };
+                gsens_calib::calibrate_observations(&log.observations, imu, &self.settings, options.record)
+                    .map(|o| BatchOutcome::Observations(Box::new(o)))
+                    .map_err(|e| e.to_string())
+            });
+            return BatchResult { data_end_s: self.data_end_s, shaken_s: self.shaken_s, outcome, stream: None };
+        }
         let records = (0..self.records.rows.len()).map(|i| self.records.record(i));
         let outcome = TrackingLog::from_records("received tracking rows", records)
             .map_err(|e| e.to_string())
             .and_then(|log| {
                 calibrate_logs(&log, &self.imu, "received IMU samples", &self.settings).map_err(|e| e.to_string())
             })
-            .map(Box::new);
-        let stream = outcome.as_ref().ok().map(|o| {
+            .map(|o| BatchOutcome::Tracking(Box::new(o)));
+        let stream = outcome.as_ref().ok().and_then(BatchOutcome::tracking).map(|o| {
             let mut stream = StreamEstimate::new(o.calibration.settings, o.session.imu_time_offset_s);
             stream.advance(&self.epochs, &self.imu);
             stream
@@ -149,7 +167,7 @@ pub struct BatchResult {
     /// Seconds each axis had been shaken at that point.
     pub shaken_s: [f64; 3],
     /// The calibration, or why there is none yet.
-    pub outcome: Result<Box<Outcome>, String>,
+    pub outcome: Result<BatchOutcome, String>,
     /// The job's epochs streamed under the estimate's loop and time offset.
     pub stream: Option<StreamEstimate>,
 }
@@ -157,7 +175,52 @@ pub struct BatchResult {
 impl BatchResult {
     /// The result document of the calibration.
     pub fn document(&self) -> Option<ResultDocument> {
-        self.outcome.as_ref().ok().map(|o| o.document(None))
+        self.outcome.as_ref().ok().map(BatchOutcome::document)
+    }
+}
+
+/// A batch estimate: of tracking records (`gsens_calib::calibrate_logs`), or
+/// of a carrier phase and Doppler log with its loop identified
+/// (`gsens_calib::calibrate_observations`).
+#[derive(Debug, Clone)]
+pub enum BatchOutcome {
+    /// From tracking records.
+    Tracking(Box<Outcome>),
+    /// From a UBX log's RXM-RAWX.
+    Observations(Box<ObservationOutcome>),
+}
+
+impl BatchOutcome {
+    /// The estimate the result document gives.
+    pub fn calibration(&self) -> &Calibration {
+        match self {
+            BatchOutcome::Tracking(o) => &o.calibration,
+            BatchOutcome::Observations(o) => &o.calibration,
+        }
+    }
+
+    /// The result document.
+    pub fn document(&self) -> ResultDocument {
+        match self {
+            BatchOutcome::Tracking(o) => o.document(None),
+            BatchOutcome::Observations(o) => o.document(None),
+        }
+    }
+
+    /// The estimate from tracking records, if it is one.
+    pub fn tracking(&self) -> Option<&Outcome> {
+        match self {
+            BatchOutcome::Tracking(o) => Some(o),
+            BatchOutcome::Observations(_) => None,
+        }
+    }
+
+    /// The receiver's loop identified from a log, if it is one.
+    pub fn identified_loop(&self) -> Option<&IdentifiedLoop> {
+        match self {
+            BatchOutcome::Tracking(_) => None,
+            BatchOutcome::Observations(o) => Some(&o.identified.identified),
+        }
     }
 }
 
@@ -244,6 +307,60 @@ pub struct LiveView {
     pub notices: (Vec<String>, u64),
     /// IMU samples and tracking rows received.
     pub received: (u64, u64),
+    /// A UBX stream as read so far; `None` for tracking records.
+    pub ubx: Option<UbxStatus>,
+}
+
+/// What a UBX stream brought so far, and the loop the latest batch
+/// estimate identified from it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UbxStatus {
+    /// Bytes received.
+    pub bytes: u64,
+    /// Frames with a valid checksum.
+    pub frames: u64,
+    /// Frames dropped for a bad checksum.
+    pub checksum_failures: u64,
+    /// Frames, messages and samples skipped, for any reason.
+    pub skipped: u64,
+    /// RXM-RAWX epochs.
+    pub epochs: u64,
+    /// Measurements of the latest epoch with a valid carrier phase.
+    pub tracks: u64,
+    /// The loop the latest batch estimate identified.
+    pub identified_loop: Option<IdentifiedLoop>,
+}
+
+impl UbxStatus {
+    /// One line of it: the tracks with a carrier phase at the latest
+    /// epoch, the frames read, dropped for their checksum and skipped, and
+    /// the loop identified (its order and Bn ± its relative σ, or the bound).
+    pub fn summary(&self) -> String {
+        let identified = match &self.identified_loop {
+            Some(l) => {
+                let bn = match l.resolution {
+                    LoopResolution::Resolved => format!("Bn {:.2} Hz ± {:.0} %", l.bn_hz, 100.0 * l.sigma_ln_bn),
+                    LoopResolution::Wide => format!("Bn ≥ {:.1} Hz", l.bn_hz),
+                    _ => format!("Bn ≤ {:.2} Hz", l.bn_hz),
+                };
+                format!(" | loop: order {}, {bn}", l.order)
+            }
+            None => String::new(),
+        };
+        format!(
+            "{} tracks, {} frames, {} bad checksums, {} skipped{identified}",
+            self.tracks, self.frames, self.checksum_failures, self.skipped
+        )
+    }
+}
+
+/// A UBX stream a session reads: the stream, how it is calibrated, and
+/// whether its ESF messages are the IMU.
+#[derive(Debug, Clone)]
+struct Observed {
+    stream: UbxStream,
+    options: UbxOptions,
+    esf_imu: bool,
 }
 
 /// What the view shows of the latest batch estimate: (data end, trustworthy, warnings), or its error.
@@ -311,6 +428,8 @@ pub struct LiveSession {
     /// The channel average of every completed tracking epoch.
     epochs: Vec<Epoch>,
     stream: StreamEstimate,
+    /// The UBX stream, when the session reads one instead of tracking records.
+    observed: Option<Box<Observed>>,
 }
 
 impl LiveSession {
@@ -349,7 +468,51 @@ impl LiveSession {
             averager,
             epochs: Vec::with_capacity(4096),
             stream,
+            observed: None,
         })
+    }
+
+    /// A session of a UBX stream named `source_name` (RXM-RAWX instead of
+    /// tracking records, calibrated with the loop identified under
+    /// `options`), its IMU the stream's ESF messages when `esf_imu`, else
+    /// IMU records pushed beside it.
+    pub fn with_ubx(
+        config: LiveConfig,
+        source_name: &str,
+        options: UbxOptions,
+        esf_imu: bool,
+    ) -> Result<Self, gsens_core::LoopError> {
+        let mut session = LiveSession::new(config)?;
+        session.observed = Some(Box::new(Observed { stream: UbxStream::new(source_name), options, esf_imu }));
+        Ok(session)
+    }
+
+    /// Takes bytes of the UBX stream, in the pieces they arrived in;
+    /// returns the accelerometer samples they completed (when the stream's
+    /// ESF messages are the IMU), to be pushed as IMU records
+    /// ([`LiveSession::push`]). Nothing for a session of tracking records.
+    pub fn push_ubx(&mut self, bytes: &[u8]) -> Vec<Input> {
+        let Some(o) = self.observed.as_mut() else { return Vec::new() };
+        o.stream.push(bytes);
+        if let Some((t_s, _)) = o.stream.latest_epoch() {
+            self.first_t_s.get_or_insert(t_s);
+        }
+        if !o.esf_imu {
+            return Vec::new();
+        }
+        let imu = o.stream.take_imu(&o.options.settings);
+        imu.t_s.iter().zip(&imu.accel_mps2).map(|(&t_s, &accel_mps2)| Input::Imu { t_s, accel_mps2 }).collect()
+    }
+
+    /// The UBX stream, when the session reads one.
+    pub fn ubx_stream(&self) -> Option<&UbxStream> {
+        self.observed.as_ref().map(|o| &o.stream)
+    }
+
+    /// How the session's UBX stream is read and calibrated, and whether its
+    /// ESF messages are the IMU.
+    pub fn ubx_options(&self) -> Option<(UbxOptions, bool)> {
+        self.observed.as_ref().map(|o| (o.options, o.esf_imu))
     }
 
     /// The configuration.
@@ -541,8 +704,12 @@ impl LiveSession {
 
     /// The latest time both streams reached \[s\].
     pub fn data_t_s(&self) -> f64 {
-        match (self.last_imu_t_s, self.records.rows.last()) {
-            (Some(a), Some(r)) => a.min(r.t_s),
+        let observed = match &self.observed {
+            Some(o) => o.stream.latest_epoch().map(|(t_s, _)| t_s),
+            None => self.records.rows.last().map(|r| r.t_s),
+        };
+        match (self.last_imu_t_s, observed) {
+            (Some(a), Some(r)) => a.min(r),
             _ => f64::NEG_INFINITY,
         }
     }
@@ -572,7 +739,12 @@ impl LiveSession {
         // Rows come in time order: those up to the end are the first.
         let records = self.records.first(self.records.rows.partition_point(|r| r.t_s <= end));
         let epochs = self.epochs.iter().take_while(|e| e.0 <= end).copied().collect();
+        let observed = self.observed.as_ref().map(|o| {
+            let log = o.stream.snapshot(&o.options.settings).map(Box::new).map_err(|e| e.to_string());
+            (log, o.options, o.esf_imu)
+        });
         BatchJob {
+            observed,
             epochs,
             records,
             imu: self.imu.clone(),
@@ -588,7 +760,7 @@ impl LiveSession {
             return;
         }
         if let Ok(o) = &result.outcome
-            && let Ok(band) = LoopBand::of(&o.calibration.loop_used)
+            && let Ok(band) = LoopBand::of(&o.calibration().loop_used)
         {
             self.band = band;
         }
@@ -600,7 +772,7 @@ impl LiveSession {
         // What the screen shows of it, made once (the result document is not cheap).
         self.batch_summary = match &result.outcome {
             Ok(o) => {
-                let doc = o.document(None);
+                let doc = o.document();
                 (Some(BatchVerdict::new(result.data_end_s, doc.measurement, doc.warnings)), None)
             }
             Err(e) => (None, Some(e.clone())),
@@ -625,7 +797,7 @@ impl LiveSession {
             let a = &mut axes[i];
             a.shaken_s = self.shaken_s[i];
             let Some(Ok(o)) = self.batch.as_ref().map(|b| &b.outcome) else { continue };
-            let c = &o.calibration;
+            let c = o.calibration();
             a.observable = c.observable[i];
             a.gamma_hz_per_mps2 = c.gamma_hz_per_mps2[i];
             a.sigma_hz_per_mps2 = c.sigma_hz_per_mps2[i];
@@ -639,7 +811,7 @@ impl LiveSession {
         }
         if let Some(now) = self.stream.estimate() {
             let sigma_white = now.sigma_hz_per_mps2();
-            let calibration = self.batch.as_ref().and_then(|b| b.outcome.as_ref().ok()).map(|o| &o.calibration);
+            let calibration = self.batch.as_ref().and_then(|b| b.outcome.as_ref().ok()).map(BatchOutcome::calibration);
             for (i, a) in axes.iter_mut().enumerate() {
                 if !sigma_white[i].is_finite() || now.epochs == 0 {
                     continue;
@@ -694,7 +866,22 @@ impl LiveSession {
             batch_error,
             notices: (self.notices.iter().cloned().collect(), self.notices_total),
             received: (self.imu.len() as u64, self.records.rows.len() as u64),
+            ubx: self.ubx_status(),
         }
+    }
+
+    fn ubx_status(&self) -> Option<UbxStatus> {
+        let s = &self.observed.as_ref()?.stream;
+        let identified_loop = self.batch.as_ref().and_then(|b| b.outcome.as_ref().ok()?.identified_loop().cloned());
+        Some(UbxStatus {
+            bytes: s.received_bytes() as u64,
+            frames: s.frames() as u64,
+            checksum_failures: s.checksum_failures() as u64,
+            skipped: s.skipped() as u64,
+            epochs: s.epochs() as u64,
+            tracks: s.latest_epoch().map_or(0, |(_, n)| n as u64),
+            identified_loop,
+        })
     }
 }
 

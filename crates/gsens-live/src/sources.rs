@@ -32,6 +32,14 @@ pub enum SourceEvent {
         /// The record.
         input: Input,
     },
+    /// Bytes of a byte stream (a UBX log or serial port), in the pieces
+    /// they arrived in: a piece may end inside a frame.
+    Bytes {
+        /// The source.
+        source: usize,
+        /// The bytes.
+        bytes: Vec<u8>,
+    },
     /// Something the source noticed that is not about one line.
     Notice {
         /// The source.

@@ -33,6 +33,7 @@ fn ended_at_30_s_the_estimate_holds_its_sigma() {
         }
         let result = live.final_job().run();
         let outcome = result.outcome.expect("30 s with x shaken give an estimate");
+        let gsens_live::BatchOutcome::Tracking(outcome) = outcome else { panic!("an estimate of tracking records") };
         let doc = outcome.document(None);
         std::fs::remove_dir_all(&dir).ok();
         if !doc.trustworthy {

@@ -89,7 +89,7 @@ fn a_log_with_the_nco_gives_the_loop_free_estimate_of_its_files() {
     let files = calibrate_logs(&tracking, &imu, "imu.csv", &settings).unwrap();
     assert_eq!(files.measurement, Measurement::InputPhase);
     let (mut live, result) = final_estimate(&inputs, settings.clone());
-    let outcome = result.outcome.as_ref().unwrap();
+    let outcome = result.outcome.as_ref().unwrap().tracking().unwrap();
     assert_eq!(outcome.measurement, Measurement::InputPhase);
     assert_eq!(outcome.calibration.gamma_hz_per_mps2, files.calibration.gamma_hz_per_mps2);
     assert_eq!(outcome.calibration.sigma_hz_per_mps2, files.calibration.sigma_hz_per_mps2);
@@ -101,7 +101,7 @@ fn a_log_with_the_nco_gives_the_loop_free_estimate_of_its_files() {
     let mut closed = settings.clone();
     closed.measurement = MeasurementChoice::TrackingError;
     let (_, result) = final_estimate(&inputs, closed);
-    let outcome = result.outcome.as_ref().unwrap();
+    let outcome = result.outcome.as_ref().unwrap().tracking().unwrap();
     assert_eq!(outcome.measurement, Measurement::TrackingError);
     assert_eq!(outcome.calibration.gamma_hz_per_mps2, files.closed_loop().gamma_hz_per_mps2);
 
@@ -114,7 +114,7 @@ fn a_log_with_the_nco_gives_the_loop_free_estimate_of_its_files() {
         })
         .collect();
     let (_, result) = final_estimate(&plain, settings);
-    let outcome = result.outcome.as_ref().unwrap();
+    let outcome = result.outcome.as_ref().unwrap().tracking().unwrap();
     assert_eq!(outcome.measurement, Measurement::TrackingError);
     assert!(outcome.loop_free.is_none());
     assert_eq!(outcome.calibration.gamma_hz_per_mps2, files.closed_loop().gamma_hz_per_mps2);
@@ -174,10 +174,11 @@ fn a_live_session_says_it_runs_on_the_loop_free_estimate() {
     assert!(said.contains(&notice), "{said}");
     assert!(said.contains(&format!("notice: stdin:{six_line}: a tracking row with the columns ")), "{said}");
     let finished = runtime.finish().unwrap();
-    assert_eq!(finished.outcome.measurement, Measurement::InputPhase);
+    let (outcome, tracking) = finished.estimate.tracking().unwrap();
+    assert_eq!(outcome.measurement, Measurement::InputPhase);
     let kept = std::fs::read_to_string(live.join("tracking.csv")).unwrap();
     assert!(kept.starts_with(&format!("{}\n", &header_of(&inputs)[4..])), "{}", &kept[..200]);
-    assert!(finished.tracking.tracks().iter().all(|t| t.nco_phase_cycles.len() == t.len()));
+    assert!(tracking.tracks().iter().all(|t| t.nco_phase_cycles.len() == t.len()));
 }
 
 /// The tagged header of the session's tracking records.

@@ -57,9 +57,10 @@ fn a_replayed_session_reaches_the_target() {
     assert_eq!(ending.heading(), "ended: every axis meets the target σ; the final estimate on everything received:\n");
     let finished = runtime.finish().unwrap();
     assert!(finished.target_met && finished.target_missed(8e-4).is_none());
-    let doc = finished.outcome.document(None);
+    let (outcome, _) = finished.estimate.tracking().unwrap();
+    let doc = outcome.document(None);
     assert!(doc.trustworthy, "{:?}", doc.warnings);
-    for s in finished.outcome.calibration.sigma_statistical_hz_per_mps2 {
+    for s in outcome.calibration.sigma_statistical_hz_per_mps2 {
         assert!(s.is_some_and(|s| s <= 8e-4), "{s:?}");
     }
     for name in ["imu.csv", "tracking.csv"] {
@@ -102,7 +103,8 @@ fn whole_session(inputs: Inputs, out: &std::path::Path, settings: PipelineSettin
         missed,
         "the target σ (0.000001 Hz/(m/s²)) was not met on every axis: shake longer, or lower the target\n"
     );
-    (said, finished.target_met, finished.outcome.document(None).trustworthy)
+    let trustworthy = finished.estimate.tracking().unwrap().0.document(None).trustworthy;
+    (said, finished.target_met, trustworthy)
 }
 
 /// Files followed from their start give the session the records in time

@@ -1,6 +1,6 @@
 //! The screen: one [`LiveView`] drawn on a ratatui frame.
 
-use gsens_live::{AxisProgress, ChannelStatus, GENTLER_FRACTION, Instruction, LiveView};
+use gsens_live::{AxisProgress, GENTLER_FRACTION, Instruction, LiveView};
 use ratatui::Frame;
 use ratatui::backend::TestBackend;
 use ratatui::buffer::Buffer;
@@ -368,7 +368,7 @@ fn draw_lower(buf: &mut Buffer, area: Rect, view: &LiveView) {
             Layout::horizontal([Constraint::Length(CHANNELS_WIDTH), Constraint::Fill(1)]).areas(area);
         let [batch, notices] =
             Layout::vertical([Constraint::Fill(1), Constraint::Length(notices_h(right.width))]).areas(right);
-        draw_channels(buf, channels, &view.channels);
+        draw_channels(buf, channels, view);
         draw_batch(buf, batch, view);
         draw_notices(buf, notices, view);
     } else {
@@ -376,16 +376,17 @@ fn draw_lower(buf: &mut Buffer, area: Rect, view: &LiveView) {
         let [channels, batch, notices] =
             Layout::vertical([Constraint::Max(channels_h), Constraint::Min(3), Constraint::Max(notices_h(area.width))])
                 .areas(area);
-        draw_channels(buf, channels, &view.channels);
+        draw_channels(buf, channels, view);
         draw_batch(buf, batch, view);
         draw_notices(buf, notices, view);
     }
 }
 
-fn draw_channels(buf: &mut Buffer, area: Rect, channels: &[ChannelStatus]) {
+fn draw_channels(buf: &mut Buffer, area: Rect, view: &LiveView) {
     if area.is_empty() {
         return;
     }
+    let channels = &view.channels;
     let tracking = channels.iter().filter(|c| c.tracking).count();
     // Rows that fit under the border and the header.
     let room = usize::from(area.height.saturating_sub(3));
@@ -398,7 +399,12 @@ fn draw_channels(buf: &mut Buffer, area: Rect, channels: &[ChannelStatus]) {
     let header =
         Row::new(["ch", "PRN", "C/N0 [dB-Hz]", "φ [rad]", "state"]).style(Style::new().add_modifier(Modifier::DIM));
     let rows: Vec<Row> = if channels.is_empty() {
-        vec![Row::new([Cell::from("no tracking rows yet")])]
+        let none = match &view.ubx {
+            // A UBX stream has no tracking rows: its tracks are in the status line.
+            Some(_) => "a UBX stream: its tracks below",
+            None => "no tracking rows yet",
+        };
+        vec![Row::new([Cell::from(none)])]
     } else {
         channels
             .iter()
@@ -516,6 +522,9 @@ fn draw_status(buf: &mut Buffer, area: Rect, view: &LiveView) {
         return;
     }
     let (imu, tracking) = view.received;
-    let text = format!("data {:.1} s · received {imu} IMU samples, {tracking} tracking rows", view.data_s);
+    let text = match &view.ubx {
+        Some(u) => format!("data {:.1} s · received {imu} IMU samples · UBX: {}", view.data_s, u.summary()),
+        None => format!("data {:.1} s · received {imu} IMU samples, {tracking} tracking rows", view.data_s),
+    };
     render(buf, area, Paragraph::new(Span::styled(text, Style::new().add_modifier(Modifier::DIM))));
 }

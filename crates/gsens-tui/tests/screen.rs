@@ -111,6 +111,7 @@ fn waiting() -> LiveView {
         batch_error: None,
         notices: (Vec::new(), 0),
         received: (0, 0),
+        ubx: None,
     };
     view.instruction = instruct(&situation(&view, 5.0), &band);
     view
@@ -136,6 +137,7 @@ fn mid_session() -> LiveView {
         batch: Some(BatchVerdict::new(45.0, Measurement::TrackingError, Vec::new())),
         notices: (vec![notice(17, "garbage line: expected 6 fields, found 2")], 1),
         received: (1920, 11_232),
+        ubx: None,
         ..waiting()
     };
     view.instruction = instruct(&situation(&view, 0.0), &band);
@@ -188,6 +190,7 @@ fn done() -> LiveView {
             2,
         ),
         received: (3860, 22_584),
+        ubx: None,
         ..waiting()
     };
     view.instruction = instruct(&situation(&view, 0.0), &band);
@@ -377,6 +380,7 @@ fn odd_values_do_not_panic() {
             )),
             notices: (vec![long.clone(); 5], u64::MAX),
             received: (u64::MAX, u64::MAX),
+            ubx: None,
             ..mid_session()
         },
         LiveView {
@@ -397,4 +401,27 @@ fn odd_values_do_not_panic() {
     }
     // Forty-odd channels at 80x24: the table says how many it could not show.
     line_with(&render_text(&odd[0], 80, 24), &["channels:", "not shown"]);
+}
+
+/// A UBX stream's session has no tracking rows: the channels panel says
+/// so, and the status line gives the stream's counts (the plain line's
+/// words, `UbxStatus::summary`).
+#[test]
+fn a_ubx_session_shows_its_stream_in_the_status_line() {
+    let mut view = waiting();
+    let ubx = gsens_live::UbxStatus {
+        bytes: 123_456,
+        frames: 677,
+        checksum_failures: 1,
+        skipped: 2,
+        epochs: 150,
+        tracks: 7,
+        identified_loop: None,
+    };
+    view.ubx = Some(ubx.clone());
+    let screen = render_text(&view, 100, 30);
+    assert!(screen.contains("a UBX stream: its tracks below"), "{screen}");
+    let status = format!("UBX: {}", ubx.summary());
+    assert_eq!(status, "UBX: 7 tracks, 677 frames, 1 bad checksums, 2 skipped");
+    assert!(screen.contains(&status), "{screen}");
 }

@@ -73,7 +73,7 @@ pub(crate) fn group_samples(blocks: &[(u8, u32, u32)]) -> (Vec<(u32, [f64; 3])>,
 
 /// Unwraps a 32-bit millisecond counter: each tag is taken as the nearest
 /// value to the previous one (steps of less than 2³¹ ms either way).
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct Unwrap {
     last: Option<(u32, i64)>,
 }

@@ -3,8 +3,9 @@
 //! u-blox UBX logs for gsens: the receiver's carrier phase and Doppler
 //! (UBX-RXM-RAWX) and its own IMU's accelerometer (UBX-ESF-RAW, or
 //! UBX-ESF-MEAS), read into [`gsens_io::ObservationLog`] and
-//! [`gsens_io::ImuSeries`] ([`read_ubx_file`], [`read_ubx`]). A receiver
-//! adapter not yet wired to the calibration.
+//! [`gsens_io::ImuSeries`] ([`read_ubx_file`], [`read_ubx`]), or as it
+//! arrives in pieces from a serial port or a file being written
+//! ([`UbxStream`]).
 //!
 //! # The log
 //!
@@ -94,4 +95,4 @@ mod log;
 mod signals;
 
 pub use esf::{ACCEL_DATA_TYPES, ACCEL_MPS2_PER_LSB, ImuTimeAnchor, SensorTime};
-pub use log::{UbxError, UbxLog, UbxSettings, read_ubx, read_ubx_bytes, read_ubx_file};
+pub use log::{UbxError, UbxLog, UbxSettings, UbxStream, read_ubx, read_ubx_bytes, read_ubx_file};

@@ -7,7 +7,7 @@ use std::path::Path;
 use gsens_io::{ClockEvent, ImuSeries, Observation, ObservationLog, ObservationLogBuilder, obs_flags};
 use ublox::proto23::{PacketRef, Proto23};
 use ublox::rxm_rawx::RxmRawxRef;
-use ublox::{ParserBuilder, ParserError, UbxPacket};
+use ublox::{Parser, ParserBuilder, ParserError, UbxPacket};
 
 use crate::esf::{ImuTimeAnchor, RawSample, SensorTime, Unwrap, group_samples, map_samples};
 use crate::signals::ubx_signal;
@@ -99,37 +99,187 @@ pub fn read_ubx_file(path: impl AsRef<Path>, settings: &UbxSettings) -> Result<U
 
 /// Reads a UBX log held in memory.
 pub fn read_ubx_bytes(bytes: &[u8], source_name: &str, settings: &UbxSettings) -> Result<UbxLog, UbxError> {
-    let mut r = Reader::new(source_name);
-    let mut parser = ParserBuilder::new().with_protocol::<Proto23>().with_vec_buffer();
-    let mut it = parser.consume_ubx(bytes);
-    while let Some(item) = it.next() {
-        let frames = r.frames;
-        let at = move || format!("after {frames} valid frames");
-        match item {
-            Ok(UbxPacket::Proto23(packet)) => {
-                r.frames += 1;
-                r.frame_bytes += FRAME_OVERHEAD + packet.payload_len();
-                r.packet(packet);
-            }
-            #[allow(unreachable_patterns, reason = "other protocols' variants exist only with their features")]
-            Ok(_) => r.b.skip("message of another UBX protocol version", at),
-            Err(ParserError::InvalidChecksum { .. }) => r.b.skip("bad checksum (frame dropped)", at),
-            Err(ParserError::InvalidPacketLen { packet, .. } | ParserError::InvalidField { packet, .. }) => {
-                r.frames += 1;
-                r.b.skip(&format!("{packet} with a malformed payload"), at);
-            }
-            Err(ParserError::OutOfMemory { .. }) => r.b.skip("frame longer than the parser's buffer", at),
+    let mut stream = UbxStream::new(source_name);
+    stream.push(bytes);
+    stream.finish(settings)
+}
+
+/// A UBX log read as it arrives, in pieces of any size (a serial port, a
+/// file being written): each piece's complete frames are read at once, the
+/// bytes of a frame not yet complete wait for the next piece. The log read
+/// from all the pieces is the log read from their concatenation
+/// ([`read_ubx_bytes`]).
+pub struct UbxStream {
+    reader: Reader,
+    parser: Parser<Vec<u8>, Proto23>,
+    /// The bytes waiting in the parser (its buffer is always the stream's
+    /// last bytes): what a clone's parser starts from.
+    waiting: Vec<u8>,
+    /// Bytes received.
+    received: usize,
+    /// Frames dropped for their checksum.
+    checksum_failures: usize,
+    /// Accelerometer samples on the log's time already handed out by [`UbxStream::take_imu`].
+    imu_taken: usize,
+    /// Samples on the sensor clock (of the list in use) when they were last mapped.
+    imu_seen: usize,
+}
+
+impl core::fmt::Debug for UbxStream {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("UbxStream")
+            .field("received", &self.received)
+            .field("frames", &self.reader.frames)
+            .field("checksum_failures", &self.checksum_failures)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Clone for UbxStream {
+    /// The stream as it is, its waiting bytes given to a new parser.
+    fn clone(&self) -> Self {
+        let mut parser = ParserBuilder::new().with_protocol::<Proto23>().with_vec_buffer();
+        let mut it = parser.consume_ubx(&self.waiting);
+        // The bytes of a frame not yet complete: they stay in the buffer.
+        while it.next().is_some() {}
+        drop(it);
+        UbxStream {
+            reader: self.reader.clone(),
+            parser,
+            waiting: self.waiting.clone(),
+            received: self.received,
+            checksum_failures: self.checksum_failures,
+            imu_taken: self.imu_taken,
+            imu_seen: self.imu_seen,
         }
     }
-    drop(it);
-    let leftover = parser.buffer_len();
-    if leftover > 0 {
-        let frames = r.frames;
-        r.b.skip("incomplete frame at the end of the log", || {
-            format!("the last {leftover} bytes, after {frames} valid frames")
-        });
+}
+
+impl UbxStream {
+    /// A stream with nothing received yet; `source_name` names it in messages.
+    pub fn new(source_name: &str) -> UbxStream {
+        UbxStream {
+            reader: Reader::new(source_name),
+            parser: ParserBuilder::new().with_protocol::<Proto23>().with_vec_buffer(),
+            waiting: Vec::new(),
+            received: 0,
+            checksum_failures: 0,
+            imu_taken: 0,
+            imu_seen: 0,
+        }
     }
-    r.finish(bytes.len(), source_name, settings)
+
+    /// Reads the complete frames `bytes` brings (with the waiting bytes
+    /// before them); what follows the last complete frame waits.
+    pub fn push(&mut self, bytes: &[u8]) {
+        self.received += bytes.len();
+        let r = &mut self.reader;
+        let mut it = self.parser.consume_ubx(bytes);
+        while let Some(item) = it.next() {
+            let frames = r.frames;
+            let at = move || format!("after {frames} valid frames");
+            match item {
+                Ok(UbxPacket::Proto23(packet)) => {
+                    r.frames += 1;
+                    r.frame_bytes += FRAME_OVERHEAD + packet.payload_len();
+                    r.packet(packet);
+                }
+                #[allow(unreachable_patterns, reason = "other protocols' variants exist only with their features")]
+                Ok(_) => r.b.skip("message of another UBX protocol version", at),
+                Err(ParserError::InvalidChecksum { .. }) => {
+                    self.checksum_failures += 1;
+                    r.b.skip("bad checksum (frame dropped)", at);
+                }
+                Err(ParserError::InvalidPacketLen { packet, .. } | ParserError::InvalidField { packet, .. }) => {
+                    r.frames += 1;
+                    r.b.skip(&format!("{packet} with a malformed payload"), at);
+                }
+                Err(ParserError::OutOfMemory { .. }) => r.b.skip("frame longer than the parser's buffer", at),
+            }
+        }
+        drop(it);
+        let n = self.parser.buffer_len();
+        let keep = self.waiting.len().min(n.saturating_sub(bytes.len()));
+        self.waiting.drain(..self.waiting.len() - keep);
+        self.waiting.extend_from_slice(&bytes[bytes.len() - (n - keep)..]);
+    }
+
+    /// Bytes received.
+    pub fn received_bytes(&self) -> usize {
+        self.received
+    }
+
+    /// Bytes waiting for the rest of their frame.
+    pub fn waiting_bytes(&self) -> usize {
+        self.parser.buffer_len()
+    }
+
+    /// Frames read with a valid checksum.
+    pub fn frames(&self) -> usize {
+        self.reader.frames
+    }
+
+    /// Frames dropped for a bad checksum.
+    pub fn checksum_failures(&self) -> usize {
+        self.checksum_failures
+    }
+
+    /// Frames, messages and samples skipped so far, for any reason
+    /// (checksum failures among them).
+    pub fn skipped(&self) -> usize {
+        self.reader.b.skipped_count()
+    }
+
+    /// RXM-RAWX epochs read.
+    pub fn epochs(&self) -> usize {
+        self.reader.b.epochs()
+    }
+
+    /// The latest RXM-RAWX epoch's time \[s\] (`t_s` as the log's) and its
+    /// measurements with a valid carrier phase.
+    pub fn latest_epoch(&self) -> Option<(f64, usize)> {
+        self.reader.last_epoch_s.map(|t_s| (t_s, self.reader.last_epoch_phases))
+    }
+
+    /// The accelerometer samples not handed out before, on the log's time
+    /// by `settings` ([`SensorTime`]): under [`SensorTime::FreeRunningMs`]
+    /// none before the sensor clock is tied to an RXM-RAWX epoch, then every
+    /// sample since the first. Samples of ESF-RAW where the log has it, else
+    /// of ESF-MEAS; a sample not after its predecessor is left out.
+    pub fn take_imu(&mut self, settings: &UbxSettings) -> ImuSeries {
+        let r = &self.reader;
+        let (samples, anchor) = if r.raw.is_empty() { (&r.meas, r.meas_anchor) } else { (&r.raw, r.raw_anchor) };
+        let untied = settings.sensor_time == SensorTime::FreeRunningMs && anchor.is_none();
+        if untied || samples.len() == self.imu_seen {
+            return ImuSeries::default();
+        }
+        self.imu_seen = samples.len();
+        // Mapped from the first sample on, as the whole log is: a week's rollover of
+        // GPS-time tags and the samples left out follow the log's order.
+        let (imu, _, _) = map_samples(samples, settings.sensor_time, anchor);
+        let from = self.imu_taken.min(imu.len());
+        self.imu_taken = imu.len();
+        ImuSeries { t_s: imu.t_s[from..].to_vec(), accel_mps2: imu.accel_mps2[from..].to_vec() }
+    }
+
+    /// The log of the complete frames received so far, as [`read_ubx_bytes`]
+    /// reads those bytes (the bytes waiting are not counted).
+    pub fn snapshot(&self, settings: &UbxSettings) -> Result<UbxLog, UbxError> {
+        self.reader.clone().finish(self.received - self.waiting_bytes(), settings)
+    }
+
+    /// The log of everything received: the bytes still waiting are an
+    /// incomplete frame at its end, skipped and counted.
+    pub fn finish(mut self, settings: &UbxSettings) -> Result<UbxLog, UbxError> {
+        let leftover = self.parser.buffer_len();
+        if leftover > 0 {
+            let frames = self.reader.frames;
+            self.reader.b.skip("incomplete frame at the end of the log", || {
+                format!("the last {leftover} bytes, after {frames} valid frames")
+            });
+        }
+        self.reader.finish(self.received, settings)
+    }
 }
 
 /// The state of one track's lock between RXM-RAWX epochs.
@@ -140,8 +290,13 @@ struct Lock {
     phase_valid: bool,
 }
 
+#[derive(Clone)]
 struct Reader {
     b: ObservationLogBuilder,
+    /// The source's name in messages.
+    name: String,
+    /// Measurements of the latest epoch with a valid carrier phase.
+    last_epoch_phases: usize,
     frames: usize,
     frame_bytes: usize,
     last_epoch_s: Option<f64>,
@@ -158,6 +313,8 @@ impl Reader {
     fn new(source_name: &str) -> Reader {
         Reader {
             b: ObservationLogBuilder::new(source_name, "UBX"),
+            name: source_name.to_owned(),
+            last_epoch_phases: 0,
             frames: 0,
             frame_bytes: 0,
             last_epoch_s: None,
@@ -202,6 +359,7 @@ impl Reader {
         }
         let Some(t_s) = self.b.start_epoch(u32::from(p.week()), p.rcv_tow(), at) else { return };
         self.last_epoch_s = Some(t_s);
+        self.last_epoch_phases = 0;
         if p.rec_stat().bits() & CLK_RESET != 0 {
             self.b.clock_event(ClockEvent { t_s, jump_s: None, what: "RXM-RAWX recStat clkReset".to_owned() });
         }
@@ -219,6 +377,7 @@ impl Reader {
                 }
             };
             let phase_valid = trk & CP_VALID != 0;
+            self.last_epoch_phases += usize::from(phase_valid);
             let mut flags = 0;
             if trk & PR_VALID == 0 {
                 flags |= obs_flags::PSEUDORANGE_INVALID;
@@ -277,7 +436,8 @@ impl Reader {
         }
     }
 
-    fn finish(mut self, total_bytes: usize, source_name: &str, settings: &UbxSettings) -> Result<UbxLog, UbxError> {
+    fn finish(mut self, total_bytes: usize, settings: &UbxSettings) -> Result<UbxLog, UbxError> {
+        let source_name = std::mem::take(&mut self.name);
         let (samples, anchor) = if !self.raw.is_empty() {
             for _ in 0..self.meas.len() {
                 self.b.skip("ESF-MEAS accelerometer sample (the log has ESF-RAW)", || "ESF-MEAS".to_owned());

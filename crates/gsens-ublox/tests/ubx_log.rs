@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 
 use gsens_io::obs_flags;
-use gsens_ublox::{SensorTime, UbxError, UbxSettings, read_ubx_bytes, read_ubx_file};
+use gsens_ublox::{SensorTime, UbxError, UbxSettings, UbxStream, read_ubx_bytes, read_ubx_file};
 
 const FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/sim.ubx");
 
@@ -203,4 +203,82 @@ fn frames_written_from_the_interface_description_decode_to_their_fields() {
     // Read as GPS time of week, the tag is 5 s.
     let tow = UbxSettings { sensor_time: SensorTime::GpsTowMs };
     assert_eq!(read_ubx_bytes(&HAND_WRITTEN, "hand.ubx", &tow).unwrap().imu.t_s, [5.0]);
+}
+
+/// The log with one RXM-RAWX's checksum broken (a payload byte flipped) and
+/// 5 garbage bytes before the 8th.
+fn corrupted() -> Vec<u8> {
+    let clean = std::fs::read(FIXTURE).unwrap();
+    let frames = frame_offsets(&clean);
+    let rawx: Vec<_> = frames.iter().filter(|f| (f.1, f.2) == (0x02, 0x15)).collect();
+    let mut bytes = clean.clone();
+    bytes[rawx[4].0 + 6 + 16] ^= 0x40;
+    let at = rawx[7].0;
+    let mut spliced = bytes[..at].to_vec();
+    spliced.extend_from_slice(&[0xB5, 0x00, 0x62, 0x11, 0x22]);
+    spliced.extend_from_slice(&bytes[at..]);
+    spliced
+}
+
+/// A stream fed in pieces of every size from 1 to 97 bytes (cut inside
+/// frames, inside the sync and the length) reads the log
+/// `read_ubx_bytes` reads from the whole: every value, every count. Its
+/// snapshot part way is the log of the complete frames so far, and a clone
+/// made there, fed the rest, reads the same log.
+#[test]
+fn a_stream_read_in_pieces_is_the_log_read_whole() {
+    let bytes = corrupted();
+    let settings = UbxSettings::default();
+    let whole = read_ubx_bytes(&bytes, "s.ubx", &settings).unwrap();
+    assert_eq!(whole.observations.skipped.iter().map(|s| s.count).sum::<usize>(), 1);
+    for (sizes, cut) in [(1..=97usize, 40_001usize), (7..=7, 20_003), (4096..=4096, 60_000)] {
+        let mut stream = UbxStream::new("s.ubx");
+        let mut clone: Option<UbxStream> = None;
+        let (mut at, mut snapshot_checked) = (0, false);
+        for size in sizes.cycle() {
+            if at >= bytes.len() {
+                break;
+            }
+            let end = (at + size).min(bytes.len());
+            stream.push(&bytes[at..end]);
+            if let Some(c) = clone.as_mut() {
+                c.push(&bytes[at..end]);
+            }
+            at = end;
+            if !snapshot_checked && at >= cut {
+                snapshot_checked = true;
+                let complete = at - stream.waiting_bytes();
+                assert!(stream.waiting_bytes() < 8 + 16 + 32 * 40, "{}", stream.waiting_bytes());
+                let part = stream.snapshot(&settings).unwrap();
+                let read = read_ubx_bytes(&bytes[..complete], "s.ubx", &settings).unwrap();
+                assert_eq!(part, read);
+                clone = Some(stream.clone());
+            }
+        }
+        assert_eq!(stream.received_bytes(), bytes.len());
+        assert_eq!((stream.checksum_failures(), stream.skipped()), (1, 1));
+        assert_eq!((stream.frames(), stream.epochs()), (whole.frames, whole.observations.epochs));
+        assert_eq!(stream.finish(&settings).unwrap(), whole);
+        assert_eq!(clone.unwrap().finish(&settings).unwrap(), whole);
+    }
+}
+
+/// The accelerometer samples handed out as frames arrive are, together,
+/// the IMU of the log read whole: none before the sensor clock is tied to
+/// an RXM-RAWX epoch, each once.
+#[test]
+fn the_stream_hands_out_each_imu_sample_once_on_the_logs_time() {
+    let bytes = std::fs::read(FIXTURE).unwrap();
+    for settings in [UbxSettings::default(), UbxSettings { sensor_time: SensorTime::GpsTowMs }] {
+        let whole = read_ubx_bytes(&bytes, "s.ubx", &settings).unwrap();
+        let mut stream = UbxStream::new("s.ubx");
+        let mut taken = gsens_io::ImuSeries::default();
+        for piece in bytes.chunks(333) {
+            stream.push(piece);
+            let new = stream.take_imu(&settings);
+            taken.t_s.extend(new.t_s);
+            taken.accel_mps2.extend(new.accel_mps2);
+        }
+        assert_eq!(taken, whole.imu, "{settings:?}");
+    }
 }
