@@ -408,7 +408,8 @@ impl<'a> Problem<'a> {
         let a: Vec<[f64; 3]> = used.par_iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
         // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
         let g = self.gamma_on_axes(a.iter().copied());
-        let mut columns: Vec<Vec<f64>> = self.axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
+        // The nuisance parameters' columns, after φ_a's on the fit's axes.
+        let mut columns: Vec<Vec<f64>> = Vec::new();
         // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
         let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
             let fed = triad_pass(self.series, self.settings, model)?;
@@ -440,7 +441,17 @@ impl<'a> Problem<'a> {
                     .collect(),
             );
         }
-        Ok(DMatrix::from_fn(used.len(), self.fitted.len(), |r, c| columns[c][r]))
+        // Column-major: each column's rows written on their own, in parallel.
+        let n = used.len();
+        let mut jac = DMatrix::zeros(n, self.fitted.len());
+        let (phi_a_part, nuisance_part) = jac.as_mut_slice().split_at_mut(n * self.axes.len());
+        phi_a_part.par_chunks_mut(n).zip(self.axes.par_iter()).for_each(|(dst, &i)| {
+            for (d, v) in dst.iter_mut().zip(&a) {
+                *d = v[i];
+            }
+        });
+        nuisance_part.par_chunks_mut(n).zip(columns).for_each(|(dst, src)| dst.copy_from_slice(&src));
+        Ok(jac)
     }
 }
 
