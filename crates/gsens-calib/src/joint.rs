@@ -879,6 +879,27 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
 
+    /// JᵀJ and Jᵀy formed entry by entry in parallel are nalgebra's
+    /// products bit for bit, on pools of 1, 2, 4 and 5 threads.
+    #[test]
+    fn normal_products_are_nalgebras_on_any_pool() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let noise = Normal::new(0.0, 1.0).unwrap();
+        let (n, p) = (10_007, 5);
+        let jac = DMatrix::from_fn(n, p, |_, c| noise.sample(&mut rng) * (c + 1) as f64);
+        let y = DVector::from_fn(n, |_, _| noise.sample(&mut rng));
+        let bits = |m: &DMatrix<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+        for threads in [1, 2, 4, 5] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (g, b) = pool.install(|| (gram(&jac), tr_mul_vector(&jac, &y)));
+            assert_eq!(bits(&g), bits(&jac.tr_mul(&jac)), "{threads} threads");
+            assert_eq!(
+                b.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                jac.tr_mul(&y).iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
+
     /// 400 s at 40 Hz of the paper's loop run at the log rate, driven by
     /// Δf = aᵀΓ with x, y, z shaken in turn for 20 s each at 0.9 Hz, white
     /// phase noise: (t, φ, a).
