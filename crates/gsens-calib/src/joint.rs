@@ -408,7 +408,8 @@ impl<'a> Problem<'a> {
         let a: Vec<[f64; 3]> = used.par_iter().map(|&k| shifted(&center, k, dtau, &by)).collect();
         // Γ̂ at the current θ, for the Jacobian of the nuisance parameters.
         let g = self.gamma_on_axes(a.iter().copied());
-        let mut columns: Vec<Vec<f64>> = self.axes.iter().map(|&i| a.iter().map(|v| v[i]).collect()).collect();
+        // The nuisance parameters' columns, after φ_a's on the fit's axes.
+        let mut columns: Vec<Vec<f64>> = Vec::new();
         // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
         let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
             let fed = triad_pass(self.series, self.settings, model)?;
@@ -440,24 +441,57 @@ impl<'a> Problem<'a> {
                     .collect(),
             );
         }
-        Ok(DMatrix::from_fn(used.len(), self.fitted.len(), |r, c| columns[c][r]))
+        // Column-major: each column's rows written on their own, in parallel.
+        let n = used.len();
+        let mut jac = DMatrix::zeros(n, self.fitted.len());
+        let (phi_a_part, nuisance_part) = jac.as_mut_slice().split_at_mut(n * self.axes.len());
+        phi_a_part.par_chunks_mut(n).zip(self.axes.par_iter()).for_each(|(dst, &i)| {
+            for (d, v) in dst.iter_mut().zip(&a) {
+                *d = v[i];
+            }
+        });
+        nuisance_part.par_chunks_mut(n).zip(columns).for_each(|(dst, src)| dst.copy_from_slice(&src));
+        Ok(jac)
     }
 }
 
+/// JᵀJ of `jac`, entry (i, j) the dot product of columns i and j as
+/// nalgebra's `tr_mul` computes it (so the same bits), the entries on and
+/// above the diagonal computed in parallel and mirrored below it (the dot
+/// product is the same either way round).
+fn gram(jac: &DMatrix<f64>) -> DMatrix<f64> {
+    let p = jac.ncols();
+    let pairs: Vec<(usize, usize)> = (0..p).flat_map(|i| (i..p).map(move |j| (i, j))).collect();
+    let dots: Vec<f64> = pairs.par_iter().map(|&(i, j)| jac.column(i).dot(&jac.column(j))).collect();
+    let mut g = DMatrix::zeros(p, p);
+    for (&(i, j), &d) in pairs.iter().zip(&dots) {
+        g[(i, j)] = d;
+        g[(j, i)] = d;
+    }
+    g
+}
+
+/// Jᵀy of `jac`, entry i the dot product of column i with `y` as nalgebra's
+/// `tr_mul` computes it, the columns in parallel.
+fn tr_mul_vector(jac: &DMatrix<f64>, y: &DVector<f64>) -> DVector<f64> {
+    let dots: Vec<f64> = (0..jac.ncols()).into_par_iter().map(|i| jac.column(i).dot(y)).collect();
+    DVector::from_vec(dots)
+}
+
 /// One Gauss–Newton step: the least-squares solution on the Jacobian (Γ
-/// and the nuisance steps, laid out as the solver's vector) and whether
+/// and the nuisance steps, laid out as the solver's vector), whether
 /// every nuisance step, limited, lies within [`CONVERGED_STEP_SIGMAS`] of
-/// its white-noise σ.
+/// its white-noise σ, and JᵀJ with its inverse.
 fn gauss_newton_step(
     jac: &DMatrix<f64>,
     y: &DVector<f64>,
     fitted: &Fitted,
-) -> Result<(DVector<f64>, bool), CalibError> {
-    let jtj = jac.tr_mul(jac);
+) -> Result<(DVector<f64>, bool, Normal), CalibError> {
+    let jtj = gram(jac);
     let Some(jtj_inv) = jtj.clone().try_inverse() else {
         return Err(CalibError::Unsupported("the joint fit of Γ, the loop and the time offset is singular"));
     };
-    let beta = &jtj_inv * jac.tr_mul(y);
+    let beta = &jtj_inv * tr_mul_vector(jac, y);
     let white_var = {
         let r = y - jac * &beta;
         r.norm_squared() / (jac.nrows() as f64 - fitted.len() as f64).max(1.0)
@@ -465,7 +499,13 @@ fn gauss_newton_step(
     let small = |c: usize, d: f64| d.abs() <= CONVERGED_STEP_SIGMAS * (jtj_inv[(c, c)] * white_var).max(0.0).sqrt();
     let step = Theta::limited_step(&fitted.read(beta.as_slice()), fitted.offset_max_abs_s);
     let converged = step.nuisance(fitted).iter().fold(true, |all, &(c, d)| all & small(c, d));
-    Ok((beta, converged))
+    Ok((beta, converged, Normal { jtj, jtj_inv }))
+}
+
+/// A Jacobian's normal matrix JᵀJ and its inverse.
+struct Normal {
+    jtj: DMatrix<f64>,
+    jtj_inv: DMatrix<f64>,
 }
 
 /// Gauss–Newton on Γ (on `axes`) and the nuisance parameters `spec` asks
@@ -486,10 +526,10 @@ fn solve(
     let fitted = problem.fitted;
     let y = DVector::from_column_slice(&problem.phi);
     let mut iterations = 0;
-    let (jac, resid, gamma) = loop {
+    let (jac, resid, gamma, normal) = loop {
         iterations += 1;
         let jac = problem.jacobian(&fed0, &theta)?;
-        let (beta, converged) = gauss_newton_step(&jac, &y, &fitted)?;
+        let (beta, converged, normal) = gauss_newton_step(&jac, &y, &fitted)?;
         let step = Theta::limited_step(&fitted.read(beta.as_slice()), spec.offset_max_abs_s);
         theta = theta.advanced(&step, spec.offset_max_abs_s);
         // Converged (steps far below any σ) or out of iterations: Γ at the
@@ -500,7 +540,7 @@ fn solve(
             for (&i, g) in axes.iter().zip(&step.gamma) {
                 gamma[i] = *g;
             }
-            break (jac, resid, gamma);
+            break (jac, resid, gamma, normal);
         }
     };
     let gamma_stated = if fitted.natural_frequency || fitted.damping {
@@ -515,7 +555,7 @@ fn solve(
     };
     let (p, na) = (fitted.len(), fitted.axes);
     let (cov, cov3) = if covariance {
-        sandwich_covariance(&jac, &resid, &problem.used, fed0.len(), series.log_interval_s, na)
+        sandwich_covariance(&jac, &normal, &resid, &problem.used, fed0.len(), series.log_interval_s, na)
     } else {
         (DMatrix::from_element(p, p, f64::NAN), DMatrix::from_element(na, na, f64::NAN))
     };
@@ -533,12 +573,13 @@ fn solve(
 }
 
 /// The least-squares sandwich (JᵀJ)⁻¹·JᵀΣJ·(JᵀJ)⁻¹ of the Jacobian `jac`
-/// (rows: the `used` epochs of a series of `n`, log interval `t`), Σ the
-/// autocovariance of an AR model of the residuals `resid` over the used
-/// epochs' contiguous runs; and the same sandwich on the first `na` (Γ)
-/// columns alone, Γ's covariance with θ known.
+/// (rows: the `used` epochs of a series of `n`, log interval `t`; `normal`
+/// its JᵀJ and inverse), Σ the autocovariance of an AR model of the
+/// residuals `resid` over the used epochs' contiguous runs; and the same
+/// sandwich on the first `na` (Γ) columns alone, Γ's covariance with θ known.
 fn sandwich_covariance(
     jac: &DMatrix<f64>,
+    normal: &Normal,
     resid: &DVector<f64>,
     used: &[usize],
     n: usize,
@@ -558,10 +599,11 @@ fn sandwich_covariance(
     let slices: Vec<&[f64]> = segments.iter().map(|s| &full_resid[s.clone()]).collect();
     let max_order = ((gls::MAX_AR_SPAN_S / t).ceil() as usize).min(used.len() / 20).max(1);
     let full_columns: Vec<Vec<f64>> = (0..p)
+        .into_par_iter()
         .map(|c| {
             let mut v = vec![0.0; n];
-            for (r, &k) in used.iter().enumerate() {
-                v[k] = jac[(r, c)];
+            for (&x, &k) in jac.column(c).iter().zip(used) {
+                v[k] = x;
             }
             v
         })
@@ -573,10 +615,15 @@ fn sandwich_covariance(
     let middle = spectra.middle(&noise);
     // A singular normal matrix leaves σ undefined (NaN), never 0: the axes
     // then come out unobservable (`Calibration::include_nuisance`).
-    let jtj_inv = jac.tr_mul(jac).try_inverse().unwrap_or_else(|| DMatrix::from_element(p, p, f64::NAN));
-    let cov = &jtj_inv * &middle * &jtj_inv;
-    let a3 = jac.columns(0, na).into_owned();
-    let a3_inv = a3.tr_mul(&a3).try_inverse().unwrap_or_else(|| DMatrix::from_element(na, na, f64::NAN));
+    let cov = &normal.jtj_inv * &middle * &normal.jtj_inv;
+    // The Γ columns' normal matrix is the leading block of JᵀJ (the same
+    // dot products of the same columns).
+    let a3_inv = normal
+        .jtj
+        .view((0, 0), (na, na))
+        .into_owned()
+        .try_inverse()
+        .unwrap_or_else(|| DMatrix::from_element(na, na, f64::NAN));
     // Entry (i, j) of the middle depends on columns i and j alone: the Γ
     // columns' middle is the leading block of the joint one.
     let middle3 = middle.view((0, 0), (na, na)).into_owned();
@@ -831,6 +878,27 @@ mod tests {
     use gsens_core::DiscretePll;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
+
+    /// JᵀJ and Jᵀy formed entry by entry in parallel are nalgebra's
+    /// products bit for bit, on pools of 1, 2, 4 and 5 threads.
+    #[test]
+    fn normal_products_are_nalgebras_on_any_pool() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let noise = Normal::new(0.0, 1.0).unwrap();
+        let (n, p) = (10_007, 5);
+        let jac = DMatrix::from_fn(n, p, |_, c| noise.sample(&mut rng) * (c + 1) as f64);
+        let y = DVector::from_fn(n, |_, _| noise.sample(&mut rng));
+        let bits = |m: &DMatrix<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+        for threads in [1, 2, 4, 5] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (g, b) = pool.install(|| (gram(&jac), tr_mul_vector(&jac, &y)));
+            assert_eq!(bits(&g), bits(&jac.tr_mul(&jac)), "{threads} threads");
+            assert_eq!(
+                b.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                jac.tr_mul(&y).iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
 
     /// 400 s at 40 Hz of the paper's loop run at the log rate, driven by
     /// Δf = aᵀΓ with x, y, z shaken in turn for 20 s each at 0.9 Hz, white

@@ -125,8 +125,9 @@ pub struct RegressorModel<L = ModelLoop> {
     prev_accel_mps2: Option<[f64; 3]>,
     /// The map of one log interval, when it holds more than one update.
     lifted: Option<LiftedInterval>,
-    /// The triad's states between epochs on the lifted path.
-    states: [LoopState; 3],
+    /// The triad's states between epochs on the lifted path, component by
+    /// component: `lanes[j][axis]` (a fourth lane kept at zero).
+    lanes: TriadLanes,
 }
 
 /// One log interval of a linear loop, n updates on the linear interpolation
@@ -176,8 +177,9 @@ impl LiftedInterval {
     }
 
     /// Advances `state` over one interval from sample `a_prev` to `a_cur`;
-    /// returns what the row holds.
-    #[inline]
+    /// returns what the row holds: one axis of [`LiftedInterval::step_triad`],
+    /// its reference.
+    #[cfg(test)]
     pub(crate) fn step(&self, state: &mut LoopState, a_prev: f64, a_cur: f64) -> f64 {
         let s = *state;
         let mut out = self.d_prev * a_prev + self.d_cur * a_cur;
@@ -194,7 +196,40 @@ impl LiftedInterval {
         }
         out
     }
+
+    /// [`LiftedInterval::step`] for the three axes at once, their states
+    /// held component by component (`lanes[j][axis]`, the fourth lane
+    /// zero): each axis's arithmetic is `step`'s, the same operations in
+    /// the same order (no fused multiply-add), so the same bits, with the
+    /// axes side by side in the lanes of a vector register.
+    #[inline]
+    pub(crate) fn step_triad(&self, lanes: &mut TriadLanes, a_prev: &[f64; 3], a_cur: &[f64; 3]) -> [f64; 3] {
+        let s = *lanes;
+        let ap = [a_prev[0], a_prev[1], a_prev[2], 0.0];
+        let ac = [a_cur[0], a_cur[1], a_cur[2], 0.0];
+        let mut out: [f64; 4] = core::array::from_fn(|l| self.d_prev * ap[l] + self.d_cur * ac[l]);
+        for j in 0..LOOP_STATE_LEN {
+            for l in 0..4 {
+                out[l] += self.c[j] * s[j][l];
+            }
+        }
+        for i in 0..LOOP_STATE_LEN {
+            let row = &self.phi[i];
+            let mut v: [f64; 4] = core::array::from_fn(|l| self.b_prev[i] * ap[l] + self.b_cur[i] * ac[l]);
+            for j in 0..LOOP_STATE_LEN {
+                for l in 0..4 {
+                    v[l] += row[j] * s[j][l];
+                }
+            }
+            lanes[i] = v;
+        }
+        [out[0], out[1], out[2]]
+    }
 }
+
+/// The states of a triad's three loops component by component:
+/// `lanes[j][axis]` is component j of the axis's state, lane 3 is zero.
+type TriadLanes = [[f64; 4]; LOOP_STATE_LEN];
 
 /// The n loop updates of one log interval, one at a time, on the linear
 /// interpolation a_prev + (j/n)·(a_cur − a_prev), j = 1…n: the recursion
@@ -280,7 +315,7 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
             quantity,
             prev_accel_mps2: None,
             lifted,
-            states: [[0.0; LOOP_STATE_LEN]; 3],
+            lanes: [[0.0; 4]; LOOP_STATE_LEN],
         })
     }
 
@@ -307,9 +342,11 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
             None => {
                 // The receiver was tracking before the log began: start each
                 // model loop in the steady state of the first sample.
-                for ((pll, a), state) in self.triad.iter_mut().zip(accel_mps2).zip(&mut self.states) {
+                for (axis, (pll, a)) in self.triad.iter_mut().zip(accel_mps2).enumerate() {
                     pll.settle(*a);
-                    *state = pll.state();
+                    for (lane, x) in self.lanes.iter_mut().zip(pll.state()) {
+                        lane[axis] = x;
+                    }
                 }
                 *accel_mps2
             }
@@ -319,7 +356,7 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
             let quantity = self.quantity;
             return [0, 1, 2].map(|axis| interval_updates(&mut self.triad[axis], 0.0, accel_mps2[axis], 1, quantity));
         };
-        [0, 1, 2].map(|axis| lifted.step(&mut self.states[axis], prev[axis], accel_mps2[axis]))
+        lifted.step_triad(&mut self.lanes, &prev, accel_mps2)
     }
 
     /// Back to rest.
@@ -327,7 +364,7 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         for p in &mut self.triad {
             p.reset();
         }
-        self.states = [[0.0; LOOP_STATE_LEN]; 3];
+        self.lanes = [[0.0; 4]; LOOP_STATE_LEN];
         self.prev_accel_mps2 = None;
     }
 }
@@ -454,6 +491,33 @@ mod tests {
         assert_lifted_equals_updates(ModelLoop::from(gnss_sdr), 0.001, 0.02);
         let pocket = PocketSdrPll::new(PocketSdrStage::l1ca(5.0)).unwrap();
         assert_lifted_equals_updates(ModelLoop::from(pocket), pocket.stage().interval_s, 0.02);
+    }
+
+    #[test]
+    fn the_triad_step_is_three_single_steps_bit_for_bit() {
+        let l = DiscretePll::new(spec(3, 15.0), 0.001);
+        let lifted = LiftedInterval::of_loop(&l, 25, RowQuantity::PhaseError(LoggedPhase::Mean));
+        let mut states = [[0.0; LOOP_STATE_LEN]; 3];
+        let mut lanes: TriadLanes = [[0.0; 4]; LOOP_STATE_LEN];
+        // A seeded linear congruential sequence of specific forces [m/s²].
+        let mut seed: u64 = 7;
+        let mut next = || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
+        };
+        let mut prev = [0.0; 3];
+        for _ in 0..2000 {
+            let cur = [next(), next(), next()];
+            let single: [f64; 3] = core::array::from_fn(|axis| lifted.step(&mut states[axis], prev[axis], cur[axis]));
+            let triad = lifted.step_triad(&mut lanes, &prev, &cur);
+            assert_eq!(single.map(f64::to_bits), triad.map(f64::to_bits));
+            for j in 0..LOOP_STATE_LEN {
+                let axes: [f64; 3] = core::array::from_fn(|axis| states[axis][j]);
+                assert_eq!(axes.map(f64::to_bits), [lanes[j][0], lanes[j][1], lanes[j][2]].map(f64::to_bits));
+                assert_eq!(lanes[j][3], 0.0);
+            }
+            prev = cur;
+        }
     }
 
     #[test]

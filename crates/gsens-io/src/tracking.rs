@@ -724,9 +724,10 @@ const JOIN_PARALLEL_ROWS: usize = 1 << 16;
 /// 1-hour log 11 000 more page faults; BENCHMARKS.md).
 const CHUNK_BYTES: u64 = 2 << 20;
 
-/// Chunks parsed at once before they are joined: enough to keep a few
-/// threads busy, few enough that their columns beside the joined log's stay
-/// small (a fixed number, so the memory does not grow with the threads).
+/// Chunks parsed at once, while the wave before them is joined: enough to
+/// keep a few threads busy, few enough that their columns beside the joined
+/// log's stay small (a fixed number, so the memory does not grow with the
+/// threads).
 const WAVE_CHUNKS: usize = 4;
 
 /// Opens and reads a `tracking.csv` file; errors name the file by its path.
@@ -785,21 +786,16 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<T
     let fields = src.header.len();
     let bounds = crate::plain::chunk_bounds(&mut file, start, total, chunk_bytes)?;
     let chunks: Vec<(usize, (u64, u64))> = bounds.windows(2).map(|w| (w[0], w[1])).enumerate().collect();
-    let mut joined: Option<(Builder, u64)> = None;
-    // A wave of chunks at a time, joined before the next is parsed: the
-    // chunks' own columns held at once stay a few chunks' worth.
-    for wave in chunks.chunks(WAVE_CHUNKS) {
-        let parsed: Vec<Option<(Builder, u64)>> = wave
-            .par_iter()
-            .map(|&(k, (from, to))| {
-                let mut b = builder_for(&src, &columns);
-                // The first chunk's columns are sized for the whole file: the others' rows join them.
-                let (first_line, reserve) = if k == 0 { (2, total - start) } else { (1, to - from) };
-                let input = crate::plain::byte_range(path, from, to)?;
-                let newlines = plain_rows(input, first_line, &cols, fields, &mut b, reserve)?;
-                Some((b, newlines))
-            })
-            .collect();
+    let parse = |&(k, (from, to)): &(usize, (u64, u64))| {
+        let mut b = builder_for(&src, &columns);
+        // The first chunk's columns are sized for the whole file: the others' rows join them.
+        let (first_line, reserve) = if k == 0 { (2, total - start) } else { (1, to - from) };
+        let input = crate::plain::byte_range(path, from, to)?;
+        let newlines = plain_rows(input, first_line, &cols, fields, &mut b, reserve)?;
+        Some((b, newlines))
+    };
+    // The chunks parsed so far joined in file order, with the lines before the next chunk.
+    let join_all = |mut joined: Option<(Builder, u64)>, parsed: Vec<Option<(Builder, u64)>>| {
         for chunk in parsed {
             let (b, newlines) = chunk?;
             joined = Some(match joined {
@@ -809,6 +805,21 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<T
                 Some((log, lines_before)) => (log.join(b, lines_before)?, lines_before + newlines),
             });
         }
+        Some(joined)
+    };
+    // A wave of chunks at a time, parsed while the wave before it is joined
+    // (the joins are serial, and fault in the log's own pages): the chunks'
+    // own columns held at once stay two waves' worth.
+    let mut joined: Option<(Builder, u64)> = None;
+    let mut parsed: Vec<Option<(Builder, u64)>> = Vec::new();
+    for wave in chunks.chunks(WAVE_CHUNKS).map(Some).chain([None]) {
+        let before = std::mem::take(&mut parsed);
+        let (next, so_far) = rayon::join(
+            || wave.map_or_else(Vec::new, |w| w.par_iter().map(parse).collect()),
+            || join_all(joined.take(), before),
+        );
+        joined = so_far?;
+        parsed = next;
     }
     let (log, _) = joined?;
     log.finish().ok()
@@ -1368,25 +1379,34 @@ mod tests {
         assert_eq!(read_tracking_file(&f.0).unwrap(), read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
     }
 
-    /// The file's log is the same bit for bit on a pool of one thread and
-    /// on a pool of four: the chunks are cut by the bytes alone.
+    /// The file's log is the same bit for bit on pools of 1, 2, 4 and 5
+    /// threads: the chunks are cut by the bytes alone, and joined in file
+    /// order while the next wave is parsed (several waves, in chunks of the
+    /// reader's size and in smaller ones).
     #[test]
     fn the_log_does_not_depend_on_the_threads() {
         let text = log_text(HEADER, 120_000, 3, 60_000, 90_000);
         assert!(text.len() as u64 >= 3 * CHUNK_BYTES, "several chunks per wave");
         let f = TempFile::new("chunks-threads.csv", &text);
+        let total = text.len() as u64;
+        let small = total / (5 * WAVE_CHUNKS as u64 + 1);
         let on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| read_tracking_file(&f.0).unwrap())
+            pool.install(|| {
+                (read_tracking_file(&f.0).unwrap(), read_plain(&f.0, &path_name(&f.0), total, small).unwrap())
+            })
         };
-        let (one, four) = (on(1), on(4));
         let bits = |log: &TrackingLog| -> Vec<u64> {
             let columns = log.tracks().iter().flat_map(|t| [&t.t_s, &t.phase_err_rad, &t.cn0_dbhz, &t.elev_deg]);
             columns.flatten().map(|v| v.to_bits()).collect()
         };
-        assert_eq!(bits(&one), bits(&four));
-        assert_eq!(one, four);
-        assert_eq!(one, read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap());
+        let serial = read_tracking(text.as_bytes(), &path_name(&f.0)).unwrap();
+        for threads in [1, 2, 4, 5] {
+            let (whole, waves) = on(threads);
+            assert_eq!(bits(&whole), bits(&serial), "{threads} threads");
+            assert_eq!(whole, serial, "{threads} threads");
+            assert_eq!(waves, serial, "{threads} threads, six waves");
+        }
     }
 
     /// What the chunks cannot decide alone is read again by the `csv`
