@@ -148,6 +148,15 @@ pub enum SessionError {
         /// Which criterion excluded the channels, channel by channel.
         reason: String,
     },
+    /// The channels passed, but no epoch's average of them is a finite number.
+    #[error(
+        "{file}: no epoch has a finite channel-averaged phase error: the phases, or the constant offsets \
+         between the channels fitted from them, overflow (check the phase_err_rad column's values and units)"
+    )]
+    NoAveragedPhase {
+        /// Tracking source name.
+        file: String,
+    },
 }
 
 /// An invalid value in a [`ScreeningConfig`](crate::ScreeningConfig), naming

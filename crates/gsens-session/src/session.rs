@@ -296,7 +296,7 @@ pub fn prepare_session_from(
         .then_some(RemovedOffsets { slot_base: &gathered.slot_base, offsets_rad: &offsets_rad });
     let channels = summaries::channel_summaries(&candidates, screened, chosen, removed, &averaged.t_s);
     let signals = summaries::signal_summaries(&channels);
-    averaged.trim_to_phases();
+    averaged.trim_to_phases().ok_or_else(|| SessionError::NoAveragedPhase { file: file.to_owned() })?;
     let Averaged { t_s, phase_err_rad, accel_mps2 } = averaged;
     Ok(PreparedSession {
         log_interval_s: grid.log_interval_s,

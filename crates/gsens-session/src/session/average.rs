@@ -151,15 +151,18 @@ impl Averaged {
     /// screened out), and a leading stretch without one would be a gap to
     /// the estimator, which then leaves out up to three time constants of
     /// its high-pass after it (9.5 s at 0.05 Hz), where its own warm-up suffices.
-    pub(super) fn trim_to_phases(&mut self) {
-        let first = self.phase_err_rad.iter().position(Option::is_some).expect("a used track keeps a row");
-        let end = self.phase_err_rad.iter().rposition(Option::is_some).expect("a used track keeps a row") + 1;
+    /// Returns `None`, and keeps everything, where no epoch has a phase
+    /// (every average not finite).
+    pub(super) fn trim_to_phases(&mut self) -> Option<()> {
+        let first = self.phase_err_rad.iter().position(Option::is_some)?;
+        let end = self.phase_err_rad.iter().rposition(Option::is_some)? + 1;
         self.t_s.truncate(end);
         self.t_s.drain(..first);
         self.phase_err_rad.truncate(end);
         self.phase_err_rad.drain(..first);
         self.accel_mps2.truncate(end);
         self.accel_mps2.drain(..first);
+        Some(())
     }
 }
 

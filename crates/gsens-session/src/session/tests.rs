@@ -723,3 +723,14 @@ fn without_c_n0_differences_the_least_noisy_tracks_are_used() {
     let s = prep(&noisy_log(sigma_rad, |ch| 40.0 + ch as f64), &imu, &cfg).unwrap();
     assert_eq!((s.channel_ranking, used_channels(&s)), (ChannelRanking::Cn0, vec![2, 3, 4, 5]));
 }
+
+/// Phases so large that the channels' constant offsets overflow leave no
+/// epoch with a finite average: an error naming the file, not a panic.
+#[test]
+fn phases_whose_average_overflows_are_an_error() {
+    let rows: Vec<TrackingRow> =
+        (0..200).flat_map(|k| [row(tk(k), 1, 45.0, None, 1.7e308), row(tk(k), 2, 45.0, None, -1.7e308)]).collect();
+    let e = prep(&log_from(&rows), &wide_imu(), &base()).unwrap_err();
+    assert!(matches!(e, SessionError::NoAveragedPhase { .. }), "{e}");
+    assert!(msg(e).starts_with("tracking.csv: no epoch has a finite channel-averaged phase error"));
+}
