@@ -13,7 +13,7 @@ use gsens_calib::{
     SelectionOptions, SystematicOptions,
 };
 use gsens_gnss_sdr::{GnssSdrError, ImportOverrides};
-use gsens_inputs::{InputChoice, Inputs, InputsError, ObservationInputs};
+use gsens_inputs::{InputChoice, InputsError, Route};
 use std::path::PathBuf;
 
 /// The flag of the option `name` (`bn_hz` is `--bn-hz`).
@@ -115,7 +115,7 @@ impl CalibrationArgs {
     }
 }
 
-/// How GNSS-SDR dump records are selected.
+/// How GNSS-SDR dump records are selected (`import gnss-sdr`).
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "GNSS-SDR dumps")]
 pub(crate) struct ConversionArgs {
@@ -137,82 +137,8 @@ pub(crate) fn conversion_error(e: InputsError) -> anyhow::Error {
     }
 }
 
-/// Where a calibration's logs come from (`estimate`, `report`): an IMU log
-/// with a tracking log, GNSS-SDR dumps or a PocketSDR log.
-#[derive(Args, Debug, Clone)]
-pub(crate) struct InputArgs {
-    /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2 (beside a RINEX file: t_s in GPS seconds of the week of
-    /// its first epoch; with --ubx, instead of the module's own accelerometer).
-    #[arg(long, required_unless_present = "ubx")]
-    pub imu: Option<PathBuf>,
-    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or --gnss-sdr, --pocketsdr,
-    /// --rinex, --ubx).
-    #[arg(
-        long,
-        required_unless_present_any = ["gnss_sdr", "pocketsdr", "rinex", "ubx"],
-        conflicts_with_all = ["gnss_sdr", "pocketsdr", "rinex", "ubx"]
-    )]
-    pub tracking: Option<PathBuf>,
-    /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead of --tracking.
-    #[arg(long, requires = "gnss_sdr_conf")]
-    pub gnss_sdr: Option<PathBuf>,
-    /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
-    /// With --tracking instead of --gnss-sdr: rows that came from that GNSS-SDR run another way
-    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop.
-    #[arg(long)]
-    pub gnss_sdr_conf: Option<PathBuf>,
-    #[command(flatten)]
-    pub gnss_sdr_conversion: ConversionArgs,
-    /// A pocket_trk log (-log FILE, its $CH lines) to use instead of --tracking; PocketSDR's
-    /// carrier loop is modelled exactly.
-    #[arg(long, conflicts_with = "gnss_sdr")]
-    pub pocketsdr: Option<PathBuf>,
-    #[command(flatten)]
-    pub pocketsdr_conversion: gsens_pocketsdr::ImportOptions,
-    /// A RINEX observation file (3.x, 2.11, Hatanaka) of a receiver that logs carrier phase or
-    /// Doppler but no tracking error: its loop is identified from the session.
-    #[arg(long, conflicts_with_all = ["gnss_sdr", "pocketsdr", "ubx"], help_heading = "Carrier phase and Doppler logs")]
-    pub rinex: Option<PathBuf>,
-    /// A u-blox UBX log (RXM-RAWX; the module's accelerometer from ESF-RAW / ESF-MEAS unless
-    /// --imu is given): its loop is identified from the session.
-    #[arg(long, conflicts_with_all = ["gnss_sdr", "pocketsdr"], help_heading = "Carrier phase and Doppler logs")]
-    pub ubx: Option<PathBuf>,
-    /// What the estimate from a RINEX or UBX log is made from: the carrier phase differenced, the
-    /// Doppler, or auto (the carrier phase where most tracks have one).
-    #[arg(long, value_enum, default_value_t, help_heading = "Carrier phase and Doppler logs")]
-    pub observable: gsens_calib::ObservationRecord,
-    /// How the UBX log's ESF sensor time tags map to GPS time: free-running-ms (a millisecond sensor
-    /// clock, tied once to an RXM-RAWX epoch; the rest is the IMU offset searched) or gps-tow-ms
-    /// (the tags count GPS time of week in ms, as rcvTow).
-    #[arg(long, value_enum, default_value = "free-running-ms", help_heading = "Carrier phase and Doppler logs")]
-    pub ubx_sensor_time: gsens_ublox::SensorTime,
-}
-
-impl InputArgs {
-    /// The inputs the options name, with their conversion settings.
-    pub(crate) fn inputs(&self) -> Result<Inputs> {
-        self.choice().inputs(flag).map_err(conversion_error)
-    }
-
-    /// The carrier phase and Doppler route, where --rinex or --ubx is given.
-    pub(crate) fn observations(&self) -> Option<Result<ObservationInputs>> {
-        self.choice().observations(flag).map(|r| r.map_err(conversion_error))
-    }
-
-    fn choice(&self) -> InputChoice {
-        InputChoice {
-            imu: self.imu.clone().unwrap_or_default(),
-            tracking: self.tracking.clone(),
-            gnss_sdr: self.gnss_sdr.clone(),
-            gnss_sdr_conf: self.gnss_sdr_conf.clone(),
-            gnss_sdr_fs_hz: self.gnss_sdr_conversion.gnss_sdr_fs_hz,
-            gnss_sdr_overrides: self.gnss_sdr_conversion.overrides.clone(),
-            pocketsdr: self.pocketsdr.clone(),
-            pocketsdr_options: self.pocketsdr_conversion.clone(),
-            rinex: self.rinex.clone(),
-            ubx: self.ubx.clone(),
-            ubx_settings: gsens_ublox::UbxSettings { sensor_time: self.ubx_sensor_time },
-            observation_record: self.observable,
-        }
-    }
+/// The route of the inputs `choice` names (a RINEX or UBX log, else the
+/// tracking route), with its conversion settings.
+pub(crate) fn route(choice: &InputChoice) -> Result<Route> {
+    choice.route(flag).map_err(conversion_error)
 }

@@ -1,17 +1,17 @@
 //! `gsens estimate`: Γ̂ from receiver logs.
 
-use crate::args::{CalibrationArgs, InputArgs};
+use crate::args::CalibrationArgs;
 use anyhow::{Result, anyhow};
 use clap::Args;
-use gsens_calib::{ObservationOutcome, PipelineSettings};
-use gsens_inputs::{Calibrated, Inputs, InputsError, ObservationInputs};
+use gsens_calib::PipelineSettings;
+use gsens_inputs::{Estimated, InputsError, Route};
 use gsens_tui::progress::observed;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub(crate) struct EstimateArgs {
     #[command(flatten)]
-    pub inputs: InputArgs,
+    pub inputs: gsens_inputs::InputChoice,
     /// Write the result document (JSON) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -24,50 +24,31 @@ pub(crate) struct EstimateArgs {
     pub calibration: CalibrationArgs,
 }
 
-/// Runs the calibration of `inputs` (keeping the tracking log the estimate
-/// was made from when `keep_tracking`), printing what became of each track of
-/// a receiver's log and which receiver loop was modelled.
-pub(crate) fn calibrate(inputs: Inputs, settings: &PipelineSettings, keep_tracking: bool) -> Result<Calibrated> {
-    let run = || if keep_tracking { inputs.calibrate_keeping_tracking(settings) } else { inputs.calibrate(settings) };
-    let calibrated = observed(run).map_err(|e| match e {
+/// Runs the calibration of `route` (keeping the tracking log the estimate
+/// was made from when `keep_tracking`), printing what the route did besides
+/// the estimate ([`Estimated::notes`]).
+pub(crate) fn calibrate(route: Route, settings: &PipelineSettings, keep_tracking: bool) -> Result<Estimated> {
+    let estimated = observed(|| route.calibrate(settings, keep_tracking)).map_err(|e| match e {
         InputsError::LoopStatedTwice { .. } => anyhow!(gsens_gnss_sdr::loop_stated_twice(crate::args::flag)),
         e => e.into(),
     })?;
-    let loop_note = calibrated.loop_note().map(|note| note + "\n");
-    crate::out(&(calibrated.track_summary().unwrap_or_default() + &loop_note.unwrap_or_default()))?;
-    Ok(calibrated)
-}
-
-/// Runs the calibration of a RINEX or UBX log, printing what became of its
-/// tracks.
-pub(crate) fn calibrate_observations(
-    inputs: ObservationInputs,
-    settings: &PipelineSettings,
-) -> Result<ObservationOutcome> {
-    let outcome = observed(|| inputs.calibrate(settings))?;
-    crate::out(&gsens_inputs::render_observation_summary(&outcome))?;
-    Ok(outcome)
+    crate::out(&estimated.notes())?;
+    Ok(estimated)
 }
 
 pub(crate) fn run(args: &EstimateArgs, given: &[&str]) -> Result<crate::Status> {
     let settings = args.calibration.settings(given)?;
     crate::check_files(&[("--json", args.json.as_deref()), ("--epochs-out", args.epochs_out.as_deref())], None)?;
-    if let Some(observations) = args.inputs.observations() {
-        if args.epochs_out.is_some() {
-            return Err(anyhow!("--epochs-out needs a tracking error, which --rinex and --ubx logs do not hold"));
-        }
-        let outcome = calibrate_observations(observations?, &settings)?;
-        let doc = outcome.document(None);
-        crate::out(&gsens_report::render_text(&doc))?;
-        crate::write_json(args.json.as_deref(), &doc, "\n")?;
-        return Ok(crate::Status::of(&doc));
+    let route = crate::args::route(&args.inputs)?;
+    if args.epochs_out.is_some() && matches!(route, Route::Observations(_)) {
+        return Err(anyhow!("--epochs-out needs a tracking error, which --rinex and --ubx logs do not hold"));
     }
-    let outcome = calibrate(args.inputs.inputs()?, &settings, false)?.outcome;
-    let doc = outcome.document(None);
+    let estimated = calibrate(route, &settings, false)?;
+    let doc = estimated.document(None);
     crate::out(&gsens_report::render_text(&doc))?;
     crate::write_json(args.json.as_deref(), &doc, "\n")?;
-    if let Some(path) = &args.epochs_out {
-        let s = outcome.series();
+    if let (Some(path), Estimated::Tracking(calibrated)) = (&args.epochs_out, &estimated) {
+        let s = calibrated.outcome.series();
         gsens_io::write_epochs_file(path, s.t_s, s.phase_err_rad, s.accel_mps2)?;
     }
     Ok(crate::Status::of(&doc))

@@ -7,7 +7,7 @@ use crate::args::CalibrationArgs;
 use anyhow::Result;
 use clap::Args;
 use gsens_calib::option_values::{finite_non_negative, positive};
-use gsens_live::{Display, FinalEstimate, InputChoice, InputChoiceError, Runtime, RuntimeConfig, SystemClock};
+use gsens_live::{Display, InputChoice, InputChoiceError, Runtime, RuntimeConfig, SystemClock};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -141,15 +141,8 @@ pub(crate) fn run(args: &LiveArgs, given: &[&str]) -> Result<crate::Status> {
     if let Some(t) = &args.truth {
         finished.estimate.inputs_mut().push(("truth".into(), t.display().to_string()));
     }
-    let status = match &finished.estimate {
-        FinalEstimate::Tracking { outcome, tracking } => {
-            crate::report::write_report(outcome, tracking, truth, &args.out, &args.title, args.header)?
-        }
-        FinalEstimate::Observations(outcome) => {
-            crate::out(&gsens_inputs::render_observation_summary(outcome))?;
-            crate::report::write_observation_report(outcome, truth, &args.out, &args.title, args.header)?
-        }
-    };
+    crate::out(&finished.estimate.notes())?;
+    let status = crate::report::write_report(&finished.estimate, truth, &args.out, &args.title, args.header)?;
     let missed = finished.target_missed(args.target_sigma);
     crate::out(missed.as_deref().unwrap_or_default())?;
     Ok(if missed.is_some() && status == crate::Status::Done { crate::Status::TargetMissed } else { status })

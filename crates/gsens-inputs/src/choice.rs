@@ -7,43 +7,88 @@ use crate::{Inputs, InputsError, Log, ObservationFile, ObservationInputs};
 use gsens_gnss_sdr::{ImportOverrides, ImportSettings};
 use std::path::{Path, PathBuf};
 
-/// The inputs a caller names (every optional field unset: none).
+/// The inputs a caller names (every optional field unset: none). With the
+/// `clap` feature it is a command line's options (the fields' doc comments
+/// are their help, where a unit reads `[Hz]`, not a link): at least a
+/// tracking log, GNSS-SDR dumps, a PocketSDR log, a RINEX file or a UBX log,
+/// one at a time, and the IMU log except beside a UBX log.
 #[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct InputChoice {
-    /// The IMU log.
-    pub imu: PathBuf,
-    /// A tracking log in gsens's format; with
-    /// [`InputChoice::gnss_sdr_conf`], rows that came from that GNSS-SDR run.
+    /// IMU log: t_s,fx_mps2,fy_mps2,fz_mps2 (beside a RINEX file: t_s in GPS seconds of the week of
+    /// its first epoch; beside a UBX log, instead of the module's own accelerometer).
+    #[cfg_attr(feature = "clap", arg(long, required_unless_present = "ubx"))]
+    pub imu: Option<PathBuf>,
+    /// Tracking log: t_s,channel,prn,cn0_dbhz,elev_deg,phase_err_rad (or instead a receiver's own
+    /// log: GNSS-SDR dumps, a PocketSDR log, a RINEX file, a UBX log).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            required_unless_present_any = ["gnss_sdr", "pocketsdr", "rinex", "ubx"],
+            conflicts_with_all = ["gnss_sdr", "pocketsdr", "rinex", "ubx"]
+        )
+    )]
     pub tracking: Option<PathBuf>,
-    /// A directory of GNSS-SDR tracking dumps (`trk_ch_N.dat`).
+    /// Directory of GNSS-SDR tracking dumps (trk_ch_N.dat, Tracking_1C.dump=true) to use instead
+    /// of a tracking log, with the configuration they were made with.
+    #[cfg_attr(feature = "clap", arg(long, requires = "gnss_sdr_conf"))]
     pub gnss_sdr: Option<PathBuf>,
-    /// The configuration of the GNSS-SDR run the dumps or the rows came from.
+    /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
+    /// With a tracking log instead of dumps: rows that came from that GNSS-SDR run another way
+    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub gnss_sdr_conf: Option<PathBuf>,
-    /// The tracking's sampling rate when the configuration gives none \[Hz\].
+    /// Sampling rate of the tracking [Hz] when the configuration does not give it.
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            allow_negative_numbers = true,
+            value_parser = gsens_calib::option_values::positive,
+            help_heading = "GNSS-SDR dumps"
+        )
+    )]
     pub gnss_sdr_fs_hz: Option<f64>,
     /// What is set instead of the configuration's conversion.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub gnss_sdr_overrides: ImportOverrides,
-    /// A PocketSDR `pocket_trk` log.
+    /// A pocket_trk log (-log FILE, its $CH lines) to use instead of a tracking log; PocketSDR's
+    /// carrier loop is modelled exactly.
+    #[cfg_attr(feature = "clap", arg(long, conflicts_with = "gnss_sdr"))]
     pub pocketsdr: Option<PathBuf>,
     /// How the PocketSDR log is converted.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub pocketsdr_options: gsens_pocketsdr::ImportOptions,
-    /// A RINEX observation file.
+    /// A RINEX observation file (3.x, 2.11, Hatanaka) of a receiver that logs carrier phase or
+    /// Doppler but no tracking error: its loop is identified from the session.
+    #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["gnss_sdr", "pocketsdr", "ubx"], help_heading = HEADING))]
     pub rinex: Option<PathBuf>,
-    /// A u-blox UBX log (RXM-RAWX; its ESF accelerometer where `imu` is empty).
+    /// A u-blox UBX log (RXM-RAWX; the module's accelerometer from ESF-RAW / ESF-MEAS unless an
+    /// IMU log is named): its loop is identified from the session.
+    #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["gnss_sdr", "pocketsdr"], help_heading = HEADING))]
     pub ubx: Option<PathBuf>,
-    /// How the UBX log is read.
-    pub ubx_settings: gsens_ublox::UbxSettings,
-    /// Which observable of a RINEX or UBX log the estimate is made from.
+    /// What the estimate from a RINEX or UBX log is made from: the carrier phase differenced, the
+    /// Doppler, or auto (the carrier phase where most tracks have one).
+    #[cfg_attr(feature = "clap", arg(id = "observable", long = "observable", value_name = "OBSERVABLE", value_enum, default_value_t, help_heading = HEADING))]
     pub observation_record: gsens_calib::ObservationRecord,
+    /// How the UBX log is read.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub ubx_settings: gsens_ublox::UbxSettings,
 }
+
+/// The help heading of the carrier phase and Doppler logs' options.
+#[cfg(feature = "clap")]
+const HEADING: &str = "Carrier phase and Doppler logs";
 
 impl InputChoice {
     /// The route of a carrier phase and Doppler log, where a RINEX file or
-    /// a UBX log is named (`None` otherwise): the IMU log named, or with an
-    /// empty `imu` the UBX log's own accelerometer. Both named, or a RINEX
+    /// a UBX log is named (`None` otherwise): the IMU log named, or without
+    /// one the UBX log's own accelerometer. Both named, or a RINEX
     /// file without an IMU log, is refused, naming the options by `name`.
     pub fn observations(&self, name: impl Fn(&str) -> String) -> Option<Result<ObservationInputs, InputsError>> {
-        let imu = (!self.imu.as_os_str().is_empty()).then(|| self.imu.clone());
+        let imu = self.imu.clone();
         let log = match (&self.rinex, &self.ubx) {
             (None, None) => return None,
             (Some(_), Some(_)) => {
@@ -65,13 +110,15 @@ impl InputChoice {
     /// The route the inputs name, its conversion settings checked: a
     /// PocketSDR log; else GNSS-SDR dumps; else a tracking log, as rows of
     /// the GNSS-SDR run of `gnss_sdr_conf` when one is named. A PocketSDR
-    /// conversion named without its log is refused, as is no tracking input
+    /// conversion named without its log is refused, as is no IMU log or no tracking input
     /// ([`InputsError::Choice`], its message naming each option by `name`: a
     /// command line's flag, say); a setting's error is its receiver's
     /// ([`gsens_gnss_sdr::GnssSdrError::setting`],
     /// [`gsens_pocketsdr::PocketSdrError::setting`]).
     pub fn inputs(&self, name: impl Fn(&str) -> String) -> Result<Inputs, InputsError> {
-        let imu = self.imu.clone();
+        let Some(imu) = self.imu.clone() else {
+            return Err(InputsError::Choice(format!("{} is required", name("imu"))));
+        };
         if let Some(log) = &self.pocketsdr {
             let import = self.pocketsdr_options.settings()?;
             return Ok(Inputs::PocketSdr { imu, log: log.clone(), import });
@@ -122,7 +169,8 @@ mod tests {
     fn the_route_is_the_receiver_named() {
         let f = fixtures();
         let conf = f.join("order2/gnss-sdr.conf");
-        let plain = InputChoice { imu: f.join("imu.csv"), tracking: Some(f.join("t.csv")), ..InputChoice::default() };
+        let plain =
+            InputChoice { imu: Some(f.join("imu.csv")), tracking: Some(f.join("t.csv")), ..InputChoice::default() };
         assert!(matches!(plain.inputs(flag), Ok(Inputs::Csv { imu: Log::File(_), tracking: Log::File(_) })));
         let rows = InputChoice { gnss_sdr_conf: Some(conf.clone()), ..plain.clone() };
         let Ok(Inputs::GnssSdrRows { import, conf: c, .. }) = rows.inputs(flag) else { panic!("not rows") };
@@ -138,11 +186,13 @@ mod tests {
         assert_eq!(import.toff_s, 1.0);
     }
 
-    /// A PocketSDR conversion without its log, no tracking input and a
-    /// setting out of range are refused, each naming its options.
+    /// No IMU log, a PocketSDR conversion without its log, no tracking
+    /// input and a setting out of range are refused, each naming its options.
     #[test]
     fn incomplete_or_out_of_range_choices_are_refused() {
-        let imu = fixtures().join("imu.csv");
+        let no_imu = InputChoice { tracking: Some("t.csv".into()), ..InputChoice::default() };
+        assert_eq!(no_imu.inputs(flag).unwrap_err().to_string(), "<imu> is required");
+        let imu = Some(fixtures().join("imu.csv"));
         let none = InputChoice { imu, ..InputChoice::default() };
         let e = none.inputs(flag).unwrap_err();
         assert_eq!(e.to_string(), "<tracking> is required (or <gnss_sdr>, or <pocketsdr>)");

@@ -23,10 +23,12 @@
 
 mod choice;
 mod observations;
+mod route;
 mod truth;
 
 pub use choice::InputChoice;
 pub use observations::{ObservationFile, ObservationInputs, render_observation_summary};
+pub use route::{Estimated, Route};
 pub use truth::{TruthLoopUse, settings_of_simulated_session, take_truth_loop, truth_loop_note};
 
 use gsens_calib::{Outcome, PipelineError, PipelineSettings};

@@ -90,6 +90,23 @@ impl crate::Inputs {
     }
 }
 
+impl crate::Route {
+    /// [`truth_loop_note`] for a calibration by this route: a tracking
+    /// route's ([`crate::Inputs::truth_loop_note`]); a carrier phase and
+    /// Doppler log's loop is identified from the log, so a simulated
+    /// session's is not taken (`None`).
+    pub fn truth_loop_note(
+        &self,
+        settings: &mut PipelineSettings,
+        truth_json: Option<&Path>,
+    ) -> Result<Option<String>, LoadError> {
+        match self {
+            crate::Route::Tracking(inputs) => inputs.truth_loop_note(settings, truth_json),
+            crate::Route::Observations(_) => Ok(None),
+        }
+    }
+}
+
 /// The default settings with the loop of the simulated session's
 /// `truth_json` (the default's stated loop when it states none).
 pub fn settings_of_simulated_session(truth_json: &Path) -> Result<PipelineSettings, LoadError> {

@@ -21,7 +21,7 @@ fn calibrated(record: ObservationRecord) -> (gsens_calib::ResultDocument, Vec<f6
 /// The fixture's calibration from `record`'s rows, and the truth.
 fn outcome(record: ObservationRecord) -> (gsens_calib::ObservationOutcome, Vec<f64>) {
     let choice = InputChoice {
-        imu: fixture("imu.csv"),
+        imu: Some(fixture("imu.csv")),
         rinex: Some(fixture("gnss-sdr.24O")),
         observation_record: record,
         ..InputChoice::default()

@@ -67,7 +67,7 @@ pub use motion::{MotionWindow, Shaking};
 pub use pacing::{CreateError, ReplaySink, SpeedError, check_speed, replay};
 pub use recording::{MonitorRecording, RecordingError};
 pub use replay::read_session_dir;
-pub use runtime::{Display, Ending, FinalEstimate, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
+pub use runtime::{Display, Ending, Finished, Inputs, LiveScreen, Runtime, RuntimeConfig, RuntimeError};
 pub use session::{
     AxisProgress, BatchJob, BatchOutcome, BatchResult, BatchVerdict, ChannelStatus, LiveConfig, LiveSession, LiveView,
     Pushed, UbxStatus,

@@ -16,10 +16,9 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use gsens_calib::{ObservationOutcome, Outcome, PipelineSettings};
+use gsens_calib::PipelineSettings;
 use gsens_gnss_sdr::monitor::{LiveGrid, MonitorReceiver, MonitorStream};
-use gsens_inputs::{ObservationFile, ObservationInputs};
-use gsens_io::TrackingLog;
+use gsens_inputs::{Calibrated, Conversion, Estimated, ObservationFile, ObservationInputs};
 
 use crate::clock::Clock;
 use crate::guidance::Protocol;
@@ -227,43 +226,12 @@ pub enum RuntimeError {
 
 /// The end of a session: the final estimate, the batch estimate of the logs kept.
 pub struct Finished {
-    /// The final estimate, its inputs the kept logs.
-    pub estimate: FinalEstimate,
+    /// The final estimate, as `gsens report` makes it from the kept logs
+    /// (its inputs those logs): from `imu.csv` and `tracking.csv` with the
+    /// tracking log read back, or from `received.ubx` with its loop identified.
+    pub estimate: Estimated,
     /// Whether every axis met the target σ.
     pub target_met: bool,
-}
-
-/// The final estimate of a session, as `gsens report` makes it from the kept logs.
-pub enum FinalEstimate {
-    /// From the kept `imu.csv` and `tracking.csv`.
-    Tracking {
-        /// The estimate.
-        outcome: Box<Outcome>,
-        /// The kept tracking log, read back.
-        tracking: TrackingLog,
-    },
-    /// From the kept UBX log (`received.ubx`) with its loop identified, as
-    /// `gsens report --ubx` makes it.
-    Observations(Box<ObservationOutcome>),
-}
-
-impl FinalEstimate {
-    /// The estimate from tracking records, with its log, if it is one.
-    pub fn tracking(&self) -> Option<(&Outcome, &TrackingLog)> {
-        match self {
-            FinalEstimate::Tracking { outcome, tracking } => Some((outcome, tracking)),
-            FinalEstimate::Observations(_) => None,
-        }
-    }
-
-    /// The inputs named in the result document, as role → path (a caller
-    /// adds its own, as `truth`).
-    pub fn inputs_mut(&mut self) -> &mut Vec<(String, String)> {
-        match self {
-            FinalEstimate::Tracking { outcome, .. } => &mut outcome.inputs,
-            FinalEstimate::Observations(o) => &mut o.inputs,
-        }
-    }
 }
 
 impl Finished {
@@ -635,7 +603,7 @@ impl Runtime {
             let log = ObservationFile::Ubx(ubx_path.clone(), options.settings);
             let inputs = ObservationInputs::new(log, (!esf_imu).then_some(imu_path), options.record);
             let outcome = inputs.calibrate(&self.session.config().settings)?;
-            return Ok(Finished { estimate: FinalEstimate::Observations(Box::new(outcome)), target_met });
+            return Ok(Finished { estimate: Estimated::Observations(Box::new(outcome)), target_met });
         }
         let (imu_samples, tracking_rows) = self.session.view().received;
         if imu_samples == 0 || tracking_rows == 0 {
@@ -647,7 +615,8 @@ impl Runtime {
         let imu_name = imu_path.display().to_string();
         let mut outcome = gsens_calib::calibrate_logs(&tracking, &imu, &imu_name, &self.session.config().settings)?;
         outcome.inputs = vec![("imu".into(), imu_name), ("tracking".into(), tracking_path.display().to_string())];
-        Ok(Finished { estimate: FinalEstimate::Tracking { outcome: Box::new(outcome), tracking }, target_met })
+        let calibrated = Calibrated { outcome, conversion: Conversion::None, tracking: Some(tracking) };
+        Ok(Finished { estimate: Estimated::Tracking(Box::new(calibrated)), target_met })
     }
 }
 

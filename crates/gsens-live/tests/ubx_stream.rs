@@ -8,9 +8,7 @@ use std::sync::mpsc;
 
 use gsens_calib::{ObservationRecord, PipelineSettings};
 use gsens_inputs::{ObservationFile, ObservationInputs};
-use gsens_live::{
-    Display, Ending, FinalEstimate, Inputs, ManualClock, Runtime, RuntimeConfig, Source, SourceEvent, UbxOptions,
-};
+use gsens_live::{Display, Ending, Inputs, ManualClock, Runtime, RuntimeConfig, Source, SourceEvent, UbxOptions};
 
 const FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/shaken.ubx");
 
@@ -105,7 +103,7 @@ fn a_stream_in_pieces_ends_with_the_estimate_of_the_whole_log() {
     assert_eq!(std::fs::read(out.join("received.ubx")).unwrap(), bytes);
     let kept = gsens_io::read_imu_file(out.join("imu.csv")).unwrap();
     assert_eq!(kept.len(), read.imu.len());
-    let FinalEstimate::Observations(live) = &finished.estimate else { panic!("an estimate of the UBX log") };
+    let gsens_inputs::Estimated::Observations(live) = &finished.estimate else { panic!("an estimate of the UBX log") };
     let whole =
         ObservationInputs::new(ObservationFile::Ubx(damaged, Default::default()), None, ObservationRecord::Auto)
             .calibrate(&PipelineSettings::default())

@@ -42,11 +42,11 @@ pub(crate) fn estimate(
             return Err(GsensError::new_err("give one of tracking, gnss_sdr, pocketsdr, rinex and ubx"));
         }
         let imu = match imu.map(|i| LogSource::extract(i, "imu")).transpose()? {
-            Some(LogSource::Path(p)) => p,
+            Some(LogSource::Path(p)) => Some(p),
             Some(LogSource::Columns(_)) => {
                 return Err(GsensError::new_err("imu: give the IMU log as a file with rinex or ubx"));
             }
-            None => PathBuf::new(),
+            None => None,
         };
         // The names are the record's serde names, as the command line's.
         let record = match observable {

@@ -2,8 +2,8 @@
 //! figure set and every file of [`write_report_dir`], and the line that
 //! says where they are.
 
-use crate::{FigureInputs, ReportFiles, WriteError, write_report_dir};
-use gsens_calib::{CalibError, Outcome, ResultDocument};
+use crate::{FigureInputs, ReportFiles, WriteError, observation_figures, write_report_dir};
+use gsens_calib::{CalibError, ObservationOutcome, Outcome, ResultDocument};
 use gsens_io::TrackingLog;
 use std::path::Path;
 
@@ -19,22 +19,39 @@ pub enum ReportError {
     Write(#[from] WriteError),
 }
 
-/// Writes the report of `outcome`, estimated from `tracking` (with the
-/// true Γ `truth` when known), into `dir` titled `title`: the files of
-/// [`write_report_dir`] with the figures of [`FigureInputs`]. Returns the
-/// result document and the files written.
+/// What a report is written from: a calibration from tracking rows with the
+/// log it was made from (for the figures of its tracks), or one from a
+/// carrier phase and Doppler log (its loop identified).
+#[derive(Debug, Clone, Copy)]
+pub enum ReportSource<'a> {
+    /// A calibration and the tracking log it was estimated from.
+    Tracking(&'a Outcome, &'a TrackingLog),
+    /// A calibration from a RINEX or UBX log.
+    Observations(&'a ObservationOutcome),
+}
+
+/// Writes the report of `source` (with the true Γ `truth` when known) into
+/// `dir` titled `title`: the files of [`write_report_dir`] with the figures
+/// of [`FigureInputs`] for tracking rows, of [`observation_figures`] for a
+/// carrier phase and Doppler log. Returns the result document and the files
+/// written.
 pub fn write_calibration_report(
-    outcome: &Outcome,
-    tracking: &TrackingLog,
+    source: ReportSource<'_>,
     truth: Option<[f64; 3]>,
     dir: &Path,
     title: &str,
     write_untrusted_header: bool,
     on_figure: impl FnMut(&str),
 ) -> Result<(ResultDocument, ReportFiles), ReportError> {
-    let doc = outcome.document(truth);
-    let figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
-    let files = write_report_dir(dir, title, &doc, &figure_inputs.figures(), write_untrusted_header, on_figure)?;
+    let figure_inputs;
+    let (doc, figures) = match source {
+        ReportSource::Tracking(outcome, tracking) => {
+            figure_inputs = FigureInputs::new(outcome, Some(tracking), truth)?;
+            (outcome.document(truth), figure_inputs.figures())
+        }
+        ReportSource::Observations(outcome) => (outcome.document(truth), observation_figures(outcome)),
+    };
+    let files = write_report_dir(dir, title, &doc, &figures, write_untrusted_header, on_figure)?;
     Ok((doc, files))
 }
 

@@ -19,7 +19,7 @@
 //!   the verdict (`GSENS_GAMMA_TRUSTWORTHY`) and the warnings;
 //! - [`render_text`]: the text report the CLI prints;
 //! - [`write_calibration_report`]: a calibration's whole report from its
-//!   outcome, and [`write_demo_figures`]: a demo's figures with the
+//!   outcome (tracking rows, or a carrier phase and Doppler log), and [`write_demo_figures`]: a demo's figures with the
 //!   simulated oscillator's Allan deviation;
 //! - [`studies`]: the outputs of `response`, `predict` and `validate`
 //!   besides their text tables;
@@ -43,7 +43,7 @@ pub mod studies;
 mod text;
 mod time;
 
-pub use calibration_report::{ReportError, write_calibration_report};
+pub use calibration_report::{ReportError, ReportSource, write_calibration_report};
 pub use demo_figures::{DemoFiguresError, write_demo_figures};
 pub use figure_set::{
     Figure, FigureInputs, ReportFiles, WriteError, observation_figures, write_figures, write_report_dir,

@@ -22,10 +22,25 @@ const CLK_RESET: u8 = 0x02;
 /// A frame's bytes besides its payload: sync (2), class, id, length (2), checksum (2).
 const FRAME_OVERHEAD: usize = 8;
 
-/// How to read a UBX log.
+/// How to read a UBX log. With the `clap` feature it is a command line's
+/// options (the field's doc comment is its help).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct UbxSettings {
-    /// How the ESF messages' sensor time tags map to GPS time.
+    /// How the UBX log's ESF sensor time tags map to GPS time: free-running-ms (a millisecond sensor
+    /// clock, tied once to an RXM-RAWX epoch; the rest is the IMU offset searched) or gps-tow-ms
+    /// (the tags count GPS time of week in ms, as rcvTow).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            id = "ubx_sensor_time",
+            long = "ubx-sensor-time",
+            value_name = "UBX_SENSOR_TIME",
+            value_enum,
+            default_value = "free-running-ms",
+            help_heading = "Carrier phase and Doppler logs"
+        )
+    )]
     pub sensor_time: SensorTime,
 }
 
