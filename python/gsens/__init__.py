@@ -94,7 +94,8 @@ def estimate(
     A receiver that logs carrier phase or Doppler: ``rinex`` (a RINEX
     observation file, with ``imu`` a file whose ``t_s`` is GPS seconds of the
     week) or ``ubx`` (a u-blox log; its own accelerometer unless ``imu`` is
-    given), the receiver's loop identified from the session;
+    given), the receiver's loop identified from the session (or, for a
+    RINEX file from GNSS-SDR with ``gnss_sdr_conf``, GNSS-SDR's own loop);
     ``observable`` is ``"auto"``, ``"carrier_phase"`` or ``"doppler"``.
 
     The settings are the command line's options with ``_`` for ``-``
@@ -109,7 +110,15 @@ def estimate(
     path = lambda p: None if p is None else os.fspath(p)  # noqa: E731
     if rinex is not None or ubx is not None:
         return _gsens.estimate(
-            path(imu), tracking, rinex=path(rinex), ubx=path(ubx), observable=observable, **settings
+            path(imu),
+            tracking,
+            gnss_sdr=path(gnss_sdr),
+            gnss_sdr_conf=path(gnss_sdr_conf),
+            pocketsdr=path(pocketsdr),
+            rinex=path(rinex),
+            ubx=path(ubx),
+            observable=observable,
+            **settings,
         )
     if imu is None:
         raise GsensError("imu is required (except with ubx)")

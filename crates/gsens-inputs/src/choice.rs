@@ -37,7 +37,9 @@ pub struct InputChoice {
     pub gnss_sdr: Option<PathBuf>,
     /// The GNSS-SDR configuration file the dumps were made with (its loop is modelled exactly).
     /// With a tracking log instead of dumps: rows that came from that GNSS-SDR run another way
-    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop.
+    /// (`gsens import gnss-sdr-monitor`), estimated with its exact loop. With a RINEX file: the
+    /// GNSS-SDR run that wrote it, whose loop is then modelled exactly (its bandwidth fitted)
+    /// instead of identified among generic ones.
     #[cfg_attr(feature = "clap", arg(long))]
     pub gnss_sdr_conf: Option<PathBuf>,
     /// Sampling rate of the tracking [Hz] when the configuration does not give it.
@@ -85,26 +87,39 @@ const HEADING: &str = "Carrier phase and Doppler logs";
 impl InputChoice {
     /// The route of a carrier phase and Doppler log, where a RINEX file or
     /// a UBX log is named (`None` otherwise): the IMU log named, or without
-    /// one the UBX log's own accelerometer. Both named, or a RINEX
-    /// file without an IMU log, is refused, naming the options by `name`.
+    /// one the UBX log's own accelerometer; with `gnss_sdr_conf`, the RINEX
+    /// file is a GNSS-SDR run's and its loop GNSS-SDR's. Both logs named, a
+    /// RINEX file without an IMU log, or a GNSS-SDR configuration with a UBX
+    /// log is refused, naming the options by `name`; a configuration that
+    /// does not read is its receiver's error.
     pub fn observations(&self, name: impl Fn(&str) -> String) -> Option<Result<ObservationInputs, InputsError>> {
         let imu = self.imu.clone();
+        let refused = |why: String| Some(Err(InputsError::Choice(why)));
         let log = match (&self.rinex, &self.ubx) {
             (None, None) => return None,
-            (Some(_), Some(_)) => {
-                return Some(Err(InputsError::Choice(format!(
-                    "{} and {} exclude each other",
+            (Some(_), Some(_)) => return refused(format!("{} and {} exclude each other", name("rinex"), name("ubx"))),
+            (Some(_), None) if imu.is_none() => return refused(format!("{} needs {}", name("rinex"), name("imu"))),
+            (None, Some(_)) if self.gnss_sdr_conf.is_some() => {
+                return refused(format!(
+                    "{} goes with a GNSS-SDR run's {}, not {}",
+                    name("gnss_sdr_conf"),
                     name("rinex"),
                     name("ubx")
-                ))));
-            }
-            (Some(_), None) if imu.is_none() => {
-                return Some(Err(InputsError::Choice(format!("{} needs {}", name("rinex"), name("imu")))));
+                ));
             }
             (Some(path), None) => ObservationFile::Rinex(path.clone()),
             (None, Some(path)) => ObservationFile::Ubx(path.clone(), self.ubx_settings),
         };
-        Some(Ok(ObservationInputs { log, imu, record: self.observation_record }))
+        let gnss_sdr_conf = match &self.gnss_sdr_conf {
+            Some(conf) => {
+                match ImportSettings::from_conf_with(Some(conf), self.gnss_sdr_fs_hz, &self.gnss_sdr_overrides) {
+                    Ok(import) => Some((conf.clone(), import)),
+                    Err(e) => return Some(Err(e.into())),
+                }
+            }
+            None => None,
+        };
+        Some(Ok(ObservationInputs { log, imu, record: self.observation_record, gnss_sdr_conf }))
     }
 
     /// The route the inputs name, its conversion settings checked: a

@@ -31,18 +31,35 @@ pub struct ObservationInputs {
     pub imu: Option<PathBuf>,
     /// Which observable the rows are made of.
     pub record: ObservationRecord,
+    /// The configuration of the GNSS-SDR run that wrote a RINEX file, and
+    /// what it says: the receiver's loop is then GNSS-SDR's, modelled
+    /// exactly ([`gsens_gnss_sdr::with_gnss_sdr_loop`]; its bandwidth still
+    /// fitted), instead of one identified among generic shapes.
+    pub gnss_sdr_conf: Option<(PathBuf, gsens_gnss_sdr::ImportSettings)>,
 }
 
 impl ObservationInputs {
     /// The inputs of `log` with the IMU log `imu` (`None`: a UBX log's own
     /// accelerometer), the rows made of `record`.
     pub fn new(log: ObservationFile, imu: Option<PathBuf>, record: ObservationRecord) -> Self {
-        ObservationInputs { log, imu, record }
+        ObservationInputs { log, imu, record, gnss_sdr_conf: None }
     }
 
     /// Reads the log and the IMU and calibrates under `settings`, the inputs
-    /// list filled in.
+    /// list filled in. With a GNSS-SDR configuration the settings must not
+    /// state a loop of their own ([`InputsError::LoopStatedTwice`]).
     pub fn calibrate(&self, settings: &PipelineSettings) -> Result<ObservationOutcome, InputsError> {
+        let gnss_sdr_settings;
+        let settings = match &self.gnss_sdr_conf {
+            Some((conf, _)) if settings.loop_stated => {
+                return Err(InputsError::LoopStatedTwice { conf: conf.display().to_string() });
+            }
+            Some((_, import)) => {
+                gnss_sdr_settings = gsens_gnss_sdr::with_gnss_sdr_loop(settings, import);
+                &gnss_sdr_settings
+            }
+            None => settings,
+        };
         let read_imu = |path: &PathBuf| gsens_io::read_imu_file(path);
         let mut esf_time = String::new();
         let (log, imu, role, path): (gsens_io::ObservationLog, ImuSeries, &str, &PathBuf) = match &self.log {
@@ -89,6 +106,9 @@ impl ObservationInputs {
             Some(p) => ("imu".to_string(), p.display().to_string()),
             None => ("imu".to_string(), format!("{} (ESF; {esf_time})", path.display())),
         });
+        if let Some((conf, _)) = &self.gnss_sdr_conf {
+            outcome.inputs.push(("gnss_sdr_conf".to_string(), conf.display().to_string()));
+        }
         Ok(outcome)
     }
 }

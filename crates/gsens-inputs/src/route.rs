@@ -14,7 +14,7 @@ pub enum Route {
     /// A log of the tracking error.
     Tracking(Box<Inputs>),
     /// A log of carrier phase and Doppler, with the loop identified.
-    Observations(ObservationInputs),
+    Observations(Box<ObservationInputs>),
 }
 
 /// The estimate of a [`Route`].
@@ -33,7 +33,7 @@ impl InputChoice {
     /// tracking route ([`InputChoice::inputs`]); options named by `name`.
     pub fn route(&self, name: impl Fn(&str) -> String) -> Result<Route, InputsError> {
         match self.observations(&name) {
-            Some(observations) => observations.map(Route::Observations),
+            Some(observations) => observations.map(|inputs| Route::Observations(Box::new(inputs))),
             None => self.inputs(name).map(|inputs| Route::Tracking(Box::new(inputs))),
         }
     }

@@ -54,7 +54,14 @@ pub(crate) fn estimate(
             Some(name) => serde_json::from_value(serde_json::Value::String(name))
                 .map_err(|e| GsensError::new_err(format!("observable: {e}")))?,
         };
-        let choice = gsens_inputs::InputChoice { imu, rinex, ubx, observation_record: record, ..Default::default() };
+        let choice = gsens_inputs::InputChoice {
+            imu,
+            rinex,
+            ubx,
+            gnss_sdr_conf: gnss_sdr_conf.clone(),
+            observation_record: record,
+            ..Default::default()
+        };
         let Some(inputs) = choice.observations(|n| n.to_string()) else { unreachable!("rinex or ubx is given") };
         let inputs = inputs.map_err(error)?;
         let outcome = py.detach(|| inputs.calibrate(&pipeline)).map_err(error)?;

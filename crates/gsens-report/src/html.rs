@@ -288,7 +288,7 @@ fn estimate_notes(h: &mut String, d: &ReportData) {
     if let Some(id) = &d.document.identified_loop {
         // The text report's lines on the identified loop, one paragraph.
         let mut lines = String::new();
-        crate::text::identified_loop(&mut lines, id);
+        crate::text::identified_loop(&mut lines, id, &d.document.calibration.loop_used);
         let lines: Vec<String> = lines.lines().map(|l| escape(l.trim())).collect();
         let _ = writeln!(h, "<p id=\"identified-loop\">{}</p>", lines.join("<br>"));
     }

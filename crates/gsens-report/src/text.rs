@@ -2,9 +2,9 @@
 
 use crate::AXES;
 use gsens_calib::{LoopResolution, Measurement, ResultDocument};
-use gsens_core::LoggedPhase;
 use gsens_core::units::Decimal;
 use gsens_core::units::hz_per_mps2_to_ppb_per_g;
+use gsens_core::{LoggedPhase, LoopModel};
 use gsens_session::Weighting;
 use std::fmt::Write as _;
 
@@ -55,7 +55,7 @@ fn log_and_loop(s: &mut String, doc: &ResultDocument) {
         c.settings.warmup_s
     );
     if let Some(id) = &doc.identified_loop {
-        identified_loop(s, id);
+        identified_loop(s, id, &c.loop_used);
     } else {
         let _ = writeln!(
             s,
@@ -79,8 +79,10 @@ fn log_and_loop(s: &mut String, doc: &ResultDocument) {
 
 /// The receiver's loop as the session identified it: order, update
 /// interval and bandwidth with its σ (or the bound), how far H is from 1 at
-/// the shaking, and the estimate H = 1 would give.
-pub(crate) fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentification) {
+/// the shaking, and the estimate H = 1 would give. A receiver's own loop
+/// (`loop_used` GNSS-SDR's or PocketSDR's, from its configuration) is named:
+/// its shape was stated, only its bandwidth fitted.
+pub(crate) fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentification, loop_used: &LoopModel) {
     let l = &id.identified;
     let order =
         if l.order_resolved { format!("order {}", l.order) } else { format!("order {} (not resolved)", l.order) };
@@ -89,15 +91,24 @@ pub(crate) fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentificati
         LoopResolution::Wide => format!("Bn ≥ {:.1} Hz (wide: H ≈ 1 in the shaking's band)", l.bn_hz),
         _ => format!("Bn ≤ {:.2} Hz (at the narrow end of the search)", l.bn_hz),
     };
-    let _ = writeln!(
-        s,
-        "receiver loop identified from the {}: {order}, updated every {} s, {bn}",
-        match id.record {
-            gsens_calib::ObservationRecord::Doppler => "Doppler",
-            _ => "carrier phase differenced",
-        },
-        l.loop_interval_s
-    );
+    let record = match id.record {
+        gsens_calib::ObservationRecord::Doppler => "Doppler",
+        _ => "carrier phase differenced",
+    };
+    let receiver = match loop_used {
+        LoopModel::GnssSdr(_) => Some("GNSS-SDR"),
+        LoopModel::PocketSdr(_) => Some("PocketSDR"),
+        _ => None,
+    };
+    let interval_s = l.loop_interval_s;
+    let _ = match receiver {
+        Some(r) => writeln!(
+            s,
+            "receiver loop: {r}'s, modelled exactly, its bandwidth fitted to the {record}: {order}, updated every \
+             {interval_s} s, {bn}"
+        ),
+        None => writeln!(s, "receiver loop identified from the {record}: {order}, updated every {interval_s} s, {bn}"),
+    };
     if let [first, .., last] = l.alike_intervals_s.as_slice() {
         let _ = writeln!(s, "  update intervals {first}–{last} s fit alike: σ covers the Γ̂ of each");
     }
