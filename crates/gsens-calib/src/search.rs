@@ -20,26 +20,103 @@
 //! search can reach; a candidate τ then costs a few 3×3 products, not a pass
 //! over the log.
 
-use crate::estimate::{build_model, model_input};
+use crate::estimate::build_model;
 use crate::{CalibError, EpochSeries, EstimateSettings};
-use gsens_core::Calibrator;
 use gsens_core::FedEpoch;
 use gsens_core::LoopModel;
 use gsens_core::LoopSpec;
+use gsens_core::{AxisStage, Calibrator};
 use gsens_core::{BatchLeastSquares, NormalEquations};
+use rayon::prelude::*;
 
 /// Runs the batch estimator over the series; returns every epoch as fed
 /// (high-passed φ and φ_a, used or not) and the normal equations.
+///
+/// The calibrator's work, [`Calibrator::feed`] epoch by epoch, in two kinds
+/// of task: each axis's prefilter ([`gsens_core::compensate_interpolation`]'s
+/// a_k + c·(2a_k − a_{k−1} − a_{k+1})), loop model and φ_a high-pass
+/// ([`Calibrator::axis_stages`]) is a recursion of its own, and the phase's
+/// high-pass, the gap filling and the normal equations
+/// ([`Calibrator::feed_regressed`]) follow in epoch order. The epochs go in
+/// blocks of [`BATCH_BLOCK_EPOCHS`]: while one block's epochs are fed, the
+/// next block's three axes are computed, all four as rayon tasks. Every
+/// recursion sees its inputs in epoch order with the operations of `feed`,
+/// so the result is `feed`'s, bit for bit, on any pool.
 pub(crate) fn batch_pass(
     series: &EpochSeries,
     settings: &EstimateSettings,
 ) -> Result<(Vec<FedEpoch>, NormalEquations), CalibError> {
     let model = build_model(series.log_interval_s, settings)?;
-    let accel = model_input(series.accel_mps2, &model);
+    let c = model.interpolation_compensation();
     let skip = crate::estimate::warmup_epochs(settings, series.log_interval_s);
     let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, series.log_interval_s);
-    let fed: Vec<FedEpoch> = accel.iter().zip(series.phase_err_rad).map(|(a, p)| cal.feed(a, *p)).collect();
+    let mut axes = cal.axis_stages();
+    let accel = series.accel_mps2;
+    let n = accel.len().min(series.phase_err_rad.len());
+    let block_of = |b: usize| b * BATCH_BLOCK_EPOCHS..((b + 1) * BATCH_BLOCK_EPOCHS).min(n);
+    let blocks = n.div_ceil(BATCH_BLOCK_EPOCHS);
+    let mut fed: Vec<FedEpoch> = Vec::with_capacity(n);
+    let (mut cur, mut next) = (AxisBlock::default(), AxisBlock::default());
+    if blocks > 0 {
+        cur.regress(&mut axes, accel, c, block_of(0));
+    }
+    for b in 0..blocks {
+        let range = block_of(b);
+        rayon::join(
+            || {
+                let [(rx, hx), (ry, hy), (rz, hz)] = &cur.columns;
+                for (j, p) in series.phase_err_rad[range].iter().enumerate() {
+                    fed.push(cal.feed_regressed(&[rx[j], ry[j], rz[j]], &[hx[j], hy[j], hz[j]], *p));
+                }
+            },
+            || {
+                if b + 1 < blocks {
+                    next.regress(&mut axes, accel, c, block_of(b + 1));
+                }
+            },
+        );
+        std::mem::swap(&mut cur, &mut next);
+    }
     Ok((fed, *cal.estimator().normal_equations()))
+}
+
+/// The epochs of one block of [`batch_pass`].
+pub(crate) const BATCH_BLOCK_EPOCHS: usize = 4096;
+
+/// One block of epochs' regressors, axis by axis: the raw φ_a,i and the
+/// high-passed one.
+#[derive(Default)]
+struct AxisBlock {
+    columns: [(Vec<f64>, Vec<f64>); 3],
+}
+
+impl AxisBlock {
+    /// Runs each axis's stage over the epochs `range` of `accel`, prefiltered
+    /// with coefficient `c` (0: not at all) as [`model_input`] prefilters the
+    /// whole of `accel`, the three axes as rayon tasks.
+    ///
+    /// [`model_input`]: crate::estimate::model_input
+    fn regress(&mut self, axes: &mut [AxisStage; 3], accel: &[[f64; 3]], c: f64, range: std::ops::Range<usize>) {
+        let last = accel.len().saturating_sub(1);
+        let filtered = c != 0.0 && accel.len() >= 2;
+        axes.par_iter_mut().zip(self.columns.par_iter_mut()).enumerate().for_each(|(i, (stage, (raw, hp)))| {
+            raw.clear();
+            hp.clear();
+            for k in range.clone() {
+                let cur = accel[k][i];
+                let a = if filtered {
+                    let prev = if k > 0 { accel[k - 1][i] } else { cur };
+                    let next = if k < last { accel[k + 1][i] } else { cur };
+                    cur + c * (2.0 * cur - prev - next)
+                } else {
+                    cur
+                };
+                let (r, h) = stage.step(a);
+                raw.push(r);
+                hp.push(h);
+            }
+        });
+    }
 }
 
 /// RSS of the least-squares fit from normal equations: φᵀφ − bᵀ(AᵀA)⁺b.
@@ -270,6 +347,55 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Uniform};
+
+    /// The batch pass on pools of 1, 2, 4 and 5 threads is the calibrator
+    /// fed epoch by epoch (the model's input prefiltered as a whole), bit
+    /// for bit: several blocks and a short last one, gaps, a loop lifted over
+    /// 25 updates and one at the log rate.
+    #[test]
+    fn batch_pass_is_feed_on_any_pool() {
+        use gsens_core::{LoggedPhase, LoopModel};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(8);
+        let uniform = Uniform::new(-1.0, 1.0).expect("a range");
+        let n = 3 * BATCH_BLOCK_EPOCHS + 123;
+        let t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.025).collect();
+        let accel: Vec<[f64; 3]> =
+            t_s.iter().map(|t| [(5.7 * t).sin(), 0.3 * uniform.sample(&mut rng), 9.8 + (3.1 * t).cos()]).collect();
+        let phase: Vec<Option<f64>> = (0..n)
+            .map(|k| {
+                let gap = (4090..4100).contains(&k) || k == 9000 || k + 1 == n;
+                (!gap).then(|| 0.1 * uniform.sample(&mut rng))
+            })
+            .collect();
+        let series = EpochSeries {
+            log_interval_s: 0.025,
+            t_s: &t_s,
+            phase_err_rad: &phase,
+            accel_mps2: &accel,
+            imu_time_offset_s: 0.0,
+        };
+        let fed_bits = |fed: &[FedEpoch]| -> Vec<([u64; 3], Option<u64>, bool)> {
+            fed.iter().map(|e| (e.phi_a.map(f64::to_bits), e.phase_err_rad.map(f64::to_bits), e.used)).collect()
+        };
+        let ne_bits =
+            |ne: &NormalEquations| (ne.ata.map(f64::to_bits), ne.atb.map(f64::to_bits), ne.btb.to_bits(), ne.n);
+        for interval_s in [Some(0.001), None] {
+            let mut settings = EstimateSettings::default().with_loop(LoopModel::kaplan(LoopSpec::PAPER, interval_s));
+            settings.logged_phase = LoggedPhase::Mean;
+            let model = build_model(0.025, &settings).unwrap();
+            let input = crate::estimate::model_input(&accel, &model);
+            let skip = crate::estimate::warmup_epochs(&settings, 0.025);
+            let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, 0.025);
+            let want: Vec<FedEpoch> = input.iter().zip(&phase).map(|(a, p)| cal.feed(a, *p)).collect();
+            assert!(want.iter().filter(|e| e.used).count() > n / 2);
+            for threads in [1, 2, 4, 5] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let (fed, ne) = pool.install(|| batch_pass(&series, &settings)).unwrap();
+                assert_eq!(fed_bits(&fed), fed_bits(&want), "{threads} threads, loop every {interval_s:?} s");
+                assert_eq!(ne_bits(&ne), ne_bits(cal.estimator().normal_equations()), "{threads} threads");
+            }
+        }
+    }
 
     /// The lagged sums' normal equations against the definition: every used
     /// epoch's φ_a interpolated by Catmull–Rom at the shift and summed.
