@@ -279,6 +279,20 @@ impl<'a> Cells<'a> {
         (v.is_finite() && self.past(rest, len)).then_some(Some(v))
     }
 
+    /// [`Cells::number`] for a cell seldom written as a whole number (a
+    /// phase): straight to the float parser, which reads a whole number as
+    /// the same value, without first trying it as one.
+    #[inline]
+    pub(crate) fn fraction(&mut self) -> Option<Option<f64>> {
+        let rest = self.rest?;
+        if matches!(rest.first(), None | Some(b',')) {
+            self.past(rest, 0);
+            return Some(None);
+        }
+        let (v, len) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
+        (v.is_finite() && self.past(rest, len)).then_some(Some(v))
+    }
+
     /// The next cell as [`crate::parse::cell_u32`] reads it, when it is one to
     /// nine decimal digits.
     #[inline]
@@ -442,6 +456,10 @@ mod tests {
                     Some((x, y)) => assert_eq!((Ok(x), Ok(y)), (cell_f64(cut[0]), cell_f64(cut[1])), "{text:?}"),
                     None => assert!(!plain, "{text:?} not taken"),
                 }
+                let (mut c, mut f) = (Cells::new(text.as_bytes()), Cells::new(text.as_bytes()));
+                let by_number = c.number().zip(c.number()).filter(|_| c.finished());
+                let by_fraction = f.fraction().zip(f.fraction()).filter(|_| f.finished());
+                assert_eq!(by_fraction, by_number, "{text:?}");
                 let digits = |v: &str| (1..=9).contains(&v.len()) && v.bytes().all(|b| b.is_ascii_digit());
                 let mut c = Cells::new(text.as_bytes());
                 match c.integer().zip(c.integer()).filter(|_| c.finished()) {
