@@ -284,7 +284,7 @@ mod tests {
     #[test]
     fn axis_stages_and_feed_regressed_are_feed_bit_for_bit() {
         use crate::estimator::BatchLeastSquares;
-        use crate::pll::{DiscretePll, LoopSpec};
+        use crate::pll::LoopSpec;
         use crate::regressor::LoggedPhase;
         let coeffs = LoopSpec::PAPER.coeffs().unwrap();
         // A seeded linear congruential sequence in [−1, 1).
