@@ -64,8 +64,11 @@ pub(crate) fn batch_pass(
         let range = block_of(b);
         rayon::join(
             || {
+                let phases = &series.phase_err_rad[range];
+                let len = phases.len();
                 let [(rx, hx), (ry, hy), (rz, hz)] = &cur.columns;
-                for (j, p) in series.phase_err_rad[range].iter().enumerate() {
+                let (rx, ry, rz, hx, hy, hz) = (&rx[..len], &ry[..len], &rz[..len], &hx[..len], &hy[..len], &hz[..len]);
+                for (j, p) in phases.iter().enumerate() {
                     fed.push(cal.feed_regressed(&[rx[j], ry[j], rz[j]], &[hx[j], hy[j], hz[j]], *p));
                 }
             },
@@ -97,23 +100,21 @@ impl AxisBlock {
     ///
     /// [`model_input`]: crate::estimate::model_input
     fn regress(&mut self, axes: &mut [AxisStage; 3], accel: &[[f64; 3]], c: f64, range: std::ops::Range<usize>) {
-        let last = accel.len().saturating_sub(1);
-        let filtered = c != 0.0 && accel.len() >= 2;
+        let n = accel.len();
+        let filtered = c != 0.0 && n >= 2;
         axes.par_iter_mut().zip(self.columns.par_iter_mut()).enumerate().for_each(|(i, (stage, (raw, hp)))| {
-            raw.clear();
-            hp.clear();
-            for k in range.clone() {
-                let cur = accel[k][i];
-                let a = if filtered {
-                    let prev = if k > 0 { accel[k - 1][i] } else { cur };
-                    let next = if k < last { accel[k + 1][i] } else { cur };
-                    cur + c * (2.0 * cur - prev - next)
-                } else {
-                    cur
-                };
-                let (r, h) = stage.step(a);
-                raw.push(r);
-                hp.push(h);
+            raw.resize(range.len(), 0.0);
+            hp.resize(range.len(), 0.0);
+            // The samples before, at and after epoch k (a missing neighbour
+            // at the ends is the sample itself).
+            let Some(first) = accel.get(range.start) else { return };
+            let mut cur = first[i];
+            let mut prev = if range.start > 0 { accel[range.start - 1][i] } else { cur };
+            for ((k, r), h) in range.clone().zip(raw.iter_mut()).zip(hp.iter_mut()) {
+                let next = if k + 1 < n { accel[k + 1][i] } else { cur };
+                let a = if filtered { cur + c * (2.0 * cur - prev - next) } else { cur };
+                (*r, *h) = stage.step(a);
+                (prev, cur) = (cur, next);
             }
         });
     }
