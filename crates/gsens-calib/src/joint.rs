@@ -931,13 +931,7 @@ mod tests {
     #[test]
     fn the_search_finds_the_sessions_loop() {
         let (t_s, phase, accel) = long_session();
-        let series = EpochSeries {
-            log_interval_s: 0.025,
-            t_s: &t_s,
-            phase_err_rad: &phase,
-            accel_mps2: &accel,
-            imu_time_offset_s: 0.0,
-        };
+        let series = EpochSeries::without_offset(0.025, &t_s, &phase, &accel);
         let chosen = choose_loop(&series, &EstimateSettings::default(), Some(0.1)).unwrap();
         assert_eq!(chosen.model.interval_s(), Some(0.025), "{}", chosen.model);
         assert_eq!(chosen.model.order(), 2, "{}", chosen.model);

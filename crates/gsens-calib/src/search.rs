@@ -368,13 +368,7 @@ mod tests {
                 (!gap).then(|| 0.1 * uniform.sample(&mut rng))
             })
             .collect();
-        let series = EpochSeries {
-            log_interval_s: 0.025,
-            t_s: &t_s,
-            phase_err_rad: &phase,
-            accel_mps2: &accel,
-            imu_time_offset_s: 0.0,
-        };
+        let series = EpochSeries::without_offset(0.025, &t_s, &phase, &accel);
         let fed_bits = |fed: &[FedEpoch]| -> Vec<([u64; 3], Option<u64>, bool)> {
             fed.iter().map(|e| (e.phi_a.map(f64::to_bits), e.phase_err_rad.map(f64::to_bits), e.used)).collect()
         };

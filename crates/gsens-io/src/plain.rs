@@ -261,10 +261,6 @@ impl<'a> Cells<'a> {
     #[inline]
     pub(crate) fn number(&mut self) -> Option<Option<f64>> {
         let rest = self.rest?;
-        if matches!(rest.first(), None | Some(b',')) {
-            self.past(rest, 0);
-            return Some(None);
-        }
         // A whole number of up to 15 digits (C/N0 and elevation as many
         // receivers log them) is below 2⁵³, so exact as an f64: the value
         // the float parser would give, read without it.
@@ -273,10 +269,7 @@ impl<'a> Cells<'a> {
             self.past(rest, len);
             return Some(Some(v as f64));
         }
-        // fast-float2's full parse is this partial one with every byte used:
-        // the same number, read without first finding where the cell ends.
-        let (v, len) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
-        (v.is_finite() && self.past(rest, len)).then_some(Some(v))
+        self.fraction()
     }
 
     /// [`Cells::number`] for a cell seldom written as a whole number (a
@@ -289,6 +282,8 @@ impl<'a> Cells<'a> {
             self.past(rest, 0);
             return Some(None);
         }
+        // fast-float2's full parse is this partial one with every byte used:
+        // the same number, read without first finding where the cell ends.
         let (v, len) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
         (v.is_finite() && self.past(rest, len)).then_some(Some(v))
     }
