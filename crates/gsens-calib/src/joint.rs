@@ -410,16 +410,17 @@ impl<'a> Problem<'a> {
         let g = self.gamma_on_axes(a.iter().copied());
         // The nuisance parameters' columns, after φ_a's on the fit's axes.
         let mut columns: Vec<Vec<f64>> = Vec::new();
-        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
+        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at
+        // once), each epoch's on its own (the epochs in parallel).
         let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
             let fed = triad_pass(self.series, self.settings, model)?;
-            Ok(used.iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
+            Ok(used.par_iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
         };
         let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
             // Two independent passes over the log.
             let (pl, ph) = rayon::join(|| predicted(lo), || predicted(hi));
             let (pl, ph) = (pl?, ph?);
-            Ok(ph.iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
+            Ok(ph.par_iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
         };
         let (ln_s, zeta) = (theta.ln_s, theta.zeta);
         if self.fitted.natural_frequency {
