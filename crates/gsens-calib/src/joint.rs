@@ -360,12 +360,15 @@ impl<'a> Problem<'a> {
             (None, _) => 0.0,
         };
         let n = fed0.len();
-        let used: Vec<usize> =
-            (margin..n.saturating_sub(margin)).filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some()).collect();
+        // The used epochs and their phases, in epoch order (rayon's collect keeps it).
+        let used: Vec<usize> = (margin..n.saturating_sub(margin))
+            .into_par_iter()
+            .filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some())
+            .collect();
         if used.len() < 20 {
             return Err(CalibError::TooFewEpochs { epochs: used.len() as u64, warmup_s: settings.warmup_s });
         }
-        let phi: Vec<f64> = used.iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
+        let phi: Vec<f64> = used.par_iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
         let problem = Problem { series, settings, stated, fitted, axes, used, phi };
         Ok((problem, Theta { ln_s: 0.0, zeta: zeta0, dtau_s }))
     }

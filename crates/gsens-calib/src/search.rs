@@ -304,9 +304,12 @@ impl LaggedSums {
 pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result<OffsetProfile, CalibError> {
     let reach = (max_abs_s / t).ceil() as usize;
     let margin = reach + 2;
-    let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
-    let mut used: Vec<usize> =
-        (margin..fed.len().saturating_sub(margin)).filter(|&k| fed[k].used && fed[k].phase_err_rad.is_some()).collect();
+    // φ_a and the used epochs in epoch order (rayon's collect keeps it).
+    let phi_a: Vec<[f64; 3]> = fed.par_iter().map(|e| e.phi_a).collect();
+    let mut used: Vec<usize> = (margin..fed.len().saturating_sub(margin))
+        .into_par_iter()
+        .filter(|&k| fed[k].used && fed[k].phase_err_rad.is_some())
+        .collect();
     if used.len() < 10 {
         return Err(CalibError::TooShortForOffsetSearch { max_abs_s, epochs: used.len() });
     }
@@ -315,7 +318,7 @@ pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result
     if stride > 1 {
         used = used.into_iter().step_by(stride).collect();
     }
-    let phi: Vec<f64> = used.iter().map(|&k| fed[k].phase_err_rad.unwrap_or(0.0)).collect();
+    let phi: Vec<f64> = used.par_iter().map(|&k| fed[k].phase_err_rad.unwrap_or(0.0)).collect();
     // φ_a at true time t_k comes from the IMU at stamp t_k + τ: a shift of +τ/T
     // samples, whole part −reach … reach, taps one before to two after it.
     let reach = reach as isize;
