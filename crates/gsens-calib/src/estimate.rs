@@ -29,6 +29,19 @@ pub struct EpochSeries<'a> {
     pub imu_time_offset_s: f64,
 }
 
+#[cfg(test)]
+impl<'a> EpochSeries<'a> {
+    /// Epochs `log_interval_s` apart at `t_s`, the IMU read with no time offset.
+    pub(crate) fn without_offset(
+        log_interval_s: f64,
+        t_s: &'a [f64],
+        phase_err_rad: &'a [Option<f64>],
+        accel_mps2: &'a [[f64; 3]],
+    ) -> Self {
+        EpochSeries { log_interval_s, t_s, phase_err_rad, accel_mps2, imu_time_offset_s: 0.0 }
+    }
+}
+
 /// 1σ of Γ̂ per axis caused by IMU calibration errors \[Hz/(m/s²)\].
 ///
 /// The IMU measures f_m = (I + E)·f with E = diag(s) + N (scale factors s,

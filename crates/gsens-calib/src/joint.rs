@@ -360,12 +360,15 @@ impl<'a> Problem<'a> {
             (None, _) => 0.0,
         };
         let n = fed0.len();
-        let used: Vec<usize> =
-            (margin..n.saturating_sub(margin)).filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some()).collect();
+        // The used epochs and their phases, in epoch order (rayon's collect keeps it).
+        let used: Vec<usize> = (margin..n.saturating_sub(margin))
+            .into_par_iter()
+            .filter(|&k| fed0[k].used && fed0[k].phase_err_rad.is_some())
+            .collect();
         if used.len() < 20 {
             return Err(CalibError::TooFewEpochs { epochs: used.len() as u64, warmup_s: settings.warmup_s });
         }
-        let phi: Vec<f64> = used.iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
+        let phi: Vec<f64> = used.par_iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
         let problem = Problem { series, settings, stated, fitted, axes, used, phi };
         Ok((problem, Theta { ln_s: 0.0, zeta: zeta0, dtau_s }))
     }
@@ -410,16 +413,17 @@ impl<'a> Problem<'a> {
         let g = self.gamma_on_axes(a.iter().copied());
         // The nuisance parameters' columns, after φ_a's on the fit's axes.
         let mut columns: Vec<Vec<f64>> = Vec::new();
-        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at once).
+        // φ_aᵀΓ̂ over the used epochs of one more pass (its epochs freed at
+        // once), each epoch's on its own (the epochs in parallel).
         let predicted = |model: &LoopModel| -> Result<Vec<f64>, CalibError> {
             let fed = triad_pass(self.series, self.settings, model)?;
-            Ok(used.iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
+            Ok(used.par_iter().map(|&k| dot(&shifted(&fed, k, dtau, &by), &g)).collect())
         };
         let diff = |lo: &LoopModel, hi: &LoopModel, step: f64| -> Result<Vec<f64>, CalibError> {
             // Two independent passes over the log.
             let (pl, ph) = rayon::join(|| predicted(lo), || predicted(hi));
             let (pl, ph) = (pl?, ph?);
-            Ok(ph.iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
+            Ok(ph.par_iter().zip(&pl).map(|(h, l)| (h - l) / step).collect())
         };
         let (ln_s, zeta) = (theta.ln_s, theta.zeta);
         if self.fitted.natural_frequency {
@@ -931,13 +935,7 @@ mod tests {
     #[test]
     fn the_search_finds_the_sessions_loop() {
         let (t_s, phase, accel) = long_session();
-        let series = EpochSeries {
-            log_interval_s: 0.025,
-            t_s: &t_s,
-            phase_err_rad: &phase,
-            accel_mps2: &accel,
-            imu_time_offset_s: 0.0,
-        };
+        let series = EpochSeries::without_offset(0.025, &t_s, &phase, &accel);
         let chosen = choose_loop(&series, &EstimateSettings::default(), Some(0.1)).unwrap();
         assert_eq!(chosen.model.interval_s(), Some(0.025), "{}", chosen.model);
         assert_eq!(chosen.model.order(), 2, "{}", chosen.model);

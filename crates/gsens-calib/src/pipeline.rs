@@ -10,8 +10,8 @@ use crate::{
 use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
 use gsens_session::{
-    FlatRuns, PreparedSession, SelectionConfig, despike_imu, find_flat_runs, mask_flat_runs, prepare_session_from,
-    reinterpolate_imu,
+    FlatRuns, PreparedSession, SelectionConfig, find_flat_runs, imu_spikes, mask_flat_runs, prepare_session_from,
+    reinterpolate_imu, replace_imu_spikes,
 };
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -357,12 +357,17 @@ struct PreparedImu {
 
 impl PreparedImu {
     fn new(imu: &ImuSeries, settings: &PipelineSettings) -> Self {
-        // Two independent tasks over the same series, run at once.
-        let ((despiked, spikes), flat_runs) = rayon::join(
-            || if settings.despike_imu { despike_imu(imu) } else { (imu.clone(), Default::default()) },
-            || find_flat_runs(imu),
-        );
-        PreparedImu { despiked, spikes_t_s: spikes.t_s, flat_runs }
+        Self::of_series(imu.clone(), settings)
+    }
+
+    /// [`PreparedImu::new`] of a series no one else needs: despiked in place.
+    fn of_series(mut imu: ImuSeries, settings: &PipelineSettings) -> Self {
+        // Two independent tasks over the same series, run at once: the
+        // spikes found and the flat runs of the series as logged.
+        let (spikes, flat_runs) =
+            rayon::join(|| settings.despike_imu.then(|| imu_spikes(&imu)), || find_flat_runs(&imu));
+        let spikes = spikes.map(|at| replace_imu_spikes(&mut imu, &at)).unwrap_or_default();
+        PreparedImu { despiked: imu, spikes_t_s: spikes.t_s, flat_runs }
     }
 }
 
@@ -615,7 +620,7 @@ pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings)
     crate::progress::stage("reading the logs", None);
     let (tracking_log, imu_series) = rayon::join(
         || gsens_io::read_tracking_file(tracking),
-        || gsens_io::read_imu_file(imu).map(|series| PreparedImu::new(&series, settings)),
+        || gsens_io::read_imu_file(imu).map(|series| PreparedImu::of_series(series, settings)),
     );
     let (tracking_log, prepared_imu) = (tracking_log?, imu_series?);
     let mut outcome = calibrate_prepared(Cow::Owned(tracking_log), prepared_imu, &imu.display().to_string(), settings)?;

@@ -400,13 +400,7 @@ mod tests {
     #[test]
     fn an_axis_the_joint_fit_has_no_variance_for_is_unobservable_not_sigma_zero() {
         let (t_s, phase, accel) = session();
-        let series = EpochSeries {
-            log_interval_s: 0.025,
-            t_s: &t_s,
-            phase_err_rad: &phase,
-            accel_mps2: &accel,
-            imu_time_offset_s: 0.0,
-        };
+        let series = EpochSeries::without_offset(0.025, &t_s, &phase, &accel);
         let settings = EstimateSettings::default();
         let c = calibrate(&series, &settings).unwrap();
         assert!(c.observable.iter().all(|&o| o), "{:?}", c.axes);

@@ -20,26 +20,104 @@
 //! search can reach; a candidate τ then costs a few 3×3 products, not a pass
 //! over the log.
 
-use crate::estimate::{build_model, model_input};
+use crate::estimate::build_model;
 use crate::{CalibError, EpochSeries, EstimateSettings};
-use gsens_core::Calibrator;
 use gsens_core::FedEpoch;
 use gsens_core::LoopModel;
 use gsens_core::LoopSpec;
+use gsens_core::{AxisStage, Calibrator};
 use gsens_core::{BatchLeastSquares, NormalEquations};
+use rayon::prelude::*;
 
 /// Runs the batch estimator over the series; returns every epoch as fed
 /// (high-passed φ and φ_a, used or not) and the normal equations.
+///
+/// The calibrator's work, [`Calibrator::feed`] epoch by epoch, in two kinds
+/// of task: each axis's prefilter ([`gsens_core::compensate_interpolation`]'s
+/// a_k + c·(2a_k − a_{k−1} − a_{k+1})), loop model and φ_a high-pass
+/// ([`Calibrator::axis_stages`]) is a recursion of its own, and the phase's
+/// high-pass, the gap filling and the normal equations
+/// ([`Calibrator::feed_regressed`]) follow in epoch order. The epochs go in
+/// blocks of [`BATCH_BLOCK_EPOCHS`]: while one block's epochs are fed, the
+/// next block's three axes are computed, all four as rayon tasks. Every
+/// recursion sees its inputs in epoch order with the operations of `feed`,
+/// so the result is `feed`'s, bit for bit, on any pool.
 pub(crate) fn batch_pass(
     series: &EpochSeries,
     settings: &EstimateSettings,
 ) -> Result<(Vec<FedEpoch>, NormalEquations), CalibError> {
     let model = build_model(series.log_interval_s, settings)?;
-    let accel = model_input(series.accel_mps2, &model);
+    let c = model.interpolation_compensation();
     let skip = crate::estimate::warmup_epochs(settings, series.log_interval_s);
     let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, series.log_interval_s);
-    let fed: Vec<FedEpoch> = accel.iter().zip(series.phase_err_rad).map(|(a, p)| cal.feed(a, *p)).collect();
+    let mut axes = cal.axis_stages();
+    let accel = series.accel_mps2;
+    let n = accel.len().min(series.phase_err_rad.len());
+    let block_of = |b: usize| b * BATCH_BLOCK_EPOCHS..((b + 1) * BATCH_BLOCK_EPOCHS).min(n);
+    let blocks = n.div_ceil(BATCH_BLOCK_EPOCHS);
+    let mut fed: Vec<FedEpoch> = Vec::with_capacity(n);
+    let (mut cur, mut next) = (AxisBlock::default(), AxisBlock::default());
+    if blocks > 0 {
+        cur.regress(&mut axes, accel, c, block_of(0));
+    }
+    for b in 0..blocks {
+        let range = block_of(b);
+        rayon::join(
+            || {
+                let phases = &series.phase_err_rad[range];
+                let len = phases.len();
+                let [(rx, hx), (ry, hy), (rz, hz)] = &cur.columns;
+                let (rx, ry, rz, hx, hy, hz) = (&rx[..len], &ry[..len], &rz[..len], &hx[..len], &hy[..len], &hz[..len]);
+                for (j, p) in phases.iter().enumerate() {
+                    fed.push(cal.feed_regressed(&[rx[j], ry[j], rz[j]], &[hx[j], hy[j], hz[j]], *p));
+                }
+            },
+            || {
+                if b + 1 < blocks {
+                    next.regress(&mut axes, accel, c, block_of(b + 1));
+                }
+            },
+        );
+        std::mem::swap(&mut cur, &mut next);
+    }
     Ok((fed, *cal.estimator().normal_equations()))
+}
+
+/// The epochs of one block of [`batch_pass`].
+pub(crate) const BATCH_BLOCK_EPOCHS: usize = 4096;
+
+/// One block of epochs' regressors, axis by axis: the raw φ_a,i and the
+/// high-passed one.
+#[derive(Default)]
+struct AxisBlock {
+    columns: [(Vec<f64>, Vec<f64>); 3],
+}
+
+impl AxisBlock {
+    /// Runs each axis's stage over the epochs `range` of `accel`, prefiltered
+    /// with coefficient `c` (0: not at all) as [`model_input`] prefilters the
+    /// whole of `accel`, the three axes as rayon tasks.
+    ///
+    /// [`model_input`]: crate::estimate::model_input
+    fn regress(&mut self, axes: &mut [AxisStage; 3], accel: &[[f64; 3]], c: f64, range: std::ops::Range<usize>) {
+        let n = accel.len();
+        let filtered = c != 0.0 && n >= 2;
+        axes.par_iter_mut().zip(self.columns.par_iter_mut()).enumerate().for_each(|(i, (stage, (raw, hp)))| {
+            raw.resize(range.len(), 0.0);
+            hp.resize(range.len(), 0.0);
+            // The samples before, at and after epoch k (a missing neighbour
+            // at the ends is the sample itself).
+            let Some(first) = accel.get(range.start) else { return };
+            let mut cur = first[i];
+            let mut prev = if range.start > 0 { accel[range.start - 1][i] } else { cur };
+            for ((k, r), h) in range.clone().zip(raw.iter_mut()).zip(hp.iter_mut()) {
+                let next = if k + 1 < n { accel[k + 1][i] } else { cur };
+                let a = if filtered { cur + c * (2.0 * cur - prev - next) } else { cur };
+                (*r, *h) = stage.step(a);
+                (prev, cur) = (cur, next);
+            }
+        });
+    }
 }
 
 /// RSS of the least-squares fit from normal equations: φᵀφ − bᵀ(AᵀA)⁺b.
@@ -226,9 +304,12 @@ impl LaggedSums {
 pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result<OffsetProfile, CalibError> {
     let reach = (max_abs_s / t).ceil() as usize;
     let margin = reach + 2;
-    let phi_a: Vec<[f64; 3]> = fed.iter().map(|e| e.phi_a).collect();
-    let mut used: Vec<usize> =
-        (margin..fed.len().saturating_sub(margin)).filter(|&k| fed[k].used && fed[k].phase_err_rad.is_some()).collect();
+    // φ_a and the used epochs in epoch order (rayon's collect keeps it).
+    let phi_a: Vec<[f64; 3]> = fed.par_iter().map(|e| e.phi_a).collect();
+    let mut used: Vec<usize> = (margin..fed.len().saturating_sub(margin))
+        .into_par_iter()
+        .filter(|&k| fed[k].used && fed[k].phase_err_rad.is_some())
+        .collect();
     if used.len() < 10 {
         return Err(CalibError::TooShortForOffsetSearch { max_abs_s, epochs: used.len() });
     }
@@ -237,7 +318,7 @@ pub(crate) fn offset_profile(fed: &[FedEpoch], t: f64, max_abs_s: f64) -> Result
     if stride > 1 {
         used = used.into_iter().step_by(stride).collect();
     }
-    let phi: Vec<f64> = used.iter().map(|&k| fed[k].phase_err_rad.unwrap_or(0.0)).collect();
+    let phi: Vec<f64> = used.par_iter().map(|&k| fed[k].phase_err_rad.unwrap_or(0.0)).collect();
     // φ_a at true time t_k comes from the IMU at stamp t_k + τ: a shift of +τ/T
     // samples, whole part −reach … reach, taps one before to two after it.
     let reach = reach as isize;
@@ -270,6 +351,49 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Uniform};
+
+    /// The batch pass on pools of 1, 2, 4 and 5 threads is the calibrator
+    /// fed epoch by epoch (the model's input prefiltered as a whole), bit
+    /// for bit: several blocks and a short last one, gaps, a loop lifted over
+    /// 25 updates and one at the log rate.
+    #[test]
+    fn batch_pass_is_feed_on_any_pool() {
+        use gsens_core::{LoggedPhase, LoopModel};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(8);
+        let uniform = Uniform::new(-1.0, 1.0).expect("a range");
+        let n = 3 * BATCH_BLOCK_EPOCHS + 123;
+        let t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.025).collect();
+        let accel: Vec<[f64; 3]> =
+            t_s.iter().map(|t| [(5.7 * t).sin(), 0.3 * uniform.sample(&mut rng), 9.8 + (3.1 * t).cos()]).collect();
+        let phase: Vec<Option<f64>> = (0..n)
+            .map(|k| {
+                let gap = (4090..4100).contains(&k) || k == 9000 || k + 1 == n;
+                (!gap).then(|| 0.1 * uniform.sample(&mut rng))
+            })
+            .collect();
+        let series = EpochSeries::without_offset(0.025, &t_s, &phase, &accel);
+        let fed_bits = |fed: &[FedEpoch]| -> Vec<([u64; 3], Option<u64>, bool)> {
+            fed.iter().map(|e| (e.phi_a.map(f64::to_bits), e.phase_err_rad.map(f64::to_bits), e.used)).collect()
+        };
+        let ne_bits =
+            |ne: &NormalEquations| (ne.ata.map(f64::to_bits), ne.atb.map(f64::to_bits), ne.btb.to_bits(), ne.n);
+        for interval_s in [Some(0.001), None] {
+            let mut settings = EstimateSettings::default().with_loop(LoopModel::kaplan(LoopSpec::PAPER, interval_s));
+            settings.logged_phase = LoggedPhase::Mean;
+            let model = build_model(0.025, &settings).unwrap();
+            let input = crate::estimate::model_input(&accel, &model);
+            let skip = crate::estimate::warmup_epochs(&settings, 0.025);
+            let mut cal = Calibrator::new(model, BatchLeastSquares::new(), skip, settings.highpass_hz, 0.025);
+            let want: Vec<FedEpoch> = input.iter().zip(&phase).map(|(a, p)| cal.feed(a, *p)).collect();
+            assert!(want.iter().filter(|e| e.used).count() > n / 2);
+            for threads in [1, 2, 4, 5] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let (fed, ne) = pool.install(|| batch_pass(&series, &settings)).unwrap();
+                assert_eq!(fed_bits(&fed), fed_bits(&want), "{threads} threads, loop every {interval_s:?} s");
+                assert_eq!(ne_bits(&ne), ne_bits(cal.estimator().normal_equations()), "{threads} threads");
+            }
+        }
+    }
 
     /// The lagged sums' normal equations against the definition: every used
     /// epoch's φ_a interpolated by Catmull–Rom at the shift and summed.

@@ -2,7 +2,7 @@ use crate::estimator::{GammaEstimate, GammaEstimator};
 use crate::filter::HighPass;
 use crate::math::dot3;
 use crate::pll::{LinearLoop, ModelLoop};
-use crate::regressor::RegressorModel;
+use crate::regressor::{AxisRegressor, RegressorModel};
 
 /// Weighted mean of the channels present at an epoch: Σwᵢφᵢ/Σwᵢ over the
 /// channels whose phase is finite (absent channels are NaN). The weights are
@@ -99,6 +99,33 @@ impl<E: GammaEstimator, L: LinearLoop + Clone> Calibrator<E, L> {
     pub fn feed(&mut self, accel_mps2: &[f64; 3], phase_err_rad: Option<f64>) -> FedEpoch {
         let raw = self.model.epoch(accel_mps2);
         let phi_a = [self.hp_phi_a[0].step(raw[0]), self.hp_phi_a[1].step(raw[1]), self.hp_phi_a[2].step(raw[2])];
+        self.feed_regressed(&raw, &phi_a, phase_err_rad)
+    }
+
+    /// The regressor's three axes, each its loop model and φ_a high-pass in
+    /// this calibrator's current state, as independent recursions
+    /// ([`AxisStage`]): axis i fed a_i returns the raw and the high-passed
+    /// φ_a,i that [`Calibrator::feed`] computes, bit for bit. A caller runs
+    /// them (on any threads) and hands each epoch's values to
+    /// [`Calibrator::feed_regressed`] in epoch order.
+    pub fn axis_stages(&self) -> [AxisStage<L>; 3] {
+        let [x, y, z] = self.model.axes();
+        [
+            AxisStage { regressor: x, highpass: self.hp_phi_a[0] },
+            AxisStage { regressor: y, highpass: self.hp_phi_a[1] },
+            AxisStage { regressor: z, highpass: self.hp_phi_a[2] },
+        ]
+    }
+
+    /// One epoch whose regressors were computed by [`Calibrator::axis_stages`]:
+    /// `raw_phi_a` (the loop models' φ_a) and `phi_a` (high-passed), and the
+    /// averaged phase error (None when no channel was present). The phase's
+    /// high-pass, the gap filling and the estimator's update of
+    /// [`Calibrator::feed`]; this calibrator's own model does not advance,
+    /// so a calibrator is fed one way or the other, not both.
+    #[inline]
+    pub fn feed_regressed(&mut self, raw_phi_a: &[f64; 3], phi_a: &[f64; 3], phase_err_rad: Option<f64>) -> FedEpoch {
+        let (raw, phi_a) = (*raw_phi_a, *phi_a);
         self.epochs += 1;
         let (input, measured) = match phase_err_rad.filter(|p| p.is_finite()) {
             Some(p) => {
@@ -153,6 +180,25 @@ impl<E: GammaEstimator, L: LinearLoop + Clone> Calibrator<E, L> {
     /// The estimator.
     pub fn estimator(&self) -> &E {
         &self.estimator
+    }
+}
+
+/// One axis of a [`Calibrator`]'s regressor ([`Calibrator::axis_stages`]):
+/// the axis's loop model φ_a,i = L\[a_i\] and the high-pass H that follows
+/// it, y_k = α·(y_{k−1} + x_k − x_{k−1}) (the calibrator's high-pass).
+#[derive(Debug, Clone)]
+pub struct AxisStage<L = ModelLoop> {
+    regressor: AxisRegressor<L>,
+    highpass: HighPass,
+}
+
+impl<L: LinearLoop> AxisStage<L> {
+    /// The next epoch's specific force on this axis in \[m/s²\]; returns the
+    /// raw φ_a,i and H\[φ_a,i\].
+    #[inline]
+    pub fn step(&mut self, accel_mps2: f64) -> (f64, f64) {
+        let raw = self.regressor.epoch(accel_mps2);
+        (raw, self.highpass.step(raw))
     }
 }
 
@@ -229,5 +275,49 @@ mod tests {
         assert_eq!(average_phase_rad(&[1.0, 3.0, nan], &[1.0, 1.0, 1.0]), Some(2.0));
         assert_eq!(average_phase_rad(&[1.0, 3.0, 5.0], &[1.0, 1.0, 2.0]), Some(3.5));
         assert_eq!(average_phase_rad(&[nan, nan], &[1.0, 1.0]), None);
+    }
+
+    /// The axes run on their own and handed to `feed_regressed` are `feed`,
+    /// bit for bit: epochs, estimator and gaps (the model's prediction
+    /// through them), for a lifted loop (25 updates an epoch) and one at the
+    /// log rate, high-pass on and off.
+    #[test]
+    fn axis_stages_and_feed_regressed_are_feed_bit_for_bit() {
+        use crate::estimator::BatchLeastSquares;
+        use crate::pll::LoopSpec;
+        use crate::regressor::LoggedPhase;
+        let coeffs = LoopSpec::PAPER.coeffs().unwrap();
+        // A seeded linear congruential sequence in [−1, 1).
+        let mut seed: u64 = 3;
+        let mut uniform = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let epochs: [([f64; 3], Option<f64>); 3000] = core::array::from_fn(|k| {
+            let t = k as f64 * 0.025;
+            let a = [libm::sin(5.7 * t) + 0.1 * uniform(), 0.3 * uniform(), 9.8 + libm::cos(3.1 * t)];
+            // Gaps of 1, 7 and 40 epochs.
+            let gap = k == 500 || (900..907).contains(&k) || (2000..2040).contains(&k);
+            (a, (!gap).then(|| 0.1 * uniform()))
+        });
+        for (loop_interval_s, highpass_hz) in [(0.001, 0.05), (0.025, 0.05), (0.001, 0.0)] {
+            let model = RegressorModel::new(coeffs, loop_interval_s, 0.025, LoggedPhase::Mean).unwrap();
+            let new = || Calibrator::new(model.clone(), BatchLeastSquares::new(), 80, highpass_hz, 0.025);
+            let (mut whole, mut split) = (new(), new());
+            let mut axes = split.axis_stages();
+            for (a, p) in &epochs {
+                let want = whole.feed(a, *p);
+                let [x, y, z] = core::array::from_fn(|i| axes[i].step(a[i]));
+                let got = split.feed_regressed(&[x.0, y.0, z.0], &[x.1, y.1, z.1], *p);
+                assert_eq!(got.phi_a.map(f64::to_bits), want.phi_a.map(f64::to_bits));
+                assert_eq!(got.phase_err_rad.map(f64::to_bits), want.phase_err_rad.map(f64::to_bits));
+                assert_eq!(got.used, want.used);
+            }
+            let bits = |c: &Calibrator<BatchLeastSquares>| {
+                let ne = c.estimator().normal_equations();
+                (ne.ata.map(f64::to_bits), ne.atb.map(f64::to_bits), ne.btb.to_bits(), ne.n)
+            };
+            assert_eq!(bits(&split), bits(&whole));
+        }
     }
 }

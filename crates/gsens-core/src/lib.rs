@@ -37,7 +37,7 @@ pub mod units;
 pub use pll::gnss_sdr;
 pub use pll::pocket_sdr;
 
-pub use calibrator::{Calibrator, FedEpoch, PrefilteredCalibrator, average_phase_rad, warmup_epochs};
+pub use calibrator::{AxisStage, Calibrator, FedEpoch, PrefilteredCalibrator, average_phase_rad, warmup_epochs};
 pub use compensate::{Compensator, compensated_phase_rad};
 pub use discriminator::{Discriminator, RANGE_FALSE_ALARM, RANGE_MARGIN_SIGMAS, discriminator_variance_rad2};
 pub use estimator::{
@@ -53,6 +53,6 @@ pub use pll::{
     second_order_wn_from_bn, third_order_bn_over_wn,
 };
 pub use regressor::{
-    LoggedPhase, RegressorError, RegressorModel, RowQuantity, compensate_interpolation, loop_substeps,
+    AxisRegressor, LoggedPhase, RegressorError, RegressorModel, RowQuantity, compensate_interpolation, loop_substeps,
 };
 pub use robust::{HuberWeights, sandwich_covariance};

@@ -178,8 +178,8 @@ impl LiftedInterval {
 
     /// Advances `state` over one interval from sample `a_prev` to `a_cur`;
     /// returns what the row holds: one axis of [`LiftedInterval::step_triad`],
-    /// its reference.
-    #[cfg(test)]
+    /// the same operations in the same order.
+    #[inline]
     pub(crate) fn step(&self, state: &mut LoopState, a_prev: f64, a_cur: f64) -> f64 {
         let s = *state;
         let mut out = self.d_prev * a_prev + self.d_cur * a_cur;
@@ -359,6 +359,21 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         lifted.step_triad(&mut self.lanes, &prev, accel_mps2)
     }
 
+    /// The triad's three loops as independent recursions, each in this
+    /// model's current state: fed axis i's specific force, the i-th
+    /// [`AxisRegressor`] returns what [`RegressorModel::epoch`] returns on
+    /// axis i, bit for bit (the same operations in the same order), so the
+    /// axes can run on different threads.
+    pub fn axes(&self) -> [AxisRegressor<L>; 3] {
+        core::array::from_fn(|axis| AxisRegressor {
+            model_loop: self.triad[axis].clone(),
+            quantity: self.quantity,
+            lifted: self.lifted,
+            state: core::array::from_fn(|j| self.lanes[j][axis]),
+            prev_accel_mps2: self.prev_accel_mps2.map(|a| a[axis]),
+        })
+    }
+
     /// Back to rest.
     pub fn reset(&mut self) {
         for p in &mut self.triad {
@@ -366,6 +381,42 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         }
         self.lanes = [[0.0; 4]; LOOP_STATE_LEN];
         self.prev_accel_mps2 = None;
+    }
+}
+
+/// One axis of a [`RegressorModel`] ([`RegressorModel::axes`]): the loop
+/// model of that axis alone, φ_a,i = L\[a_i\] epoch by epoch, with the same
+/// start (the steady state of the first sample), the same lifted map of one
+/// log interval and the same arithmetic as the triad's lane.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisRegressor<L = ModelLoop> {
+    model_loop: L,
+    quantity: RowQuantity,
+    lifted: Option<LiftedInterval>,
+    /// The loop's state between epochs on the lifted path.
+    state: LoopState,
+    prev_accel_mps2: Option<f64>,
+}
+
+impl<L: LinearLoop> AxisRegressor<L> {
+    /// Advances the loop to the next log epoch, whose specific force on this
+    /// axis is `accel_mps2`, and returns φ_a there (what
+    /// [`RegressorModel::epoch`] returns on this axis).
+    #[inline]
+    pub fn epoch(&mut self, accel_mps2: f64) -> f64 {
+        let prev = match self.prev_accel_mps2 {
+            Some(p) => p,
+            None => {
+                self.model_loop.settle(accel_mps2);
+                self.state = self.model_loop.state();
+                accel_mps2
+            }
+        };
+        self.prev_accel_mps2 = Some(accel_mps2);
+        match &self.lifted {
+            Some(lifted) => lifted.step(&mut self.state, prev, accel_mps2),
+            None => interval_updates(&mut self.model_loop, 0.0, accel_mps2, 1, self.quantity),
+        }
     }
 }
 

@@ -197,8 +197,14 @@ fn read_plain(path: &Path, name: &str, total: u64, chunk_bytes: u64) -> Option<I
     };
     let bounds = crate::plain::chunk_bounds(&mut file, data_start, total, chunk_bytes)?;
     let chunks: Vec<Option<ImuSeries>> = bounds.par_windows(2).map(|w| read_chunk(w[0], w[1])).collect();
-    let rows = chunks.iter().map(|c| c.as_ref().map_or(0, |c| c.t_s.len())).sum();
-    let mut out = ImuSeries { t_s: Vec::with_capacity(rows), accel_mps2: Vec::with_capacity(rows) };
+    let rows: usize = chunks.iter().map(|c| c.as_ref().map_or(0, |c| c.t_s.len())).sum();
+    // The first chunk's columns become the series' (a file of one chunk, as
+    // most IMU logs are, is not copied at all), grown once for the others.
+    let mut chunks = chunks.into_iter();
+    let mut out = chunks.next()??;
+    let more = rows - out.t_s.len();
+    out.t_s.reserve_exact(more);
+    out.accel_mps2.reserve_exact(more);
     for chunk in chunks {
         let chunk = chunk?;
         // Time stamps strictly increasing across the chunks too.

@@ -261,10 +261,6 @@ impl<'a> Cells<'a> {
     #[inline]
     pub(crate) fn number(&mut self) -> Option<Option<f64>> {
         let rest = self.rest?;
-        if matches!(rest.first(), None | Some(b',')) {
-            self.past(rest, 0);
-            return Some(None);
-        }
         // A whole number of up to 15 digits (C/N0 and elevation as many
         // receivers log them) is below 2⁵³, so exact as an f64: the value
         // the float parser would give, read without it.
@@ -272,6 +268,19 @@ impl<'a> Cells<'a> {
         if len > 0 && matches!(rest.get(len), None | Some(b',')) {
             self.past(rest, len);
             return Some(Some(v as f64));
+        }
+        self.fraction()
+    }
+
+    /// [`Cells::number`] for a cell seldom written as a whole number (a
+    /// phase): straight to the float parser, which reads a whole number as
+    /// the same value, without first trying it as one.
+    #[inline]
+    pub(crate) fn fraction(&mut self) -> Option<Option<f64>> {
+        let rest = self.rest?;
+        if matches!(rest.first(), None | Some(b',')) {
+            self.past(rest, 0);
+            return Some(None);
         }
         // fast-float2's full parse is this partial one with every byte used:
         // the same number, read without first finding where the cell ends.
@@ -442,6 +451,10 @@ mod tests {
                     Some((x, y)) => assert_eq!((Ok(x), Ok(y)), (cell_f64(cut[0]), cell_f64(cut[1])), "{text:?}"),
                     None => assert!(!plain, "{text:?} not taken"),
                 }
+                let (mut c, mut f) = (Cells::new(text.as_bytes()), Cells::new(text.as_bytes()));
+                let by_number = c.number().zip(c.number()).filter(|_| c.finished());
+                let by_fraction = f.fraction().zip(f.fraction()).filter(|_| f.finished());
+                assert_eq!(by_fraction, by_number, "{text:?}");
                 let digits = |v: &str| (1..=9).contains(&v.len()) && v.bytes().all(|b| b.is_ascii_digit());
                 let mut c = Cells::new(text.as_bytes());
                 match c.integer().zip(c.integer()).filter(|_| c.finished()) {

@@ -889,7 +889,7 @@ fn plain_rows(
                     prn: cells.integer()?,
                     cn0_dbhz: cells.number()??,
                     elev_deg: cells.number()?.unwrap_or(nan),
-                    phase_err_rad: cells.number()??,
+                    phase_err_rad: cells.fraction()??,
                     carrier: Carrier::GPS_L1,
                     nco: [None; 2],
                 })
@@ -919,7 +919,7 @@ fn plain_rows(
                 Cell::Prn => cells.integer().map(|v| r.prn = v),
                 Cell::Cn0 => cells.number().flatten().map(|v| r.cn0_dbhz = v),
                 Cell::Elev => cells.number().map(|v| r.elev_deg = v.unwrap_or(nan)),
-                Cell::Phase => cells.number().flatten().map(|v| r.phase_err_rad = v),
+                Cell::Phase => cells.fraction().flatten().map(|v| r.phase_err_rad = v),
             };
             got.is_some()
         });

@@ -34,13 +34,22 @@ pub struct ImuSpikes {
 }
 
 /// A copy of `imu` with its isolated spikes replaced by the mean of their
-/// neighbours (module docs), and where they were.
+/// neighbours (module docs), and where they were: [`imu_spikes`] and
+/// [`replace_imu_spikes`] on a copy.
 pub fn despike_imu(imu: &ImuSeries) -> (ImuSeries, ImuSpikes) {
-    let n = imu.accel_mps2.len();
+    let at = imu_spikes(imu);
     let mut out = imu.clone();
-    let mut spikes = ImuSpikes::default();
+    let spikes = replace_imu_spikes(&mut out, &at);
+    (out, spikes)
+}
+
+/// The indices of `imu`'s isolated spikes (module docs), in increasing
+/// order: samples k whose second difference is beyond the limit on some
+/// axis while the samples k − 1 and k + 1 are not spikes themselves.
+pub fn imu_spikes(imu: &ImuSeries) -> Vec<usize> {
+    let n = imu.accel_mps2.len();
     if n < 5 {
-        return (out, spikes);
+        return Vec::new();
     }
     let a = &imu.accel_mps2;
     let mut dt: Vec<f64> = imu.t_s.windows(2).map(|w| w[1] - w[0]).collect();
@@ -67,13 +76,18 @@ pub fn despike_imu(imu: &ImuSeries) -> (ImuSeries, ImuSpikes) {
             }
         }
     }
-    for k in 1..n - 1 {
-        if spiked[k] && !spiked[k - 1] && !spiked[k + 1] {
-            out.accel_mps2[k] = [0, 1, 2].map(|i| 0.5 * (a[k - 1][i] + a[k + 1][i]));
-            spikes.t_s.push(imu.t_s[k]);
-        }
+    (1..n - 1).filter(|&k| spiked[k] && !spiked[k - 1] && !spiked[k + 1]).collect()
+}
+
+/// Replaces the samples of `imu` at `at` ([`imu_spikes`] of this series)
+/// by the mean of their neighbours, in place, and returns where they were.
+/// No two of them are neighbours, so every mean is of samples as logged.
+pub fn replace_imu_spikes(imu: &mut ImuSeries, at: &[usize]) -> ImuSpikes {
+    let a = &mut imu.accel_mps2;
+    for &k in at {
+        a[k] = [0, 1, 2].map(|i| 0.5 * (a[k - 1][i] + a[k + 1][i]));
     }
-    (out, spikes)
+    ImuSpikes { t_s: at.iter().map(|&k| imu.t_s[k]).collect() }
 }
 
 /// Chance of a false alarm of the flat-run test per axis and log: a run is

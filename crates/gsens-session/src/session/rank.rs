@@ -3,6 +3,7 @@
 //! does not vary), the best `max_channels` used, and every track told why.
 
 use gsens_core::units::Decimal;
+use rayon::prelude::*;
 
 use super::rows::{Candidates, TrackMeta, TrackStats};
 use super::{CN0_RANKING_RESOLUTION_DB, ChannelRanking, SelectionConfig};
@@ -70,8 +71,10 @@ pub(super) fn select(
 /// Each track's standing from its counts and what the screening kept.
 pub(super) fn standings(c: &Candidates, screened: &Screened) -> Vec<Standing> {
     let rows = &c.rows;
-    // Per candidate: rows kept by the screening and their C/N0 sum.
+    // Per candidate: rows kept by the screening and their C/N0 sum, each
+    // track's sum on its own (the tracks in parallel).
     let kept: Vec<(usize, f64)> = (0..rows.tracks())
+        .into_par_iter()
         .map(|k| {
             (screened.flags[rows.range(k)].iter().zip(rows.cn0s(k)))
                 .filter(|&(&f, _)| f == 0)

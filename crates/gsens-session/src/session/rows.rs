@@ -166,9 +166,10 @@ pub(super) fn candidates(
             filter.stats(ks, tr)
         })
         .collect();
+    // Each track's mean C/N0 on its own, the tracks in parallel.
     let tracks: Vec<TrackMeta> = tracking
         .tracks()
-        .iter()
+        .par_iter()
         .map(|t| TrackMeta { channel: t.channel, prn: t.prn, carrier: t.carrier, mean_cn0_dbhz: t.mean_cn0_dbhz() })
         .collect();
     let (mut rows, candidate_of) = row_table(&stats, &tracks);
