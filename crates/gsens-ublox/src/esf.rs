@@ -98,47 +98,111 @@ pub(crate) fn map_samples(
     rule: SensorTime,
     anchor: Option<(f64, i64)>,
 ) -> (ImuSeries, Option<ImuTimeAnchor>, usize) {
-    let (offset_s, anchor) = match rule {
-        SensorTime::FreeRunningMs => match anchor {
-            Some((t_s, tag_ms)) => {
-                let off = t_s - tag_ms as f64 * 1e-3;
-                (off, Some(ImuTimeAnchor { gps_minus_sensor_s: off, at_t_s: t_s }))
-            }
-            // No RXM-RAWX to tie to: the sensor's own clock from its first tag.
-            None => (-(samples.first().map_or(0, |s| s.tag_ms) as f64) * 1e-3, None),
-        },
-        SensorTime::GpsTowMs => (0.0, None),
-    };
+    let (mut mapper, anchor) = SampleMapper::new(rule, anchor, samples.first());
     let mut imu = ImuSeries::default();
-    let mut dropped = 0;
-    let mut week_s = 0.0;
-    let mut last_tow_ms: Option<i64> = None;
     for s in samples {
-        let t_s = match rule {
-            SensorTime::FreeRunningMs => s.tag_ms as f64 * 1e-3 + offset_s,
+        if let Some(t_s) = mapper.map(s) {
+            imu.t_s.push(t_s);
+            imu.accel_mps2.push(s.accel_mps2);
+        }
+    }
+    (imu, anchor, mapper.dropped)
+}
+
+/// [`map_samples`] one sample at a time, for samples that arrive as a log is
+/// received: the same times and the same samples dropped, however the list
+/// is cut.
+#[derive(Debug, Clone)]
+pub(crate) struct SampleMapper {
+    rule: SensorTime,
+    /// GPS − sensor time of a free-running tag \[s\].
+    offset_s: f64,
+    /// Whole weeks added to GPS time-of-week tags \[s\].
+    week_s: f64,
+    last_tow_ms: Option<i64>,
+    /// The time of the last sample kept \[s\].
+    last_t_s: Option<f64>,
+    /// Samples dropped for not being after their predecessor.
+    pub(crate) dropped: usize,
+}
+
+impl SampleMapper {
+    /// The mapper of a list whose first sample is `first` (a free-running
+    /// clock without an RXM-RAWX to tie to counts from it), and the anchor
+    /// it uses.
+    pub(crate) fn new(
+        rule: SensorTime,
+        anchor: Option<(f64, i64)>,
+        first: Option<&RawSample>,
+    ) -> (SampleMapper, Option<ImuTimeAnchor>) {
+        let (offset_s, anchor) = match rule {
+            SensorTime::FreeRunningMs => match anchor {
+                Some((t_s, tag_ms)) => {
+                    let off = t_s - tag_ms as f64 * 1e-3;
+                    (off, Some(ImuTimeAnchor { gps_minus_sensor_s: off, at_t_s: t_s }))
+                }
+                // No RXM-RAWX to tie to: the sensor's own clock from its first tag.
+                None => (-(first.map_or(0, |s| s.tag_ms) as f64) * 1e-3, None),
+            },
+            SensorTime::GpsTowMs => (0.0, None),
+        };
+        let mapper = SampleMapper { rule, offset_s, week_s: 0.0, last_tow_ms: None, last_t_s: None, dropped: 0 };
+        (mapper, anchor)
+    }
+
+    /// The next sample's time on the log's time, `None` when it is dropped
+    /// (not after the last sample kept).
+    pub(crate) fn map(&mut self, s: &RawSample) -> Option<f64> {
+        let t_s = match self.rule {
+            SensorTime::FreeRunningMs => s.tag_ms as f64 * 1e-3 + self.offset_s,
             SensorTime::GpsTowMs => {
                 // The raw tag is the time of week; a fall by more than half a week is the rollover.
                 let tow_ms = s.tag_ms.rem_euclid(1 << 32);
-                if last_tow_ms.is_some_and(|l| tow_ms < l - (GPS_WEEK_S as i64 * 500)) {
-                    week_s += GPS_WEEK_S;
+                if self.last_tow_ms.is_some_and(|l| tow_ms < l - (GPS_WEEK_S as i64 * 500)) {
+                    self.week_s += GPS_WEEK_S;
                 }
-                last_tow_ms = Some(tow_ms);
-                week_s + tow_ms as f64 * 1e-3
+                self.last_tow_ms = Some(tow_ms);
+                self.week_s + tow_ms as f64 * 1e-3
             }
         };
-        if imu.t_s.last().is_some_and(|&last| t_s <= last) {
-            dropped += 1;
-            continue;
+        if self.last_t_s.is_some_and(|last| t_s <= last) {
+            self.dropped += 1;
+            return None;
         }
-        imu.t_s.push(t_s);
-        imu.accel_mps2.push(s.accel_mps2);
+        self.last_t_s = Some(t_s);
+        Some(t_s)
     }
-    (imu, anchor, dropped)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sample by sample, the mapper gives the times and drops of the whole
+    /// list's mapping: a GPS week's rollover, a repeated tag and a tag going
+    /// back included.
+    #[test]
+    fn the_mapper_maps_as_the_whole_list_is_mapped() {
+        let week_ms = (GPS_WEEK_S * 1e3) as i64;
+        let tags = [week_ms - 20, week_ms - 10, week_ms - 10, 0, 10, 5, 20];
+        let samples: Vec<RawSample> = tags
+            .iter()
+            .enumerate()
+            .map(|(k, &tag_ms)| RawSample { tag_ms, accel_mps2: [k as f64, 0.0, 9.8] })
+            .collect();
+        let anchor = Some((1000.0, week_ms - 20));
+        for rule in [SensorTime::GpsTowMs, SensorTime::FreeRunningMs] {
+            let (whole, _, dropped) = map_samples(&samples, rule, anchor);
+            let (mut mapper, _) = SampleMapper::new(rule, anchor, samples.first());
+            let one_by_one: Vec<f64> = samples.iter().filter_map(|s| mapper.map(s)).collect();
+            assert_eq!((&one_by_one, mapper.dropped), (&whole.t_s, dropped), "{rule:?}");
+        }
+        // Time of week: the rollover continues the week; the repeat and the step back are dropped.
+        let (gps, _, dropped) = map_samples(&samples, SensorTime::GpsTowMs, None);
+        let want = [-0.02, -0.01, 0.0, 0.01, 0.02].map(|d| GPS_WEEK_S + d);
+        assert_eq!(dropped, 2);
+        assert!(gps.t_s.iter().zip(want).all(|(t, w)| (t - w).abs() < 1e-9), "{:?}", gps.t_s);
+    }
 
     #[test]
     fn fields_and_counters() {

@@ -9,7 +9,7 @@ use ublox::proto23::{PacketRef, Proto23};
 use ublox::rxm_rawx::RxmRawxRef;
 use ublox::{Parser, ParserBuilder, ParserError, UbxPacket};
 
-use crate::esf::{ImuTimeAnchor, RawSample, SensorTime, Unwrap, group_samples, map_samples};
+use crate::esf::{ImuTimeAnchor, RawSample, SampleMapper, SensorTime, Unwrap, group_samples, map_samples};
 use crate::signals::ubx_signal;
 
 /// `trkStat` bits of an RXM-RAWX measurement (interface description).
@@ -136,8 +136,18 @@ pub struct UbxStream {
     checksum_failures: usize,
     /// Accelerometer samples on the log's time already handed out by [`UbxStream::take_imu`].
     imu_taken: usize,
-    /// Samples on the sensor clock (of the list in use) when they were last mapped.
-    imu_seen: usize,
+    /// The mapping of the sample list in use so far: whether it is ESF-RAW's,
+    /// the mapper, the samples mapped and of them those kept.
+    imu_mapped: Option<MappedSamples>,
+}
+
+/// How far [`UbxStream::take_imu`] has mapped a sample list.
+#[derive(Debug, Clone)]
+struct MappedSamples {
+    raw: bool,
+    mapper: SampleMapper,
+    mapped: usize,
+    kept: usize,
 }
 
 impl core::fmt::Debug for UbxStream {
@@ -165,7 +175,7 @@ impl Clone for UbxStream {
             received: self.received,
             checksum_failures: self.checksum_failures,
             imu_taken: self.imu_taken,
-            imu_seen: self.imu_seen,
+            imu_mapped: self.imu_mapped.clone(),
         }
     }
 }
@@ -180,7 +190,7 @@ impl UbxStream {
             received: 0,
             checksum_failures: 0,
             imu_taken: 0,
-            imu_seen: 0,
+            imu_mapped: None,
         }
     }
 
@@ -263,18 +273,40 @@ impl UbxStream {
     /// of ESF-MEAS; a sample not after its predecessor is left out.
     pub fn take_imu(&mut self, settings: &UbxSettings) -> ImuSeries {
         let r = &self.reader;
-        let (samples, anchor) = if r.raw.is_empty() { (&r.meas, r.meas_anchor) } else { (&r.raw, r.raw_anchor) };
+        let raw = !r.raw.is_empty();
+        let (samples, anchor) = if raw { (&r.raw, r.raw_anchor) } else { (&r.meas, r.meas_anchor) };
         let untied = settings.sensor_time == SensorTime::FreeRunningMs && anchor.is_none();
-        if untied || samples.len() == self.imu_seen {
+        if untied {
             return ImuSeries::default();
         }
-        self.imu_seen = samples.len();
-        // Mapped from the first sample on, as the whole log is: a week's rollover of
-        // GPS-time tags and the samples left out follow the log's order.
-        let (imu, _, _) = map_samples(samples, settings.sensor_time, anchor);
-        let from = self.imu_taken.min(imu.len());
-        self.imu_taken = imu.len();
-        ImuSeries { t_s: imu.t_s[from..].to_vec(), accel_mps2: imu.accel_mps2[from..].to_vec() }
+        // Mapped from the list's first sample on, as the whole log is (a week's
+        // rollover of GPS-time tags and the samples left out follow the
+        // list's order), each sample once: a list taken over by ESF-RAW is
+        // mapped afresh.
+        let m = match &mut self.imu_mapped {
+            Some(m) if m.raw == raw => m,
+            slot => {
+                let (mapper, _) = SampleMapper::new(settings.sensor_time, anchor, samples.first());
+                slot.insert(MappedSamples { raw, mapper, mapped: 0, kept: 0 })
+            }
+        };
+        let new_samples = m.mapped < samples.len();
+        let mut imu = ImuSeries::default();
+        for s in &samples[m.mapped..] {
+            if let Some(t_s) = m.mapper.map(s) {
+                // Samples of the list in use before this many were handed out already.
+                if m.kept >= self.imu_taken {
+                    imu.t_s.push(t_s);
+                    imu.accel_mps2.push(s.accel_mps2);
+                }
+                m.kept += 1;
+            }
+        }
+        m.mapped = samples.len();
+        if new_samples {
+            self.imu_taken = m.kept;
+        }
+        imu
     }
 
     /// The log of the complete frames received so far, as [`read_ubx_bytes`]
