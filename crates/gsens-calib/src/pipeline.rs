@@ -120,7 +120,7 @@ pub struct PipelineSettings {
     /// ([`crate::choose_loop`]) and the estimate is flagged until it is stated.
     pub loop_stated: bool,
     /// Replace isolated IMU spikes by the mean of their neighbours before
-    /// anything else ([`gsens_session::despike_imu`]; default on).
+    /// anything else ([`gsens_session::replace_imu_spikes`]; default on).
     pub despike_imu: bool,
     /// What the result's estimate is made from ([`Outcome::measurement`]).
     pub measurement: MeasurementChoice,
@@ -346,7 +346,7 @@ pub fn calibrate_owned_logs(
 }
 
 /// The IMU log as the pipeline uses it: isolated spikes replaced
-/// ([`despike_imu`], when the settings ask for it) and the runs of identical
+/// ([`replace_imu_spikes`], when the settings ask for it) and the runs of identical
 /// samples found ([`find_flat_runs`]). It needs nothing of the tracking log,
 /// so [`calibrate_files`] prepares it while the tracking log is read.
 struct PreparedImu {

@@ -112,7 +112,7 @@ impl AxisBlock {
             let mut prev = if range.start > 0 { accel[range.start - 1][i] } else { cur };
             for ((k, r), h) in range.clone().zip(raw.iter_mut()).zip(hp.iter_mut()) {
                 let next = if k + 1 < n { accel[k + 1][i] } else { cur };
-                let a = if filtered { cur + c * (2.0 * cur - prev - next) } else { cur };
+                let a = if filtered { gsens_core::interpolation_compensated(prev, cur, next, c) } else { cur };
                 (*r, *h) = stage.step(a);
                 (prev, cur) = (cur, next);
             }

@@ -2,7 +2,7 @@ use crate::estimator::{GammaEstimate, GammaEstimator};
 use crate::filter::HighPass;
 use crate::math::dot3;
 use crate::pll::{LinearLoop, ModelLoop};
-use crate::regressor::{AxisRegressor, RegressorModel};
+use crate::regressor::{AxisRegressor, RegressorModel, interpolation_compensated};
 
 /// Weighted mean of the channels present at an epoch: Σwᵢφᵢ/Σwᵢ over the
 /// channels whose phase is finite (absent channels are NaN). The weights are
@@ -230,7 +230,7 @@ impl<E: GammaEstimator, L: LinearLoop + Clone> PrefilteredCalibrator<E, L> {
 
     fn filtered(&self, a: &[f64; 3], prev: &[f64; 3], next: &[f64; 3]) -> [f64; 3] {
         let c = self.c;
-        [0, 1, 2].map(|i| a[i] + c * (2.0 * a[i] - prev[i] - next[i]))
+        [0, 1, 2].map(|i| interpolation_compensated(prev[i], a[i], next[i], c))
     }
 
     /// One epoch in; out comes the previous epoch, now that its successor is

@@ -53,6 +53,7 @@ pub use pll::{
     second_order_wn_from_bn, third_order_bn_over_wn,
 };
 pub use regressor::{
-    AxisRegressor, LoggedPhase, RegressorError, RegressorModel, RowQuantity, compensate_interpolation, loop_substeps,
+    AxisRegressor, LoggedPhase, RegressorError, RegressorModel, RowQuantity, compensate_interpolation,
+    interpolation_compensated, loop_substeps,
 };
 pub use robust::{HuberWeights, sandwich_covariance};

@@ -432,10 +432,18 @@ pub fn compensate_interpolation(accel: &mut [[f64; 3]], c: f64) {
         let cur = accel[k];
         let next = if k + 1 < accel.len() { accel[k + 1] } else { cur };
         for i in 0..3 {
-            accel[k][i] = cur[i] + c * (2.0 * cur[i] - prev[i] - next[i]);
+            accel[k][i] = interpolation_compensated(prev[i], cur[i], next[i], c);
         }
         prev = cur;
     }
+}
+
+/// One sample of [`compensate_interpolation`]: a_k + c·(2a_k − a_{k−1} −
+/// a_{k+1}) from the sample `cur` and its neighbours `prev` and `next`, for
+/// a caller that streams the samples.
+#[inline]
+pub fn interpolation_compensated(prev: f64, cur: f64, next: f64, c: f64) -> f64 {
+    cur + c * (2.0 * cur - prev - next)
 }
 use crate::units::Decimal;
 

@@ -111,15 +111,19 @@ impl InputChoice {
             (None, Some(path)) => ObservationFile::Ubx(path.clone(), self.ubx_settings),
         };
         let gnss_sdr_conf = match &self.gnss_sdr_conf {
-            Some(conf) => {
-                match ImportSettings::from_conf_with(Some(conf), self.gnss_sdr_fs_hz, &self.gnss_sdr_overrides) {
-                    Ok(import) => Some((conf.clone(), import)),
-                    Err(e) => return Some(Err(e.into())),
-                }
-            }
+            Some(conf) => match self.gnss_sdr_import(Some(conf)) {
+                Ok(import) => Some((conf.clone(), import)),
+                Err(e) => return Some(Err(e.into())),
+            },
             None => None,
         };
         Some(Ok(ObservationInputs { log, imu, record: self.observation_record, gnss_sdr_conf }))
+    }
+
+    /// How GNSS-SDR's records of the run configured by `conf` are read:
+    /// the configuration with the sampling rate and the overrides named.
+    fn gnss_sdr_import(&self, conf: Option<&Path>) -> Result<ImportSettings, gsens_gnss_sdr::GnssSdrError> {
+        ImportSettings::from_conf_with(conf, self.gnss_sdr_fs_hz, &self.gnss_sdr_overrides)
     }
 
     /// The route the inputs name, its conversion settings checked: a
@@ -143,7 +147,7 @@ impl InputChoice {
             return Err(InputsError::Choice(format!("{conf}, {settle} and {toff} need {} LOG", name("pocketsdr"))));
         }
         let conf = self.gnss_sdr_conf.as_deref();
-        let import = |conf| ImportSettings::from_conf_with(conf, self.gnss_sdr_fs_hz, &self.gnss_sdr_overrides);
+        let import = |conf| self.gnss_sdr_import(conf);
         Ok(match (&self.gnss_sdr, &self.tracking, conf) {
             (Some(dir), _, _) => Inputs::GnssSdrDumps {
                 imu,

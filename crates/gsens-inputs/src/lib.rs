@@ -15,7 +15,7 @@
 //! that: a route added here works in all of them. A simulated session's
 //! `truth.json` states the loop that made its log, which the settings take
 //! when they state none ([`take_truth_loop`]) and the route does not model
-//! its receiver's own ([`Inputs::truth_loop_note`]).
+//! its receiver's own ([`Route::truth_loop_note`]).
 //!
 //! The crate sits above `gsens_calib`, `gsens_gnss_sdr` and
 //! `gsens_pocketsdr` (the PocketSDR crate itself depends on `gsens_calib`,

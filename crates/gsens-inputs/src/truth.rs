@@ -76,34 +76,19 @@ pub fn truth_loop_note(
     truth_json.map(|path| Ok(take_truth_loop(settings, path)?.note(path))).transpose()
 }
 
-impl crate::Inputs {
-    /// [`truth_loop_note`] for a calibration from these inputs: a
-    /// receiver's log comes with its receiver's loop
-    /// ([`crate::Inputs::models_the_loop`]), which a simulated session's is
-    /// not put in place of (`None`: nothing taken, nothing to say).
-    pub fn truth_loop_note(
-        &self,
-        settings: &mut PipelineSettings,
-        truth_json: Option<&Path>,
-    ) -> Result<Option<String>, LoadError> {
-        truth_loop_note(settings, truth_json.filter(|_| !self.models_the_loop()))
-    }
-}
-
 impl crate::Route {
-    /// [`truth_loop_note`] for a calibration by this route: a tracking
-    /// route's ([`crate::Inputs::truth_loop_note`]); a carrier phase and
-    /// Doppler log's loop is identified from the log, so a simulated
-    /// session's is not taken (`None`).
+    /// [`truth_loop_note`] for a calibration by this route. Only a tracking
+    /// log in gsens's format takes a simulated session's loop: a receiver's
+    /// log comes with its receiver's loop ([`crate::Inputs::models_the_loop`]),
+    /// and a carrier phase and Doppler log's loop is identified from the log
+    /// (`None`: nothing taken, nothing to say).
     pub fn truth_loop_note(
         &self,
         settings: &mut PipelineSettings,
         truth_json: Option<&Path>,
     ) -> Result<Option<String>, LoadError> {
-        match self {
-            crate::Route::Tracking(inputs) => inputs.truth_loop_note(settings, truth_json),
-            crate::Route::Observations(_) => Ok(None),
-        }
+        let takes = matches!(self, crate::Route::Tracking(inputs) if !inputs.models_the_loop());
+        truth_loop_note(settings, truth_json.filter(|_| takes))
     }
 }
 

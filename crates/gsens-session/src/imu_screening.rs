@@ -26,21 +26,11 @@ pub(crate) const HAND_MAX_ACCEL_MPS2: f64 = 30.0;
 /// The highest frequency a hand shakes a board at \[Hz\].
 pub(crate) const HAND_MAX_FREQ_HZ: f64 = 5.0;
 
-/// What [`despike_imu`] replaced.
+/// What [`replace_imu_spikes`] replaced.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ImuSpikes {
     /// Time stamps of the replaced samples \[s\].
     pub t_s: Vec<f64>,
-}
-
-/// A copy of `imu` with its isolated spikes replaced by the mean of their
-/// neighbours (module docs), and where they were: [`imu_spikes`] and
-/// [`replace_imu_spikes`] on a copy.
-pub fn despike_imu(imu: &ImuSeries) -> (ImuSeries, ImuSpikes) {
-    let at = imu_spikes(imu);
-    let mut out = imu.clone();
-    let spikes = replace_imu_spikes(&mut out, &at);
-    (out, spikes)
 }
 
 /// The indices of `imu`'s isolated spikes (module docs), in increasing
@@ -293,6 +283,14 @@ mod tests {
             })
             .collect();
         ImuSeries { t_s, accel_mps2 }
+    }
+
+    /// A copy of `imu` with its isolated spikes replaced, and where they were.
+    fn despike_imu(imu: &ImuSeries) -> (ImuSeries, ImuSpikes) {
+        let at = imu_spikes(imu);
+        let mut out = imu.clone();
+        let spikes = replace_imu_spikes(&mut out, &at);
+        (out, spikes)
     }
 
     #[test]

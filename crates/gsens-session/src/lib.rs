@@ -237,8 +237,8 @@ mod session;
 
 pub use error::{ScreeningConfigError, SessionError};
 pub use imu_screening::{
-    FLAT_RUN_FALSE_ALARM, FlatRun, FlatRunKind, FlatRuns, ImuSpikes, MIN_FLAT_RUN, SPIKE_SIGMAS, despike_imu,
-    find_flat_runs, imu_spikes, mask_flat_runs, replace_imu_spikes,
+    FLAT_RUN_FALSE_ALARM, FlatRun, FlatRunKind, FlatRuns, ImuSpikes, MIN_FLAT_RUN, SPIKE_SIGMAS, find_flat_runs,
+    imu_spikes, mask_flat_runs, replace_imu_spikes,
 };
 pub use screening::{DEFAULT_CN0_DROP_DB, ExcludedSpan, MAX_SPANS, ScreeningConfig, TrackScreening};
 pub use session::{

@@ -137,7 +137,7 @@ pub struct UbxStream {
     /// Accelerometer samples on the log's time already handed out by [`UbxStream::take_imu`].
     imu_taken: usize,
     /// The mapping of the sample list in use so far: whether it is ESF-RAW's,
-    /// the mapper, the samples mapped and of them those kept.
+    /// the rule, the mapper, the samples mapped and of them those kept.
     imu_mapped: Option<MappedSamples>,
 }
 
@@ -145,6 +145,7 @@ pub struct UbxStream {
 #[derive(Debug, Clone)]
 struct MappedSamples {
     raw: bool,
+    rule: SensorTime,
     mapper: SampleMapper,
     mapped: usize,
     kept: usize,
@@ -281,13 +282,13 @@ impl UbxStream {
         }
         // Mapped from the list's first sample on, as the whole log is (a week's
         // rollover of GPS-time tags and the samples left out follow the
-        // list's order), each sample once: a list taken over by ESF-RAW is
-        // mapped afresh.
+        // list's order), each sample once: a list taken over by ESF-RAW, or
+        // asked for by another rule, is mapped afresh.
         let m = match &mut self.imu_mapped {
-            Some(m) if m.raw == raw => m,
+            Some(m) if m.raw == raw && m.rule == settings.sensor_time => m,
             slot => {
                 let (mapper, _) = SampleMapper::new(settings.sensor_time, anchor, samples.first());
-                slot.insert(MappedSamples { raw, mapper, mapped: 0, kept: 0 })
+                slot.insert(MappedSamples { raw, rule: settings.sensor_time, mapper, mapped: 0, kept: 0 })
             }
         };
         let new_samples = m.mapped < samples.len();
