@@ -34,6 +34,19 @@ pub enum CalibError {
     /// A combination of settings gsens does not support.
     #[error("{0}")]
     Unsupported(&'static str),
+    /// The loop stated in words has no form of the implementation named
+    /// ([`gsens_core::LoopModel::discrete_forms`]).
+    #[error(
+        "{implementation} has no form of the stated loop ({stated}): GNSS-SDR's needs a 2nd-order loop of ζ 0.707 or a \
+         3rd-order one of a3 1.1 and b3 2.4, updated every 1, 2, 4, 5, 10 or 20 ms; PocketSDR's a 3rd-order one of a3 \
+         1.1 and b3 2.4"
+    )]
+    NoLoopForm {
+        /// The loop stated, in words.
+        stated: String,
+        /// The implementation asked for.
+        implementation: gsens_core::LoopImplementation,
+    },
     /// The series differ in length.
     #[error(
         "the series differ in length: {t_s} epoch times, {phase_err_rad} phase errors, {accel_mps2} specific forces"

@@ -25,10 +25,13 @@
 //! confounded (a constant shaking rate, whose phase lag a loop error and a
 //! delay both explain) it grows, instead of one absorbing the other.
 
+mod forms;
 mod params;
 
 use crate::search::{Shift, batch_pass, offset_profile, scaled_loop};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
+pub(crate) use forms::compare_loop_forms;
+pub use forms::{LOOP_FORM_ALIKE, LoopFormFit, LoopForms};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
 use params::{Fitted, Theta};
@@ -132,6 +135,12 @@ pub struct JointFit {
     pub gamma_covariance_hz_per_mps2_sq: [[f64; 3]; 3],
     /// Gauss–Newton iterations run.
     pub iterations: u32,
+    /// The discrete forms of a loop stated in words, as the data fit them
+    /// (`None`: the loop has one form, or it is a receiver's own): the fit is
+    /// under the best, and [`JointFit::gamma_covariance_hz_per_mps2_sq`]
+    /// takes in [`LoopForms::added_variance_hz_per_mps2_sq`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loop_forms: Option<LoopForms>,
 }
 
 /// The series of φ_a for one loop: every epoch as the estimator fed it.
@@ -526,6 +535,25 @@ fn solve(
     start_dtau_s: Option<f64>,
     covariance: bool,
 ) -> Result<Solution, CalibError> {
+    solve_with_residuals(series, settings, (spec, axes), fed0, start_dtau_s, covariance).map(|(sol, _)| sol)
+}
+
+/// The residuals of a solved joint fit: the epochs fitted (indices into the
+/// series) and φ − Jβ at each \[rad\].
+struct Residuals {
+    used: Vec<usize>,
+    rad: DVector<f64>,
+}
+
+/// [`solve`], with the fit's residuals.
+fn solve_with_residuals(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    (spec, axes): (JointSpec, &[usize]),
+    fed0: Cow<'_, [FedEpoch]>,
+    start_dtau_s: Option<f64>,
+    covariance: bool,
+) -> Result<(Solution, Residuals), CalibError> {
     let (problem, mut theta) = Problem::new(series, settings, (spec, axes), &fed0, start_dtau_s)?;
     let fitted = problem.fitted;
     let y = DVector::from_column_slice(&problem.phi);
@@ -563,7 +591,7 @@ fn solve(
     } else {
         (DMatrix::from_element(p, p, f64::NAN), DMatrix::from_element(na, na, f64::NAN))
     };
-    Ok(Solution {
+    let solution = Solution {
         gamma,
         gamma_stated,
         theta,
@@ -573,7 +601,8 @@ fn solve(
         rss_rad2: resid.norm_squared(),
         epochs: problem.used.len(),
         iterations,
-    })
+    };
+    Ok((solution, Residuals { used: problem.used, rad: resid }))
 }
 
 /// The least-squares sandwich (JᵀJ)⁻¹·JᵀΣJ·(JᵀJ)⁻¹ of the Jacobian `jac`
@@ -721,10 +750,26 @@ fn describe(
             })
         }),
         iterations: sol.iterations,
+        loop_forms: None,
     }
 }
 
 impl JointFit {
+    /// Takes in which form of the stated loop the fit is under: Γ̂'s
+    /// variance on each axis grows by [`LoopForms::added_variance_hz_per_mps2_sq`]
+    /// (its variance inflation with it), so that its σ reaches the Γ̂ of the
+    /// forms the data cannot tell apart.
+    pub(crate) fn cover_loop_forms(&mut self, forms: LoopForms) {
+        for (i, add) in forms.added_variance_hz_per_mps2_sq.iter().enumerate() {
+            let var = &mut self.gamma_covariance_hz_per_mps2_sq[i][i];
+            if *var > 0.0 && var.is_finite() && *add > 0.0 {
+                self.variance_inflation[i] *= (*var + add) / *var;
+                *var += add;
+            }
+        }
+        self.loop_forms = Some(forms);
+    }
+
     /// The loop Γ̂ is given under, given the stated one: the stated loop
     /// scaled to [`used_natural_frequency_hz`](Self::used_natural_frequency_hz)
     /// (with the fitted damping), or the stated loop itself when the fit kept it.

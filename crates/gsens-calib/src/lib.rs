@@ -88,9 +88,10 @@ pub use estimate::{
     CompensatedEpoch, EpochSeries, HISTORY_INTERVAL_S, calibrate, compensation_series, imu_systematic_sigma,
     regressors, streaming_calibrator, warmup_epochs,
 };
+pub(crate) use joint::compare_loop_forms;
 pub use joint::{
-    ChosenLoop, JointFit, JointSpec, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, TYPICAL_LOOP_INTERVALS_S, choose_loop,
-    joint_fit,
+    ChosenLoop, JointFit, JointSpec, LOOP_FORM_ALIKE, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, LoopFormFit, LoopForms,
+    TYPICAL_LOOP_INTERVALS_S, choose_loop, joint_fit,
 };
 pub use loop_free::{
     CROSS_CHECK_FALSE_ALARM, InputPhases, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings,
@@ -113,8 +114,9 @@ pub use options::{
     TimeOffsetOption,
 };
 pub use pipeline::{
-    DEFAULT_LOOP_TOLERANCE, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError, PipelineSettings,
-    RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_logs, calibrate_owned_logs, series_of,
+    DEFAULT_LOOP_TOLERANCE, LoopForm, LoopIdentificationMode, Outcome, ParseTimeOffsetError, PipelineError,
+    PipelineSettings, RESPONSE_CHECK_FALSE_ALARM, TimeOffset, calibrate_files, calibrate_logs, calibrate_owned_logs,
+    series_of,
 };
 pub use progress::{Progress, observe};
 pub use response_check::{

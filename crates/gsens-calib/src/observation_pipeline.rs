@@ -112,8 +112,9 @@ pub fn calibrate_observations(
     let mut free = settings.loop_free(log_interval_s);
     free.channels = 0;
     let quantity = rows.record.quantity();
+    // A loop stated in words may be any receiver's form of those words: the identification compares them.
     let shapes: Vec<LoopModel> = if settings.loop_stated {
-        vec![settings.estimate.loop_at(log_interval_s)]
+        settings.loop_form.forms_of(&settings.estimate.loop_at(log_interval_s))?
     } else {
         identification_shapes(log_interval_s)
     };

@@ -16,11 +16,11 @@ use crate::option_values::{
 };
 use crate::settings::check_range;
 use crate::{
-    CalibError, EstimateSettings, LoopIdentificationMode, MeasurementChoice, Method, PipelineSettings, Robust,
-    TimeOffset,
+    CalibError, EstimateSettings, LoopForm, LoopIdentificationMode, MeasurementChoice, Method, PipelineSettings,
+    Robust, TimeOffset,
 };
 use core::f64::consts::FRAC_1_SQRT_2;
-use gsens_core::{Discriminator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopModel, LoopSpec};
+use gsens_core::{Discriminator, KAPLAN_A3, KAPLAN_B3, LoggedPhase, LoopImplementation, LoopModel, LoopSpec};
 use gsens_session::{SelectionConfig, Weighting};
 use serde::{Deserialize, Serialize};
 
@@ -235,6 +235,9 @@ pub struct LoopOptions {
     /// What a log row holds when the loop runs faster than the log (default: last).
     #[cfg_attr(feature = "clap", arg(long, value_enum))]
     pub logged_phase: Option<LoggedPhase>,
+    /// Which receiver's discrete form the stated loop is (default: the data choose among the forms its order, bandwidth and interval take in the receivers gsens models, and σ takes in the others by the data's odds for them).
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
+    pub loop_implementation: Option<LoopImplementation>,
     /// The receiver's carrier-phase discriminator, whose linear range bounds the g-induced phase error (GNSS-SDR and PocketSDR sessions: theirs, atan-costas for GPS L1 C/A).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t))]
     pub discriminator: Discriminator,
@@ -250,6 +253,7 @@ impl Default for LoopOptions {
             b3: KAPLAN_B3,
             loop_interval_s: None,
             logged_phase: None,
+            loop_implementation: None,
             discriminator: Discriminator::AtanCostas,
         }
     }
@@ -595,7 +599,8 @@ impl CalibrationOptions {
     /// The pipeline's settings around `estimate` (the estimation stage's,
     /// which a caller may have adapted: a simulated scenario's loop, say):
     /// selection, time offset, loop identification, despiking. The loop of
-    /// `estimate` counts as stated.
+    /// `estimate` counts as stated, its implementation included: its form is
+    /// not compared with other receivers' ([`PipelineSettings::loop_form`]).
     pub fn pipeline_settings_around(&self, estimate: EstimateSettings) -> Result<PipelineSettings, CalibError> {
         for (name, value) in [
             ("warmup_s", self.estimator.warmup_s),
@@ -647,6 +652,17 @@ impl CalibrationOptions {
         estimate.validate()?;
         let mut p = self.pipeline_settings_around(estimate)?;
         p.loop_stated = self.loop_stated();
+        p.loop_form = match (p.loop_stated, self.receiver_loop.loop_implementation) {
+            (true, None) => LoopForm::Compared,
+            (true, Some(i)) => LoopForm::Named(i),
+            (false, None) => LoopForm::Exact,
+            (false, Some(_)) => {
+                return Err(CalibError::Unsupported(
+                    "a loop implementation names the form of a stated loop: state its order, bandwidth or update \
+                     interval too",
+                ));
+            }
+        };
         Ok(p)
     }
 }

@@ -5,7 +5,7 @@
 use crate::document::{ResultDocument, SourceConversion};
 use crate::{
     CalibError, Calibration, EpochSeries, EstimateSettings, JointFit, JointSpec, Measurement, MeasurementChoice,
-    calibrate, joint_fit, session_linear_range_rad,
+    calibrate, compare_loop_forms, joint_fit, session_linear_range_rad,
 };
 use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
@@ -77,6 +77,42 @@ pub enum LoopIdentificationMode {
     NaturalFrequencyAndDamping,
 }
 
+/// How the stated loop's discrete form is known.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LoopForm {
+    /// The loop model is the receiver's own, exactly: from a receiver's
+    /// configuration, a simulated session's truth, or a caller's model.
+    #[default]
+    Exact,
+    /// A loop given in words (order, bandwidth, update interval): every
+    /// receiver's form of them ([`gsens_core::LoopModel::discrete_forms`]) is
+    /// fitted, the data choose, and σ takes in the others ([`crate::LoopForms`]).
+    Compared,
+    /// A loop given in words, in this implementation's form of them.
+    Named(gsens_core::LoopImplementation),
+}
+
+impl LoopForm {
+    /// The forms `stated` (a loop in words, at its update interval) may take
+    /// under this rule: itself when exact, every one of
+    /// [`gsens_core::LoopModel::discrete_forms`] when compared, the named
+    /// implementation's (an error when the words have none).
+    pub fn forms_of(self, stated: &LoopModel) -> Result<Vec<LoopModel>, CalibError> {
+        let forms: Vec<LoopModel> = match self {
+            LoopForm::Exact => return Ok(vec![*stated]),
+            LoopForm::Compared => stated.discrete_forms().collect(),
+            LoopForm::Named(i) => stated.discrete_forms().filter(|f| f.implementation() == i).collect(),
+        };
+        match (forms.is_empty(), self) {
+            (true, LoopForm::Named(implementation)) => {
+                Err(CalibError::NoLoopForm { stated: stated.to_string(), implementation })
+            }
+            _ => Ok(forms),
+        }
+    }
+}
+
 /// The relative 1σ tolerance of a loop stated by its design (order,
 /// bandwidth, update interval) when the user gives none: 2 %. With the
 /// order, bandwidth and update interval stated right, an implementation's
@@ -119,6 +155,9 @@ pub struct PipelineSettings {
     /// not, the loop is chosen among typical receiver loops by the data
     /// ([`crate::choose_loop`]) and the estimate is flagged until it is stated.
     pub loop_stated: bool,
+    /// Whether the loop in `estimate` is the receiver's exactly or a loop
+    /// given in words, whose discrete form is then named or chosen by the data.
+    pub loop_form: LoopForm,
     /// Replace isolated IMU spikes by the mean of their neighbours before
     /// anything else ([`gsens_session::replace_imu_spikes`]; default on).
     pub despike_imu: bool,
@@ -135,6 +174,7 @@ impl Default for PipelineSettings {
             loop_identification: LoopIdentificationMode::default(),
             loop_tolerance: None,
             loop_stated: true,
+            loop_form: LoopForm::Exact,
             despike_imu: true,
             measurement: MeasurementChoice::Auto,
         }
@@ -420,11 +460,32 @@ fn calibrate_prepared(
         // The data chose the loop: nothing was stated to hold it to.
         spec.loop_tolerance = None;
     }
+    let fits_nuisance = spec.natural_frequency || spec.offset_max_abs_s.is_some();
+    // A loop stated in words: which receiver's form of it, named or (with
+    // the joint fit to cover the rest in σ) the data's choice; without the
+    // joint fit the stated loop is taken as exact, its form included.
+    let mut forms = Vec::new();
+    if settings.loop_stated {
+        forms = settings.loop_form.forms_of(&estimate.loop_at(session.log_interval_s))?;
+        if forms.len() == 1 || !fits_nuisance {
+            estimate.receiver_loop = forms[0];
+        }
+    }
     let mut joint = None;
-    if spec.natural_frequency || spec.offset_max_abs_s.is_some() {
+    if fits_nuisance {
         let stage = |error| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", error };
+        let mut loop_forms = None;
+        if forms.len() > 1 {
+            crate::progress::stage("comparing the stated loop's forms", None);
+            let (form, compared) = compare_loop_forms(&series_of(&session), &estimate, spec, &forms).map_err(stage)?;
+            estimate.receiver_loop = form;
+            loop_forms = Some(compared);
+        }
         crate::progress::stage("fitting the loop and the IMU time offset", None);
-        let fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
+        let mut fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
+        if let Some(forms) = loop_forms {
+            fit.cover_loop_forms(forms);
+        }
         if let Some(offset_s) = fit.imu_time_offset_s {
             reinterpolate_imu(&mut session, imu, offset_s);
             flat_run_epochs += mask_flat_runs(&mut session, &flat_runs);

@@ -31,6 +31,10 @@ pub(crate) struct MonteCarloArgs {
     /// (the loop-free estimate needs none).
     #[arg(long, conflicts_with = "stated_bn_scale")]
     pub loop_unstated: bool,
+    /// State the loop in words only, not as gsens's own discrete form: the data choose among the forms
+    /// the words take in the receivers gsens models, as for a user who names no implementation.
+    #[arg(long, conflicts_with = "loop_unstated")]
+    pub loop_form_unknown: bool,
     #[command(flatten)]
     pub estimator: EstimatorOptions,
     #[command(flatten)]
@@ -50,7 +54,10 @@ pub(crate) fn run(args: &MonteCarloArgs, given: &[&str]) -> Result<crate::Status
         ..CalibrationOptions::default()
     };
     let stated = (!args.loop_unstated).then_some(args.stated_bn_scale);
-    let methods = method_settings(&scenario, &options, &args.methods, stated)?;
+    let mut methods = method_settings(&scenario, &options, &args.methods, stated)?;
+    if args.loop_form_unknown {
+        methods.iter_mut().for_each(|m| m.loop_form = gsens_calib::LoopForm::Compared);
+    }
     let name = args.scenario.scenario.as_ref().map_or("default".into(), |p| p.display().to_string());
     let (runs, seed) = (args.runs, args.scenario.seed);
     let mc =

@@ -42,6 +42,8 @@ fn report_writes_html_json_header_and_figures() {
         "0.001",
         "--logged-phase",
         "mean",
+        "--loop-implementation",
+        "kaplan",
         "--out",
         &out,
     ]);
@@ -69,7 +71,8 @@ fn report_writes_html_json_header_and_figures() {
     assert!(v["truth_gamma_hz_per_mps2"].is_array());
     let g0 = v["gamma_hz_per_mps2"][0].as_f64().unwrap();
     // `estimate --json` writes the same result document: every key but the
-    // report's own block agrees, value for value.
+    // report's own block agrees, value for value (the loop's form named, as
+    // the truth file names it for `report`).
     let est_json = format!("{d}/estimate.json");
     gsens(&[
         "estimate",
@@ -81,6 +84,8 @@ fn report_writes_html_json_header_and_figures() {
         "0.001",
         "--logged-phase",
         "mean",
+        "--loop-implementation",
+        "kaplan",
         "--json",
         &est_json,
     ]);

@@ -45,7 +45,7 @@ pub use estimator::{
     RecursiveLeastSquares, hac_covariance,
 };
 pub use filter::HighPass;
-pub use loop_model::{LoopModel, LoopPeak, TWO_RATE_FACTORS};
+pub use loop_model::{LoopImplementation, LoopModel, LoopPeak, TWO_RATE_FACTORS};
 pub use observability::{Observability, ObservabilityCriteria, assess, axes_in_solve, solve_in_observable_axes};
 pub use pll::{
     CarrierLoop, Complex, DiscretePll, KAPLAN_A3, KAPLAN_B3, LOOP_STATE_LEN, LinearLoop, LoopError, LoopFilter,

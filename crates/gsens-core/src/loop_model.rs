@@ -46,6 +46,33 @@ pub enum LoopModel {
     PocketSdr(PocketSdrStage),
 }
 
+/// Which receiver's discrete loop a [`LoopModel`] is: the variants' names,
+/// for a user who knows the implementation but states the loop in words.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum LoopImplementation {
+    /// Kaplan & Hegarty's filter as [`DiscretePll`] runs it (gsens's own
+    /// loop, the one its simulator tracks with).
+    Kaplan,
+    /// GNSS-SDR's `dll_pll_veml` carrier loop.
+    GnssSdr,
+    /// PocketSDR's `pocket_trk` PLL.
+    PocketSdr,
+}
+
+impl core::fmt::Display for LoopImplementation {
+    /// The receiver's name: `Kaplan (gsens)`, `GNSS-SDR`, `PocketSDR`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            LoopImplementation::Kaplan => "Kaplan (gsens)",
+            LoopImplementation::GnssSdr => "GNSS-SDR",
+            LoopImplementation::PocketSdr => "PocketSDR",
+        })
+    }
+}
+
 /// The peak of |L(j2πf)|: where shaking makes the largest phase error per Hz
 /// of frequency bias.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -309,6 +336,61 @@ impl LoopModel {
             sqrt(lo * hi)
         };
         Ok([find(BAND_LO_HZ, peak.f_hz, true), find(peak.f_hz, self.search_hi_hz(), false)])
+    }
+
+    /// Which receiver's loop this is.
+    pub fn implementation(&self) -> LoopImplementation {
+        match self {
+            LoopModel::Kaplan { .. } => LoopImplementation::Kaplan,
+            LoopModel::GnssSdr(_) => LoopImplementation::GnssSdr,
+            LoopModel::PocketSdr(_) => LoopImplementation::PocketSdr,
+        }
+    }
+
+    /// The discrete loops a loop given in words (order, Bn, shape and update
+    /// interval, as [`LoopModel::Kaplan`]) may be, the loop itself first:
+    /// the same words name different filters in different receivers.
+    ///
+    /// - Kaplan & Hegarty's filter as [`DiscretePll`] runs it (this loop);
+    /// - GNSS-SDR's `dll_pll_veml` ([`crate::pll::gnss_sdr`]) with bandwidth
+    ///   Bn, for a 2nd-order loop of ζ = 0.707 (its a₂ = 1.414) or a
+    ///   3rd-order one of Kaplan's a₃, b₃ (the values GNSS-SDR names), when
+    ///   the interval is a whole number of 1 ms code periods that divides the
+    ///   20 ms data bit (its `extend_correlation_symbols`);
+    /// - PocketSDR's `pocket_trk` PLL ([`crate::pll::pocket_sdr`]) with
+    ///   `b_pll` = Bn, for a 3rd-order loop of Kaplan's a₃, b₃.
+    ///
+    /// Only the forms that are stable at the interval are given. A loop
+    /// that is already a receiver's own, or given by its filter coefficients
+    /// or without an interval, has only itself.
+    pub fn discrete_forms(&self) -> impl Iterator<Item = LoopModel> {
+        // ζ and a₃, b₃ as GNSS-SDR and PocketSDR write them (to their digits).
+        let near = |a: f64, b: f64| (a - b).abs() <= 5e-4;
+        let (gnss_sdr, pocket_sdr) = match *self {
+            LoopModel::Kaplan { spec, interval_s: Some(t) } => {
+                let kaplan_third =
+                    |a3: f64, b3: f64| near(a3, crate::pll::KAPLAN_A3) && near(b3, crate::pll::KAPLAN_B3);
+                let (order, bn_hz) = match spec {
+                    LoopSpec::SecondOrder { bn_hz, zeta } if near(zeta, 0.5 * A2) => (Some(2), bn_hz),
+                    LoopSpec::ThirdOrder { bn_hz, a3, b3 } if kaplan_third(a3, b3) => (Some(3), bn_hz),
+                    _ => (None, 0.0),
+                };
+                let symbols = round(t / crate::pll::gnss_sdr::SYMBOL_S);
+                let whole_ms = symbols >= 1.0 && (t - symbols * crate::pll::gnss_sdr::SYMBOL_S).abs() <= 1e-9 * t;
+                let gnss_sdr = order
+                    .filter(|_| whole_ms)
+                    .map(|order| GnssSdrStage { order, bw_hz: bn_hz, symbols: symbols as u32 })
+                    .filter(|stage| stage.updates_per_record().is_some())
+                    .map(LoopModel::GnssSdr);
+                let pocket_sdr =
+                    (order == Some(3)).then_some(LoopModel::PocketSdr(PocketSdrStage { bw_hz: bn_hz, interval_s: t }));
+                (gnss_sdr, pocket_sdr)
+            }
+            _ => (None, None),
+        };
+        // The receivers' forms only where they are stable at the interval.
+        let others = gnss_sdr.into_iter().chain(pocket_sdr).filter(|m| m.check().is_ok());
+        core::iter::once(*self).chain(others)
     }
 
     /// The runnable linear model Δf → φ, one loop update per step (what the

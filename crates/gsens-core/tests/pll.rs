@@ -283,3 +283,38 @@ fn a_loop_of_order_two_or_three_takes_that_orders_shape_and_no_other_order_is_a_
         assert_eq!(e.to_string(), format!("order must be 2 or 3, got {order}"));
     }
 }
+
+/// The forms a loop in words may take: GNSS-SDR's for its own ζ or a₃, b₃
+/// and a whole-ms interval dividing the bit, PocketSDR's for the 3rd order,
+/// and nothing else for a loop that is already one receiver's or is given
+/// otherwise.
+#[test]
+fn a_loop_in_words_has_each_receivers_form() {
+    use gsens_core::{gnss_sdr::GnssSdrStage, pocket_sdr::PocketSdrStage};
+    let zeta = core::f64::consts::FRAC_1_SQRT_2;
+    let second = |t: Option<f64>| LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 3.0, zeta }, t);
+    let forms: Vec<LoopModel> = second(Some(0.02)).discrete_forms().collect();
+    assert_eq!(forms, vec![second(Some(0.02)), LoopModel::GnssSdr(GnssSdrStage { order: 2, bw_hz: 3.0, symbols: 20 })]);
+    let third = LoopModel::kaplan(LoopSpec::ThirdOrder { bn_hz: 10.0, a3: 1.1, b3: 2.4 }, Some(0.001));
+    let forms: Vec<LoopModel> = third.discrete_forms().collect();
+    assert_eq!(
+        forms,
+        vec![
+            third,
+            LoopModel::GnssSdr(GnssSdrStage { order: 3, bw_hz: 10.0, symbols: 1 }),
+            LoopModel::PocketSdr(PocketSdrStage { bw_hz: 10.0, interval_s: 0.001 }),
+        ]
+    );
+    // 25 ms and 3 ms do not divide the 20 ms bit; another damping is no GNSS-SDR loop.
+    for t in [0.025, 0.003] {
+        assert_eq!(second(Some(t)).discrete_forms().count(), 1, "{t}");
+    }
+    let damped = LoopModel::kaplan(LoopSpec::SecondOrder { bn_hz: 3.0, zeta: 0.9 }, Some(0.02));
+    assert_eq!(damped.discrete_forms().collect::<Vec<_>>(), vec![damped]);
+    assert_eq!(second(None).discrete_forms().count(), 1);
+    let own = LoopModel::GnssSdr(GnssSdrStage { order: 2, bw_hz: 3.0, symbols: 20 });
+    assert_eq!(own.discrete_forms().collect::<Vec<_>>(), vec![own]);
+    // A form unstable at the interval is left out: GNSS-SDR's 3rd order at 20 ms and Bn 30 Hz.
+    let wide = LoopModel::kaplan(LoopSpec::ThirdOrder { bn_hz: 30.0, a3: 1.1, b3: 2.4 }, Some(0.02));
+    assert!(wide.discrete_forms().all(|m| m == wide || m.check().is_ok()));
+}

@@ -59,11 +59,17 @@ pub fn take_truth_loop(settings: &mut PipelineSettings, truth_json: &Path) -> Re
     if settings.loop_stated {
         let same = settings.estimate.receiver_loop == truth.receiver_loop
             && settings.estimate.logged_phase == truth.logged_phase;
+        if same {
+            // The words are the simulated session's loop: its form, the simulator's own, is known.
+            settings.loop_form = gsens_calib::LoopForm::Exact;
+        }
         return Ok(TruthLoopUse::SettingsOwn { truth, same });
     }
     settings.estimate.receiver_loop = truth.receiver_loop;
     settings.estimate.logged_phase = truth.logged_phase;
     settings.loop_stated = true;
+    // The simulator's own discrete loop made the log: its form is known.
+    settings.loop_form = gsens_calib::LoopForm::Exact;
     Ok(TruthLoopUse::Taken { truth })
 }
 

@@ -293,6 +293,13 @@ fn estimate_notes(h: &mut String, d: &ReportData) {
         let _ = writeln!(h, "<p id=\"identified-loop\">{}</p>", lines.join("<br>"));
     }
     let c = &d.document.calibration;
+    if let Some(forms) = c.joint_fit.as_ref().and_then(|j| j.loop_forms.as_ref()) {
+        // The text report's line on which receiver's form of the stated loop the data chose.
+        let mut line = String::new();
+        crate::text::loop_forms(&mut line, forms);
+        let lines: Vec<String> = line.lines().map(|l| escape(l.trim())).collect();
+        let _ = writeln!(h, "<p id=\"loop-forms\">{}</p>", lines.join("<br>"));
+    }
     let truth = d.document.truth_gamma_hz_per_mps2;
     if let Some(t) = truth {
         let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();

@@ -102,6 +102,13 @@ pub(crate) fn identified_loop(s: &mut String, id: &gsens_calib::LoopIdentificati
     };
     let interval_s = l.loop_interval_s;
     let _ = match receiver {
+        // Several shapes with a receiver's among them: the forms of a loop stated in words.
+        Some(r) if l.shapes.len() > 1 => writeln!(
+            s,
+            "receiver loop: the stated loop as {r} implements it (the best fit of {} receivers' forms of it), its \
+             bandwidth fitted to the {record}: {order}, updated every {interval_s} s, {bn}",
+            l.shapes.len()
+        ),
         Some(r) => writeln!(
             s,
             "receiver loop: {r}'s, modelled exactly, its bandwidth fitted to the {record}: {order}, updated every \
@@ -270,6 +277,9 @@ fn loop_check(s: &mut String, doc: &ResultDocument) {
             )
         }
     );
+    if let Some(forms) = &j.loop_forms {
+        loop_forms(s, forms);
+    }
     let inflation = j.variance_inflation.map(f64::sqrt);
     let _ = writeln!(
         s,
@@ -286,6 +296,41 @@ fn loop_check(s: &mut String, doc: &ResultDocument) {
                 gsens_calib::two_rate_advice(&c.loop_used)
             ))
             .unwrap_or_default()
+    );
+}
+
+/// Which receiver's form of a loop stated in words the data fit, and what
+/// σ covers of the others.
+pub(crate) fn loop_forms(s: &mut String, forms: &gsens_calib::LoopForms) {
+    let chosen = forms.chosen_form();
+    let others: Vec<String> = forms
+        .forms
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| *k != forms.chosen)
+        .map(|(_, f)| format!("{} by {:.1}", f.form, f.delta_m2lnl))
+        .collect();
+    let alike: Vec<&str> = forms.alike().map(|f| f.form.as_str()).collect();
+    let _ = writeln!(
+        s,
+        "  the stated loop's form: the data fit {} best (−2 ln L higher: {}); {}",
+        chosen.form,
+        others.join("; "),
+        if alike.is_empty() {
+            "σ takes in the others' Γ̂ by the data's odds for them".to_string()
+        } else {
+            format!(
+                "σ reaches the Γ̂ of {}, which fit alike (within {})",
+                alike.join(" and "),
+                Decimal(forms.alike_within)
+            )
+        },
+    );
+    let added = forms.added_variance_hz_per_mps2_sq.map(f64::sqrt);
+    let _ = writeln!(
+        s,
+        "    adding ±{:.5}, ±{:.5}, ±{:.5} Hz/(m/s²) in quadrature (x, y, z); name the implementation to spare it",
+        added[0], added[1], added[2]
     );
 }
 

@@ -1,0 +1,204 @@
+//! Which discrete loop a loop stated in words is.
+//!
+//! "2nd order, Bn 3 Hz, every 20 ms" names a different filter in each
+//! receiver ([`LoopModel::discrete_forms`]): Kaplan & Hegarty's as gsens
+//! runs it, GNSS-SDR's, PocketSDR's. At a long update interval they differ
+//! by a few per cent in the response, which biases Γ̂ by as much while the
+//! fitted natural frequency moves only within the loop's tolerance. So every
+//! form is fitted (Γ, its natural frequency and the offset, as the joint fit
+//! would), the data's likelihood picks the form, and Γ̂'s variance takes in
+//! the other forms' Γ̂ by the data's odds for them, reaching every form the
+//! data cannot tell from the best.
+//!
+//! The likelihood is that of coloured noise: each form's residuals are
+//! prewhitened by one AR model of the noise (Burg's, fitted to the stated
+//! form's residuals) and −2 ln L = n·ln(Σe²) over the n innovations (the
+//! conditional likelihood, σ² profiled out). The forms have the same number
+//! of parameters, so −2 ln L compares them directly; a white-noise RSS
+//! would overstate how well strongly coloured loop residuals tell them
+//! apart.
+
+use super::{JointSpec, Residuals, batch_pass, fit_axes, scaled_loop, solve_with_residuals};
+use crate::{CalibError, EpochSeries, EstimateSettings, gls};
+use gsens_core::LoopModel;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
+
+/// Δ(−2 ln L) at or below which the data cannot tell a form from the best:
+/// the profile likelihood's 1σ region, as for the identified loop's shapes.
+pub const LOOP_FORM_ALIKE: f64 = 1.0;
+
+/// The most residuals the noise model of the comparison is fitted to (the
+/// first ones, run by run): enough for its spectrum, as in the GLS step
+/// ([`gls::GlsSettings::max_fit_samples`]).
+const NOISE_FIT_SAMPLES: usize = 40_000;
+
+/// One discrete form of the stated loop, as the data fit it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoopFormFit {
+    /// The form, in words.
+    pub form: String,
+    /// −2 ln L of its fit over the best form's (0 for the best).
+    pub delta_m2lnl: f64,
+    /// Γ̂ of its fit, the natural frequency and the offset fitted freely
+    /// \[Hz/(m/s²)\].
+    pub gamma_hz_per_mps2: [f64; 3],
+    /// The natural frequency ωn/2π of its fit \[Hz\] (`None`: held at the
+    /// stated one, or none).
+    pub natural_frequency_hz: Option<f64>,
+    /// The same for the form at the stated bandwidth \[Hz\].
+    pub stated_natural_frequency_hz: Option<f64>,
+}
+
+/// The discrete forms of a loop stated in words, compared by the data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoopForms {
+    /// Every form fitted, the stated one (gsens's own) first.
+    pub forms: Vec<LoopFormFit>,
+    /// The index of the form Γ̂ is given under: the best fit.
+    pub chosen: usize,
+    /// Δ(−2 ln L) within which a form is covered by σ ([`LOOP_FORM_ALIKE`]).
+    pub alike_within: f64,
+    /// Per axis, the variance added to Γ̂'s: the forms' spread about the
+    /// best's Γ̂ weighted by the data's odds, Σ_k w_k·(Γ̂_k − Γ̂_best)² with
+    /// w_k ∝ exp(−Δ_k/2), or, when larger, the largest (Γ̂_k − Γ̂_best)² of
+    /// the forms within [`LoopForms::alike_within`] (so that 1σ reaches each);
+    /// Γ̂ of the forms' free fits \[(Hz/(m/s²))²\].
+    pub added_variance_hz_per_mps2_sq: [f64; 3],
+}
+
+impl LoopForms {
+    /// The chosen form's fit.
+    pub fn chosen_form(&self) -> &LoopFormFit {
+        &self.forms[self.chosen]
+    }
+
+    /// The forms other than the chosen one the data cannot tell from it.
+    pub fn alike(&self) -> impl Iterator<Item = &LoopFormFit> {
+        let chosen = self.chosen;
+        self.forms
+            .iter()
+            .enumerate()
+            .filter(move |(k, f)| *k != chosen && f.delta_m2lnl <= self.alike_within)
+            .map(|(_, f)| f)
+    }
+}
+
+/// The form among `forms` (of `settings`' loop, the stated one first) the
+/// data fit best, and the comparison. Each form is fitted as `spec` asks,
+/// without a tolerance (the data's fit) and without its covariance, on the
+/// axes the first form's pass observes; the forms in parallel.
+pub(crate) fn compare_loop_forms(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    spec: JointSpec,
+    forms: &[LoopModel],
+) -> Result<(LoopModel, LoopForms), CalibError> {
+    let with_form = |form: &LoopModel| EstimateSettings { receiver_loop: *form, ..*settings };
+    let passes = forms.par_iter().map(|form| batch_pass(series, &with_form(form))).collect::<Result<Vec<_>, _>>()?;
+    let axes = fit_axes(&passes[0].1, settings);
+    let free = JointSpec { loop_tolerance: None, ..spec };
+    let fits = forms
+        .par_iter()
+        .zip(passes)
+        .map(|(form, (fed, _))| {
+            solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Owned(fed), None, false)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let n = series.phase_err_rad.len();
+    let residuals: Vec<&Residuals> = fits.iter().map(|(_, r)| r).collect();
+    let m2lnl = whitened_m2lnl(&residuals, n, series.log_interval_s);
+    let best = m2lnl.iter().copied().fold(f64::INFINITY, f64::min);
+    let chosen = m2lnl.iter().position(|&v| v == best).unwrap_or(0);
+    let gamma_chosen = fits[chosen].0.gamma;
+    let models = forms;
+    let forms: Vec<LoopFormFit> = models
+        .iter()
+        .zip(&fits)
+        .zip(&m2lnl)
+        .map(|((form, (sol, _)), v)| LoopFormFit {
+            form: form.to_string(),
+            delta_m2lnl: v - best,
+            gamma_hz_per_mps2: sol.gamma,
+            natural_frequency_hz: sol
+                .fitted
+                .natural_frequency
+                .then(|| scaled_loop(form, sol.theta.ln_s.exp(), sol.theta.zeta).natural_frequency_hz())
+                .flatten(),
+            stated_natural_frequency_hz: form.natural_frequency_hz(),
+        })
+        .collect();
+    let added = form_variance(&forms, gamma_chosen);
+    let model = models[chosen];
+    Ok((model, LoopForms { forms, chosen, alike_within: LOOP_FORM_ALIKE, added_variance_hz_per_mps2_sq: added }))
+}
+
+/// The variance per axis the forms add to Γ̂ of the chosen one,
+/// `gamma_chosen`: the larger of their spread weighted by the data's odds,
+/// Σ_k w_k·(Γ̂_k − Γ̂)² with w_k ∝ exp(−Δ_k/2) (the forms' posterior under
+/// equal priors), and the largest (Γ̂_k − Γ̂)² of the forms within
+/// [`LOOP_FORM_ALIKE`]. The weighted spread covers a wrong choice: under one
+/// shaking rate a receiver's form differs from another's mostly by a gain
+/// and a delay, which Γ and the IMU time offset take up, and the data tell
+/// them apart only by a Δ of about ten, so the other form wins now and then.
+fn form_variance(forms: &[LoopFormFit], gamma_chosen: [f64; 3]) -> [f64; 3] {
+    let weights: Vec<f64> = forms.iter().map(|f| (-0.5 * f.delta_m2lnl).exp()).collect();
+    let total: f64 = weights.iter().sum();
+    [0, 1, 2].map(|i| {
+        let spread = |f: &LoopFormFit| (f.gamma_hz_per_mps2[i] - gamma_chosen[i]).powi(2);
+        let weighted = forms.iter().zip(&weights).map(|(f, w)| w * spread(f)).sum::<f64>() / total;
+        let alike = forms.iter().filter(|f| f.delta_m2lnl <= LOOP_FORM_ALIKE).map(spread).fold(0.0, f64::max);
+        weighted.max(alike)
+    })
+}
+
+/// −2 ln L (up to a constant) of each fit's residuals under one AR model of
+/// the noise: fitted to the first fit's residuals on the epochs every fit
+/// used (at most [`NOISE_FIT_SAMPLES`] of them, the longest memory
+/// [`gls::MAX_AR_SPAN_S`]), each fit's residuals whitened run by run, and
+/// n·ln(Σe²) over the n innovations.
+fn whitened_m2lnl(fits: &[&Residuals], n: usize, log_interval_s: f64) -> Vec<f64> {
+    // Each fit's residuals on the series' epochs, and the epochs every fit used.
+    let mut common = vec![true; n];
+    let full: Vec<Vec<f64>> = fits
+        .iter()
+        .map(|r| {
+            let mut v = vec![f64::NAN; n];
+            for (&k, &e) in r.used.iter().zip(r.rad.iter()) {
+                v[k] = e;
+            }
+            v
+        })
+        .collect();
+    for v in &full {
+        for (c, e) in common.iter_mut().zip(v) {
+            *c &= !e.is_nan();
+        }
+    }
+    let segments = gls::segments_of(common.iter().copied());
+    let mut noise_slices: Vec<&[f64]> = Vec::new();
+    let mut taken = 0;
+    for s in &segments {
+        if taken >= NOISE_FIT_SAMPLES {
+            break;
+        }
+        let len = s.len().min(NOISE_FIT_SAMPLES - taken);
+        noise_slices.push(&full[0][s.start..s.start + len]);
+        taken += len;
+    }
+    let max_order = ((gls::MAX_AR_SPAN_S / log_interval_s).ceil() as usize).min(taken / 20).max(1);
+    let noise = gls::fit_ar(&noise_slices, max_order);
+    full.par_iter()
+        .map(|v| {
+            let (mut sum, mut count) = (0.0, 0usize);
+            for s in &segments {
+                for e in noise.whiten(&v[s.clone()]) {
+                    sum += e * e;
+                    count += 1;
+                }
+            }
+            count as f64 * (sum / count.max(1) as f64).ln()
+        })
+        .collect()
+}
