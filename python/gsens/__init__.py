@@ -177,13 +177,15 @@ class Simulation:
         return _pandas("tracking_frame").DataFrame(self.tracking)
 
     def estimate_settings(self) -> Dict[str, Any]:
-        """The loop settings that describe this session's receiver (for :func:`estimate`)."""
+        """The loop settings that describe this session's receiver (for :func:`estimate`),
+        its implementation included: the simulator runs gsens's own discrete loop."""
         loop = self.truth["scenario"]["loop"]
         s: Dict[str, Any] = {"order": loop["order"], "bn_hz": loop["bn_hz"], "loop_interval_s": loop["interval_s"]}
         s["zeta" if loop["order"] == 2 else "a3"] = loop["zeta"] if loop["order"] == 2 else loop["a3"]
         if loop["order"] == 3:
             s["b3"] = loop["b3"]
         s["logged_phase"] = self.truth["logged_phase"]
+        s["loop_implementation"] = "kaplan"
         return s
 
 

@@ -34,7 +34,7 @@ pub(crate) use forms::compare_loop_forms;
 pub use forms::{LOOP_FORM_ALIKE, LoopFormFit, LoopForms};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
-use params::{Fitted, Theta};
+use params::{Fitted, Start, Theta};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -198,16 +198,42 @@ fn zeta_of(model: &LoopModel) -> Option<f64> {
 /// extrapolated there. When the test rejects the stated loop, Γ̂ is the free
 /// fit's.
 pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointSpec) -> Result<JointFit, CalibError> {
+    joint_fit_from(series, settings, spec, None)
+}
+
+/// Where a joint fit may start: the stated loop's pass over the series, the
+/// axes fitted and θ where an earlier fit of the same problem ended (the
+/// comparison of the stated loop's forms fits the chosen one so).
+pub(crate) struct FitStart {
+    fed0: Vec<FedEpoch>,
+    axes: Vec<usize>,
+    theta: Theta,
+}
+
+/// [`joint_fit`], from `start` when given (its free fit then confirms the
+/// earlier one's end in one Gauss–Newton step rather than searching again).
+pub(crate) fn joint_fit_from(
+    series: &EpochSeries,
+    settings: &EstimateSettings,
+    spec: JointSpec,
+    start: Option<FitStart>,
+) -> Result<JointFit, CalibError> {
     // The stated loop's pass: it decides the axes and starts the fit.
-    let (fed0, ne) = batch_pass(series, settings)?;
-    let axes = fit_axes(&ne, settings);
+    let (fed0, axes, start) = match start {
+        Some(FitStart { fed0, axes, theta }) => (fed0, axes, Start::At(theta)),
+        None => {
+            let (fed0, ne) = batch_pass(series, settings)?;
+            let axes = fit_axes(&ne, settings);
+            (fed0, axes, Start::Search)
+        }
+    };
     let stated = settings.loop_at(series.log_interval_s);
     let fit_loop = spec.natural_frequency && stated.natural_frequency_hz().is_some();
     let tolerance = spec.loop_tolerance.filter(|t| fit_loop && t.is_finite());
     let Some(tol) = tolerance else {
-        return free_fit(series, settings, spec, &axes, fed0, true);
+        return free_fit(series, settings, (spec, &axes), fed0, start, true);
     };
-    let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), None, true)?;
+    let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), start, true)?;
     let (ln_s, c_ss) = free.ln_s_and_variance().unwrap_or((0.0, 0.0));
     let z = ln_s / (c_ss + tol * tol).sqrt();
     // No variance of ln ŝ (NaN included) or a rejected loop: the free fit.
@@ -231,7 +257,7 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
         Cow::Owned(triad_pass(series, settings, &at_post.receiver_loop)?)
     };
     let held = JointSpec { natural_frequency: false, loop_tolerance: None, ..spec };
-    let refit = solve(series, &at_post, held, &axes, fed_post, Some(free.theta.dtau_s), true)?;
+    let refit = solve(series, &at_post, held, &axes, fed_post, Start::Offset(free.theta.dtau_s), true)?;
     let posterior = free.posterior(&refit, ln_s_post, var_post);
     // Held exact, the free fit's linearization is not used: the held fit's σ_τ is what must hold.
     let linearization_sigma_tau_s = if tol == 0.0 { posterior.sigma_tau_s() } else { free.sigma_tau_s() };
@@ -342,16 +368,15 @@ struct Problem<'a> {
 }
 
 impl<'a> Problem<'a> {
-    /// The problem of [`solve`] and its start: the stated loop, the offset
-    /// `start_dtau_s` clamped to its range (`None`: the global search's
-    /// under the stated loop; 0 when not fitted). Fewer than 20 epochs are
-    /// an error.
+    /// The problem of [`solve`] and its start: the stated loop (or where
+    /// `start` says), the offset clamped to its range (0 when not fitted).
+    /// Fewer than 20 epochs are an error.
     fn new(
         series: &'a EpochSeries<'a>,
         settings: &'a EstimateSettings,
         (spec, axes): (JointSpec, &'a [usize]),
         fed0: &[FedEpoch],
-        start_dtau_s: Option<f64>,
+        start: Start,
     ) -> Result<(Self, Theta), CalibError> {
         let t = series.log_interval_s;
         let stated = settings.loop_at(t);
@@ -363,9 +388,14 @@ impl<'a> Problem<'a> {
             offset_max_abs_s: spec.offset_max_abs_s,
         };
         let margin = spec.offset_max_abs_s.map_or(0, |m| (m / t).ceil() as usize + 2);
-        let dtau_s = match (spec.offset_max_abs_s, start_dtau_s) {
-            (Some(max), Some(d)) => d.clamp(-max, max),
-            (Some(max), None) => offset_profile(fed0, t, max)?.dtau_s,
+        let theta0 = match start {
+            Start::At(theta) => theta,
+            Start::Search | Start::Offset(_) => Theta { ln_s: 0.0, zeta: zeta0, dtau_s: 0.0 },
+        };
+        let dtau_s = match (spec.offset_max_abs_s, start) {
+            (Some(max), Start::Offset(d)) => d.clamp(-max, max),
+            (Some(max), Start::At(theta)) => theta.dtau_s.clamp(-max, max),
+            (Some(max), Start::Search) => offset_profile(fed0, t, max)?.dtau_s,
             (None, _) => 0.0,
         };
         let n = fed0.len();
@@ -379,7 +409,7 @@ impl<'a> Problem<'a> {
         }
         let phi: Vec<f64> = used.par_iter().map(|&k| fed0[k].phase_err_rad.unwrap_or(0.0)).collect();
         let problem = Problem { series, settings, stated, fitted, axes, used, phi };
-        Ok((problem, Theta { ln_s: 0.0, zeta: zeta0, dtau_s }))
+        Ok((problem, Theta { dtau_s, ..theta0 }))
     }
 
     /// The stated loop with ln s and ζ of θ.
@@ -523,7 +553,7 @@ struct Normal {
 
 /// Gauss–Newton on Γ (on `axes`) and the nuisance parameters `spec` asks
 /// for, from `fed0`, the series as `settings`' loop fed it, and the offset
-/// `start_dtau_s` (None: the global search's under that loop). Without
+/// as `start` says. Without
 /// `covariance` the sandwich is left out (its matrices NaN): the parameters
 /// and the RSS are the same.
 fn solve(
@@ -532,10 +562,10 @@ fn solve(
     spec: JointSpec,
     axes: &[usize],
     fed0: Cow<'_, [FedEpoch]>,
-    start_dtau_s: Option<f64>,
+    start: Start,
     covariance: bool,
 ) -> Result<Solution, CalibError> {
-    solve_with_residuals(series, settings, (spec, axes), fed0, start_dtau_s, covariance).map(|(sol, _)| sol)
+    solve_with_residuals(series, settings, (spec, axes), fed0, start, covariance).map(|(sol, _)| sol)
 }
 
 /// The residuals of a solved joint fit: the epochs fitted (indices into the
@@ -551,10 +581,10 @@ fn solve_with_residuals(
     settings: &EstimateSettings,
     (spec, axes): (JointSpec, &[usize]),
     fed0: Cow<'_, [FedEpoch]>,
-    start_dtau_s: Option<f64>,
+    start: Start,
     covariance: bool,
 ) -> Result<(Solution, Residuals), CalibError> {
-    let (problem, mut theta) = Problem::new(series, settings, (spec, axes), &fed0, start_dtau_s)?;
+    let (problem, mut theta) = Problem::new(series, settings, (spec, axes), &fed0, start)?;
     let fitted = problem.fitted;
     let y = DVector::from_column_slice(&problem.phi);
     let mut iterations = 0;
@@ -896,13 +926,13 @@ pub fn choose_loop(
 fn free_fit(
     series: &EpochSeries,
     settings: &EstimateSettings,
-    spec: JointSpec,
-    axes: &[usize],
+    (spec, axes): (JointSpec, &[usize]),
     fed0: Vec<FedEpoch>,
+    start: Start,
     covariance: bool,
 ) -> Result<JointFit, CalibError> {
     let stated = settings.loop_at(series.log_interval_s);
-    let free = solve(series, settings, spec, axes, Cow::Owned(fed0), None, covariance)?;
+    let free = solve(series, settings, spec, axes, Cow::Owned(fed0), start, covariance)?;
     let data = free.ln_s_and_variance();
     let evidence = LoopEvidence { data, tolerance: None, linearization_sigma_tau_s: free.sigma_tau_s() };
     Ok(describe(series, &stated, spec, axes, &free, evidence))
@@ -917,7 +947,7 @@ fn candidate_fit(
     spec: JointSpec,
 ) -> Result<(f64, LoopModel), CalibError> {
     let (fed0, ne) = batch_pass(series, settings)?;
-    let fit = free_fit(series, settings, spec, &fit_axes(&ne, settings), fed0, false)?;
+    let fit = free_fit(series, settings, (spec, &fit_axes(&ne, settings)), fed0, Start::Search, false)?;
     Ok((fit.rss_rad2, fit.fitted(&settings.loop_at(series.log_interval_s))))
 }
 

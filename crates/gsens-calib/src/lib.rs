@@ -88,11 +88,11 @@ pub use estimate::{
     CompensatedEpoch, EpochSeries, HISTORY_INTERVAL_S, calibrate, compensation_series, imu_systematic_sigma,
     regressors, streaming_calibrator, warmup_epochs,
 };
-pub(crate) use joint::compare_loop_forms;
 pub use joint::{
     ChosenLoop, JointFit, JointSpec, LOOP_FORM_ALIKE, LOOP_TEST_FALSE_ALARM, LOOP_TEST_Z, LoopFormFit, LoopForms,
     TYPICAL_LOOP_INTERVALS_S, choose_loop, joint_fit,
 };
+pub(crate) use joint::{compare_loop_forms, joint_fit_from};
 pub use loop_free::{
     CROSS_CHECK_FALSE_ALARM, InputPhases, LoopFreeCheck, LoopFreeError, LoopFreeEstimate, LoopFreeSettings,
     TrackInputPhase, estimate_loop_free, estimate_loop_free_choosing, estimate_loop_free_from,

@@ -5,7 +5,7 @@
 use crate::document::{ResultDocument, SourceConversion};
 use crate::{
     CalibError, Calibration, EpochSeries, EstimateSettings, JointFit, JointSpec, Measurement, MeasurementChoice,
-    calibrate, compare_loop_forms, joint_fit, session_linear_range_rad,
+    calibrate, compare_loop_forms, joint_fit_from, session_linear_range_rad,
 };
 use gsens_core::{Discriminator, LoopModel};
 use gsens_io::{FormatError, ImuSeries, TrackingLog};
@@ -474,15 +474,16 @@ fn calibrate_prepared(
     let mut joint = None;
     if fits_nuisance {
         let stage = |error| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", error };
-        let mut loop_forms = None;
+        let (mut loop_forms, mut start) = (None, None);
         if forms.len() > 1 {
             crate::progress::stage("comparing the stated loop's forms", None);
-            let (form, compared) = compare_loop_forms(&series_of(&session), &estimate, spec, &forms).map_err(stage)?;
+            let (form, compared, from) =
+                compare_loop_forms(&series_of(&session), &estimate, spec, &forms).map_err(stage)?;
             estimate.receiver_loop = form;
-            loop_forms = Some(compared);
+            (loop_forms, start) = (Some(compared), Some(from));
         }
         crate::progress::stage("fitting the loop and the IMU time offset", None);
-        let mut fit = joint_fit(&series_of(&session), &estimate, spec).map_err(stage)?;
+        let mut fit = joint_fit_from(&series_of(&session), &estimate, spec, start).map_err(stage)?;
         if let Some(forms) = loop_forms {
             fit.cover_loop_forms(forms);
         }

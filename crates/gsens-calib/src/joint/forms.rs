@@ -18,7 +18,7 @@
 //! would overstate how well strongly coloured loop residuals tell them
 //! apart.
 
-use super::{JointSpec, Residuals, batch_pass, fit_axes, scaled_loop, solve_with_residuals};
+use super::{FitStart, JointSpec, Residuals, Start, batch_pass, fit_axes, scaled_loop, solve_with_residuals};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
 use gsens_core::LoopModel;
 use rayon::prelude::*;
@@ -94,16 +94,17 @@ pub(crate) fn compare_loop_forms(
     settings: &EstimateSettings,
     spec: JointSpec,
     forms: &[LoopModel],
-) -> Result<(LoopModel, LoopForms), CalibError> {
+) -> Result<(LoopModel, LoopForms, FitStart), CalibError> {
     let with_form = |form: &LoopModel| EstimateSettings { receiver_loop: *form, ..*settings };
-    let passes = forms.par_iter().map(|form| batch_pass(series, &with_form(form))).collect::<Result<Vec<_>, _>>()?;
+    let mut passes =
+        forms.par_iter().map(|form| batch_pass(series, &with_form(form))).collect::<Result<Vec<_>, _>>()?;
     let axes = fit_axes(&passes[0].1, settings);
     let free = JointSpec { loop_tolerance: None, ..spec };
     let fits = forms
         .par_iter()
-        .zip(passes)
+        .zip(&passes)
         .map(|(form, (fed, _))| {
-            solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Owned(fed), None, false)
+            solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Borrowed(fed), Start::Search, false)
         })
         .collect::<Result<Vec<_>, _>>()?;
     let n = series.phase_err_rad.len();
@@ -131,7 +132,10 @@ pub(crate) fn compare_loop_forms(
         .collect();
     let added = form_variance(&forms, gamma_chosen);
     let model = models[chosen];
-    Ok((model, LoopForms { forms, chosen, alike_within: LOOP_FORM_ALIKE, added_variance_hz_per_mps2_sq: added }))
+    // The chosen form's joint fit starts where its fit here ended.
+    let start = FitStart { fed0: passes.swap_remove(chosen).0, axes, theta: fits[chosen].0.theta };
+    let compared = LoopForms { forms, chosen, alike_within: LOOP_FORM_ALIKE, added_variance_hz_per_mps2_sq: added };
+    Ok((model, compared, start))
 }
 
 /// The variance per axis the forms add to Γ̂ of the chosen one,
@@ -201,4 +205,35 @@ fn whitened_m2lnl(fits: &[&Residuals], n: usize, log_interval_s: f64) -> Vec<f64
             count as f64 * (sum / count.max(1) as f64).ln()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn form(delta_m2lnl: f64, gamma_x: f64) -> LoopFormFit {
+        LoopFormFit {
+            form: String::new(),
+            delta_m2lnl,
+            gamma_hz_per_mps2: [gamma_x, 0.0, 0.0],
+            natural_frequency_hz: None,
+            stated_natural_frequency_hz: None,
+        }
+    }
+
+    /// The odds-weighted spread in closed form, w = e^{−Δ/2}/(1 + e^{−Δ/2}),
+    /// and the whole spread of a form within Δ ≤ 1.
+    #[test]
+    fn the_forms_add_their_spread_by_the_datas_odds() {
+        let d = 0.01;
+        let added = form_variance(&[form(0.0, 0.1), form(2.0, 0.1 + d)], [0.1, 0.0, 0.0]);
+        let w = (-1.0f64).exp() / (1.0 + (-1.0f64).exp());
+        assert!((added[0] - w * d * d).abs() < 1e-15, "{added:?}");
+        assert_eq!((added[1], added[2]), (0.0, 0.0));
+        let alike = form_variance(&[form(0.0, 0.1), form(0.5, 0.1 + d)], [0.1, 0.0, 0.0]);
+        assert!((alike[0] - d * d).abs() < 1e-15, "{alike:?}");
+        // A form the data rule out adds (almost) nothing.
+        let far = form_variance(&[form(0.0, 0.1), form(60.0, 0.1 + d)], [0.1, 0.0, 0.0]);
+        assert!(far[0] < 1e-13 * d * d, "{far:?}");
+    }
 }

@@ -86,6 +86,18 @@ impl Params {
     }
 }
 
+/// Where a joint fit's Gauss–Newton starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Start {
+    /// The stated loop, at the offset of the global search under it.
+    Search,
+    /// The stated loop, at this offset \[s\].
+    Offset(f64),
+    /// Where an earlier fit of the same problem (loop, settings, axes)
+    /// ended: Gauss–Newton then takes one step to confirm it.
+    At(Theta),
+}
+
 /// Where the nuisance parameters θ are: ln s of the loop (relative to the
 /// loop the fit starts from), its damping ζ (the stated one's when not
 /// fitted; `None` for a loop without one) and the offset τ \[s\] (relative to
