@@ -53,6 +53,7 @@ struct Options {
     b3: Value,
     loop_interval_s: Value,
     logged_phase: Option<bool>,
+    loop_implementation: Option<u8>,
     method: u8,
     gain_k: Value,
     lambda: Value,
@@ -93,6 +94,10 @@ impl Options {
                 b3: self.b3.or(d.receiver_loop.b3),
                 loop_interval_s: self.loop_interval_s.opt(d.receiver_loop.loop_interval_s),
                 logged_phase: self.logged_phase.map(|l| if l { LoggedPhase::Last } else { LoggedPhase::Mean }),
+                loop_implementation: self.loop_implementation.map(|k| {
+                    use gsens_core::LoopImplementation::{GnssSdr, Kaplan, PocketSdr};
+                    [Kaplan, GnssSdr, PocketSdr][usize::from(k) % 3]
+                }),
                 discriminator: if self.atan2_discriminator {
                     gsens_core::Discriminator::Atan2
                 } else {
