@@ -30,8 +30,8 @@ mod params;
 
 use crate::search::{Shift, batch_pass, offset_profile, scaled_loop};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
-pub(crate) use forms::compare_loop_forms;
 pub use forms::{LOOP_FORM_ALIKE, LoopFormFit, LoopForms};
+pub(crate) use forms::{compare_loop_forms, weighted_spread};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
 use params::{Fitted, Start, Theta};

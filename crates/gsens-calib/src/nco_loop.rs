@@ -300,15 +300,8 @@ pub fn estimate_nco_frequency_identified_from(
     // is resolved when the other order's shapes (and H = 1) weigh under 5 %.
     let weights: Vec<f64> = totals.iter().map(|t| (-0.5 * (t - totals[k_best])).exp()).collect();
     let total: f64 = weights.iter().sum();
-    let g_best = candidates[k_best].estimate.gamma_hz_per_mps2;
-    let spread: [f64; 3] = [0, 1, 2].map(|i| {
-        candidates
-            .iter()
-            .zip(&weights)
-            .map(|(c, w)| w * (c.estimate.gamma_hz_per_mps2[i] - g_best[i]).powi(2))
-            .sum::<f64>()
-            / total
-    });
+    let gammas: Vec<[f64; 3]> = candidates.iter().map(|c| c.estimate.gamma_hz_per_mps2).collect();
+    let spread = crate::joint::weighted_spread(&weights, &gammas, candidates[k_best].estimate.gamma_hz_per_mps2);
     let order_best = candidates[k_best].shape.order();
     let other_order: f64 = candidates
         .iter()

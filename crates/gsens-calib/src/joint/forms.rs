@@ -148,13 +148,23 @@ pub(crate) fn compare_loop_forms(
 /// them apart only by a Δ of about ten, so the other form wins now and then.
 fn form_variance(forms: &[LoopFormFit], gamma_chosen: [f64; 3]) -> [f64; 3] {
     let weights: Vec<f64> = forms.iter().map(|f| (-0.5 * f.delta_m2lnl).exp()).collect();
-    let total: f64 = weights.iter().sum();
+    let gammas: Vec<[f64; 3]> = forms.iter().map(|f| f.gamma_hz_per_mps2).collect();
+    let weighted = weighted_spread(&weights, &gammas, gamma_chosen);
     [0, 1, 2].map(|i| {
         let spread = |f: &LoopFormFit| (f.gamma_hz_per_mps2[i] - gamma_chosen[i]).powi(2);
-        let weighted = forms.iter().zip(&weights).map(|(f, w)| w * spread(f)).sum::<f64>() / total;
         let alike = forms.iter().filter(|f| f.delta_m2lnl <= LOOP_FORM_ALIKE).map(spread).fold(0.0, f64::max);
-        weighted.max(alike)
+        weighted[i].max(alike)
     })
+}
+
+/// The spread of alternative fits' Γ̂ (`gammas`) about the best one's,
+/// weighted by `weights` (the data's odds exp(−Δ_k/2) for each), per axis:
+/// Σ_k w_k·(Γ̂_k − Γ̂_best)² / Σ_k w_k. What not knowing which alternative
+/// holds adds to Γ̂'s variance (a loop's form here, an identified loop's
+/// shape in [`crate::nco_loop`]).
+pub(crate) fn weighted_spread(weights: &[f64], gammas: &[[f64; 3]], gamma_best: [f64; 3]) -> [f64; 3] {
+    let total: f64 = weights.iter().sum();
+    [0, 1, 2].map(|i| gammas.iter().zip(weights).map(|(g, w)| w * (g[i] - gamma_best[i]).powi(2)).sum::<f64>() / total)
 }
 
 /// −2 ln L (up to a constant) of each fit's residuals under one AR model of
