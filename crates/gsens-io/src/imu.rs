@@ -40,9 +40,20 @@ impl ImuSeries {
         if t[j] == tau_s || j + 1 == t.len() {
             return self.accel_mps2[j];
         }
-        let f = (tau_s - t[j]) / (t[j + 1] - t[j]);
-        let (a, b) = (self.accel_mps2[j], self.accel_mps2[j + 1]);
-        [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f]
+        // Cubic Hermite through samples j and j + 1 with Catmull–Rom slopes
+        // (central differences over the neighbours; one-sided at the ends).
+        let h = t[j + 1] - t[j];
+        let s = (tau_s - t[j]) / h;
+        let a = &self.accel_mps2;
+        let slope = |k: usize| -> [f64; 3] {
+            let (lo, hi) = (k.saturating_sub(1), (k + 1).min(t.len() - 1));
+            let dt = t[hi] - t[lo];
+            core::array::from_fn(|i| (a[hi][i] - a[lo][i]) / dt)
+        };
+        let (m0, m1) = (slope(j), slope(j + 1));
+        let (s2, s3) = (s * s, s * s * s);
+        let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
+        core::array::from_fn(|i| h00 * a[j][i] + h10 * h * m0[i] + h01 * a[j + 1][i] + h11 * h * m1[i])
     }
 
     /// Number of samples.
