@@ -77,6 +77,7 @@ mod robust;
 mod search;
 mod settings;
 mod verdict;
+mod warmup;
 mod warning;
 
 pub use document::{
@@ -127,4 +128,5 @@ pub use result::{Calibration, HistoryPoint};
 pub use robust::{HuberFit, huber_irls};
 pub use settings::{EstimateSettings, Method, Robust};
 pub use verdict::{AxisVerdict, session_linear_range_rad};
+pub use warmup::{longest_models_warmup_s, models_warmup_s};
 pub use warning::{Warning, WarningCode, untrusted_codes};

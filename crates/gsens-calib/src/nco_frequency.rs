@@ -129,8 +129,8 @@ fn usable_row(tr: &gsens_io::ChannelTrack, k: usize, settings: &LoopFreeSettings
 /// The loop model's NCO command for a unit Γ per axis, on the log's uniform
 /// grid: the model runs from `lead_s` before the first epoch asked for (its
 /// start-up transient dies out there), fed the IMU's specific force at each
-/// grid instant plus τ (linear interpolation, compensated for the model's own
-/// interpolation between epochs as for the tracking error's regressors).
+/// grid instant plus τ ([`ImuSeries::interpolate_at`]; the model's own linear
+/// interpolation between epochs compensated as for the tracking error's regressors).
 pub(crate) struct ModelRegressor<'a> {
     /// Each epoch's index on the grid t₀ + j·h.
     grid: Vec<usize>,

@@ -471,6 +471,7 @@ fn calibrate_prepared(
             estimate.receiver_loop = forms[0];
         }
     }
+    estimate.warmup_s = estimate.warmup_s.max(session_models_warmup_s(&session, imu, &estimate));
     let mut joint = None;
     if fits_nuisance {
         let stage = |error| PipelineError::Stage { stage: "fitting the loop and the IMU time offset", error };
@@ -558,7 +559,8 @@ fn loop_free_settings(
     let limit = settings.selection.screening.max_abs_phase_rad;
     crate::LoopFreeSettings {
         time_offset: settings.time_offset,
-        warmup_s: estimate.warmup_s,
+        // No model to start: the settings' own warm-up.
+        warmup_s: settings.estimate.warmup_s,
         channels: settings.selection.max_channels.unwrap_or(0),
         max_abs_phase_rad: limit.filter(|v| *v > 0.0).unwrap_or(estimate.discriminator.unambiguous_range_rad() / 2.0),
         ..crate::LoopFreeSettings::new(loop_interval_s, estimate.logged_phase)
@@ -596,6 +598,19 @@ fn check_carrier(settings: &PipelineSettings, tracking: &TrackingLog) -> Result<
         });
     }
     Ok(())
+}
+
+/// The warm-up the regressor models' start-up needs in `session`
+/// ([`crate::models_warmup_s`] of the loop `estimate` runs, from the
+/// session's first epoch), at most half the session: a session that begins
+/// mid-shake keeps its other half, and the checks judge what is left of
+/// the start-up.
+fn session_models_warmup_s(session: &PreparedSession, imu: &ImuSeries, estimate: &EstimateSettings) -> f64 {
+    let (Some(&t0), Some(&t1)) = (session.t_s.first(), session.t_s.last()) else { return 0.0 };
+    let receiver_loop = estimate.loop_at(session.log_interval_s);
+    let start_s = t0 + session.imu_time_offset_s;
+    let w = crate::models_warmup_s(&receiver_loop, imu, start_s, session.log_interval_s, estimate.highpass_hz);
+    w.min(0.5 * (t1 - t0))
 }
 
 /// The session's span against the settings: an offset searched beyond half

@@ -338,6 +338,32 @@ impl LoopModel {
         Ok([find(BAND_LO_HZ, peak.f_hz, true), find(peak.f_hz, self.search_hi_hz(), false)])
     }
 
+    /// Time for the loop's slowest natural mode to decay by e⁻ⁿ, n =
+    /// `time_constants` \[s\]: `n·T/(−ln ρ)`, ρ the largest modulus of the
+    /// discrete loop's poles ([`LoopFilterCoeffs::spectral_radius_at`],
+    /// [`GnssSdrPll::settling_time_s`], [`PocketSdrStage::settling_time_s`]), T
+    /// the update interval. Infinite for a loop that cannot run (no interval,
+    /// unstable).
+    pub fn settling_time_s(&self, time_constants: f64) -> f64 {
+        let (rho, t_s) = match self {
+            LoopModel::Kaplan { spec, interval_s: Some(t) } => {
+                (spec.coeffs().ok().and_then(|c| c.spectral_radius_at(*t)), *t)
+            }
+            LoopModel::Kaplan { interval_s: None, .. } => return f64::INFINITY,
+            LoopModel::GnssSdr(stage) => {
+                return GnssSdrPll::new(*stage).map_or(f64::INFINITY, |p| p.settling_time_s(time_constants));
+            }
+            LoopModel::PocketSdr(stage) => {
+                return stage.settling_time_s(time_constants);
+            }
+        };
+        match rho {
+            Some(r) if r < 1.0 && r > 0.0 => time_constants * t_s / -ln(r),
+            Some(r) if r <= 0.0 => 0.0,
+            _ => f64::INFINITY,
+        }
+    }
+
     /// Which receiver's loop this is.
     pub fn implementation(&self) -> LoopImplementation {
         match self {

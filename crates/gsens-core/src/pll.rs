@@ -288,13 +288,18 @@ impl LoopFilterCoeffs {
     /// factor (z − 1) that cancels in L_d, and without the first (c1 = c2 = 0)
     /// another: they are divided out first.
     pub fn is_stable_at(&self, t_s: f64) -> bool {
+        self.spectral_radius_at(t_s).is_some_and(|r| r * r < 1.0 - 1e-12)
+    }
+
+    /// The largest modulus of the roots of P(z) ([`LoopFilterCoeffs::is_stable_at`]):
+    /// the discrete loop's slowest mode decays as ρᵏ per update. `None` for a
+    /// non-positive interval or a matrix the Schur iteration cannot handle.
+    pub fn spectral_radius_at(&self, t_s: f64) -> Option<f64> {
         if !(t_s.is_finite() && t_s > 0.0) {
-            return false;
+            return None;
         }
         let (c0, c1, c2) = (self.c0_per_s, self.c1_per_s2, self.c2_per_s3);
         let k = 2.0 / t_s;
-        // Every root strictly inside the unit circle (a matrix whose Schur iteration fails: unstable).
-        let inside = |rho: Option<f64>| rho.is_some_and(|r| r * r < 1.0 - 1e-12);
         if c2 != 0.0 {
             let a = c0 + c1 * t_s + c2 * t_s * t_s;
             let b = -2.0 * c0 - c1 * t_s;
@@ -306,7 +311,7 @@ impl LoopFilterCoeffs {
                 0.0, 1.0, 0.0, 0.0, //
                 0.0, 0.0, 1.0, 0.0,
             );
-            inside(crate::math::SpectralRadius::spectral_radius(m))
+            crate::math::SpectralRadius::spectral_radius(m)
         } else if c1 != 0.0 {
             // k·z(z−1)² + (z+1)((c0 + c1·T) z − c0), divided by k.
             let a = c0 + c1 * t_s;
@@ -316,12 +321,12 @@ impl LoopFilterCoeffs {
                 1.0, 0.0, 0.0, //
                 0.0, 1.0, 0.0,
             );
-            inside(crate::math::SpectralRadius::spectral_radius(m))
+            crate::math::SpectralRadius::spectral_radius(m)
         } else {
             // k·z(z−1) + c0·(z+1), divided by k.
             let p = [(-k + c0) / k, c0 / k];
             let m = nalgebra::Matrix2::new(-p[0], -p[1], 1.0, 0.0);
-            inside(crate::math::SpectralRadius::spectral_radius(m))
+            crate::math::SpectralRadius::spectral_radius(m)
         }
     }
 }

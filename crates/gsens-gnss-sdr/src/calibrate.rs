@@ -84,10 +84,9 @@ pub struct GnssSdrOutcome {
 /// loop-free estimate from the records' NCO beside it
 /// ([`crate::gnss_sdr_input_phases`], the outcome's `loop_free`): the loop and
 /// logged-phase settings of `settings` are replaced by the ones the dumps
-/// were made with ([`with_gnss_sdr_loop`]), and the warm-up of the estimates
-/// through the loop model is at least [`ImportSettings::models_warmup_s`]
-/// (the regressor models' start-up error; the loop-free estimate keeps the
-/// settings' own warm-up, having no model to start).
+/// were made with ([`with_gnss_sdr_loop`]). The records begin at the narrow
+/// loop's switch, possibly mid-shake: the pipeline's warm-up covers the
+/// regressor models' start-up ([`gsens_calib::models_warmup_s`]).
 pub fn calibrate_gnss_sdr(
     dumps_dir: &Path,
     import: &ImportSettings,
@@ -97,22 +96,13 @@ pub fn calibrate_gnss_sdr(
     let imported = import_dir(dumps_dir, import)?;
     let tracking = gnss_sdr_tracking_log(dumps_dir, &imported)?;
     let imu_series = gsens_io::read_imu_file(imu)?;
-    let mut settings = with_gnss_sdr_loop(settings, import);
-    // The loop-free estimate has no loop model, so no model start-up to wait out.
-    let loop_free_settings = settings.clone();
-    // The regressor models start at the first kept record, possibly while
-    // the board is shaken: their start-up error, computed from the IMU, is
-    // left to the warm-up (ImportSettings::models_warmup_s).
-    if let Some(start_s) = tracking.epoch_t_s().first() {
-        let w = import.models_warmup_s(&imu_series, *start_s, settings.estimate.highpass_hz);
-        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
-    }
+    let settings = with_gnss_sdr_loop(settings, import);
     // The dumps' input phases come beside the log, not in it: the
     // measurement is chosen once the loop-free estimate is there.
     let mut closed_loop = settings.clone();
     closed_loop.measurement = MeasurementChoice::TrackingError;
     let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &closed_loop)?;
-    outcome.loop_free = Some(loop_free(&imported, &imu_series, &loop_free_settings));
+    outcome.loop_free = Some(loop_free(&imported, &imu_series, &settings));
     outcome.choose_measurement(settings.measurement)?;
     let conversion = Conversion { conversion: import.clone(), tracks: imported.tracks };
     outcome.source = Some(conversion.source());

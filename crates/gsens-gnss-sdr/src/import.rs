@@ -4,10 +4,9 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use gsens_core::LinearLoop;
 use gsens_core::gnss_sdr::{BIT_SYMBOLS, GnssSdrPll, GnssSdrStage};
 use gsens_core::units::Decimal;
-use gsens_io::{ImuSeries, TrackingRow};
+use gsens_io::TrackingRow;
 use std::fmt::Write as _;
 
 use crate::conf::TrackingConf;
@@ -218,108 +217,6 @@ impl ImportSettings {
             Ok(p) => p.settling_time_s(5.0).clamp(1.0, 60.0),
             Err(_) => 2.0,
         })
-    }
-
-    /// The longest estimator warm-up these dumps may need \[s\], with the
-    /// estimator's high-pass at `highpass_hz` (0 = off):
-    ///
-    /// ```text
-    /// W = max(S, τ_hp·(5 + ln(τ/τ_hp)))      S = 5τ (settle_time_s), τ_hp = 1/(2π·highpass_hz)
-    /// ```
-    ///
-    /// Why: the session starts at the first kept record, and the regressor
-    /// models start there in the steady state of the specific force at that
-    /// instant. When the board is already being shaken, that state is wrong
-    /// by about the loop's forced response, and the error d(t) ≈ d₀·e^(−t/τ)
-    /// dies out with the same slowest mode as the receiver's own transient (S
-    /// to reach e⁻⁵). The high-pass that both sides pass through remembers its
-    /// area d₀·τ: its output after the transient is about
-    /// d₀·(τ/τ_hp)·e^(−t/τ_hp), below e⁻⁵·d₀ (the criterion of S) after
-    /// τ_hp·(5 + ln(τ/τ_hp)). For GNSS-SDR's 3 Hz loops at 20 ms with the
-    /// default 0.05 Hz high-pass: 7.6 s (2nd order, τ = 0.23 s) and 15.2 s
-    /// (3rd order, τ = 2.5 s). Rounded up to 0.1 s.
-    /// [`ImportSettings::models_warmup_s`] computes the warm-up a session needs.
-    pub fn warmup_s(&self, highpass_hz: f64) -> f64 {
-        let s = self.settle_time_s();
-        let Ok(p) = GnssSdrPll::new(self.stage()) else { return s };
-        let tau = p.settling_time_s(1.0);
-        if !(highpass_hz > 0.0 && tau.is_finite() && tau > 0.0) {
-            return s;
-        }
-        let tau_hp = 1.0 / (core::f64::consts::TAU * highpass_hz);
-        // Rounded up to 0.1 s: a setting that reads back as written.
-        (s.max(tau_hp * (5.0 + (tau / tau_hp).ln())) * 10.0).ceil() / 10.0
-    }
-
-    /// The estimator warm-up a session starting at `start_s` needs \[s\]: the
-    /// regressor models' start-up error computed from the IMU log. Each axis
-    /// runs GNSS-SDR's narrow loop twice, started at `start_s` in the steady
-    /// state of the specific force there (as the estimator's models do) and
-    /// [`ImportSettings::warmup_s`] earlier (a reference whose own start has
-    /// died out); both pass through the estimator's high-pass from `start_s`
-    /// on. The warm-up ends where the difference (over two warm-ups) stays
-    /// below e⁻⁵ (the criterion of [`ImportSettings::settle_time_s`]) of the
-    /// reference's peak over the log, for every axis: 0 for a board at rest at the
-    /// start, up to [`ImportSettings::warmup_s`] (measured on order-2 dumps
-    /// shaken from the start: σ/CRB 2.1 with a 2 s warm-up, 1.3 with this one).
-    /// [`ImportSettings::warmup_s`] when the IMU log starts too late for the reference.
-    pub fn models_warmup_s(&self, imu: &ImuSeries, start_s: f64, highpass_hz: f64) -> f64 {
-        let w_max = self.warmup_s(highpass_hz);
-        let t_step = self.interval_s();
-        let (Some(&first), Some(&last)) = (imu.t_s.first(), imu.t_s.last()) else { return w_max };
-        let Ok(model) = GnssSdrPll::new(self.stage()) else { return w_max };
-        let t_ref = start_s - w_max;
-        if first > t_ref || t_step.is_nan() || t_step <= 0.0 {
-            return w_max;
-        }
-        let accel = |t: f64| -> [f64; 3] {
-            let k = imu.t_s.partition_point(|&x| x <= t).clamp(1, imu.t_s.len().max(2) - 1);
-            let (t0, t1) = (imu.t_s[k - 1], imu.t_s[k]);
-            let u = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
-            core::array::from_fn(|i| imu.accel_mps2[k - 1][i] + u * (imu.accel_mps2[k][i] - imu.accel_mps2[k - 1][i]))
-        };
-        let mut reference = [model; 3];
-        let mut started = [model; 3];
-        let a0 = accel(t_ref);
-        for (l, a) in reference.iter_mut().zip(a0) {
-            l.settle(a);
-        }
-        let hp = gsens_core::HighPass::new(highpass_hz, t_step);
-        let (mut hp_ref, mut hp_diff) = ([hp; 3], [hp; 3]);
-        let n_lead = (w_max / t_step).round() as usize;
-        let n_after = ((2.0 * w_max / t_step).round() as usize).max(1);
-        let (mut diff, mut peak) = (Vec::with_capacity(n_after), [0.0f64; 3]);
-        // The reference's peak over the whole IMU log from the start (a board at rest
-        // at first has no regressor to speak of yet); the difference over two warm-ups.
-        for k in 0.. {
-            let t = t_ref + k as f64 * t_step;
-            if t > last {
-                break;
-            }
-            let a = accel(t);
-            if k == n_lead {
-                for (l, a) in started.iter_mut().zip(a) {
-                    l.settle(a);
-                }
-            }
-            let r: [f64; 3] = core::array::from_fn(|i| reference[i].step(a[i]));
-            if k >= n_lead {
-                for i in 0..3 {
-                    peak[i] = peak[i].max(hp_ref[i].step(r[i]).abs());
-                }
-            }
-            if k >= n_lead && k < n_lead + n_after {
-                let d: [f64; 3] = core::array::from_fn(|i| hp_diff[i].step(started[i].step(a[i]) - r[i]).abs());
-                diff.push(d);
-            }
-        }
-        let bound = peak.map(|p| (-5.0f64).exp() * p);
-        // The last epoch at which some axis is still beyond the bound.
-        let last_bad = diff.iter().rposition(|d| (0..3).any(|i| d[i] > bound[i]));
-        match last_bad {
-            None => 0.0,
-            Some(k) => ((((k + 1) as f64 * t_step) * 10.0).ceil() / 10.0).min(w_max),
-        }
     }
 }
 

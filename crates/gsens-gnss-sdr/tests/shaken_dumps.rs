@@ -7,7 +7,9 @@
 
 use std::path::{Path, PathBuf};
 
-use gsens_calib::{EpochSeries, EstimateSettings, PipelineSettings, calibrate};
+use gsens_calib::{
+    EpochSeries, EstimateSettings, PipelineSettings, calibrate, longest_models_warmup_s, models_warmup_s,
+};
 use gsens_core::gnss_sdr::GnssSdrPll;
 use gsens_core::{LinearLoop, LoopModel};
 use gsens_gnss_sdr::calibrate_gnss_sdr;
@@ -163,29 +165,34 @@ fn estimate_with_warmup(order: u8, warmup_s: f64) -> ([f64; 3], [f64; 3], [f64; 
 fn the_models_start_up_transient_needs_the_derived_warm_up() {
     // Order 2: the session starts 1.2 s after the switch, mid-shake; a 2 s warm-up leaves the
     // models' start-up transient in the high-pass's memory, the derived one does not.
-    let s = settings(2);
-    let w = s.warmup_s(EstimateSettings::default().highpass_hz);
+    let narrow = |s: &ImportSettings| LoopModel::GnssSdr(s.stage());
+    let longest = |order: u8, highpass_hz: f64| longest_models_warmup_s(&narrow(&settings(order)), highpass_hz);
+    let w = longest(2, EstimateSettings::default().highpass_hz);
     assert_eq!(w, 7.6);
-    assert_eq!(settings(3).warmup_s(0.05), 15.2);
-    assert_eq!(settings(3).warmup_s(0.0), settings(3).settle_time_s(), "no high-pass, no memory");
+    assert_eq!(longest(3, 0.05), 15.2);
+    let five_tau = settings(3).settle_time_s();
+    assert!((longest(3, 0.0) - five_tau).abs() <= 0.1, "no high-pass, no memory: {} vs {five_tau}", longest(3, 0.0));
     // What these sessions need, from the IMU: their first kept record is mid-shake.
     for order in [2u8, 3] {
         let s = settings(order);
         let imported = import_dir(&dir().join(format!("order{order}")), &s).unwrap();
         let start = resample(&imported, imported.interval_s)[0].t_s;
-        let need = s.models_warmup_s(&imu(), start, 0.05);
-        eprintln!("order {order}: session from {start:.2} s, warm-up needed {need} s of at most {}", s.warmup_s(0.05));
-        assert!(need > 0.4 * s.warmup_s(0.05) && need <= s.warmup_s(0.05), "order {order}: {need}");
+        let need = models_warmup_s(&narrow(&s), &imu(), start, imported.interval_s, 0.05);
+        eprintln!(
+            "order {order}: session from {start:.2} s, warm-up needed {need} s of at most {}",
+            longest(order, 0.05)
+        );
+        assert!(need > 0.4 * longest(order, 0.05) && need <= longest(order, 0.05), "order {order}: {need}");
     }
-    // A board at rest when the session starts needs none (the quiet fixtures: rest until 20 s).
+    // A board at rest when the session starts needs none (the quiet fixtures: rest until 20 s),
+    // nor a session that starts with the IMU log (the loops remember no motion before it).
     let quiet = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
     let quiet_imu = read_imu_file(quiet.join("imu.csv")).unwrap();
     let s3 = ImportSettings::from_conf(Some(&quiet.join("order3/gnss-sdr.conf")), None).unwrap();
-    let need = s3.models_warmup_s(&quiet_imu, 18.9, 0.05);
+    let need = models_warmup_s(&narrow(&s3), &quiet_imu, 18.9, s3.interval_s(), 0.05);
     eprintln!("quiet order 3: warm-up needed {need} s");
     assert!(need < 1.0, "{need}");
-    // An IMU log that starts with the session: no reference, the longest warm-up.
-    assert_eq!(s3.models_warmup_s(&quiet_imu, 1.0, 0.05), s3.warmup_s(0.05));
+    assert_eq!(models_warmup_s(&narrow(&s3), &quiet_imu, quiet_imu.t_s[0], s3.interval_s(), 0.05), 0.0);
     let (_, sigma_short, crlb_short) = estimate_with_warmup(2, 2.0);
     let (g, sigma, crlb) = estimate_with_warmup(2, w);
     let truth = truth("gamma_imu_axes_hz_per_mps2");

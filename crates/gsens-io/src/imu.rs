@@ -25,11 +25,20 @@ pub struct ImuSeries {
 }
 
 impl ImuSeries {
-    /// The specific force at stamp `tau_s` by linear interpolation between
-    /// the samples around it (the sample itself at its own stamp; the last
-    /// sample past the end). `tau_s` must lie within the series' span (no
-    /// extrapolation is meant); `cursor` keeps the search's place, so calls
-    /// with non-decreasing `tau_s` cost O(1) each.
+    /// The specific force at stamp `tau_s`, interpolated between the samples
+    /// around it by a cubic Hermite polynomial with Catmull–Rom slopes: on
+    /// `[t_j, t_j+1]` with `s = (τ − t_j)/h`, `h = t_j+1 − t_j`,
+    /// `a(τ) = h00(s)·a_j + h10(s)·h·m_j + h01(s)·a_j+1 + h11(s)·h·m_j+1`, the
+    /// slopes `m_k = (a_k+1 − a_k−1)/(t_k+1 − t_k−1)` (one-sided at the ends).
+    /// It reads the two samples on either side. Why not linear: a linear
+    /// interpolant of a sinusoid of angular frequency ω sampled every h is
+    /// low by `(ωh)²·s(1 − s)/2` of its amplitude, `(ωh)²/12` on average over
+    /// the interval (0.4 % for 2 Hz shaking read by a 40 Hz IMU), which would
+    /// bias Γ̂ by as much whenever epochs fall between the IMU's samples; the
+    /// cubic's error is of fourth order in ωh. The sample itself at its own
+    /// stamp; the last sample past the end. `tau_s` must lie within the
+    /// series' span (no extrapolation is meant); `cursor` keeps the search's
+    /// place, so calls with non-decreasing `tau_s` cost O(1) each.
     pub fn interpolate_at(&self, tau_s: f64, cursor: &mut usize) -> [f64; 3] {
         let t = &self.t_s;
         let mut j = (*cursor).min(t.len().saturating_sub(1));
@@ -40,8 +49,6 @@ impl ImuSeries {
         if t[j] == tau_s || j + 1 == t.len() {
             return self.accel_mps2[j];
         }
-        // Cubic Hermite through samples j and j + 1 with Catmull–Rom slopes
-        // (central differences over the neighbours; one-sided at the ends).
         let h = t[j + 1] - t[j];
         let s = (tau_s - t[j]) / h;
         let a = &self.accel_mps2;
@@ -243,6 +250,46 @@ mod tests {
         let msg = e.to_string();
         assert!(msg.starts_with("imu.csv"), "message does not name the source: {msg}");
         msg
+    }
+
+    /// Read between its samples, a sampled sinusoid keeps its amplitude to
+    /// fourth order: over uniformly spread reading instants the in-phase gain
+    /// of the cubic is `1 − θ⁴/80` with `θ = ωh` (the integral over s of its
+    /// transfer `H(s)·e^(−iθs)`; a linear interpolant's is `1 − θ²/12`), and
+    /// it reads the samples themselves exactly.
+    #[test]
+    fn interpolation_between_samples_keeps_a_sinusoids_amplitude() {
+        let (f_hz, h_s) = (2.0, 0.025);
+        let w = std::f64::consts::TAU * f_hz;
+        let n = 4001;
+        let t_s: Vec<f64> = (0..n).map(|k| k as f64 * h_s).collect();
+        let accel_mps2 = t_s.iter().map(|t| [(w * t).sin(), (w * t).cos(), 9.81]).collect();
+        let imu = ImuSeries { t_s, accel_mps2 };
+        let mut cursor = 0;
+        for k in (0..n).step_by(97) {
+            assert_eq!(imu.interpolate_at(imu.t_s[k], &mut cursor), imu.accel_mps2[k]);
+        }
+        // Reading instants at an irrational fraction of the interval apart
+        // cover every phase of the sinusoid and every place between samples.
+        let (mut cursor, mut sin_dot, mut cos_dot, mut sin_norm, mut cos_norm) = (0, 0.0, 0.0, 0.0, 0.0);
+        let step_s = h_s * (2f64.sqrt() - 1.0);
+        let mut tau_s = 2.0 * h_s;
+        while tau_s < (n - 3) as f64 * h_s {
+            let a = imu.interpolate_at(tau_s, &mut cursor);
+            let (s, c) = (w * tau_s).sin_cos();
+            (sin_dot, sin_norm) = (sin_dot + a[0] * s, sin_norm + s * s);
+            (cos_dot, cos_norm) = (cos_dot + a[1] * c, cos_norm + c * c);
+            assert!((a[2] - 9.81).abs() < 1e-12);
+            tau_s += step_s;
+        }
+        let theta = w * h_s;
+        let (expected, linear) = (1.0 - theta.powi(4) / 80.0, 1.0 - theta * theta / 12.0);
+        for gain in [sin_dot / sin_norm, cos_dot / cos_norm] {
+            assert!(
+                (gain - expected).abs() < 0.05 * (1.0 - expected),
+                "gain {gain}, expected {expected}, linear {linear}"
+            );
+        }
     }
 
     /// [`read_imu_file`]'s quote-free fast path gives the series the `csv`

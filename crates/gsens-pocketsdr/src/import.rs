@@ -5,9 +5,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use gsens_core::pocket_sdr::{FLL_PULL_IN_S, PocketSdrPll, PocketSdrStage};
-use gsens_core::{HighPass, LinearLoop};
-use gsens_io::{ImuSeries, TrackingRow};
+use gsens_core::pocket_sdr::{FLL_PULL_IN_S, PocketSdrStage};
+use gsens_io::TrackingRow;
 
 use crate::error::PocketSdrError;
 use crate::log::{ChRecord, Garbled, PocketSdrLog, read_log};
@@ -124,93 +123,6 @@ impl ImportSettings {
     /// b_pll = 5 Hz, 2.6 s at 10 Hz, at least 1 s.
     pub fn settle_time_s(&self) -> f64 {
         self.settle_s.unwrap_or_else(|| self.stage().settling_time_s(5.0).clamp(1.0, 60.0))
-    }
-
-    /// The estimator warm-up the session needs \[s\], with the estimator's
-    /// high-pass at `highpass_hz`: W = max(S, τ_hp·(5 + ln(τ/τ_hp))), S the
-    /// settling time, τ the loop's slowest time constant, τ_hp = 1/(2π·f_hp).
-    /// The regressor models start at the first kept line in the steady state
-    /// of the specific force there; when the board is already shaken, their
-    /// start-up error d₀·e^(−t/τ) leaves the high-pass with an area d₀·τ that
-    /// decays as e^(−t/τ_hp), below e⁻⁵·d₀ after the second term
-    /// (the reasoning of `gsens-gnss-sdr`'s warm-up). 12.4 s at 5 Hz with
-    /// the default 0.05 Hz high-pass, rounded up to 0.1 s.
-    pub fn warmup_s(&self, highpass_hz: f64) -> f64 {
-        let s = self.settle_time_s();
-        let tau = self.stage().settling_time_s(1.0);
-        if !(highpass_hz > 0.0 && tau.is_finite() && tau > 0.0) {
-            return s;
-        }
-        let tau_hp = 1.0 / (core::f64::consts::TAU * highpass_hz);
-        (s.max(tau_hp * (5.0 + (tau / tau_hp).ln())) * 10.0).ceil() / 10.0
-    }
-
-    /// The warm-up a session starting at `start_s` needs \[s\], computed from
-    /// the IMU log: each axis runs PocketSDR's loop twice, started at
-    /// `start_s` in the steady state of the specific force there (as the
-    /// estimator's models do) and [`ImportSettings::warmup_s`] earlier (a
-    /// reference whose start has died out); both are sampled every
-    /// `log_interval_s` and high-passed from `start_s` on. The warm-up ends
-    /// where their difference stays below e⁻⁵ of the reference's peak, on
-    /// every axis (over two warm-ups): 0 for a board at rest at the start, at
-    /// most [`ImportSettings::warmup_s`]. The reference starts no earlier than
-    /// the IMU log when that covers the IF file from its start (`toff`): the
-    /// receiver's loops cannot remember older motion. Otherwise, when the IMU
-    /// log starts too late for the reference, [`ImportSettings::warmup_s`].
-    pub fn models_warmup_s(&self, imu: &ImuSeries, start_s: f64, log_interval_s: f64, highpass_hz: f64) -> f64 {
-        let w_max = self.warmup_s(highpass_hz);
-        let (Some(&first), Some(&last)) = (imu.t_s.first(), imu.t_s.last()) else { return w_max };
-        let Ok(model) = PocketSdrPll::new(self.stage()) else { return w_max };
-        let t_loop = self.stage().interval_s;
-        // The receiver's loops start with the IF file (time `toff`): an IMU
-        // log that covers the file from its start holds all the motion they
-        // can remember, so the reference may start there.
-        let t_ref = if first <= self.toff_s + 1e-9 { (start_s - w_max).max(first) } else { start_s - w_max };
-        let per_epoch = (log_interval_s / t_loop).round().max(1.0) as usize;
-        if first > t_ref || imu.t_s.len() < 2 || start_s <= t_ref {
-            return w_max;
-        }
-        let accel = |t: f64| -> [f64; 3] {
-            let k = imu.t_s.partition_point(|&x| x <= t).clamp(1, imu.t_s.len() - 1);
-            let (t0, t1) = (imu.t_s[k - 1], imu.t_s[k]);
-            let u = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
-            core::array::from_fn(|i| imu.accel_mps2[k - 1][i] + u * (imu.accel_mps2[k][i] - imu.accel_mps2[k - 1][i]))
-        };
-        let (mut reference, mut started) = ([model; 3], [model; 3]);
-        for (l, a) in reference.iter_mut().zip(accel(t_ref)) {
-            l.settle(a);
-        }
-        for (l, a) in started.iter_mut().zip(accel(start_s)) {
-            l.settle(a);
-        }
-        let hp = HighPass::new(highpass_hz, log_interval_s);
-        let (mut hp_ref, mut hp_diff) = ([hp; 3], [hp; 3]);
-        let n_lead = ((start_s - t_ref) / t_loop).round() as usize;
-        let t_end = last.min(start_s + 2.0 * w_max);
-        let (mut peak, mut diffs) = ([0.0f64; 3], Vec::new());
-        for k in 1.. {
-            let t = t_ref + k as f64 * t_loop;
-            if t > t_end {
-                break;
-            }
-            let a = accel(t);
-            let r: [f64; 3] = core::array::from_fn(|i| reference[i].step(a[i]));
-            if k <= n_lead {
-                continue;
-            }
-            let d: [f64; 3] = core::array::from_fn(|i| started[i].step(a[i]) - r[i]);
-            if (k - n_lead).is_multiple_of(per_epoch) {
-                for i in 0..3 {
-                    peak[i] = peak[i].max(hp_ref[i].step(r[i]).abs());
-                }
-                diffs.push(core::array::from_fn::<f64, 3, _>(|i| hp_diff[i].step(d[i]).abs()));
-            }
-        }
-        let bound = peak.map(|p| (-5.0f64).exp() * p);
-        match diffs.iter().rposition(|d| (0..3).any(|i| d[i] > bound[i])) {
-            None => 0.0,
-            Some(j) => (((j + 1) as f64 * log_interval_s * 10.0).ceil() / 10.0).min(w_max),
-        }
     }
 }
 

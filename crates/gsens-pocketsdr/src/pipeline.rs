@@ -49,8 +49,8 @@ impl Imported {
 /// `settings` is replaced by PocketSDR's at the options' `b_pll`, each row
 /// is the single 1 ms discriminator output at its epoch
 /// ([`gsens_core::LoggedPhase::Last`]), the loop is exact (a tolerance of 0 unless
-/// `settings` give one: tested, not fitted), and
-/// the warm-up is at least [`ImportSettings::models_warmup_s`].
+/// `settings` give one: tested, not fitted); the pipeline's warm-up covers
+/// the regressor models' start-up ([`gsens_calib::models_warmup_s`]).
 pub fn calibrate_pocketsdr(
     log: &Path,
     import: &ImportSettings,
@@ -63,15 +63,8 @@ pub fn calibrate_pocketsdr(
     let imu_series = gsens_io::read_imu_file(imu)?;
     // PocketSDR's loop is known exactly from its options: tested, not fitted.
     // pocket_trk's err_phas on L1CA: atan(Q/I), the two-quadrant Costas discriminator.
-    let mut settings =
+    let settings =
         settings.with_exact_loop(LoopModel::PocketSdr(imported.stage), gsens_core::Discriminator::AtanCostas);
-    // The regressor models start at the first kept line, possibly while the
-    // board is shaken: their start-up error, computed from the IMU, is left to
-    // the warm-up (ImportSettings::models_warmup_s).
-    if let Some(start_s) = tracking.epoch_t_s().first() {
-        let w = import.models_warmup_s(&imu_series, *start_s, imported.interval_s(), settings.estimate.highpass_hz);
-        settings.estimate.warmup_s = settings.estimate.warmup_s.max(w);
-    }
     let mut outcome = calibrate_logs(&tracking, &imu_series, &imu.display().to_string(), &settings)?;
     outcome.inputs =
         vec![("imu".into(), imu.display().to_string()), ("pocketsdr_log".into(), log.display().to_string())];

@@ -244,15 +244,15 @@ pub fn find_flat_runs(imu: &ImuSeries) -> FlatRuns {
 
 /// Leaves out of the estimate the epochs of `session` whose IMU reading
 /// touches one of `runs`: their phase becomes `None` (a gap), read at stamp
-/// t + τ within one sample interval of a run (linear interpolation uses the
-/// sample on either side). The loop models keep running through them, and
+/// t + τ within two sample intervals of a run (the interpolation between
+/// samples reads two on either side, [`ImuSeries::interpolate_at`]). The loop models keep running through them, and
 /// the estimator leaves out the epochs after a gap that its high-pass needs
 /// to settle. Returns the number of epochs that lost their phase.
 pub fn mask_flat_runs(session: &mut crate::PreparedSession, runs: &FlatRuns) -> usize {
     let h = runs.sample_interval_s;
     let mut masked = 0;
     for r in &runs.runs {
-        let (from, to) = (r.start_s - h, r.end_s + h);
+        let (from, to) = (r.start_s - 2.0 * h, r.end_s + 2.0 * h);
         let tau = session.imu_time_offset_s;
         let first = session.t_s.partition_point(|&t| t + tau < from);
         for k in first..session.t_s.len() {
