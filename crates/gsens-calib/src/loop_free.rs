@@ -1046,17 +1046,15 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// ∫a dt of the IMU's specific force on the cubic Hermite (Catmull–Rom)
-/// interpolant of its samples, slopes by three-point differences: exact for a
+/// interpolant of its samples ([`ImuSeries::interpolate_at`], its slopes
+/// [`ImuSeries::hermite_slope`]): exact for a
 /// quadratic a, where the linear interpolant's integral (the trapezoid rule)
 /// would shrink a sinusoid's integral by ≈ (ωh)²/12 (0.17 % at 0.9 Hz with a
 /// 40 Hz IMU) and inflate Γ̂ by as much. Over one interval of length h:
 ///
 /// ```text
-/// ∫ = h(a_j + a_j+1)/2 + h²(m_j − m_j+1)/12,   m_j = (h_j−1·s_j + h_j·s_j−1)/(h_j−1 + h_j)
+/// ∫ = h(a_j + a_j+1)/2 + h²(m_j − m_j+1)/12
 /// ```
-///
-/// with s_j the secant slope over [t_j, t_j+1] of length h_j (m_j the central
-/// difference on even spacing; one-sided slopes at the ends).
 struct ForceIntegral<'a> {
     imu: &'a ImuSeries,
     slope: Vec<[f64; 3]>,
@@ -1067,21 +1065,7 @@ impl<'a> ForceIntegral<'a> {
     fn new(imu: &'a ImuSeries) -> Self {
         let (t, a) = (&imu.t_s, &imu.accel_mps2);
         let n = t.len();
-        let slope: Vec<[f64; 3]> = (0..n)
-            .map(|j| {
-                let secant = |k: usize, i: usize| (a[k + 1][i] - a[k][i]) / (t[k + 1] - t[k]);
-                match (j.checked_sub(1), j + 1 < n) {
-                    // The secants weighted so that a quadratic's slope is exact on any spacing.
-                    (Some(p), true) => {
-                        let (h0, h1) = (t[j] - t[p], t[j + 1] - t[j]);
-                        [0, 1, 2].map(|i| (h0 * secant(j, i) + h1 * secant(p, i)) / (h0 + h1))
-                    }
-                    (None, true) => [0, 1, 2].map(|i| secant(j, i)),
-                    (Some(p), false) => [0, 1, 2].map(|i| secant(p, i)),
-                    (None, false) => [0.0; 3],
-                }
-            })
-            .collect();
+        let slope: Vec<[f64; 3]> = (0..n).map(|j| imu.hermite_slope(j)).collect();
         let mut at_sample = Vec::with_capacity(n);
         let mut sum = [0.0; 3];
         for j in 0..n {

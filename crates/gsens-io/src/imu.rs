@@ -29,7 +29,7 @@ impl ImuSeries {
     /// around it by a cubic Hermite polynomial with Catmull–Rom slopes: on
     /// `[t_j, t_j+1]` with `s = (τ − t_j)/h`, `h = t_j+1 − t_j`,
     /// `a(τ) = h00(s)·a_j + h10(s)·h·m_j + h01(s)·a_j+1 + h11(s)·h·m_j+1`, the
-    /// slopes `m_k = (a_k+1 − a_k−1)/(t_k+1 − t_k−1)` (one-sided at the ends).
+    /// slopes m those of [`ImuSeries::hermite_slope`] (exact for a quadratic).
     /// It reads the two samples on either side. Why not linear: a linear
     /// interpolant of a sinusoid of angular frequency ω sampled every h is
     /// low by `(ωh)²·s(1 − s)/2` of its amplitude, `(ωh)²/12` on average over
@@ -52,15 +52,29 @@ impl ImuSeries {
         let h = t[j + 1] - t[j];
         let s = (tau_s - t[j]) / h;
         let a = &self.accel_mps2;
-        let slope = |k: usize| -> [f64; 3] {
-            let (lo, hi) = (k.saturating_sub(1), (k + 1).min(t.len() - 1));
-            let dt = t[hi] - t[lo];
-            core::array::from_fn(|i| (a[hi][i] - a[lo][i]) / dt)
-        };
-        let (m0, m1) = (slope(j), slope(j + 1));
+        let (m0, m1) = (self.hermite_slope(j), self.hermite_slope(j + 1));
         let (s2, s3) = (s * s, s * s * s);
         let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
         core::array::from_fn(|i| h00 * a[j][i] + h10 * h * m0[i] + h01 * a[j + 1][i] + h11 * h * m1[i])
+    }
+
+    /// The slope of the specific force at sample `j` the cubic interpolant
+    /// takes \[m/s³\]: the secants s over the intervals on either side
+    /// (lengths h₋ and h₊) weighted `m = (h₋·s₊ + h₊·s₋)/(h₋ + h₊)`, the
+    /// central difference on even spacing and exact for a quadratic on any;
+    /// the one secant at the ends, 0 for a single sample.
+    pub fn hermite_slope(&self, j: usize) -> [f64; 3] {
+        let (t, a) = (&self.t_s, &self.accel_mps2);
+        let secant = |k: usize| -> [f64; 3] { core::array::from_fn(|i| (a[k + 1][i] - a[k][i]) / (t[k + 1] - t[k])) };
+        match (j.checked_sub(1), j + 1 < t.len()) {
+            (Some(p), true) => {
+                let (h0, h1, s0, s1) = (t[j] - t[p], t[j + 1] - t[j], secant(p), secant(j));
+                core::array::from_fn(|i| (h0 * s1[i] + h1 * s0[i]) / (h0 + h1))
+            }
+            (None, true) => secant(j),
+            (Some(p), false) => secant(p),
+            (None, false) => [0.0; 3],
+        }
     }
 
     /// Number of samples.
@@ -250,6 +264,23 @@ mod tests {
         let msg = e.to_string();
         assert!(msg.starts_with("imu.csv"), "message does not name the source: {msg}");
         msg
+    }
+
+    /// The interpolant reproduces a quadratic on unevenly spaced samples
+    /// (away from the ends' one-sided slopes).
+    #[test]
+    fn interpolation_is_exact_for_a_quadratic() {
+        let t_s: Vec<f64> = (0..40).map(|k| 0.1 * k as f64 + 0.01 * ((k * 7) % 5) as f64).collect();
+        let f = |t: f64| [1.0 + 2.0 * t - 0.5 * t * t, 9.81, -t * t];
+        let imu = ImuSeries { t_s: t_s.clone(), accel_mps2: t_s.iter().map(|&t| f(t)).collect() };
+        let mut cursor = 0;
+        for k in 0..500 {
+            let tau_s = t_s[1] + k as f64 * (t_s[38] - t_s[1]) / 500.0;
+            let (got, want) = (imu.interpolate_at(tau_s, &mut cursor), f(tau_s));
+            for i in 0..3 {
+                assert!((got[i] - want[i]).abs() < 1e-12, "t {tau_s}, axis {i}: {} vs {}", got[i], want[i]);
+            }
+        }
     }
 
     /// Read between its samples, a sampled sinusoid keeps its amplitude to
