@@ -304,6 +304,28 @@ impl Solution {
         self.fitted.loop_index().map(|l| (self.theta.ln_s, self.cov[(l, l)]))
     }
 
+    /// This free fit (with covariance) under a loop stated within the relative
+    /// tolerance `tol`, linearized as [`joint_fit`] combines them: the
+    /// statement's test z = ln ŝ/√(C_ss + σ_p²), and Γ̂ moved to
+    /// ln s* = w·ln ŝ (w = σ_p²/(C_ss + σ_p²)) along its regression on ln s,
+    /// `Γ̂* = Γ̂ + b·(ln s* − ln ŝ)`, b = C_Γ,s/C_ss: the Γ̂ the joint fit
+    /// reports under this loop. `axes`: the fit's axes, in its order. `None`
+    /// without a loop variance.
+    fn within_tolerance(&self, tol: f64, axes: &[usize]) -> Option<([f64; 3], f64)> {
+        let (ln_s, c_ss) = self.ln_s_and_variance()?;
+        let l = self.fitted.loop_index()?;
+        if !(c_ss > 0.0 && c_ss.is_finite() && tol.is_finite()) {
+            return None;
+        }
+        let total = c_ss + tol * tol;
+        let ln_s_post = tol * tol / total * ln_s;
+        let mut gamma = self.gamma;
+        for (m, i) in axes.iter().enumerate() {
+            gamma[*i] += self.cov[(m, l)] / c_ss * (ln_s_post - ln_s);
+        }
+        Some((gamma, ln_s / total.sqrt()))
+    }
+
     /// The posterior of [`joint_fit`]'s combination: `held`, a fit with the
     /// loop held at `ln_s_post` (no loop column), with the free fit's (self's)
     /// regression on ln s adding the posterior variance `var_post`.

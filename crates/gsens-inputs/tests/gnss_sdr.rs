@@ -166,8 +166,8 @@ fn tracking_rows_with_the_gnss_sdr_loop_of_a_conf() {
 /// stated in words only (order, Bn 3 Hz, 20 ms, as GNSS-SDR's configuration
 /// has it): of the forms those words take, the data choose GNSS-SDR's (by
 /// far more than the alike margin), and Γ̂ is within 3σ of the truth with σ
-/// under 2 % of |Γ|, trustworthy, for both loop orders (measured: +1.55σ,
-/// +0.57σ, −0.97σ and +1.04σ, +0.22σ, −0.69σ). Under gsens's own form of
+/// under 2 % of |Γ|, trustworthy, for both loop orders (measured: +1.25σ,
+/// +0.21σ, −0.62σ and +0.88σ, +0.03σ, −0.50σ). Under gsens's own form of
 /// the same words (`loop_implementation` kaplan) Γ̂ is at +4.9σ (2nd order,
 /// trustworthy: wrong) and −20σ (3rd order, rejected).
 #[test]

@@ -16,9 +16,15 @@
 //! conditional likelihood, σ² profiled out). The forms have the same number
 //! of parameters, so −2 ln L compares them directly; a white-noise RSS
 //! would overstate how well strongly coloured loop residuals tell them
-//! apart.
+//! apart. With the loop's tolerance σ_p stated, a form whose fitted
+//! bandwidth fails the statement's test (the joint fit's z) is not what the
+//! words say (it fits only at, say, twice the stated bandwidth) and is left
+//! out, and the Γ̂ whose spread σ takes in are the forms' Γ̂ moved to the
+//! bandwidth the joint fit would combine with the statement.
 
-use super::{FitStart, JointSpec, Residuals, Start, batch_pass, fit_axes, scaled_loop, solve_with_residuals};
+use super::{
+    FitStart, JointSpec, LOOP_TEST_Z, Residuals, Start, batch_pass, fit_axes, scaled_loop, solve_with_residuals,
+};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
 use gsens_core::LoopModel;
 use rayon::prelude::*;
@@ -39,16 +45,27 @@ const NOISE_FIT_SAMPLES: usize = 40_000;
 pub struct LoopFormFit {
     /// The form, in words.
     pub form: String,
-    /// −2 ln L of its fit over the best form's (0 for the best).
+    /// −2 ln L of its fit over the best form's (0 for the best; negative
+    /// for a form that fits better but is not consistent with the statement).
     pub delta_m2lnl: f64,
-    /// Γ̂ of its fit, the natural frequency and the offset fitted freely
-    /// \[Hz/(m/s²)\].
+    /// Whether its fitted bandwidth passes the stated loop's test within its
+    /// tolerance (|z| ≤ [`crate::LOOP_TEST_Z`], the joint fit's): a form that
+    /// fails it is neither chosen nor covered by σ (unless every form fails).
+    #[serde(default = "consistent")]
+    pub consistent_with_statement: bool,
+    /// Γ̂ of its fit as the joint fit makes it: the offset fitted, the
+    /// natural frequency within the stated loop's tolerance (freely without
+    /// one) \[Hz/(m/s²)\].
     pub gamma_hz_per_mps2: [f64; 3],
-    /// The natural frequency ωn/2π of its fit \[Hz\] (`None`: held at the
-    /// stated one, or none).
+    /// The natural frequency ωn/2π of its free fit, the data's \[Hz\]
+    /// (`None`: held at the stated one, or none).
     pub natural_frequency_hz: Option<f64>,
     /// The same for the form at the stated bandwidth \[Hz\].
     pub stated_natural_frequency_hz: Option<f64>,
+}
+
+fn consistent() -> bool {
+    true
 }
 
 /// The discrete forms of a loop stated in words, compared by the data.
@@ -64,7 +81,7 @@ pub struct LoopForms {
     /// best's Γ̂ weighted by the data's odds, Σ_k w_k·(Γ̂_k − Γ̂_best)² with
     /// w_k ∝ exp(−Δ_k/2), or, when larger, the largest (Γ̂_k − Γ̂_best)² of
     /// the forms within [`LoopForms::alike_within`] (so that 1σ reaches each);
-    /// Γ̂ of the forms' free fits \[(Hz/(m/s²))²\].
+    /// Γ̂ of the forms' fits within the loop's tolerance \[(Hz/(m/s²))²\].
     pub added_variance_hz_per_mps2_sq: [f64; 3],
 }
 
@@ -80,15 +97,16 @@ impl LoopForms {
         self.forms
             .iter()
             .enumerate()
-            .filter(move |(k, f)| *k != chosen && f.delta_m2lnl <= self.alike_within)
+            .filter(move |(k, f)| *k != chosen && f.consistent_with_statement && f.delta_m2lnl <= self.alike_within)
             .map(|(_, f)| f)
     }
 }
 
 /// The form among `forms` (of `settings`' loop, the stated one first) the
 /// data fit best, and the comparison. Each form is fitted as `spec` asks,
-/// without a tolerance (the data's fit) and without its covariance, on the
-/// axes the first form's pass observes; the forms in parallel.
+/// without a tolerance (the data's fit, which the likelihood compares) and
+/// again within it (the Γ̂ whose spread σ takes in), without covariance, on
+/// the axes the first form's pass observes; the forms in parallel.
 pub(crate) fn compare_loop_forms(
     series: &EpochSeries,
     settings: &EstimateSettings,
@@ -100,28 +118,47 @@ pub(crate) fn compare_loop_forms(
         forms.par_iter().map(|form| batch_pass(series, &with_form(form))).collect::<Result<Vec<_>, _>>()?;
     let axes = fit_axes(&passes[0].1, settings);
     let free = JointSpec { loop_tolerance: None, ..spec };
+    // With a tolerance the fits' covariances give each form's Γ̂ as the joint
+    // fit would report it and the statement's evidence against the form.
+    let tolerance = spec.loop_tolerance.filter(|t| t.is_finite() && spec.natural_frequency);
     let fits = forms
         .par_iter()
         .zip(&passes)
         .map(|(form, (fed, _))| {
-            solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Borrowed(fed), Start::Search, false)
+            let with_cov = tolerance.is_some();
+            solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Borrowed(fed), Start::Search, with_cov)
         })
         .collect::<Result<Vec<_>, _>>()?;
+    // Γ̂ under each form as the joint fit gives it, its loop combined with
+    // the statement: what not knowing the form changes of the reported Γ̂.
+    // The free fits' Γ̂ wander along the flat ωn–τ ridge of one shaking
+    // rate, a spread the joint fit's σ already holds. A form whose fitted
+    // bandwidth the statement's own test rejects (|z| > LOOP_TEST_Z, as the
+    // joint fit would reject the stated loop) is not what the words say: it
+    // is neither chosen nor covered, unless no form passes.
+    let within: Vec<Option<([f64; 3], f64)>> =
+        fits.iter().map(|(sol, _)| tolerance.and_then(|tol| sol.within_tolerance(tol, &axes))).collect();
+    let passes_test = |k: usize| within[k].is_none_or(|(_, z)| z.abs() <= LOOP_TEST_Z);
+    let any_passes = (0..forms.len()).any(passes_test);
+    let considered: Vec<bool> = (0..forms.len()).map(|k| passes_test(k) || !any_passes).collect();
     let n = series.phase_err_rad.len();
     let residuals: Vec<&Residuals> = fits.iter().map(|(_, r)| r).collect();
     let m2lnl = whitened_m2lnl(&residuals, n, series.log_interval_s);
-    let best = m2lnl.iter().copied().fold(f64::INFINITY, f64::min);
-    let chosen = m2lnl.iter().position(|&v| v == best).unwrap_or(0);
-    let gamma_chosen = fits[chosen].0.gamma;
+    let best = (0..forms.len()).filter(|&k| considered[k]).map(|k| m2lnl[k]).fold(f64::INFINITY, f64::min);
+    let chosen = (0..forms.len()).find(|&k| considered[k] && m2lnl[k] == best).unwrap_or(0);
+    let reported = |k: usize| within[k].map_or(fits[k].0.gamma, |(gamma, _)| gamma);
+    let gamma_chosen = reported(chosen);
     let models = forms;
     let forms: Vec<LoopFormFit> = models
         .iter()
         .zip(&fits)
         .zip(&m2lnl)
-        .map(|((form, (sol, _)), v)| LoopFormFit {
+        .enumerate()
+        .map(|(k, ((form, (sol, _)), v))| LoopFormFit {
             form: form.to_string(),
             delta_m2lnl: v - best,
-            gamma_hz_per_mps2: sol.gamma,
+            consistent_with_statement: considered[k],
+            gamma_hz_per_mps2: reported(k),
             natural_frequency_hz: sol
                 .fitted
                 .natural_frequency
@@ -147,12 +184,17 @@ pub(crate) fn compare_loop_forms(
 /// and a delay, which Γ and the IMU time offset take up, and the data tell
 /// them apart only by a Δ of about ten, so the other form wins now and then.
 fn form_variance(forms: &[LoopFormFit], gamma_chosen: [f64; 3]) -> [f64; 3] {
-    let weights: Vec<f64> = forms.iter().map(|f| (-0.5 * f.delta_m2lnl).exp()).collect();
+    let weights: Vec<f64> =
+        forms.iter().map(|f| if f.consistent_with_statement { (-0.5 * f.delta_m2lnl).exp() } else { 0.0 }).collect();
     let gammas: Vec<[f64; 3]> = forms.iter().map(|f| f.gamma_hz_per_mps2).collect();
     let weighted = weighted_spread(&weights, &gammas, gamma_chosen);
     [0, 1, 2].map(|i| {
         let spread = |f: &LoopFormFit| (f.gamma_hz_per_mps2[i] - gamma_chosen[i]).powi(2);
-        let alike = forms.iter().filter(|f| f.delta_m2lnl <= LOOP_FORM_ALIKE).map(spread).fold(0.0, f64::max);
+        let alike = forms
+            .iter()
+            .filter(|f| f.consistent_with_statement && f.delta_m2lnl <= LOOP_FORM_ALIKE)
+            .map(spread)
+            .fold(0.0, f64::max);
         weighted[i].max(alike)
     })
 }
@@ -225,6 +267,7 @@ mod tests {
         LoopFormFit {
             form: String::new(),
             delta_m2lnl,
+            consistent_with_statement: true,
             gamma_hz_per_mps2: [gamma_x, 0.0, 0.0],
             natural_frequency_hz: None,
             stated_natural_frequency_hz: None,
@@ -245,5 +288,8 @@ mod tests {
         // A form the data rule out adds (almost) nothing.
         let far = form_variance(&[form(0.0, 0.1), form(60.0, 0.1 + d)], [0.1, 0.0, 0.0]);
         assert!(far[0] < 1e-13 * d * d, "{far:?}");
+        // A form the statement's test rejects adds nothing, however well it fits.
+        let rejected = LoopFormFit { consistent_with_statement: false, ..form(-5.0, 0.1 + d) };
+        assert_eq!(form_variance(&[form(0.0, 0.1), rejected], [0.1, 0.0, 0.0]), [0.0; 3]);
     }
 }
