@@ -26,7 +26,7 @@ use super::{
     FitStart, JointSpec, LOOP_TEST_Z, Residuals, Start, batch_pass, fit_axes, scaled_loop, solve_with_residuals,
 };
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
-use gsens_core::LoopModel;
+use gsens_core::{FedEpoch, LoopModel};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -121,14 +121,17 @@ pub(crate) fn compare_loop_forms(
     // With a tolerance the fits' covariances give each form's Γ̂ as the joint
     // fit would report it and the statement's evidence against the form.
     let tolerance = spec.loop_tolerance.filter(|t| t.is_finite() && spec.natural_frequency);
-    let fits = forms
-        .par_iter()
-        .zip(&passes)
-        .map(|(form, (fed, _))| {
-            let with_cov = tolerance.is_some();
-            solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Borrowed(fed), Start::Search, with_cov)
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let fit = |(form, (fed, _)): (&LoopModel, &(Vec<FedEpoch>, _))| {
+        let with_cov = tolerance.is_some();
+        solve_with_residuals(series, &with_form(form), (free, &axes), Cow::Borrowed(fed), Start::Search, with_cov)
+    };
+    // With covariances the forms are fitted one after another: each sandwich
+    // holds its Jacobian and noise spectra (about 20 MB on an hour of 40 Hz
+    // epochs), and their own passes and FFTs run in parallel.
+    let fits = match tolerance {
+        Some(_) => forms.iter().zip(&passes).map(fit).collect::<Result<Vec<_>, _>>()?,
+        None => forms.par_iter().zip(&passes).map(fit).collect::<Result<Vec<_>, _>>()?,
+    };
     // Γ̂ under each form as the joint fit gives it, its loop combined with
     // the statement: what not knowing the form changes of the reported Γ̂.
     // The free fits' Γ̂ wander along the flat ωn–τ ridge of one shaking
