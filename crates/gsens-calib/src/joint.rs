@@ -201,6 +201,21 @@ pub fn joint_fit(series: &EpochSeries, settings: &EstimateSettings, spec: JointS
     joint_fit_from(series, settings, spec, None)
 }
 
+/// The data's ln ŝ (variance C_ss) combined with the statement ln s ~ N(0, σ_p²)
+/// ([`joint_fit`]): the statement's test z, the posterior ln s* and its variance.
+struct StatedCombined {
+    z: f64,
+    ln_s_post: f64,
+    var_post: f64,
+}
+
+/// [`StatedCombined`] of ln ŝ = `ln_s`, C_ss = `c_ss` and σ_p = `tol`:
+/// z = ln ŝ/√(C_ss + σ_p²), w = σ_p²/(C_ss + σ_p²), ln s* = w·ln ŝ, σ*² = w·C_ss.
+fn combine_with_statement(ln_s: f64, c_ss: f64, tol: f64) -> StatedCombined {
+    let w = tol * tol / (c_ss + tol * tol);
+    StatedCombined { z: ln_s / (c_ss + tol * tol).sqrt(), ln_s_post: w * ln_s, var_post: w * c_ss }
+}
+
 /// Where a joint fit may start: the stated loop's pass over the series, the
 /// axes fitted and θ where an earlier fit of the same problem ended (the
 /// comparison of the stated loop's forms fits the chosen one so).
@@ -235,7 +250,7 @@ pub(crate) fn joint_fit_from(
     };
     let free = solve(series, settings, spec, &axes, Cow::Borrowed(&fed0), start, true)?;
     let (ln_s, c_ss) = free.ln_s_and_variance().unwrap_or((0.0, 0.0));
-    let z = ln_s / (c_ss + tol * tol).sqrt();
+    let StatedCombined { z, ln_s_post, var_post } = combine_with_statement(ln_s, c_ss, tol);
     // No variance of ln ŝ (NaN included) or a rejected loop: the free fit.
     if c_ss.is_nan() || c_ss <= 0.0 || z.is_nan() || z.abs() > LOOP_TEST_Z {
         let evidence = LoopEvidence {
@@ -245,8 +260,6 @@ pub(crate) fn joint_fit_from(
         };
         return Ok(describe(series, &stated, spec, &axes, &free, evidence));
     }
-    let w = tol * tol / (c_ss + tol * tol);
-    let (ln_s_post, var_post) = (w * ln_s, w * c_ss);
     // The second fit: the loop held at ln s*, everything else free.
     let mut at_post = *settings;
     at_post.receiver_loop = scaled_loop(&stated, ln_s_post.exp(), free.theta.zeta);
@@ -317,13 +330,12 @@ impl Solution {
         if !(c_ss > 0.0 && c_ss.is_finite() && tol.is_finite()) {
             return None;
         }
-        let total = c_ss + tol * tol;
-        let ln_s_post = tol * tol / total * ln_s;
+        let StatedCombined { z, ln_s_post, .. } = combine_with_statement(ln_s, c_ss, tol);
         let mut gamma = self.gamma;
         for (m, i) in axes.iter().enumerate() {
             gamma[*i] += self.cov[(m, l)] / c_ss * (ln_s_post - ln_s);
         }
-        Some((gamma, ln_s / total.sqrt()))
+        Some((gamma, z))
     }
 
     /// The posterior of [`joint_fit`]'s combination: `held`, a fit with the

@@ -43,7 +43,12 @@ pub fn longest_models_warmup_s(receiver_loop: &LoopModel, highpass_hz: f64) -> f
     } else {
         s
     };
-    (w * 10.0).ceil() / 10.0
+    up_to_tenth_s(w)
+}
+
+/// `t_s` rounded up to 0.1 s: a warm-up that reads back as written.
+fn up_to_tenth_s(t_s: f64) -> f64 {
+    (t_s * 10.0).ceil() / 10.0
 }
 
 /// The warm-up a session whose first epoch is at IMU stamp `start_s` needs
@@ -92,7 +97,7 @@ pub fn models_warmup_s(
     }
     let hp = HighPass::new(highpass_hz, log_interval_s);
     let (mut hp_ref, mut hp_diff) = ([hp; 3], [hp; 3]);
-    let (mut peak, mut diffs) = ([0.0f64; 3], Vec::with_capacity(n_after));
+    let (mut peak, mut diffs) = (0.0f64, Vec::with_capacity(n_after));
     let mut cursor = 0;
     for k in 1.. {
         let t = t_ref + k as f64 * t_loop;
@@ -109,19 +114,20 @@ pub fn models_warmup_s(
         let d: [f64; 3] = core::array::from_fn(|i| if looking { started[i].step(a[i]) - r[i] } else { 0.0 });
         if (k - n_lead).is_multiple_of(per_epoch) {
             for i in 0..3 {
-                peak[i] = peak[i].max(hp_ref[i].step(r[i]).abs());
+                peak = peak.max(hp_ref[i].step(r[i]).abs());
             }
             if looking {
                 diffs.push(core::array::from_fn::<f64, 3, _>(|i| hp_diff[i].step(d[i]).abs()));
             }
         }
     }
-    // The models' start-up error against the largest regressor: an axis hardly shaken has its
-    // own peak at the IMU's noise, which its noise-driven start-up error would always pass.
-    let bound = (-SETTLED_TIME_CONSTANTS).exp() * peak.iter().fold(0.0f64, |m, &p| m.max(p));
+    // The models' start-up error against the largest regressor (`peak` over the three axes): an
+    // axis hardly shaken has its own peak at the IMU's noise, which its noise-driven start-up
+    // error would always pass.
+    let bound = (-SETTLED_TIME_CONSTANTS).exp() * peak;
     match diffs.iter().rposition(|d| d.iter().any(|&x| x > bound)) {
         None => 0.0,
-        Some(j) => (((j + 1) as f64 * log_interval_s * 10.0).ceil() / 10.0).min(w_max),
+        Some(j) => up_to_tenth_s((j + 1) as f64 * log_interval_s).min(w_max),
     }
 }
 

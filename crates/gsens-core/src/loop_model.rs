@@ -345,22 +345,16 @@ impl LoopModel {
     /// the update interval. Infinite for a loop that cannot run (no interval,
     /// unstable).
     pub fn settling_time_s(&self, time_constants: f64) -> f64 {
-        let (rho, t_s) = match self {
+        match self {
             LoopModel::Kaplan { spec, interval_s: Some(t) } => {
-                (spec.coeffs().ok().and_then(|c| c.spectral_radius_at(*t)), *t)
+                let rho = spec.coeffs().ok().and_then(|c| c.spectral_radius_at(*t));
+                crate::pll::settling_time_s(rho, *t, time_constants)
             }
-            LoopModel::Kaplan { interval_s: None, .. } => return f64::INFINITY,
+            LoopModel::Kaplan { interval_s: None, .. } => f64::INFINITY,
             LoopModel::GnssSdr(stage) => {
-                return GnssSdrPll::new(*stage).map_or(f64::INFINITY, |p| p.settling_time_s(time_constants));
+                GnssSdrPll::new(*stage).map_or(f64::INFINITY, |p| p.settling_time_s(time_constants))
             }
-            LoopModel::PocketSdr(stage) => {
-                return stage.settling_time_s(time_constants);
-            }
-        };
-        match rho {
-            Some(r) if r < 1.0 && r > 0.0 => time_constants * t_s / -ln(r),
-            Some(r) if r <= 0.0 => 0.0,
-            _ => f64::INFINITY,
+            LoopModel::PocketSdr(stage) => stage.settling_time_s(time_constants),
         }
     }
 

@@ -331,6 +331,18 @@ impl LoopFilterCoeffs {
     }
 }
 
+/// Time for a discrete loop's slowest natural mode to decay by e⁻ⁿ, n =
+/// `time_constants` \[s\]: `n·T/(−ln ρ)`, ρ the spectral radius of one
+/// update's transition, T = `interval_s`. Infinite when ρ is unknown, NaN
+/// or ≥ 1 (an unstable loop never settles); 0 when ρ ≤ 0.
+pub(crate) fn settling_time_s(spectral_radius: Option<f64>, interval_s: f64, time_constants: f64) -> f64 {
+    match spectral_radius {
+        Some(r) if r > 0.0 && r < 1.0 => time_constants * interval_s / -crate::math::ln(r),
+        Some(r) if r <= 0.0 => 0.0,
+        _ => f64::INFINITY,
+    }
+}
+
 /// The loop filter as receivers clock it: integrators updated once per update
 /// interval T (see the module docs for the difference equations).
 #[derive(Debug, Clone, Copy, PartialEq)]

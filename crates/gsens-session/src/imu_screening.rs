@@ -245,9 +245,10 @@ pub fn find_flat_runs(imu: &ImuSeries) -> FlatRuns {
 /// Leaves out of the estimate the epochs of `session` whose IMU reading
 /// touches one of `runs`: their phase becomes `None` (a gap), read at stamp
 /// t + τ within two sample intervals of a run (the interpolation between
-/// samples reads two on either side, [`ImuSeries::interpolate_at`]). The loop models keep running through them, and
-/// the estimator leaves out the epochs after a gap that its high-pass needs
-/// to settle. Returns the number of epochs that lost their phase.
+/// samples reads two on either side, [`ImuSeries::interpolate_at`]). The
+/// loop models keep running through them, and the estimator leaves out the
+/// epochs after a gap that its high-pass needs to settle. Returns the
+/// number of epochs that lost their phase.
 pub fn mask_flat_runs(session: &mut crate::PreparedSession, runs: &FlatRuns) -> usize {
     let h = runs.sample_interval_s;
     let mut masked = 0;

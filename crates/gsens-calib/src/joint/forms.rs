@@ -103,10 +103,11 @@ impl LoopForms {
 }
 
 /// The form among `forms` (of `settings`' loop, the stated one first) the
-/// data fit best, and the comparison. Each form is fitted as `spec` asks,
-/// without a tolerance (the data's fit, which the likelihood compares) and
-/// again within it (the Γ̂ whose spread σ takes in), without covariance, on
-/// the axes the first form's pass observes; the forms in parallel.
+/// data fit best, and the comparison. Each form is fitted as `spec` asks
+/// but without a tolerance (the data's fit, which the likelihood compares),
+/// on the axes the first form's pass observes; with a tolerance stated, with
+/// its covariance, which gives the statement's test of the form and its Γ̂
+/// at the bandwidth the joint fit would combine ([`Solution::within_tolerance`]).
 pub(crate) fn compare_loop_forms(
     series: &EpochSeries,
     settings: &EstimateSettings,

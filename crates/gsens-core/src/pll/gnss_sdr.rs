@@ -317,14 +317,7 @@ impl GnssSdrPll {
     /// 0.2 Hz), of its 2nd-order one 1.3 s.
     pub fn settling_time_s(&self, time_constants: f64) -> f64 {
         let (a, _, _, _) = self.state_space();
-        let Some(rho) = crate::math::SpectralRadius::spectral_radius(a) else { return f64::INFINITY };
-        if rho >= 1.0 {
-            return f64::INFINITY;
-        }
-        if rho <= 0.0 {
-            return 0.0;
-        }
-        time_constants * self.interval_s() / -libm::log(rho)
+        super::settling_time_s(crate::math::SpectralRadius::spectral_radius(a), self.interval_s(), time_constants)
     }
 
     /// The loop's response L(e^{j2πfT}) from the sequence of Δf per record to

@@ -156,14 +156,7 @@ impl PocketSdrStage {
     /// One time constant is 1/(0.1485·ω) in the continuous limit (1.06 s at 5 Hz, 0.53 s at 10 Hz);
     /// at T = 1 ms it is 1.046 s and 0.518 s.
     pub fn settling_time_s(&self, time_constants: f64) -> f64 {
-        let rho = self.spectral_radius();
-        if rho.is_nan() || rho >= 1.0 {
-            return f64::INFINITY;
-        }
-        if rho <= 0.0 {
-            return 0.0;
-        }
-        time_constants * self.interval_s / -libm::log(rho)
+        super::settling_time_s(Some(self.spectral_radius()), self.interval_s, time_constants)
     }
 
     /// The response L(e^{j2πfT}) = φ/Δf of the module docs \[rad/Hz\], at `f_hz`.
