@@ -38,7 +38,12 @@ fi
 
 echo "== the wheel (maturin build, dev profile: optimized like the tests)"
 rm -rf "$target_dir/wheels"
-"$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out "$target_dir/wheels"
+# `cargo test --workspace` built the libraries with the features the whole
+# workspace unifies (the CLI's clap derives); asking for the same ones here
+# lets maturin reuse those builds instead of compiling them a second time.
+# They add derives the module does not call and change no behaviour.
+"$venv/bin/maturin" build --profile dev --locked --interpreter "$venv/bin/python" --out "$target_dir/wheels" \
+  --features gsens-inputs/clap,gsens-sim/clap,gsens-core/default
 "$venv/bin/python" -m pip install -q --force-reinstall --no-deps "$target_dir"/wheels/gsens-*.whl
 
 # pytest keeps the tmp_path folders of its last runs under the temporary

@@ -10,7 +10,9 @@ use gsens_core::{LoggedPhase, LoopModel, LoopSpec};
 
 /// The static library, built by cargo into a target directory of its own
 /// beside this test's (`cargo test` builds the crate as an rlib only, and a
-/// nested build in the same directory would wait for the outer one's lock).
+/// nested build in the same directory would wait for the outer one's lock):
+/// the release build the README's C API section makes there too (the CLI's
+/// `c_api_readme` test), so that whichever runs second finds it built.
 fn static_library() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
     // target/<profile>/deps/<test> → target/
@@ -18,13 +20,13 @@ fn static_library() -> PathBuf {
     let dir = target.join("ffi-c-example");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let status = Command::new(&cargo)
-        .args(["build", "-p", "gsens-ffi", "--lib", "--locked", "--target-dir"])
+        .args(["build", "--release", "-p", "gsens-ffi", "--locked", "--target-dir"])
         .arg(&dir)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .status()
         .unwrap_or_else(|e| panic!("cannot run {cargo}: {e}"));
     assert!(status.success(), "cargo build -p gsens-ffi failed");
-    let lib = dir.join("debug/libgsens_ffi.a");
+    let lib = dir.join("release/libgsens_ffi.a");
     assert!(lib.exists(), "{} not built", lib.display());
     lib
 }
