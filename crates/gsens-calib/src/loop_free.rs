@@ -629,7 +629,82 @@ pub(crate) fn fit_rows_scaled<R: RowRegressor>(
     h: f64,
     settings: &LoopFreeSettings,
 ) -> Result<ScaledFit, LoopFreeError> {
-    let RowsFit { mut estimate, rows, regressors: x, gls: fit } =
+    let Linearized { mut estimate, zz, zy, sigma2 } = linearized(phases, at, ln_scale, h, settings)?;
+    let a = zz.view((0, 0), (3, 3)).into_owned();
+    let (Some(a_inv), Some(joint)) = (a.try_inverse(), zz.clone().try_inverse()) else {
+        return Err(LoopFreeError::TooFewEpochs { epochs: estimate.epochs, segment_s: settings.segment_s });
+    };
+    for i in 0..3 {
+        for j in 0..3 {
+            estimate.covariance[i][j] += sigma2 * (joint[(i, j)] - a_inv[(i, j)]);
+        }
+    }
+    estimate.crlb_hz_per_mps2 = [0, 1, 2].map(|i| (sigma2 * joint[(i, i)]).sqrt());
+    let var_ln_scale = if joint[(3, 3)] > 0.0 { sigma2 * joint[(3, 3)] } else { f64::INFINITY };
+    let step_ln_scale = (&joint * &zy)[3];
+    Ok(ScaledFit { estimate, step_ln_scale, var_ln_scale })
+}
+
+/// The fit [`fit_rows`] makes under the loop `at(0)`, known only to within a
+/// variance `var_ln_scale` of its scale θ = ln s (`at(θ)`: the regressor of
+/// the loop scaled by e^θ), with Γ̂ kept and its covariance widened by what
+/// the loop's error θ ~ N(0, var) moves it: linearized as in
+/// [`fit_rows_scaled`], Γ̂ (with τ̂ where searched, fitted along) moves by
+/// J·θ, J = (M⁻¹·Z_νᵀ·d_θ)\[Γ\] with Z_ν = \[X, d_τ\] prewhitened and
+/// M = Z_νᵀZ_ν, so
+///
+/// ```text
+/// Cov(Γ̂) = C + σ²·(M⁻¹ − A⁻¹)[Γ] + J·Jᵀ·var
+/// ```
+///
+/// with C the fit's own covariance (the larger of the bound σ²A⁻¹ and the
+/// Newey–West one) and σ²(M⁻¹ − A⁻¹) what the searched offset adds. The
+/// loop's error comes from elsewhere (a statement, or another fit), so it is
+/// propagated, not combined with what these rows say of the loop.
+pub(crate) fn fit_rows_loop_uncertain<R: RowRegressor>(
+    phases: &InputPhases,
+    at: impl Fn(f64) -> Result<R, LoopFreeError>,
+    h: f64,
+    var_ln_scale: f64,
+    settings: &LoopFreeSettings,
+) -> Result<LoopFreeEstimate, LoopFreeError> {
+    let Linearized { mut estimate, zz, sigma2, .. } = linearized(phases, at, 0.0, h, settings)?;
+    // Z = [X, d_θ, d_τ]: the fit's own parameters ν are every column but d_θ's.
+    let own: Vec<usize> = (0..zz.nrows()).filter(|&c| c != 3).collect();
+    let m = zz.select_rows(&own).select_columns(&own);
+    let z_theta = zz.column(3).select_rows(&own);
+    let a = zz.view((0, 0), (3, 3)).into_owned();
+    let (Some(a_inv), Some(m_inv)) = (a.try_inverse(), m.try_inverse()) else {
+        return Err(LoopFreeError::TooFewEpochs { epochs: estimate.epochs, segment_s: settings.segment_s });
+    };
+    let moved = &m_inv * z_theta;
+    for i in 0..3 {
+        for j in 0..3 {
+            estimate.covariance[i][j] += sigma2 * (m_inv[(i, j)] - a_inv[(i, j)]) + moved[i] * moved[j] * var_ln_scale;
+        }
+    }
+    Ok(estimate)
+}
+
+/// The fit of [`fit_rows`] at θ with the prewhitened cross products of
+/// Z = \[X, d_θ, d_τ\] (d_τ only where τ is searched) and y: see
+/// [`fit_rows_scaled`].
+struct Linearized {
+    estimate: LoopFreeEstimate,
+    zz: nalgebra::DMatrix<f64>,
+    zy: nalgebra::DVector<f64>,
+    /// The AR model's innovation variance σ².
+    sigma2: f64,
+}
+
+fn linearized<R: RowRegressor>(
+    phases: &InputPhases,
+    at: impl Fn(f64) -> Result<R, LoopFreeError>,
+    ln_scale: f64,
+    h: f64,
+    settings: &LoopFreeSettings,
+) -> Result<Linearized, LoopFreeError> {
+    let RowsFit { estimate, rows, regressors: x, gls: fit } =
         fit_rows_kept(phases, &at(ln_scale)?, settings, f64::INFINITY)?;
     let tau = estimate.imu_time_offset_s;
     let g = estimate.gamma_hz_per_mps2;
@@ -657,20 +732,7 @@ pub(crate) fn fit_rows_scaled<R: RowRegressor>(
             zy += v * e[0];
         });
     }
-    let sigma2 = fit.noise.innovation_variance;
-    let a = zz.view((0, 0), (3, 3)).into_owned();
-    let (Some(a_inv), Some(joint)) = (a.try_inverse(), zz.clone().try_inverse()) else {
-        return Err(LoopFreeError::TooFewEpochs { epochs: rows.phase.len(), segment_s: settings.segment_s });
-    };
-    for i in 0..3 {
-        for j in 0..3 {
-            estimate.covariance[i][j] += sigma2 * (joint[(i, j)] - a_inv[(i, j)]);
-        }
-    }
-    estimate.crlb_hz_per_mps2 = [0, 1, 2].map(|i| (sigma2 * joint[(i, i)]).sqrt());
-    let var_ln_scale = if joint[(3, 3)] > 0.0 { sigma2 * joint[(3, 3)] } else { f64::INFINITY };
-    let step_ln_scale = (&joint * &zy)[3];
-    Ok(ScaledFit { estimate, step_ln_scale, var_ln_scale })
+    Ok(Linearized { estimate, zz, zy, sigma2: fit.noise.innovation_variance })
 }
 
 /// The regressor ρ = −2π∫a dt read at an epoch's integration centres (one,

@@ -31,7 +31,7 @@
 
 use crate::loop_free::{
     InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, RowRegressor, check_settings, fit_rows,
-    median_step, rows_on_epochs,
+    fit_rows_loop_uncertain, median_step, rows_on_epochs,
 };
 use gsens_core::{LoopModel, RegressorModel, RowQuantity};
 use gsens_io::{ImuSeries, TrackingLog};
@@ -39,24 +39,46 @@ use gsens_io::{ImuSeries, TrackingLog};
 /// Estimates Γ from the NCO's frequency through the closed loop of
 /// `receiver_loop` (see the module documentation); `settings` as for the
 /// loop-free estimate (its loop interval unused: the loop model's is).
+///
+/// `sigma_ln_scale` is the relative 1σ of the loop's time constants (ωn and
+/// the bandwidth, all scaled together) as known from elsewhere: the stated
+/// loop's tolerance, or the σ of the loop a fit of the tracking error settled
+/// on. Near the loop's bandwidth H, and Γ̂ with it, depends on ωn, so Γ̂'s
+/// covariance takes what that error moves it by (propagated, not combined
+/// with what the rows say of the loop); 0 takes the loop as exact.
 pub fn estimate_nco_frequency(
     tracking: &TrackingLog,
     imu: &ImuSeries,
     settings: &LoopFreeSettings,
     receiver_loop: &LoopModel,
+    sigma_ln_scale: f64,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
     let (rows, quantity) = crate::nco_rows(tracking, settings, crate::NcoRecord::Command)?;
-    estimate_nco_frequency_from(&rows, imu, settings, receiver_loop, quantity)
+    if !(sigma_ln_scale > 0.0 && sigma_ln_scale.is_finite()) {
+        return estimate_nco_frequency_from(&rows, imu, settings, receiver_loop, quantity);
+    }
+    check_settings(settings)?;
+    let log_interval_s = median_step(&rows.epoch_t_s);
+    let receiver_loop = receiver_loop.with_default_interval(log_interval_s);
+    // A central difference over ±5 % of the time constants: H is smooth in them.
+    let step_ln_scale = 0.05;
+    let at = |ln_scale: f64| {
+        loop_regressor(&rows, imu, &receiver_loop.with_bn_scaled(ln_scale.exp()), quantity, settings.warmup_s)
+    };
+    let mut estimate = fit_rows_loop_uncertain(&rows, at, step_ln_scale, sigma_ln_scale.powi(2), settings)?;
+    estimate.loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
+    Ok(estimate)
 }
 
 /// [`estimate_nco_frequency`] from frequency rows a receiver's adapter made
 /// (each track's NCO frequency on the common epochs \[Hz\], the common mode
-/// −H\[aᵀΓ\]; [`crate::nco_rows`] makes them from a tracking log):
-/// `quantity` says what a row holds, [`RowQuantity::NcoFrequency`] (the
-/// command of the row's latest update) or [`RowQuantity::NcoFrequencyMean`]
-/// (the mean command over the log interval, a phase differenced). With the
-/// true loop stated its `crlb_hz_per_mps2` is the bound with the loop known
-/// that an estimate identifying the loop from the same rows
+/// −H\[aᵀΓ\]; [`crate::nco_rows`] makes them from a tracking log), the loop
+/// taken as exact: `quantity` says what a row holds,
+/// [`RowQuantity::NcoFrequency`] (the command of the row's latest update) or
+/// [`RowQuantity::NcoFrequencyMean`] (the mean command over the log
+/// interval, a phase differenced). With the true loop stated its
+/// `crlb_hz_per_mps2` is the bound with the loop known that an estimate
+/// identifying the loop from the same rows
 /// ([`crate::estimate_nco_frequency_identified_from`]) is measured against.
 pub fn estimate_nco_frequency_from(
     rows: &InputPhases,
@@ -66,17 +88,30 @@ pub fn estimate_nco_frequency_from(
     quantity: RowQuantity,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
     check_settings(settings)?;
+    let log_interval_s = median_step(&rows.epoch_t_s);
+    let receiver_loop = receiver_loop.with_default_interval(log_interval_s);
+    let regressor = loop_regressor(rows, imu, &receiver_loop, quantity, settings.warmup_s)?;
+    let mut estimate = fit_rows(rows, &regressor, settings, f64::INFINITY)?;
+    estimate.loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
+    Ok(estimate)
+}
+
+/// The regressor of `quantity` through `receiver_loop` on the rows' epochs,
+/// its model started `lead_s` before the first epoch read.
+fn loop_regressor<'a>(
+    rows: &InputPhases,
+    imu: &'a ImuSeries,
+    receiver_loop: &LoopModel,
+    quantity: RowQuantity,
+    lead_s: f64,
+) -> Result<ModelRegressor<'a>, LoopFreeError> {
     let epochs = rows.epoch_t_s.as_slice();
     let log_interval_s = median_step(epochs);
-    let receiver_loop = receiver_loop.with_default_interval(log_interval_s);
     let loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
     let runnable = receiver_loop.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
     let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, quantity)
         .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
-    let regressor = ModelRegressor::new(epochs, log_interval_s, imu, model, settings.warmup_s);
-    let mut estimate = fit_rows(rows, &regressor, settings, f64::INFINITY)?;
-    estimate.loop_interval_s = loop_interval_s;
-    Ok(estimate)
+    Ok(ModelRegressor::new(epochs, log_interval_s, imu, model, lead_s))
 }
 
 /// A track's NCO frequency \[Hz\] on the log's epochs: `None` where it has no

@@ -295,8 +295,8 @@ pub struct Outcome {
     pub loop_free: Option<Result<crate::LoopFreeEstimate, crate::LoopFreeError>>,
     /// The estimate from the NCO's frequency through the loop model's closed
     /// loop ([`crate::estimate_nco_frequency`], with the loop the estimate
-    /// through the loop model settled on), for a tracking log that holds it;
-    /// `None` for one that does not.
+    /// through the loop model settled on and its σ), for a tracking log that
+    /// holds it; `None` for one that does not.
     pub nco_frequency: Option<Result<crate::LoopFreeEstimate, crate::LoopFreeError>>,
 }
 
@@ -499,6 +499,14 @@ fn calibrate_prepared(
     }
     let loop_free_settings = loop_free_settings(settings, &estimate, session.log_interval_s);
     let receiver_loop = estimate.loop_at(session.log_interval_s);
+    // What the estimate through the tracking error knows of that loop's
+    // time constants: the NCO's frequency depends on them near the loop's
+    // bandwidth, so its σ carries their uncertainty.
+    let sigma_ln_loop_scale = joint
+        .as_ref()
+        .and_then(|j| Some(j.sigma_used_natural_frequency_hz? / j.used_natural_frequency_hz?))
+        .filter(|s| s.is_finite())
+        .unwrap_or(0.0);
     let (closed_loop, (loop_free, nco_frequency)) = rayon::join(
         || estimate_and_check_response(&session, &estimate, joint),
         || {
@@ -511,8 +519,9 @@ fn calibrate_prepared(
                     crate::estimate_loop_free_choosing(log, imu, &loop_free_settings, &crate::TYPICAL_LOOP_INTERVALS_S)
                 }
             });
-            let nco_frequency = has(|t| !t.nco_freq_hz.is_empty())
-                .then(|| crate::estimate_nco_frequency(log, imu, &loop_free_settings, &receiver_loop));
+            let nco_frequency = has(|t| !t.nco_freq_hz.is_empty()).then(|| {
+                crate::estimate_nco_frequency(log, imu, &loop_free_settings, &receiver_loop, sigma_ln_loop_scale)
+            });
             (loop_free, nco_frequency)
         },
     );

@@ -24,7 +24,7 @@ fn z_scores(toml: &str, seeds: std::ops::RangeInclusive<u64>, receiver_loop: &Lo
         .flat_map(|seed| {
             let logs = session_of(&format!("{toml}\n[log]\nnco = true\n"), seed);
             let settings = LoopFreeSettings::new(0.001, LoggedPhase::Mean);
-            let est = estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, receiver_loop)
+            let est = estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, receiver_loop, 0.0)
                 .expect("an estimate from the NCO frequency");
             let (g, s, want) = (est.gamma_hz_per_mps2, est.sigma_hz_per_mps2(), truth(&logs));
             [0, 1, 2].map(|i| (g[i] - want[i]) / s[i])
@@ -52,7 +52,7 @@ fn another_loop_gives_estimates_within_their_sigma() {
 fn a_log_without_the_nco_frequency_is_refused() {
     let logs = session_of("[log]\nnco = false\n", 1);
     let settings = LoopFreeSettings::new(0.001, LoggedPhase::Mean);
-    let err = estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, &paper_loop(3.0)).unwrap_err();
+    let err = estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, &paper_loop(3.0), 0.0).unwrap_err();
     assert!(err.to_string().contains("nco_freq_hz"), "{err}");
 }
 
@@ -85,7 +85,7 @@ fn a_wrong_loop_moves_the_estimate_as_the_closed_loop_says() {
     for seed in [1, 2] {
         let logs = session_of("[log]\nnco = true\n", seed);
         let at = |k: f64| {
-            estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, &paper_loop(3.0 * k))
+            estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, &paper_loop(3.0 * k), 0.0)
                 .expect("an estimate")
                 .gamma_hz_per_mps2
         };
@@ -94,6 +94,36 @@ fn a_wrong_loop_moves_the_estimate_as_the_closed_loop_says() {
             let shift = wide[i] / right[i] - 1.0;
             eprintln!("seed {seed} axis {i}: {shift:+.4}");
             assert!(shift > low - 0.003 && shift < high + 0.003, "seed {seed} axis {i}: {shift} outside {band:?}");
+        }
+    }
+}
+
+/// A loop known to within a relative 1σ of its time constants widens Γ̂'s
+/// variance by what that error moves Γ̂: the linearized J·σ the estimate
+/// adds against the central difference of two whole estimates under the
+/// loop scaled by e^(±0.05), on the same rows (the offset fixed, so the
+/// loop's share is all that is added; the estimate itself is unchanged).
+#[test]
+fn a_loop_known_to_a_tolerance_widens_sigma_by_what_it_moves_the_estimate() {
+    let settings = LoopFreeSettings::new(0.001, LoggedPhase::Mean);
+    let sigma_ln_scale = 0.02;
+    for seed in [1, 2] {
+        let logs = session_of("[log]\nnco = true\n", seed);
+        let at = |ln_scale: f64, sigma: f64| {
+            estimate_nco_frequency(&logs.tracking, &logs.imu, &settings, &paper_loop(3.0 * ln_scale.exp()), sigma)
+                .expect("an estimate")
+        };
+        let (exact, known) = (at(0.0, 0.0), at(0.0, sigma_ln_scale));
+        assert_eq!(exact.gamma_hz_per_mps2, known.gamma_hz_per_mps2);
+        let (up, down) = (at(0.05, 0.0).gamma_hz_per_mps2, at(-0.05, 0.0).gamma_hz_per_mps2);
+        for i in 0..3 {
+            let moved = (up[i] - down[i]) / 0.1 * sigma_ln_scale;
+            let added = (known.covariance[i][i] - exact.covariance[i][i]).sqrt();
+            eprintln!(
+                "seed {seed} axis {i}: added {added:.3e}, moved {moved:.3e}, σ {:.3e}",
+                exact.sigma_hz_per_mps2()[i]
+            );
+            assert!((added / moved.abs() - 1.0).abs() < 0.1, "seed {seed} axis {i}: added {added}, moved {moved}");
         }
     }
 }
