@@ -13,9 +13,9 @@
 //!
 //! per channel i, whatever the loop's order, bandwidth, gains or latency. The
 //! regressor is the integrated specific force ρ = −2π∫a dt (the open-loop
-//! limit of L(s) = −2π/(s + F(s))), sampled as the rows are: at the row's
-//! stamp (`last`) or the mean over the n integration centres since the
-//! previous row (`mean`).
+//! limit of L(s) = −2π/(s + F(s))), averaged as the rows average the phase:
+//! over the row's latest integration (`last`) or the n integrations since
+//! the previous row (`mean`).
 //!
 //! Each satellite's carrier phase θ_signal,i is smooth (its Doppler changes
 //! by under 1 Hz/s, its third derivative by ~10⁻⁸ Hz/s³ for a static
@@ -380,20 +380,15 @@ pub fn estimate_loop_free_from(
     fit(phases, imu, settings, 1)
 }
 
-/// The estimate from input phases whose regressor is the mean of `n_window`
-/// instants a loop interval apart, ending at each epoch.
+/// The estimate from input phases whose regressor is the mean over the
+/// `n_window` integrations ending at each epoch ([`Regressor`]).
 fn fit(
     phases: &InputPhases,
     imu: &ImuSeries,
     settings: &LoopFreeSettings,
     n_window: usize,
 ) -> Result<LoopFreeEstimate, LoopFreeError> {
-    let regressor = Regressor {
-        integral: ForceIntegral::new(imu),
-        epochs: &phases.epoch_t_s,
-        n_window,
-        loop_interval_s: settings.loop_interval_s,
-    };
+    let regressor = Regressor::new(imu, &phases.epoch_t_s, n_window, settings.loop_interval_s);
     // A step of half the smallest slip flags one: the smallest is a half cycle of the discriminator,
     // 4·max|φ| (π for atan Costas at max|φ| = π/4).
     let mut estimate = fit_rows(phases, &regressor, settings, 2.0 * settings.max_abs_phase_rad)?;
@@ -735,34 +730,63 @@ fn linearized<R: RowRegressor>(
     Ok(Linearized { estimate, zz, zy, sigma2: fit.noise.innovation_variance })
 }
 
-/// The regressor ρ = −2π∫a dt read at an epoch's integration centres (one,
-/// or the n of a `mean` row) on the IMU's clock, offset by τ.
+/// The regressor ρ = −2π∫a dt averaged over the integrations a row holds,
+/// on the IMU's clock offset by τ: the latest one, centred on the epoch
+/// (`last`), or the n contiguous ones ending with it (`mean`).
+///
+/// A correlator's discriminator gives the mean of the phase error over its
+/// integration, and the NCO's commanded phase is linear within one, so the
+/// row's input phase holds the oscillator's phase −2π∫Δf averaged over the
+/// window W, not read at its centre: for a sinusoid that is the centre value
+/// times sinc(ωW/2), 1 − (ωT)²/24 for one integration of T (0.05 % at 0.9 Hz
+/// with 20 ms). The mean is taken by 3-point Gauss–Legendre on panels no
+/// longer than half the IMU's median interval: ρ is a quartic between IMU
+/// samples, where the rule is exact.
 struct Regressor<'a> {
     integral: ForceIntegral<'a>,
     epochs: &'a [f64],
     n_window: usize,
     loop_interval_s: f64,
+    /// Panels of the window's Gauss–Legendre rule.
+    panels: usize,
 }
 
-impl Regressor<'_> {
-    fn instants(&self, k: usize, tau: f64) -> impl Iterator<Item = f64> + '_ {
-        let last = self.epochs[k] + tau;
-        (0..self.n_window).map(move |j| last - j as f64 * self.loop_interval_s)
+impl<'a> Regressor<'a> {
+    fn new(imu: &'a ImuSeries, epochs: &'a [f64], n_window: usize, loop_interval_s: f64) -> Self {
+        let imu_step_s = median_step(&imu.t_s);
+        let window_s = n_window as f64 * loop_interval_s;
+        let panels = if imu_step_s > 0.0 { (2.0 * window_s / imu_step_s).ceil().max(1.0) as usize } else { 1 };
+        Regressor { integral: ForceIntegral::new(imu), epochs, n_window, loop_interval_s, panels }
+    }
+
+    /// The window epoch `k`'s row averages over, at offset `tau` \[s\].
+    fn window(&self, k: usize, tau: f64) -> (f64, f64) {
+        let end = self.epochs[k] + tau + self.loop_interval_s / 2.0;
+        (end - self.n_window as f64 * self.loop_interval_s, end)
     }
 
     fn at(&self, k: usize, tau: f64) -> [f64; 3] {
+        // Gauss–Legendre's 3 nodes on [−1, 1] and their weights (which sum to 2).
+        const NODES: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
+        const WEIGHTS: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
+        let (start, end) = self.window(k, tau);
+        let half = (end - start) / (2.0 * self.panels as f64);
         let mut sum = [0.0; 3];
-        for t in self.instants(k, tau) {
-            let v = self.integral.at(t);
-            (0..3).for_each(|i| sum[i] += v[i]);
+        for p in 0..self.panels {
+            let mid = start + (2 * p + 1) as f64 * half;
+            for (x, w) in NODES.iter().zip(WEIGHTS) {
+                let v = self.integral.at(mid + x * half);
+                (0..3).for_each(|i| sum[i] += w * v[i]);
+            }
         }
-        sum.map(|v| -TAU * v / self.n_window as f64)
+        sum.map(|v| -TAU * v / (2.0 * self.panels as f64))
     }
 }
 
 impl RowRegressor for Regressor<'_> {
     fn covers(&self, k: usize, tau: f64) -> bool {
-        self.instants(k, tau).all(|t| self.integral.covers(t))
+        let (start, end) = self.window(k, tau);
+        self.integral.covers(start) && self.integral.covers(end)
     }
 
     fn values(&self, at: &[usize], tau: f64) -> Vec<[f64; 3]> {
@@ -1169,6 +1193,34 @@ impl<'a> ForceIntegral<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A row's regressor is ρ = −2π∫a averaged over its integrations, not
+    /// read at their centre: for a = A·sin ωt, ρ's oscillating part
+    /// 2πA/ω·cos ωt averages to the centre value times sinc(ωW/2) over a
+    /// window W. At 0.9 Hz a centre reading of a 20 ms integration would be
+    /// off by (ωT)²/24 = 5.3·10⁻⁴ of the amplitude; the cubic through the
+    /// 40 Hz IMU costs ~10⁻⁵.
+    #[test]
+    fn a_rows_regressor_is_the_mean_over_its_integrations() {
+        let (amp, w) = (3.0, core::f64::consts::TAU * 0.9);
+        let t_s: Vec<f64> = (0..2000).map(|k| k as f64 / 40.0).collect();
+        let imu =
+            ImuSeries { t_s: t_s.clone(), accel_mps2: t_s.iter().map(|&t| [amp * (w * t).sin(), 0.0, 0.0]).collect() };
+        let epochs: Vec<f64> = (100..2000).map(|k| k as f64 / 50.0).filter(|&t| t < 48.0).collect();
+        for (n_window, loop_interval_s) in [(1, 0.02), (20, 0.001)] {
+            let regressor = Regressor::new(&imu, &epochs, n_window, loop_interval_s);
+            let window_s = n_window as f64 * loop_interval_s;
+            let sinc = (w * window_s / 2.0).sin() / (w * window_s / 2.0);
+            for k in (0..epochs.len()).step_by(37) {
+                let centre = epochs[k] + loop_interval_s / 2.0 - window_s / 2.0;
+                // −2π·mean of A(1 − cos ωt)/ω over the window.
+                let want = -core::f64::consts::TAU * amp / w * (1.0 - (w * centre).cos() * sinc);
+                let got = regressor.at(k, 0.0)[0];
+                let scale = core::f64::consts::TAU * amp / w;
+                assert!((got - want).abs() < 3e-5 * scale, "n {n_window} epoch {k}: {got} against {want}");
+            }
+        }
+    }
 
     /// Catmull–Rom reproduces a quadratic, so its integral is exact for one
     /// (here on uneven samples, away from the ends' one-sided slopes).
