@@ -32,7 +32,8 @@
 //! use gsens_core::RegressorModel;
 //! use gsens_core::{LoopModel, LoopSpec};
 //!
-//! // A synthetic session: x shaken at 0.9 Hz, φ = L[aᵀΓ] through the paper's loop.
+//! // A synthetic session: x shaken at 0.9 Hz, φ = L[aᵀΓ] through the paper's
+//! // loop, fed each integration's mean as the estimate's prefilter takes it.
 //! let t = 0.025;
 //! let gamma = [0.3, 0.0, 0.0];
 //! let accel: Vec<[f64; 3]> =
@@ -40,8 +41,10 @@
 //! let mut triad = RegressorModel::with_loop(
 //!     LoopModel::kaplan(LoopSpec::PAPER, Some(t)).runnable()?, t, t,
 //!     gsens_core::LoggedPhase::Last)?;
+//! let mut means = accel.clone();
+//! gsens_core::compensate_interpolation(&mut means, triad.interpolation_compensation());
 //! let phase: Vec<Option<f64>> =
-//!     accel.iter().map(|a| { let p = triad.epoch(a); Some(p[0] * gamma[0]) }).collect();
+//!     means.iter().map(|a| { let p = triad.epoch(a); Some(p[0] * gamma[0]) }).collect();
 //! let t_s: Vec<f64> = (0..accel.len()).map(|k| k as f64 * t).collect();
 //! let series = EpochSeries { log_interval_s: t, t_s: &t_s, phase_err_rad: &phase, accel_mps2: &accel,
 //!                            imu_time_offset_s: 0.0 };

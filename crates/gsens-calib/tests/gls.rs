@@ -1,6 +1,7 @@
 //! Generalized least squares and the Cramér–Rao bound on synthetic series with
-//! coloured (AR) noise: φ from the same discrete loop as the model, the noise
-//! known, so the bound can be computed from the truth.
+//! coloured (AR) noise: φ from the model's discrete loop fed what a correlator
+//! sees of the specific force over each integration, the noise known, so the
+//! bound can be computed from the truth.
 
 use gsens_calib::gls::{ArModel, GlsSettings, gls};
 use gsens_calib::{EpochSeries, EstimateSettings, Method, calibrate};
@@ -39,37 +40,60 @@ enum Excitation {
     Broadband,
 }
 
-/// Specific force and the noiseless phase error from the loop.
+/// Specific force and the noiseless phase error from the loop: each
+/// integration [t − T/2, t + T/2] advances the replica by Δf's mean over it
+/// and gives the correlator's mean phase, Δf weighted by the time left in it
+/// (`step_varying`), both by composite Simpson on 16 panels.
 fn motion(excitation: &Excitation, seed: u64) -> (Vec<[f64; 3]>, Vec<f64>) {
     let n = (80.0 / T) as usize;
     let mut pll = DiscretePll::new(LoopSpec::PAPER.coeffs().unwrap(), T);
     pll.settle(9.80665 * GAMMA[2]);
     let ph = (seed as f64 * 0.7).sin() * PI;
+    let delta_f = |t: f64| (0..3).map(|i| force(excitation, ph, t)[i] * GAMMA[i]).sum::<f64>();
     let (mut accel, mut phase) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for k in 0..n {
         let t = k as f64 * T;
-        let mut a = [0.0, 0.0, 9.80665];
-        match excitation {
-            Excitation::Paper => {
-                let axis = ((t - 5.0) / 25.0).floor();
-                let within = (t - 5.0) - 25.0 * axis;
-                if (0.0..3.0).contains(&axis) && within < 20.0 {
-                    a[axis as usize] += 3.0 * (TAU * 0.9 * within).sin() * (PI * within / 20.0).sin();
-                }
+        let panels = 16;
+        let h = T / panels as f64;
+        let (mut mean, mut weighted) = (0.0, 0.0);
+        for i in 0..=panels {
+            let c = match i {
+                0 => 1.0,
+                _ if i == panels => 1.0,
+                _ => 2.0 + 2.0 * (i % 2) as f64,
+            };
+            let s = i as f64 * h;
+            let v = delta_f(t - T / 2.0 + s);
+            mean += c * v * h / 3.0 / T;
+            weighted += c * v * 2.0 * (1.0 - s / T) * h / 3.0 / T;
+        }
+        phase.push(pll.step_varying(mean, weighted));
+        accel.push(force(excitation, ph, t));
+    }
+    (accel, phase)
+}
+
+/// The specific force at `t` \[m/s²\] (`ph`: the broadband tones' phase).
+fn force(excitation: &Excitation, ph: f64, t: f64) -> [f64; 3] {
+    let mut a = [0.0, 0.0, 9.80665];
+    match excitation {
+        Excitation::Paper => {
+            let axis = ((t - 5.0) / 25.0).floor();
+            let within = (t - 5.0) - 25.0 * axis;
+            if (0.0..3.0).contains(&axis) && within < 20.0 {
+                a[axis as usize] += 3.0 * (TAU * 0.9 * within).sin() * (PI * within / 20.0).sin();
             }
-            Excitation::Broadband => {
-                let tones = [[0.15, 0.71, 2.3], [0.23, 1.07, 2.9], [0.31, 0.53, 1.9]];
-                for i in 0..3 {
-                    for (j, f) in tones[i].iter().enumerate() {
-                        a[i] += 1.5 * (TAU * f * t + ph + i as f64 + 2.0 * j as f64).sin();
-                    }
+        }
+        Excitation::Broadband => {
+            let tones = [[0.15, 0.71, 2.3], [0.23, 1.07, 2.9], [0.31, 0.53, 1.9]];
+            for i in 0..3 {
+                for (j, f) in tones[i].iter().enumerate() {
+                    a[i] += 1.5 * (TAU * f * t + ph + i as f64 + 2.0 * j as f64).sin();
                 }
             }
         }
-        phase.push(pll.step((0..3).map(|i| a[i] * GAMMA[i]).sum()));
-        accel.push(a);
     }
-    (accel, phase)
+    a
 }
 
 /// One synthetic session: φ = loop response + AR noise, a gap every 10 s.

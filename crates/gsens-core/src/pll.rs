@@ -470,7 +470,7 @@ impl CarrierLoop {
 /// With e_k the phase error at the start of the interval:
 ///
 /// ```text
-/// φ_k      = e_k − π·T·(f_k + Δf_k)          discriminator: mean phase error over the interval
+/// φ_k      = e_k − π·T·(f_k + Δf̃_k)          discriminator: mean phase error over the interval
 /// e_{k+1}  = e_k − 2π·T·(f_k + Δf_k)         NCO phase accumulates the frequency it ran at
 /// a2_k     = a2_{k−1} + c2·T·φ_k             integrators updated once per T (rectangular rule)
 /// a1_k     = a1_{k−1} + T·(c1·φ_k + a2_k)
@@ -488,7 +488,10 @@ impl CarrierLoop {
 /// L_d(z) = −G(z) / (1 + G(z)·z⁻¹·F_d(z)/2π)
 /// ```
 ///
-/// which tends to L(s) as T → 0 (z = e^{sT}).
+/// which tends to L(s) as T → 0 (z = e^{sT}). Δf̃_k is Δf over the
+/// integration weighted by the time left in it, 2(1 − s/T)/T (the mean of
+/// the phase accumulated since the integration began): Δf_k for a constant
+/// bias, which is what L_d assumes; [`LinearLoop::step_varying`] takes both.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DiscretePll {
     carrier: CarrierLoop,
@@ -506,8 +509,17 @@ impl DiscretePll {
     /// returns the discriminator output φ_k \[rad\].
     #[inline]
     pub fn step(&mut self, delta_f_hz: f64) -> f64 {
+        self.step_varying(delta_f_hz, delta_f_hz)
+    }
+
+    /// [`DiscretePll::step`] with a bias that varies over the integration:
+    /// its mean `delta_f_hz` advances the replica, its mean weighted by
+    /// 2(1 − s/T)/T over the integration, `weighted_hz`, enters the mean
+    /// phase error ([`LinearLoop::step_varying`]).
+    #[inline]
+    pub fn step_varying(&mut self, delta_f_hz: f64, weighted_hz: f64) -> f64 {
         let advance = self.carrier.replica_advance_rad(delta_f_hz);
-        let phase_err_rad = self.err_start_rad - 0.5 * advance;
+        let phase_err_rad = self.err_start_rad - 0.5 * self.carrier.replica_advance_rad(weighted_hz);
         self.err_start_rad -= advance;
         self.carrier.close(phase_err_rad);
         phase_err_rad
@@ -536,8 +548,20 @@ impl DiscretePll {
 /// (any of them, chosen at run time).
 pub trait LinearLoop {
     /// One loop update with mean NCO frequency bias `delta_f_hz` \[Hz\] over
-    /// it; returns the discriminator output φ \[rad\].
-    fn step(&mut self, delta_f_hz: f64) -> f64;
+    /// it, constant over the integration; returns the discriminator output
+    /// φ \[rad\].
+    #[inline]
+    fn step(&mut self, delta_f_hz: f64) -> f64 {
+        self.step_varying(delta_f_hz, delta_f_hz)
+    }
+    /// One loop update with a bias that varies over the integration: its mean
+    /// `delta_f_hz` \[Hz\] advances the replica, and the discriminator's mean
+    /// phase error over the integration takes it weighted by the time left,
+    /// 2(1 − s/T)/T with s from the integration's start (the phase
+    /// accumulated since the start, averaged): `weighted_hz`, the same as the
+    /// mean for a constant bias and Δf_c − (T/6)·Δf′ + O(T²) of the mean for a
+    /// smooth one (Δf_c the centre value).
+    fn step_varying(&mut self, delta_f_hz: f64, weighted_hz: f64) -> f64;
     /// Puts the loop in the steady state of a constant bias `delta_f_hz`.
     fn settle(&mut self, delta_f_hz: f64);
     /// Back to rest.
@@ -594,8 +618,8 @@ pub fn loop_state_space<L: LinearLoop + Clone>(model_loop: &L) -> (Matrix4<f64>,
 
 impl LinearLoop for DiscretePll {
     #[inline]
-    fn step(&mut self, delta_f_hz: f64) -> f64 {
-        DiscretePll::step(self, delta_f_hz)
+    fn step_varying(&mut self, delta_f_hz: f64, weighted_hz: f64) -> f64 {
+        DiscretePll::step_varying(self, delta_f_hz, weighted_hz)
     }
     fn settle(&mut self, delta_f_hz: f64) {
         DiscretePll::settle(self, delta_f_hz)
@@ -652,11 +676,11 @@ impl From<pocket_sdr::PocketSdrPll> for ModelLoop {
 
 impl LinearLoop for ModelLoop {
     #[inline]
-    fn step(&mut self, delta_f_hz: f64) -> f64 {
+    fn step_varying(&mut self, delta_f_hz: f64, weighted_hz: f64) -> f64 {
         match self {
-            ModelLoop::Kaplan(p) => p.step(delta_f_hz),
-            ModelLoop::GnssSdr(p) => p.step(delta_f_hz),
-            ModelLoop::PocketSdr(p) => p.step(delta_f_hz),
+            ModelLoop::Kaplan(p) => p.step_varying(delta_f_hz, weighted_hz),
+            ModelLoop::GnssSdr(p) => p.step_varying(delta_f_hz, weighted_hz),
+            ModelLoop::PocketSdr(p) => p.step_varying(delta_f_hz, weighted_hz),
         }
     }
     fn settle(&mut self, delta_f_hz: f64) {

@@ -20,7 +20,8 @@ fn accel(t: f64, excite: [bool; 3]) -> [f64; 3] {
 }
 
 /// (φ, φ_a) pairs: φ from a loop driven by Δf = aᵀΓ at the loop rate (with the
-/// same linear interpolation of a between log epochs as the model), plus noise.
+/// same linear interpolation of a between log epochs as the model, and the
+/// same weighting of Δf by the time left in each integration), plus noise.
 fn synth(
     duration_s: f64,
     substeps: u32,
@@ -46,7 +47,8 @@ fn synth(
         for j in 1..=substeps {
             let w = j as f64 / substeps as f64;
             let df: f64 = (0..3).map(|i| (prev[i] + w * (a[i] - prev[i])) * GAMMA[i]).sum();
-            last = truth.step(df);
+            let lead: f64 = (0..3).map(|i| (a[i] - prev[i]) / (6.0 * substeps as f64) * GAMMA[i]).sum();
+            last = truth.step_varying(df, df - lead);
             sum += last;
         }
         prev = a;

@@ -381,7 +381,9 @@ pub fn simulate<S: SessionSink + ?Sized>(
     let n_steps = (duration_s * updates_per_s + 1e-6).floor() as u64;
     let per_row = u64::from(sc.integrations_per_row());
     let geo_steps = (GEOMETRY_STEP_S / t_s).round() as u64;
-    let mut force = ForceGrid::new(&world, t_s);
+    // The force at the integrations' starts, centres and ends (half steps).
+    let mut force = ForceGrid::new(&world, t_s / 2.0);
+    let mut a_start: Option<[f64; 3]> = None;
     // The receiver's feed-forward of Γ̂ into its NCOs, from its IMU's samples.
     let mut feed_forward = sc.compensation.as_ref().map(crate::compensation::FeedForward::new);
     let mut receiver = Receiver::new(sc, seed, coeffs, t_s);
@@ -398,15 +400,27 @@ pub fn simulate<S: SessionSink + ?Sized>(
         })?;
         // Shared per-step inputs: oscillator and specific force → Δf.
         let y = world.osc.next_y();
-        let a = force.at(&world, k);
+        // Over this step's integration [t − T/2, t + T/2] the force varies: its
+        // mean advances the replica, its mean weighted by the time left,
+        // 2(1 − s/T)/T, enters the mean phase error (Channel::step_varying).
+        // Simpson's rule on the start, centre and end: exact for a quadratic.
+        // The first integration starts at the session's start.
+        let a_centre = force.at(&world, 2 * k);
+        let a_end = force.at(&world, 2 * k + 1);
+        let a0 = a_start.unwrap_or(a_centre);
+        let a_mean: [f64; 3] = core::array::from_fn(|i| (a0[i] + 4.0 * a_centre[i] + a_end[i]) / 6.0);
+        let a_weighted: [f64; 3] = core::array::from_fn(|i| (a0[i] + 2.0 * a_centre[i]) / 3.0);
+        a_start = Some(a_end);
         // What reaches the NCOs: the oscillator's error, less the feed-forward's correction.
         let correction_hz = feed_forward.as_mut().map_or(0.0, |f| f.correction_hz(t));
-        let delta_f_hz = carrier_hz * y + a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2] + correction_hz;
+        let delta_f =
+            |a: [f64; 3]| carrier_hz * y + a[0] * gamma[0] + a[1] * gamma[1] + a[2] * gamma[2] + correction_hz;
+        let (delta_f_hz, weighted_hz) = (delta_f(a_mean), delta_f(a_weighted));
         if k % geo_steps == 0 {
             receiver.update_sky(&world, t, delta_f_hz);
             progress((t / duration_s).min(1.0));
         }
-        receiver.integrate(t, delta_f_hz);
+        receiver.integrate(t, delta_f_hz, weighted_hz);
         if k > 0 && k % per_row == 0 {
             receiver.log_rows(t, sink)?;
         }
@@ -447,7 +461,7 @@ fn truth(
     }
 }
 
-/// The specific force at the loop steps: exact every [`FORCE_GRID_S`] (a
+/// The specific force at steps of a fixed length: exact every [`FORCE_GRID_S`] (a
 /// whole number `m` of steps), linear in between.
 struct ForceGrid {
     m: u64,
@@ -552,15 +566,17 @@ impl<'a> Receiver<'a> {
     }
 
     /// One integration per channel at `t` \[s\], the oscillator's error
-    /// `delta_f_hz` on its carrier (with Doppler aiding, the NCO also follows
-    /// the Doppler).
-    fn integrate(&mut self, t: f64, delta_f_hz: f64) {
+    /// on its carrier: its mean `delta_f_hz` over the integration and its mean
+    /// weighted by the time left, `weighted_hz` (with Doppler aiding, the NCO
+    /// also follows the Doppler).
+    fn integrate(&mut self, t: f64, delta_f_hz: f64, weighted_hz: f64) {
         let aiding = self.sc.tracking_loop.doppler_aiding;
         for tr in self.tracks.iter_mut() {
             let f_sig = tr.doppler0_hz + tr.doppler_slope_hz_per_s * (t - tr.seg_t0_s);
-            let delta_f_c_hz = delta_f_hz * tr.carrier_ratio;
-            let bias = if aiding { delta_f_c_hz + f_sig } else { delta_f_c_hz };
-            tr.ch.step(f_sig, bias);
+            let aided = if aiding { f_sig } else { 0.0 };
+            let bias = delta_f_hz * tr.carrier_ratio + aided;
+            let bias_weighted = weighted_hz * tr.carrier_ratio + aided;
+            tr.ch.step_varying(f_sig, bias, bias_weighted);
         }
     }
 

@@ -337,12 +337,11 @@ impl GnssSdrPll {
 
 impl LinearLoop for GnssSdrPll {
     #[inline]
-    fn step(&mut self, delta_f_hz: f64) -> f64 {
+    fn step_varying(&mut self, delta_f_hz: f64, weighted_hz: f64) -> f64 {
         let t = self.stage.interval_s();
-        let g = -delta_f_hz;
-        let phi = self.err_start_rad + PI * t * (g - self.nco_hz);
+        let phi = self.err_start_rad + PI * t * (-weighted_hz - self.nco_hz);
         let f_new = self.filter.update(phi * (0.5 / PI));
-        self.advance(g, f_new);
+        self.advance(-delta_f_hz, f_new);
         phi
     }
 

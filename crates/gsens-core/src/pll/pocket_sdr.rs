@@ -226,9 +226,16 @@ impl PocketSdrPll {
     /// replica's nominal over the block (g = −Δf); returns φ \[rad\].
     #[inline]
     pub fn step_signal(&mut self, signal_hz: f64) -> f64 {
+        self.step_signal_varying(signal_hz, signal_hz)
+    }
+
+    /// [`PocketSdrPll::step_signal`] for a signal frequency that varies over
+    /// the integration: its mean `signal_hz` and its mean weighted by the time
+    /// left, `weighted_hz` ([`LinearLoop::step_varying`]).
+    pub fn step_signal_varying(&mut self, signal_hz: f64, weighted_hz: f64) -> f64 {
         let t = self.stage.interval_s;
         let w = self.w;
-        let phi = self.err_start_rad + PI * t * (signal_hz - self.nco_hz);
+        let phi = self.err_start_rad + PI * t * (weighted_hz - self.nco_hz);
         let c = phi * (0.5 / PI);
         self.acc_hz_per_s += w * w * w * t * c;
         let f_next = self.nco_hz + B3 * w * (c - self.prev_cycles) + A3 * w * w * t * c + t * self.acc_hz_per_s;
@@ -241,8 +248,8 @@ impl PocketSdrPll {
 
 impl LinearLoop for PocketSdrPll {
     #[inline]
-    fn step(&mut self, delta_f_hz: f64) -> f64 {
-        self.step_signal(-delta_f_hz)
+    fn step_varying(&mut self, delta_f_hz: f64, weighted_hz: f64) -> f64 {
+        self.step_signal_varying(-delta_f_hz, -weighted_hz)
     }
 
     fn settle(&mut self, delta_f_hz: f64) {
