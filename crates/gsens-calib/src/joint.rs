@@ -31,7 +31,7 @@ mod params;
 use crate::search::{Shift, batch_pass, offset_profile, scaled_loop};
 use crate::{CalibError, EpochSeries, EstimateSettings, gls};
 pub use forms::{LOOP_FORM_ALIKE, LoopFormFit, LoopForms};
-pub(crate) use forms::{compare_loop_forms, weighted_spread};
+pub(crate) use forms::{compare_loop_forms, form_variance, weighted_spread};
 use gsens_core::{FedEpoch, LoopModel, LoopSpec};
 use nalgebra::{DMatrix, DVector};
 use params::{Fitted, Start, Theta};

@@ -13,6 +13,7 @@ use gsens_session::{
     FlatRuns, PreparedSession, SelectionConfig, find_flat_runs, imu_spikes, mask_flat_runs, prepare_session_from,
     reinterpolate_imu, replace_imu_spikes,
 };
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
 use std::path::Path;
@@ -507,6 +508,24 @@ fn calibrate_prepared(
         .and_then(|j| Some(j.sigma_used_natural_frequency_hz? / j.used_natural_frequency_hz?))
         .filter(|s| s.is_finite())
         .unwrap_or(0.0);
+    // The stated loop's other forms the tracking error could not rule out,
+    // each at the bandwidth its own fit found: the NCO's estimate is made
+    // under them too, and their spread joins its σ as it joins the
+    // tracking error's.
+    let other_forms: Vec<(LoopModel, crate::LoopFormFit)> = joint
+        .as_ref()
+        .and_then(|j| j.loop_forms.as_ref())
+        .map(|compared| {
+            (compared.forms.iter().zip(&forms).enumerate())
+                .filter(|(k, (fit, _))| *k != compared.chosen && fit.consistent_with_statement)
+                .map(|(_, (fit, model))| {
+                    let scale =
+                        fit.natural_frequency_hz.zip(fit.stated_natural_frequency_hz).map_or(1.0, |(f, f0)| f / f0);
+                    (model.with_bn_scaled(scale), fit.clone())
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     let (closed_loop, (loop_free, nco_frequency)) = rayon::join(
         || estimate_and_check_response(&session, &estimate, joint),
         || {
@@ -520,7 +539,12 @@ fn calibrate_prepared(
                 }
             });
             let nco_frequency = has(|t| !t.nco_freq_hz.is_empty()).then(|| {
-                crate::estimate_nco_frequency(log, imu, &loop_free_settings, &receiver_loop, sigma_ln_loop_scale)
+                let mut estimate =
+                    crate::estimate_nco_frequency(log, imu, &loop_free_settings, &receiver_loop, sigma_ln_loop_scale)?;
+                cover_other_forms(&mut estimate, &other_forms, |model| {
+                    crate::estimate_nco_frequency(log, imu, &loop_free_settings, model, 0.0)
+                });
+                Ok(estimate)
             });
             (loop_free, nco_frequency)
         },
@@ -559,6 +583,44 @@ impl PipelineSettings {
 /// update interval and what a row holds (stated, configured or chosen), the
 /// same offset option, warm-up and channel count, and the screening's phase
 /// limit (by default half the discriminator's unambiguous range).
+/// Widens `estimate`'s covariance by the spread of the estimates under the
+/// loop's other forms (`other_forms`, each with the tracking error's fit of
+/// it: its Δ(−2 ln L) and whether the statement allows it), made by
+/// `estimate_under`, as [`crate::LoopForms::added_variance_hz_per_mps2_sq`]
+/// does for the tracking error's: the larger of their spread weighted by the
+/// data's odds and the largest of the forms the data cannot tell apart. A
+/// form whose estimate fails is left out.
+fn cover_other_forms(
+    estimate: &mut crate::LoopFreeEstimate,
+    other_forms: &[(LoopModel, crate::LoopFormFit)],
+    estimate_under: impl Fn(&LoopModel) -> Result<crate::LoopFreeEstimate, crate::LoopFreeError> + Sync,
+) {
+    if other_forms.is_empty() {
+        return;
+    }
+    let gamma = estimate.gamma_hz_per_mps2;
+    let chosen = crate::LoopFormFit {
+        form: String::new(),
+        delta_m2lnl: 0.0,
+        consistent_with_statement: true,
+        gamma_hz_per_mps2: gamma,
+        natural_frequency_hz: None,
+        stated_natural_frequency_hz: None,
+    };
+    let others: Vec<crate::LoopFormFit> = other_forms
+        .par_iter()
+        .filter_map(|(model, fit)| {
+            let under = estimate_under(model).ok()?;
+            Some(crate::LoopFormFit { gamma_hz_per_mps2: under.gamma_hz_per_mps2, ..fit.clone() })
+        })
+        .collect();
+    let fits: Vec<crate::LoopFormFit> = std::iter::once(chosen).chain(others).collect();
+    let added = crate::joint::form_variance(&fits, gamma);
+    for (i, v) in added.iter().enumerate() {
+        estimate.covariance[i][i] += v;
+    }
+}
+
 fn loop_free_settings(
     settings: &PipelineSettings,
     estimate: &EstimateSettings,
@@ -716,4 +778,74 @@ pub fn calibrate_files(tracking: &Path, imu: &Path, settings: &PipelineSettings)
 
 fn input(role: &str, path: &Path) -> (String, String) {
     (role.to_string(), path.display().to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn estimate(gamma: [f64; 3]) -> crate::LoopFreeEstimate {
+        crate::LoopFreeEstimate {
+            gamma_hz_per_mps2: gamma,
+            covariance: [[1e-8, 0.0, 0.0], [0.0, 1e-8, 0.0], [0.0, 0.0, 1e-8]],
+            crlb_hz_per_mps2: [1e-4; 3],
+            epochs: 1000,
+            tracks: 4,
+            segments: 2,
+            imu_time_offset_s: 0.0,
+            time_offset_searched: false,
+            slipped_segments: 0,
+            residual_variance_rad2: 1e-4,
+            loop_interval_s: 0.02,
+            logged_phase: gsens_core::LoggedPhase::Last,
+            bookkeeping_chosen: false,
+            excitation_rms: [1.0; 3],
+            noise_ar_order: 3,
+        }
+    }
+
+    fn form(delta_m2lnl: f64) -> crate::LoopFormFit {
+        crate::LoopFormFit {
+            form: String::new(),
+            delta_m2lnl,
+            consistent_with_statement: true,
+            gamma_hz_per_mps2: [0.0; 3],
+            natural_frequency_hz: None,
+            stated_natural_frequency_hz: None,
+        }
+    }
+
+    /// The other forms' estimates widen σ as the tracking error's forms do:
+    /// per axis the larger of their spread weighted by the odds exp(−Δ/2)
+    /// (the chosen form's included) and the largest of the forms within
+    /// Δ ≤ 1; a form whose estimate fails is left out.
+    #[test]
+    fn other_forms_widen_sigma_by_their_spread() {
+        let gamma = [0.09, 0.08, -0.08];
+        let mut est = estimate(gamma);
+        let loops = [
+            gsens_core::LoopModel::kaplan(gsens_core::LoopSpec::PAPER, Some(0.001)),
+            gsens_core::LoopModel::kaplan(gsens_core::LoopSpec::PAPER, Some(0.002)),
+            gsens_core::LoopModel::kaplan(gsens_core::LoopSpec::PAPER, Some(0.005)),
+        ];
+        let others = [(loops[0], form(0.5)), (loops[1], form(8.0)), (loops[2], form(0.1))];
+        cover_other_forms(&mut est, &others, |model| {
+            let mut g = gamma;
+            let t = model.interval_s().unwrap_or(0.0);
+            if t == 0.001 {
+                g[0] += 0.001;
+            } else if t == 0.002 {
+                g[1] += 0.002;
+            } else {
+                return Err(crate::LoopFreeError::Loop { why: "fails".into() });
+            }
+            Ok(estimate(g))
+        });
+        let total = 1.0 + (-0.25f64).exp() + (-4.0f64).exp();
+        let want = [(1e-6f64).max((-0.25f64).exp() * 1e-6 / total), (-4.0f64).exp() * 4e-6 / total, 0.0];
+        for i in 0..3 {
+            let added = est.covariance[i][i] - 1e-8;
+            assert!((added - want[i]).abs() < 1e-15, "axis {i}: {added} against {}", want[i]);
+        }
+    }
 }

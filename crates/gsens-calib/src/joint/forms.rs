@@ -187,7 +187,7 @@ pub(crate) fn compare_loop_forms(
 /// shaking rate a receiver's form differs from another's mostly by a gain
 /// and a delay, which Γ and the IMU time offset take up, and the data tell
 /// them apart only by a Δ of about ten, so the other form wins now and then.
-fn form_variance(forms: &[LoopFormFit], gamma_chosen: [f64; 3]) -> [f64; 3] {
+pub(crate) fn form_variance(forms: &[LoopFormFit], gamma_chosen: [f64; 3]) -> [f64; 3] {
     let weights: Vec<f64> =
         forms.iter().map(|f| if f.consistent_with_statement { (-0.5 * f.delta_m2lnl).exp() } else { 0.0 }).collect();
     let gammas: Vec<[f64; 3]> = forms.iter().map(|f| f.gamma_hz_per_mps2).collect();
