@@ -63,7 +63,8 @@ pub fn estimate_nco_frequency(
     // A central difference over ±5 % of the time constants: H is smooth in them.
     let step_ln_scale = 0.05;
     let at = |ln_scale: f64| {
-        loop_regressor(&rows, imu, &receiver_loop.with_bn_scaled(ln_scale.exp()), quantity, settings.warmup_s)
+        let scaled = receiver_loop.with_bn_scaled(ln_scale.exp());
+        loop_regressor(&rows.epoch_t_s, imu, &scaled, quantity, settings.warmup_s)
     };
     let mut estimate = fit_rows_loop_uncertain(&rows, at, step_ln_scale, sigma_ln_scale.powi(2), settings)?;
     estimate.loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
@@ -90,22 +91,21 @@ pub fn estimate_nco_frequency_from(
     check_settings(settings)?;
     let log_interval_s = median_step(&rows.epoch_t_s);
     let receiver_loop = receiver_loop.with_default_interval(log_interval_s);
-    let regressor = loop_regressor(rows, imu, &receiver_loop, quantity, settings.warmup_s)?;
+    let regressor = loop_regressor(&rows.epoch_t_s, imu, &receiver_loop, quantity, settings.warmup_s)?;
     let mut estimate = fit_rows(rows, &regressor, settings, f64::INFINITY)?;
     estimate.loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
     Ok(estimate)
 }
 
-/// The regressor of `quantity` through `receiver_loop` on the rows' epochs,
-/// its model started `lead_s` before the first epoch read.
-fn loop_regressor<'a>(
-    rows: &InputPhases,
+/// The regressor of `quantity` through `receiver_loop` on `epochs`, its
+/// model started `lead_s` before each epoch it is read at.
+pub(crate) fn loop_regressor<'a>(
+    epochs: &[f64],
     imu: &'a ImuSeries,
     receiver_loop: &LoopModel,
     quantity: RowQuantity,
     lead_s: f64,
 ) -> Result<ModelRegressor<'a>, LoopFreeError> {
-    let epochs = rows.epoch_t_s.as_slice();
     let log_interval_s = median_step(epochs);
     let loop_interval_s = receiver_loop.interval_s().unwrap_or(log_interval_s);
     let runnable = receiver_loop.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;

@@ -36,8 +36,8 @@ use crate::loop_free::{
     InputPhases, LoopFreeError, LoopFreeEstimate, LoopFreeSettings, check_settings, fit_rows, fit_rows_scaled,
     integrated_phase_rad, median_step, rows_noise, rows_score,
 };
-use crate::nco_frequency::{ModelRegressor, frequency_on_epochs, mean_frequency_on_epochs};
-use gsens_core::{LoopModel, LoopSpec, RegressorModel, RowQuantity};
+use crate::nco_frequency::{ModelRegressor, frequency_on_epochs, loop_regressor, mean_frequency_on_epochs};
+use gsens_core::{LoopModel, LoopSpec, RowQuantity};
 use gsens_io::{ImuSeries, TrackingLog};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -407,14 +407,8 @@ fn model_regressor<'a>(
     quantity: RowQuantity,
     lead_s: f64,
 ) -> Result<ModelRegressor<'a>, LoopFreeError> {
-    let log_interval_s = median_step(epochs);
-    let loop_interval_s = shape.interval_s().unwrap_or(log_interval_s);
     let bn0 = shape.bn_hz().unwrap_or(gsens_core::defaults::DEFAULT_BN_HZ);
-    let scaled = shape.with_bn_scaled(ln_bn.exp() / bn0);
-    let runnable = scaled.runnable().map_err(|e| LoopFreeError::Loop { why: e.to_string() })?;
-    let model = RegressorModel::of_quantity(runnable, loop_interval_s, log_interval_s, quantity)
-        .map_err(|_| LoopFreeError::Intervals { log_interval_s, loop_interval_s })?;
-    Ok(ModelRegressor::new(epochs, log_interval_s, imu, model, lead_s))
+    loop_regressor(epochs, imu, &shape.with_bn_scaled(ln_bn.exp() / bn0), quantity, lead_s)
 }
 
 /// The estimate from frequency rows with H = 1 in the shaking's band: the

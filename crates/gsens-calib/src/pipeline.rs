@@ -579,10 +579,6 @@ impl PipelineSettings {
     }
 }
 
-/// The loop-free estimate's settings from the calibration's: the loop's
-/// update interval and what a row holds (stated, configured or chosen), the
-/// same offset option, warm-up and channel count, and the screening's phase
-/// limit (by default half the discriminator's unambiguous range).
 /// Widens `estimate`'s covariance by the spread of the estimates under the
 /// loop's other forms (`other_forms`, each with the tracking error's fit of
 /// it: its Δ(−2 ln L) and whether the statement allows it), made by
@@ -621,6 +617,10 @@ fn cover_other_forms(
     }
 }
 
+/// The loop-free estimate's settings from the calibration's: the loop's
+/// update interval and what a row holds (stated, configured or chosen), the
+/// same offset option, warm-up and channel count, and the screening's phase
+/// limit (by default half the discriminator's unambiguous range).
 fn loop_free_settings(
     settings: &PipelineSettings,
     estimate: &EstimateSettings,
