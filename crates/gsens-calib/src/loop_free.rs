@@ -53,7 +53,7 @@ use crate::Measurement;
 use crate::gls::{GlsFit, GlsSettings, gls};
 use gsens_core::LoggedPhase;
 use gsens_core::interpolate::lagrange;
-use gsens_io::{ImuSeries, TrackingLog};
+use gsens_io::{ImuCubic, ImuSeries, TrackingLog};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
@@ -1143,7 +1143,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// ```
 struct ForceIntegral<'a> {
     imu: &'a ImuSeries,
-    slope: Vec<[f64; 3]>,
+    cubic: ImuCubic<'a>,
     at_sample: Vec<[f64; 3]>,
 }
 
@@ -1151,7 +1151,8 @@ impl<'a> ForceIntegral<'a> {
     fn new(imu: &'a ImuSeries) -> Self {
         let (t, a) = (&imu.t_s, &imu.accel_mps2);
         let n = t.len();
-        let slope: Vec<[f64; 3]> = (0..n).map(|j| imu.hermite_slope(j)).collect();
+        let cubic = ImuCubic::new(imu);
+        let slope = cubic.slopes();
         let mut at_sample = Vec::with_capacity(n);
         let mut sum = [0.0; 3];
         for j in 0..n {
@@ -1163,7 +1164,7 @@ impl<'a> ForceIntegral<'a> {
             }
             at_sample.push(sum);
         }
-        ForceIntegral { imu, slope, at_sample }
+        ForceIntegral { imu, cubic, at_sample }
     }
 
     fn covers(&self, t_s: f64) -> bool {
@@ -1183,9 +1184,10 @@ impl<'a> ForceIntegral<'a> {
         let w10 = u2 / 2.0 - 2.0 * u3 / 3.0 + u4 / 4.0;
         let w01 = u3 - u4 / 2.0;
         let w11 = -u3 / 3.0 + u4 / 4.0;
+        let slope = self.cubic.slopes();
         [0, 1, 2].map(|i| {
             self.at_sample[j][i]
-                + h * (w00 * a[j][i] + w10 * h * self.slope[j][i] + w01 * a[j + 1][i] + w11 * h * self.slope[j + 1][i])
+                + h * (w00 * a[j][i] + w10 * h * slope[j][i] + w01 * a[j + 1][i] + w11 * h * slope[j + 1][i])
         })
     }
 }

@@ -344,6 +344,11 @@ impl<L: LinearLoop + Clone> RegressorModel<L> {
         self.substeps
     }
 
+    /// What each epoch's output is.
+    pub fn quantity(&self) -> RowQuantity {
+        self.quantity
+    }
+
     /// The coefficient c = (1 − 1/n²)/12 − 1/(24n²) of
     /// [`compensate_interpolation`] for this model's n substeps: the first
     /// term undoes the linear interpolation's loss, the second takes each

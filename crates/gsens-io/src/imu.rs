@@ -40,6 +40,11 @@ impl ImuSeries {
     /// series' span (no extrapolation is meant); `cursor` keeps the search's
     /// place, so calls with non-decreasing `tau_s` cost O(1) each.
     pub fn interpolate_at(&self, tau_s: f64, cursor: &mut usize) -> [f64; 3] {
+        self.cubic_at(tau_s, cursor, |j| self.hermite_slope(j))
+    }
+
+    /// [`ImuSeries::interpolate_at`] with the slope at sample j from `slope(j)`.
+    fn cubic_at(&self, tau_s: f64, cursor: &mut usize, slope: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
         let t = &self.t_s;
         let mut j = (*cursor).min(t.len().saturating_sub(1));
         while j + 1 < t.len() && t[j + 1] <= tau_s {
@@ -52,7 +57,7 @@ impl ImuSeries {
         let h = t[j + 1] - t[j];
         let s = (tau_s - t[j]) / h;
         let a = &self.accel_mps2;
-        let (m0, m1) = (self.hermite_slope(j), self.hermite_slope(j + 1));
+        let (m0, m1) = (slope(j), slope(j + 1));
         let (s2, s3) = (s * s, s * s * s);
         let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
         core::array::from_fn(|i| h00 * a[j][i] + h10 * h * m0[i] + h01 * a[j + 1][i] + h11 * h * m1[i])
@@ -110,6 +115,38 @@ impl ImuSeries {
             }
         }
         Ok(())
+    }
+}
+
+/// [`ImuSeries::interpolate_at`] with every sample's slope
+/// ([`ImuSeries::hermite_slope`]) computed once: the same values, bit for
+/// bit, at a fraction of the cost where one series is read at many instants
+/// (a loop model fed at the IMU's rate for every time offset tried).
+#[derive(Debug, Clone)]
+pub struct ImuCubic<'a> {
+    imu: &'a ImuSeries,
+    slopes: Vec<[f64; 3]>,
+}
+
+impl<'a> ImuCubic<'a> {
+    /// The interpolant of `imu`.
+    pub fn new(imu: &'a ImuSeries) -> Self {
+        ImuCubic { imu, slopes: (0..imu.len()).map(|j| imu.hermite_slope(j)).collect() }
+    }
+
+    /// The series interpolated.
+    pub fn series(&self) -> &'a ImuSeries {
+        self.imu
+    }
+
+    /// Each sample's slope \[m/s³\] ([`ImuSeries::hermite_slope`]).
+    pub fn slopes(&self) -> &[[f64; 3]] {
+        &self.slopes
+    }
+
+    /// The specific force at `tau_s`: [`ImuSeries::interpolate_at`].
+    pub fn at(&self, tau_s: f64, cursor: &mut usize) -> [f64; 3] {
+        self.imu.cubic_at(tau_s, cursor, |j| self.slopes[j])
     }
 }
 

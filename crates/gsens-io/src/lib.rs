@@ -152,7 +152,7 @@ mod writers;
 pub use columns::{HeaderError, TrackingColumns};
 pub use config::{MAX_CONFIG_BYTES, read_config_text};
 pub use error::{Column, FormatError};
-pub use imu::{IMU_COLUMNS, ImuSeries, read_imu, read_imu_file};
+pub use imu::{IMU_COLUMNS, ImuCubic, ImuSeries, read_imu, read_imu_file};
 pub use observations::{
     ClockEvent, GPS_WEEK_S, Observation, ObservationLog, ObservationLogBuilder, SatelliteSeries, Skipped, obs_flags,
 };
