@@ -48,6 +48,14 @@ pub struct FedEpoch {
 /// The per-epoch path of a receiver-side calibration: average the selected
 /// channels' phase errors, advance the triad, update the estimator. No
 /// allocation.
+///
+/// The model takes each epoch's specific force as given. Fed raw samples,
+/// its linear interpolation between epochs and its point values standing
+/// for each update's integration mean read a sinusoid at ω low by
+/// c·(ωh)², c = [`RegressorModel::interpolation_compensation`] (h the log
+/// interval), and Γ̂ comes out high by as much: feed it samples filtered by
+/// [`crate::compensate_interpolation`] (a batch), or use
+/// [`PrefilteredCalibrator`], which streams that filter one epoch late.
 #[derive(Debug, Clone)]
 pub struct Calibrator<E, L = ModelLoop> {
     model: RegressorModel<L>,
