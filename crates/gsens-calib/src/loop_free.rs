@@ -1142,7 +1142,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// ∫ = h(a_j + a_j+1)/2 + h²(m_j − m_j+1)/12
 /// ```
 struct ForceIntegral<'a> {
-    imu: &'a ImuSeries,
     cubic: ImuCubic<'a>,
     at_sample: Vec<[f64; 3]>,
 }
@@ -1164,17 +1163,17 @@ impl<'a> ForceIntegral<'a> {
             }
             at_sample.push(sum);
         }
-        ForceIntegral { imu, cubic, at_sample }
+        ForceIntegral { cubic, at_sample }
     }
 
     fn covers(&self, t_s: f64) -> bool {
-        let t = &self.imu.t_s;
+        let t = &self.cubic.series().t_s;
         t.len() >= 2 && t_s >= t[0] && t_s <= t[t.len() - 1]
     }
 
     /// ∫ from the first sample to `t_s` (within [`Self::covers`]) \[m/s\].
     fn at(&self, t_s: f64) -> [f64; 3] {
-        let (t, a) = (&self.imu.t_s, &self.imu.accel_mps2);
+        let (t, a) = (&self.cubic.series().t_s, &self.cubic.series().accel_mps2);
         let j = t.partition_point(|&x| x <= t_s).clamp(1, t.len() - 1) - 1;
         let h = t[j + 1] - t[j];
         let u = (t_s - t[j]) / h;

@@ -211,7 +211,7 @@ pub(crate) struct ModelRegressor<'a> {
     log_interval_s: f64,
     /// Model steps per log interval, m.
     steps: usize,
-    imu: ImuCubic<'a>,
+    imu: &'a ImuSeries,
     /// The model at the step h/m, at rest.
     model: RegressorModel,
     lead_s: f64,
@@ -258,13 +258,12 @@ impl<'a> ModelRegressor<'a> {
     ) -> Self {
         let t0_s = epochs.first().copied().unwrap_or(0.0);
         let grid = epochs.iter().map(|t| ((t - t0_s) / log_interval_s).round().max(0.0) as usize).collect();
-        let imu = ImuCubic::new(imu);
         let steps = steps.max(1) as usize;
         ModelRegressor { grid, t0_s, log_interval_s, steps, imu, model, lead_s, stepped: OnceLock::new() }
     }
 
     fn imu_span(&self) -> (f64, f64) {
-        let t = &self.imu.series().t_s;
+        let t = &self.imu.t_s;
         (t.first().copied().unwrap_or(f64::NAN), t.last().copied().unwrap_or(f64::NAN))
     }
 
@@ -289,9 +288,9 @@ impl<'a> ModelRegressor<'a> {
         let (i_first, i_last) = (((imu_first - self.t0_s) / step_s).ceil(), ((imu_last - self.t0_s) / step_s).floor());
         let t_first_s = self.t0_s + i_first * step_s;
         let count = if i_last >= i_first { (i_last - i_first) as usize + 1 } else { 0 };
-        let mut cursor = 0;
+        let (cubic, mut cursor) = (ImuCubic::new(self.imu), 0);
         let accel: Vec<[f64; 3]> =
-            (0..count).map(|i| self.imu.at((t_first_s + i as f64 * step_s).min(imu_last), &mut cursor)).collect();
+            (0..count).map(|i| cubic.at((t_first_s + i as f64 * step_s).min(imu_last), &mut cursor)).collect();
         let mut model = self.model.clone();
         model.reset();
         let input = crate::estimate::model_input(&accel, &model);
